@@ -1,0 +1,266 @@
+#include "common/config/config.hpp"
+
+#include <fstream>
+
+namespace teleop::config {
+
+namespace {
+std::string join(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+std::string scalar_text(const YAML::Node& n) {
+  if (!n.IsDefined() || n.IsNull()) return "<missing>";
+  if (n.IsScalar()) return "'" + n.Scalar() + "'";
+  std::ostringstream os;
+  os << n;
+  return "'" + os.str() + "'";
+}
+}  // namespace
+
+std::string range_text(double lo, double hi) {
+  std::ostringstream os;
+  os << "[" << lo << ", " << hi << "]";
+  return os.str();
+}
+
+Node::Node(YAML::Node node, std::string file, std::string path)
+    : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {}
+
+Node Node::load_file(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw ConfigError(file + ": cannot open the file for reading");
+  try {
+    return Node(YAML::LoadFile(file), file, "");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(file + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
+                      ", column " + std::to_string(e.mark.column + 1) + ": " + e.msg);
+  }
+}
+
+Node Node::parse(const std::string& text, const std::string& file) {
+  try {
+    return Node(YAML::Load(text), file, "");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(file + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
+                      ": " + e.msg);
+  }
+}
+
+std::string Node::field(const std::string& key) const { return join(path_, key); }
+
+void Node::fail(const std::string& key, const std::string& what) const {
+  throw ConfigError(file_ + ": field '" + field(key) + "': " + what);
+}
+
+bool Node::has(const std::string& key) const {
+  if (!node_.IsMap()) return false;
+  const YAML::Node c = node_[key];
+  return c.IsDefined() && !c.IsNull();
+}
+
+Node Node::at(const std::string& key) const {
+  if (!node_.IsMap()) {
+    throw ConfigError(file_ + ": field '" + (path_.empty() ? "<root>" : path_) +
+                      "' must be a mapping (looking for '" + key + "')");
+  }
+  if (!has(key)) fail(key, "is required but missing");
+  return Node(node_[key], file_, field(key));
+}
+
+Node Node::child(const std::string& key) const {
+  if (!node_.IsMap()) return Node(YAML::Node(), file_, field(key));
+  return Node(node_[key], file_, field(key));
+}
+
+Node Node::at(std::size_t index) const {
+  if (!node_.IsSequence() || index >= node_.size()) {
+    throw ConfigError(file_ + ": field '" + path_ + "': no element " + std::to_string(index));
+  }
+  return Node(node_[index], file_, path_ + "[" + std::to_string(index) + "]");
+}
+
+std::size_t Node::size() const { return node_.IsSequence() || node_.IsMap() ? node_.size() : 0; }
+
+double Node::number(const std::string& key, double lo, double hi) const {
+  const Node c = at(key);
+  double v = 0.0;
+  try {
+    v = c.node_.as<double>();
+  } catch (const YAML::Exception&) {
+    fail(key, "value " + scalar_text(c.node_) + " is not a number; allowed range " +
+                  range_text(lo, hi));
+  }
+  if (!std::isfinite(v) || v < lo || v > hi) {
+    fail(key, "value " + scalar_text(c.node_) + " is out of the allowed range " +
+                  range_text(lo, hi));
+  }
+  return v;
+}
+
+double Node::number_or(const std::string& key, double fallback, double lo, double hi) const {
+  return has(key) ? number(key, lo, hi) : fallback;
+}
+
+long long Node::integer(const std::string& key, long long lo, long long hi) const {
+  const Node c = at(key);
+  long long v = 0;
+  try {
+    v = c.node_.as<long long>();
+  } catch (const YAML::Exception&) {
+    fail(key, "value " + scalar_text(c.node_) + " is not an integer; allowed range " +
+                  range_text(static_cast<double>(lo), static_cast<double>(hi)));
+  }
+  if (v < lo || v > hi) {
+    fail(key, "value " + scalar_text(c.node_) + " is out of the allowed range " +
+                  range_text(static_cast<double>(lo), static_cast<double>(hi)));
+  }
+  return v;
+}
+
+long long Node::integer_or(const std::string& key, long long fallback, long long lo,
+                           long long hi) const {
+  return has(key) ? integer(key, lo, hi) : fallback;
+}
+
+bool Node::boolean_or(const std::string& key, bool fallback) const {
+  if (!has(key)) return fallback;
+  const Node c = at(key);
+  try {
+    return c.node_.as<bool>();
+  } catch (const YAML::Exception&) {
+    fail(key, "value " + scalar_text(c.node_) + " is not a boolean (true or false)");
+  }
+}
+
+std::string Node::string(const std::string& key) const {
+  const Node c = at(key);
+  if (!c.node_.IsScalar()) fail(key, "value " + scalar_text(c.node_) + " is not a string");
+  return c.node_.Scalar();
+}
+
+std::string Node::string_or(const std::string& key, const std::string& fallback) const {
+  return has(key) ? string(key) : fallback;
+}
+
+std::string Node::choice(const std::string& key, const std::vector<std::string>& allowed) const {
+  const std::string v = string(key);
+  for (const auto& a : allowed) {
+    if (a == v) return v;
+  }
+  std::string list;
+  for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+  fail(key, "value '" + v + "' is not one of {" + list + "}");
+}
+
+std::string Node::choice_or(const std::string& key, const std::string& fallback,
+                            const std::vector<std::string>& allowed) const {
+  return has(key) ? choice(key, allowed) : fallback;
+}
+
+std::vector<double> Node::numbers(const std::string& key, std::size_t count, double lo,
+                                  double hi) const {
+  const Node c = at(key);
+  if (!c.node_.IsSequence() || c.node_.size() != count) {
+    fail(key, "value " + scalar_text(c.node_) + " must be a list of " + std::to_string(count) +
+                  " numbers, each in " + range_text(lo, hi));
+  }
+  std::vector<double> out(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    double v = 0.0;
+    try {
+      v = c.node_[i].as<double>();
+    } catch (const YAML::Exception&) {
+      fail(key, "element " + std::to_string(i) + " " + scalar_text(c.node_[i]) +
+                    " is not a number; allowed range " + range_text(lo, hi));
+    }
+    if (!std::isfinite(v) || v < lo || v > hi) {
+      fail(key, "element " + std::to_string(i) + " " + scalar_text(c.node_[i]) +
+                    " is out of the allowed range " + range_text(lo, hi));
+    }
+    out[i] = v;
+  }
+  return out;
+}
+
+std::vector<double> Node::numbers_or(const std::string& key, const std::vector<double>& fallback,
+                                     double lo, double hi) const {
+  return has(key) ? numbers(key, fallback.size(), lo, hi) : fallback;
+}
+
+void Node::reject_unknown_keys(const std::set<std::string>& known) const {
+  if (!node_.IsMap()) return;
+  for (const auto& kv : node_) {
+    const std::string k = kv.first.as<std::string>();
+    if (!known.count(k)) {
+      std::string list;
+      for (const auto& a : known) list += (list.empty() ? "" : ", ") + a;
+      fail(k, "unknown field; known fields here are {" + list + "}");
+    }
+  }
+}
+
+double check_flag(const std::string& flag, double value, double lo, double hi) {
+  if (!std::isfinite(value) || value < lo || value > hi) {
+    std::ostringstream os;
+    os << "command line: " << flag << " " << value << " is out of the allowed range "
+       << range_text(lo, hi);
+    throw ConfigError(os.str());
+  }
+  return value;
+}
+
+double parse_duration_s(const std::string& flag, const std::string& text) {
+  std::size_t pos = 0;
+  double v = 0.0;
+  try {
+    v = std::stod(text, &pos);
+  } catch (const std::exception&) {
+    throw ConfigError("command line: " + flag + " '" + text +
+                      "' is not a duration (examples: 50ms, 0.2s, 150us)");
+  }
+  const std::string unit = text.substr(pos);
+  double scale = 1.0;
+  if (unit.empty() || unit == "s") {
+    scale = 1.0;
+  } else if (unit == "ms") {
+    scale = 1e-3;
+  } else if (unit == "us") {
+    scale = 1e-6;
+  } else if (unit == "ns") {
+    scale = 1e-9;
+  } else {
+    throw ConfigError("command line: " + flag + " '" + text + "' has unknown unit '" + unit +
+                      "' (allowed: s, ms, us, ns)");
+  }
+  const double s = v * scale;
+  if (!std::isfinite(s) || s < 0.0) {
+    throw ConfigError("command line: " + flag + " '" + text + "' must be a finite duration >= 0");
+  }
+  return s;
+}
+
+double parse_probability(const std::string& flag, const std::string& text) {
+  std::size_t pos = 0;
+  double v = 0.0;
+  try {
+    v = std::stod(text, &pos);
+  } catch (const std::exception&) {
+    throw ConfigError("command line: " + flag + " '" + text +
+                      "' is not a probability (examples: 1%, 0.01)");
+  }
+  const std::string unit = text.substr(pos);
+  if (unit == "%") {
+    v /= 100.0;
+  } else if (!unit.empty()) {
+    throw ConfigError("command line: " + flag + " '" + text + "' has unknown suffix '" + unit +
+                      "' (allowed: %, or none)");
+  }
+  if (!std::isfinite(v) || v < 0.0 || v > 1.0) {
+    throw ConfigError("command line: " + flag + " '" + text +
+                      "' is out of the allowed range [0, 1] (or [0%, 100%])");
+  }
+  return v;
+}
+
+}  // namespace teleop::config

@@ -1,0 +1,98 @@
+#pragma once
+// Typed configuration loading with validation at the edge.
+//
+// Every error names the file, the field path, the offending value and the allowed
+// range, so a user can fix it without reading code. Loaders throw ConfigError; the
+// executables catch it, print it and exit with status 2.
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace teleop::config {
+
+/// A configuration or command-line mistake. what() is a complete user-facing message.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A YAML node together with the file it came from and its field path ("scene.sphere.radius_m").
+/// Accessors validate type and range and throw ConfigError naming file, field, value, range.
+class Node {
+ public:
+  Node(YAML::Node node, std::string file, std::string path);
+
+  /// Loads a YAML file. @throws ConfigError if it cannot be read or parsed.
+  static Node load_file(const std::string& file);
+  /// Parses YAML text; `file` is used only in messages.
+  static Node parse(const std::string& text, const std::string& file = "<string>");
+
+  bool has(const std::string& key) const;
+  /// Child mapping entry; throws if missing.
+  Node at(const std::string& key) const;
+  /// Child entry or an undefined node (has() false) when missing.
+  Node child(const std::string& key) const;
+  /// Sequence element.
+  Node at(std::size_t index) const;
+  std::size_t size() const;
+  bool is_map() const { return node_.IsMap(); }
+  bool is_sequence() const { return node_.IsSequence(); }
+  bool defined() const { return node_.IsDefined() && !node_.IsNull(); }
+
+  const std::string& file() const { return file_; }
+  const std::string& path() const { return path_; }
+  const YAML::Node& raw() const { return node_; }
+
+  /// Required number within [lo, hi].
+  double number(const std::string& key, double lo, double hi) const;
+  /// Optional number within [lo, hi]; `fallback` when the key is missing.
+  double number_or(const std::string& key, double fallback, double lo, double hi) const;
+  /// Required integer within [lo, hi].
+  long long integer(const std::string& key, long long lo, long long hi) const;
+  long long integer_or(const std::string& key, long long fallback, long long lo,
+                       long long hi) const;
+  bool boolean_or(const std::string& key, bool fallback) const;
+  std::string string(const std::string& key) const;
+  std::string string_or(const std::string& key, const std::string& fallback) const;
+  /// A string that must be one of `allowed`.
+  std::string choice(const std::string& key, const std::vector<std::string>& allowed) const;
+  std::string choice_or(const std::string& key, const std::string& fallback,
+                        const std::vector<std::string>& allowed) const;
+  /// A fixed-length list of numbers, each within [lo, hi].
+  std::vector<double> numbers(const std::string& key, std::size_t count, double lo,
+                              double hi) const;
+  std::vector<double> numbers_or(const std::string& key, const std::vector<double>& fallback,
+                                 double lo, double hi) const;
+
+  /// Throws if the mapping has keys not in `known` (catches typos such as "radus_m").
+  void reject_unknown_keys(const std::set<std::string>& known) const;
+
+  /// Builds "<file>: field '<path>': <what>" for custom checks.
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+
+ private:
+  std::string field(const std::string& key) const;
+  YAML::Node node_;
+  std::string file_;
+  std::string path_;
+};
+
+/// Formats a range for messages: "[lo, hi]".
+std::string range_text(double lo, double hi);
+
+/// Checks a command-line numeric flag; throws ConfigError naming the flag, value and range.
+double check_flag(const std::string& flag, double value, double lo, double hi);
+
+/// Parses durations such as "50ms", "0.2s", "150us", "3" (seconds); throws ConfigError.
+double parse_duration_s(const std::string& flag, const std::string& text);
+/// Parses "1%", "0.01"; returns a probability in [0, 1]; throws ConfigError.
+double parse_probability(const std::string& flag, const std::string& text);
+
+}  // namespace teleop::config

@@ -1,0 +1,46 @@
+#include "common/util/rate_loop.hpp"
+
+#include <time.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "common/util/clock.hpp"
+
+namespace teleop {
+
+RateLoop::RateLoop(double rate_hz, std::size_t jitter_capacity)
+    : period_ns_(0), next_ns_(0), lateness_us_(jitter_capacity) {
+  if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) {
+    throw std::invalid_argument("RateLoop: rate_hz must be a positive finite number");
+  }
+  period_ns_ = static_cast<std::int64_t>(std::llround(1e9 / rate_hz));
+  reset();
+}
+
+void RateLoop::reset() { next_ns_ = now_ns() + period_ns_; }
+
+bool RateLoop::wait() {
+  ++iterations_;
+  std::int64_t now = now_ns();
+  bool on_time = true;
+  if (now > next_ns_) {
+    // missed: count the whole periods lost and re-anchor on the next boundary
+    const std::int64_t missed = (now - next_ns_) / period_ns_ + 1;
+    overruns_ += static_cast<std::uint64_t>(missed);
+    next_ns_ += missed * period_ns_;
+    on_time = false;
+  }
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(next_ns_ / 1000000000LL);
+  ts.tv_nsec = static_cast<long>(next_ns_ % 1000000000LL);
+  // steady_clock is CLOCK_MONOTONIC on Linux
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
+  }
+  now = now_ns();
+  lateness_us_.record(static_cast<double>(now - next_ns_) * 1e-3);
+  next_ns_ += period_ns_;
+  return on_time;
+}
+
+}  // namespace teleop

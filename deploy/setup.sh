@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Installs every Debian package the project needs. Idempotent and non-interactive.
+# Usage: deploy/setup.sh            (as root, or through sudo)
+#        TELEOP_SETUP_VIEWER=0 deploy/setup.sh   (skip the OpenGL viewer packages)
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libeigen3-dev
+  libfastrtps-dev libfastcdr-dev fastdds-tools fastddsgen default-jre-headless
+  libode-dev libfcl-dev libassimp-dev
+  googletest libgtest-dev libgmock-dev libbenchmark-dev
+  libyaml-cpp-dev libcli11-dev
+  python3-matplotlib python3-numpy
+  clang-format
+)
+if [ "${TELEOP_SETUP_VIEWER:-1}" = "1" ]; then
+  packages+=(libglfw3-dev libgl-dev libimgui-dev xvfb xauth)
+fi
+
+sudo_cmd=()
+if [ "$(id -u)" != "0" ]; then
+  if command -v sudo >/dev/null 2>&1; then
+    sudo_cmd=(sudo)
+  else
+    echo "deploy/setup.sh: must run as root or have sudo available" >&2
+    exit 1
+  fi
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ "${#missing[@]}" -eq 0 ]; then
+  echo "deploy/setup.sh: all ${#packages[@]} packages already installed"
+  exit 0
+fi
+
+echo "deploy/setup.sh: installing ${#missing[@]} missing packages: ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "deploy/setup.sh: done"

@@ -1,0 +1,76 @@
+#include "server/world/tool_scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace teleop::sim {
+
+void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input, double dt) {
+  // hold: latch the pose once and track it with zero velocity
+  if (input.hold && !state.was_holding) state.hold_position_m = state.position_m;
+  state.was_holding = input.hold;
+  const Eigen::Vector3d target_p = input.hold ? state.hold_position_m : input.target_position_m;
+  const Eigen::Vector3d target_v =
+      input.hold ? Eigen::Vector3d::Zero() : input.target_velocity_mps;
+  const double kp = input.kp_override_n_per_m > 0.0 ? input.kp_override_n_per_m : model.kp_n_per_m;
+
+  // translational PD with saturation, plus gravity compensation
+  Eigen::Vector3d f_ctrl =
+      kp * (target_p - state.position_m) + model.kd_ns_per_m * (target_v - state.velocity_mps);
+  const double fn = f_ctrl.norm();
+  if (fn > model.max_force_n) f_ctrl *= model.max_force_n / fn;
+  if (model.gravity_compensation) f_ctrl -= model.mass_kg * model.gravity_mps2;
+  state.control_force_n = f_ctrl;
+
+  // penalty contact with each plane: k x + b xdot (compression only, never pulling)
+  Eigen::Vector3d f_contact = Eigen::Vector3d::Zero();
+  state.penetration_m = 0.0;
+  state.contact_object = -1;
+  for (int i = 0; i < model.plane_count; ++i) {
+    const Plane& pl = model.planes[static_cast<std::size_t>(i)];
+    const double gap = pl.normal.dot(state.position_m) - pl.offset_m - model.radius_m;
+    if (gap >= 0.0) continue;
+    const double depth = -gap;
+    const double vn = pl.normal.dot(state.velocity_mps);
+    const double mag = std::max(0.0, pl.stiffness_n_per_m * depth - pl.damping_ns_per_m * vn);
+    f_contact += mag * pl.normal;
+    if (depth > state.penetration_m) {
+      state.penetration_m = depth;
+      state.contact_object = pl.id;
+    }
+  }
+  state.contact_force_n = f_contact;
+
+  const Eigen::Vector3d f_total = f_ctrl + f_contact + model.mass_kg * model.gravity_mps2 -
+                                  model.linear_damping_ns_per_m * state.velocity_mps;
+  state.velocity_mps += dt * f_total / model.mass_kg;
+  state.position_m += dt * state.velocity_mps;
+
+  // rotational PD on the quaternion error (shortest arc), semi-implicit
+  const Eigen::Quaterniond target_q =
+      input.hold ? state.orientation : input.target_orientation.normalized();
+  Eigen::Quaterniond err = target_q * state.orientation.conjugate();
+  if (err.w() < 0.0) err.coeffs() *= -1.0;
+  const Eigen::AngleAxisd aa(err);
+  const Eigen::Vector3d rot_err = aa.angle() * aa.axis();
+  const Eigen::Vector3d w_target =
+      input.hold ? Eigen::Vector3d::Zero() : input.target_angular_velocity_radps;
+  const Eigen::Vector3d torque = model.kp_rot_nm_per_rad * rot_err +
+                                 model.kd_rot_nms_per_rad * (w_target - state.angular_velocity_radps);
+  state.angular_velocity_radps += dt * torque / model.inertia_kgm2();
+  const Eigen::Vector3d dtheta = dt * state.angular_velocity_radps;
+  const double angle = dtheta.norm();
+  if (angle > 1e-12) {
+    state.orientation =
+        (Eigen::Quaterniond(Eigen::AngleAxisd(angle, dtheta / angle)) * state.orientation)
+            .normalized();
+  }
+  state.sim_time_s += dt;
+}
+
+double tool_kinetic_energy(const ToolModel& model, const ToolState& state) {
+  return 0.5 * model.mass_kg * state.velocity_mps.squaredNorm() +
+         0.5 * model.inertia_kgm2() * state.angular_velocity_radps.squaredNorm();
+}
+
+}  // namespace teleop::sim

@@ -1,0 +1,96 @@
+#include "common/config/config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+
+using teleop::config::ConfigError;
+using teleop::config::Node;
+
+namespace {
+
+std::string error_of(const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, NumberInRangeIsReturned) {
+  const Node n = Node::parse("sphere: {radius_m: 0.25}", "scene.yaml");
+  EXPECT_DOUBLE_EQ(n.at("sphere").number("radius_m", 0.01, 10.0), 0.25);
+}
+
+TEST(Config, OutOfRangeNamesFileFieldValueAndRange) {
+  const Node n = Node::parse("sphere: {radius_m: -3}", "scene.yaml");
+  const std::string msg = error_of([&] { n.at("sphere").number("radius_m", 0.01, 10.0); });
+  EXPECT_NE(msg.find("scene.yaml"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("sphere.radius_m"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("-3"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("[0.01, 10]"), std::string::npos) << msg;
+}
+
+TEST(Config, NotANumberIsRejected) {
+  const Node n = Node::parse("k: stiff", "a.yaml");
+  const std::string msg = error_of([&] { n.number("k", 0, 1e6); });
+  EXPECT_NE(msg.find("'stiff' is not a number"), std::string::npos) << msg;
+}
+
+TEST(Config, NanIsRejected) {
+  const Node n = Node::parse("k: .nan", "a.yaml");
+  EXPECT_THROW(n.number("k", 0, 1e6), ConfigError);
+}
+
+TEST(Config, MissingRequiredFieldIsNamed) {
+  const Node n = Node::parse("a: 1", "a.yaml");
+  const std::string msg = error_of([&] { n.number("b", 0, 1); });
+  EXPECT_NE(msg.find("'b'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("missing"), std::string::npos) << msg;
+}
+
+TEST(Config, ChoiceListsAllowedValues) {
+  const Node n = Node::parse("integrator: rk4", "a.yaml");
+  const std::string msg =
+      error_of([&] { n.choice("integrator", {"explicit-euler", "symplectic-euler"}); });
+  EXPECT_NE(msg.find("rk4"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("symplectic-euler"), std::string::npos) << msg;
+}
+
+TEST(Config, UnknownKeysAreRejected) {
+  const Node n = Node::parse("radus_m: 1", "a.yaml");
+  const std::string msg = error_of([&] { n.reject_unknown_keys({"radius_m"}); });
+  EXPECT_NE(msg.find("radus_m"), std::string::npos) << msg;
+}
+
+TEST(Config, NumbersListChecksLengthAndElements) {
+  const Node n = Node::parse("g: [0, 0, -9.81]\nbad: [0, 1]", "a.yaml");
+  EXPECT_EQ(n.numbers("g", 3, -100, 100)[2], -9.81);
+  EXPECT_THROW(n.numbers("bad", 3, -100, 100), ConfigError);
+}
+
+TEST(Config, SyntaxErrorNamesFile) {
+  const std::string msg = error_of([&] { Node::parse("a: [1, 2", "broken.yaml"); });
+  EXPECT_NE(msg.find("broken.yaml"), std::string::npos) << msg;
+}
+
+TEST(Config, MissingFileIsReported) {
+  const std::string msg = error_of([&] { Node::load_file("/nonexistent/x.yaml"); });
+  EXPECT_NE(msg.find("/nonexistent/x.yaml"), std::string::npos) << msg;
+}
+
+TEST(Config, DurationsAndProbabilities) {
+  using teleop::config::parse_duration_s;
+  using teleop::config::parse_probability;
+  EXPECT_DOUBLE_EQ(parse_duration_s("--delay", "50ms"), 0.05);
+  EXPECT_DOUBLE_EQ(parse_duration_s("--delay", "2"), 2.0);
+  EXPECT_DOUBLE_EQ(parse_duration_s("--delay", "150us"), 150e-6);
+  EXPECT_THROW(parse_duration_s("--delay", "5 parsecs"), ConfigError);
+  EXPECT_THROW(parse_duration_s("--delay", "-1ms"), ConfigError);
+  EXPECT_DOUBLE_EQ(parse_probability("--loss", "1%"), 0.01);
+  EXPECT_DOUBLE_EQ(parse_probability("--loss", "0.2"), 0.2);
+  EXPECT_THROW(parse_probability("--loss", "120%"), ConfigError);
+}
+
+}  // namespace

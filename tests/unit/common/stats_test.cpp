@@ -1,0 +1,62 @@
+#include "common/util/stats.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "common/util/rate_loop.hpp"
+#include "tests/support/alloc_counter.hpp"
+
+namespace {
+
+TEST(Stats, PercentilesInterpolate) {
+  std::vector<double> v;
+  for (int i = 1; i <= 101; ++i) v.push_back(i);
+  EXPECT_DOUBLE_EQ(teleop::percentile(v, 50), 51);
+  EXPECT_DOUBLE_EQ(teleop::percentile(v, 99), 100);
+  const auto s = teleop::summarize(v);
+  EXPECT_EQ(s.count, 101u);
+  EXPECT_DOUBLE_EQ(s.min, 1);
+  EXPECT_DOUBLE_EQ(s.max, 101);
+  EXPECT_DOUBLE_EQ(s.mean, 51);
+}
+
+TEST(Stats, EmptyPercentileIsNan) { EXPECT_TRUE(std::isnan(teleop::percentile({}, 50))); }
+
+TEST(Stats, SampleWindowKeepsNewestAndDoesNotAllocate) {
+  teleop::SampleWindow w(4);
+  {
+    teleop::test::NoAllocScope scope;
+    for (int i = 0; i < 10; ++i) w.record(i);
+    EXPECT_EQ(scope.allocations(), 0u);
+  }
+  EXPECT_EQ(w.size(), 4u);
+  EXPECT_EQ(w.total_recorded(), 10u);
+  EXPECT_EQ(w.snapshot(), (std::vector<double>{6, 7, 8, 9}));
+}
+
+TEST(AllocCounter, SeesVectorGrowth) {
+  teleop::test::NoAllocScope scope;
+  std::vector<int> v;
+  v.push_back(1);
+  EXPECT_GE(scope.allocations(), 1u);
+}
+
+TEST(RateLoop, HoldsRateAndCountsOverruns) {
+  teleop::RateLoop loop(1000.0);
+  for (int i = 0; i < 50; ++i) loop.wait();
+  EXPECT_EQ(loop.iterations(), 50u);
+  // a deliberate 20 ms stall must be counted as missed periods
+  const auto before = loop.overruns();
+  struct timespec ts{0, 20'000'000};
+  nanosleep(&ts, nullptr);
+  loop.wait();
+  EXPECT_GE(loop.overruns() - before, 10u);
+}
+
+TEST(RateLoop, RejectsNonPositiveRate) {
+  EXPECT_THROW(teleop::RateLoop(0.0), std::invalid_argument);
+  EXPECT_THROW(teleop::RateLoop(-5.0), std::invalid_argument);
+}
+
+}  // namespace
