@@ -2,7 +2,7 @@
 function(teleop_set_warnings target)
   target_compile_options(${target} PRIVATE
     $<$<COMPILE_LANGUAGE:CXX>:-Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
-      -Wold-style-cast -Wcast-align -Wunused -Woverloaded-virtual -Wnull-dereference
+      -Wold-style-cast -Wcast-align -Wunused -Woverloaded-virtual
       -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough>)
   if(TELEOP_WERROR)
     target_compile_options(${target} PRIVATE -Werror)

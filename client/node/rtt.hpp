@@ -13,8 +13,10 @@ class RttTracker {
 
   /// Called for each received SlaveState. Returns the RTT [ms] if this echo is new
   /// (a command seq not seen before), or a negative number for a repeat/stale echo.
-  double on_echo(std::uint64_t command_seq, std::int64_t command_send_time_ns,
-                 std::int64_t now_ns);
+  /// Echoes of seq 0 (no command applied yet) or of a seq above `newest_sent_seq` (from an
+  /// earlier master session) are ignored.
+  double on_echo(std::uint64_t command_seq, std::int64_t command_send_time_ns, std::int64_t now_ns,
+                 std::uint64_t newest_sent_seq);
 
   const SampleWindow& rtt_ms() const { return rtt_ms_; }
   std::uint64_t unique_echoes() const { return unique_; }

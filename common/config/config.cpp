@@ -88,12 +88,12 @@ double Node::number(const std::string& key, double lo, double hi) const {
   try {
     v = c.node_.as<double>();
   } catch (const YAML::Exception&) {
-    fail(key, "value " + scalar_text(c.node_) + " is not a number; allowed range " +
-                  range_text(lo, hi));
+    fail(key,
+         "value " + scalar_text(c.node_) + " is not a number; allowed range " + range_text(lo, hi));
   }
   if (!std::isfinite(v) || v < lo || v > hi) {
-    fail(key, "value " + scalar_text(c.node_) + " is out of the allowed range " +
-                  range_text(lo, hi));
+    fail(key,
+         "value " + scalar_text(c.node_) + " is out of the allowed range " + range_text(lo, hi));
   }
   return v;
 }

@@ -17,14 +17,12 @@ CsvWriter::CsvWriter(const std::string& path, const std::vector<std::string>& co
   row_text(columns);
 }
 
-void CsvWriter::row(std::initializer_list<double> values) {
-  row(std::vector<double>(values));
-}
+void CsvWriter::row(std::initializer_list<double> values) { row(std::vector<double>(values)); }
 
 void CsvWriter::row(const std::vector<double>& values) {
   if (values.size() != columns_) {
-    throw std::logic_error("CsvWriter: row of " + std::to_string(values.size()) +
-                           " values for " + std::to_string(columns_) + " columns in " + path_);
+    throw std::logic_error("CsvWriter: row of " + std::to_string(values.size()) + " values for " +
+                           std::to_string(columns_) + " columns in " + path_);
   }
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (i) out_ << ',';
@@ -35,8 +33,8 @@ void CsvWriter::row(const std::vector<double>& values) {
 
 void CsvWriter::row_text(const std::vector<std::string>& fields) {
   if (fields.size() != columns_) {
-    throw std::logic_error("CsvWriter: row of " + std::to_string(fields.size()) +
-                           " fields for " + std::to_string(columns_) + " columns in " + path_);
+    throw std::logic_error("CsvWriter: row of " + std::to_string(fields.size()) + " fields for " +
+                           std::to_string(columns_) + " columns in " + path_);
   }
   for (std::size_t i = 0; i < fields.size(); ++i) {
     if (i) out_ << ',';

@@ -29,8 +29,7 @@ CommandRegistry& CommandRegistry::get(const std::string& group) {
   return groups[group];
 }
 
-bool CommandRegistry::add(const std::string& name, const std::string& description,
-                          CommandFn fn) {
+bool CommandRegistry::add(const std::string& name, const std::string& description, CommandFn fn) {
   entries_[name] = CommandEntry{name, description, std::move(fn)};
   return true;
 }

@@ -10,8 +10,7 @@ void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input,
   if (input.hold && !state.was_holding) state.hold_position_m = state.position_m;
   state.was_holding = input.hold;
   const Eigen::Vector3d target_p = input.hold ? state.hold_position_m : input.target_position_m;
-  const Eigen::Vector3d target_v =
-      input.hold ? Eigen::Vector3d::Zero() : input.target_velocity_mps;
+  const Eigen::Vector3d target_v = input.hold ? Eigen::Vector3d::Zero() : input.target_velocity_mps;
   const double kp = input.kp_override_n_per_m > 0.0 ? input.kp_override_n_per_m : model.kp_n_per_m;
 
   // translational PD with saturation, plus gravity compensation
@@ -55,8 +54,9 @@ void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input,
   const Eigen::Vector3d rot_err = aa.angle() * aa.axis();
   const Eigen::Vector3d w_target =
       input.hold ? Eigen::Vector3d::Zero() : input.target_angular_velocity_radps;
-  const Eigen::Vector3d torque = model.kp_rot_nm_per_rad * rot_err +
-                                 model.kd_rot_nms_per_rad * (w_target - state.angular_velocity_radps);
+  const Eigen::Vector3d torque =
+      model.kp_rot_nm_per_rad * rot_err +
+      model.kd_rot_nms_per_rad * (w_target - state.angular_velocity_radps);
   state.angular_velocity_radps += dt * torque / model.inertia_kgm2();
   const Eigen::Vector3d dtheta = dt * state.angular_velocity_radps;
   const double angle = dtheta.norm();

@@ -26,7 +26,7 @@ struct ToolModel {
   double linear_damping_ns_per_m = 0.5;  ///< viscous damping to the world [N s/m]
   double max_force_n = 200.0;            ///< PD force saturation [N]
   Eigen::Vector3d gravity_mps2 = Eigen::Vector3d::Zero();  ///< [m/s^2]
-  bool gravity_compensation = true;      ///< the controller cancels m g
+  bool gravity_compensation = true;                        ///< the controller cancels m g
   std::array<Plane, kMaxPlanes> planes{};
   int plane_count = 0;
 
@@ -51,10 +51,10 @@ struct ToolState {
   Eigen::Vector3d hold_position_m = Eigen::Vector3d::Zero();  ///< latched on entering hold
   bool was_holding = false;
   // outputs of the last step
-  Eigen::Vector3d contact_force_n = Eigen::Vector3d::Zero();   ///< environment force on tool [N]
-  Eigen::Vector3d control_force_n = Eigen::Vector3d::Zero();   ///< PD force applied [N]
-  double penetration_m = 0.0;                                  ///< deepest plane penetration [m]
-  int contact_object = -1;                                     ///< plane id touched, -1 none
+  Eigen::Vector3d contact_force_n = Eigen::Vector3d::Zero();  ///< environment force on tool [N]
+  Eigen::Vector3d control_force_n = Eigen::Vector3d::Zero();  ///< PD force applied [N]
+  double penetration_m = 0.0;                                 ///< deepest plane penetration [m]
+  int contact_object = -1;                                    ///< plane id touched, -1 none
   double sim_time_s = 0.0;
 };
 

@@ -52,8 +52,9 @@ TEST(Config, MissingRequiredFieldIsNamed) {
 
 TEST(Config, ChoiceListsAllowedValues) {
   const Node n = Node::parse("integrator: rk4", "a.yaml");
-  const std::string msg =
-      error_of([&] { n.choice("integrator", {"explicit-euler", "symplectic-euler"}); });
+  const std::string msg = error_of([&] {
+    n.choice("integrator", {"explicit-euler", "symplectic-euler"});
+  });
   EXPECT_NE(msg.find("rk4"), std::string::npos) << msg;
   EXPECT_NE(msg.find("symplectic-euler"), std::string::npos) << msg;
 }

@@ -48,7 +48,9 @@ TEST(RateLoop, HoldsRateAndCountsOverruns) {
   EXPECT_EQ(loop.iterations(), 50u);
   // a deliberate 20 ms stall must be counted as missed periods
   const auto before = loop.overruns();
-  struct timespec ts{0, 20'000'000};
+  struct timespec ts {
+    0, 20'000'000
+  };
   nanosleep(&ts, nullptr);
   loop.wait();
   EXPECT_GE(loop.overruns() - before, 10u);

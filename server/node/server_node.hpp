@@ -1,0 +1,47 @@
+#pragma once
+// The server's DDS node: owns the world, steps it at a fixed rate, applies the newest valid
+// MasterCommand, publishes SlaveState every step, the scene once, mesh frames at the visual
+// rate (from its own thread), events on change and ServerStats periodically.
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "common/dds/participant.hpp"
+#include "server/world/scene.hpp"
+#include "server/world/world.hpp"
+
+namespace teleop::server {
+
+struct ServerOptions {
+  dds::ParticipantOptions dds;
+  double rate_hz = 1000.0;          ///< physics rate [Hz]
+  double command_timeout_s = 0.05;  ///< watchdog [s]
+  double duration_s = 0.0;          ///< stop after this long; 0 = until SIGINT/SIGTERM [s]
+  double stats_period_s = 1.0;      ///< ServerStats period [s]
+  std::string summary_json;         ///< write a JSON summary here at exit (optional)
+  bool quiet = false;
+};
+
+/// Counters of commands seen by the reader thread (atomics: written there, read by the loop).
+struct CommandCounters {
+  std::atomic<std::uint64_t> received{0};
+  std::atomic<std::uint64_t> accepted{0};
+  std::atomic<std::uint64_t> rejected_nan{0};
+  std::atomic<std::uint64_t> rejected_workspace{0};
+  std::atomic<std::uint64_t> rejected_stale{0};
+};
+
+class ServerNode {
+ public:
+  ServerNode(const ServerOptions& options, const sim::SceneConfig& scene);
+  ~ServerNode();
+  /// Runs until stop_requested() or the duration elapses. Returns the process exit status.
+  int run();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace teleop::server

@@ -1,0 +1,110 @@
+#include "server/world/scene.hpp"
+
+namespace teleop::sim {
+
+namespace {
+Eigen::Vector3d vec3(const config::Node& n, const std::string& key, const Eigen::Vector3d& def,
+                     double lo, double hi) {
+  const auto v = n.numbers_or(key, {def.x(), def.y(), def.z()}, lo, hi);
+  return {v[0], v[1], v[2]};
+}
+}  // namespace
+
+SceneConfig parse_scene(const config::Node& root) {
+  SceneConfig s;
+  s.file = root.file();
+  root.reject_unknown_keys(
+      {"name", "kind", "physics", "command", "tool", "planes", "robot", "deformables"});
+  s.name = root.string_or("name", s.name);
+  s.kind = root.choice_or("kind", s.kind, {"tool", "robot"});
+
+  if (root.has("physics")) {
+    const auto p = root.at("physics");
+    p.reject_unknown_keys({"rate_hz", "visual_rate_hz", "gravity_mps2"});
+    s.physics_rate_hz = p.number_or("rate_hz", s.physics_rate_hz, 10.0, 20000.0);
+    s.visual_rate_hz = p.number_or("visual_rate_hz", s.visual_rate_hz, 1.0, 240.0);
+    s.gravity_mps2 = vec3(p, "gravity_mps2", s.gravity_mps2, -100.0, 100.0);
+  }
+  if (root.has("command")) {
+    const auto c = root.at("command");
+    c.reject_unknown_keys({"timeout_s", "workspace_min_m", "workspace_max_m"});
+    s.command_timeout_s = c.number_or("timeout_s", s.command_timeout_s, 0.001, 10.0);
+    s.workspace_min_m = vec3(c, "workspace_min_m", s.workspace_min_m, -100.0, 100.0);
+    s.workspace_max_m = vec3(c, "workspace_max_m", s.workspace_max_m, -100.0, 100.0);
+    for (int i = 0; i < 3; ++i) {
+      if (s.workspace_min_m[i] >= s.workspace_max_m[i]) {
+        c.fail("workspace_min_m", "element " + std::to_string(i) + " must be below " +
+                                      "workspace_max_m's (" + std::to_string(s.workspace_max_m[i]) +
+                                      ")");
+      }
+    }
+  }
+  s.tool.gravity_mps2 = s.gravity_mps2;
+  if (root.has("tool")) {
+    const auto t = root.at("tool");
+    t.reject_unknown_keys({"mass_kg", "radius_m", "kp_n_per_m", "kd_ns_per_m", "kp_rot_nm_per_rad",
+                           "kd_rot_nms_per_rad", "linear_damping_ns_per_m", "max_force_n",
+                           "gravity_compensation", "start_position_m"});
+    s.tool.mass_kg = t.number_or("mass_kg", s.tool.mass_kg, 1e-3, 100.0);
+    s.tool.radius_m = t.number_or("radius_m", s.tool.radius_m, 1e-3, 1.0);
+    s.tool.kp_n_per_m = t.number_or("kp_n_per_m", s.tool.kp_n_per_m, 0.0, 1e6);
+    s.tool.kd_ns_per_m = t.number_or("kd_ns_per_m", s.tool.kd_ns_per_m, 0.0, 1e4);
+    s.tool.kp_rot_nm_per_rad = t.number_or("kp_rot_nm_per_rad", s.tool.kp_rot_nm_per_rad, 0, 1e4);
+    s.tool.kd_rot_nms_per_rad =
+        t.number_or("kd_rot_nms_per_rad", s.tool.kd_rot_nms_per_rad, 0, 1e3);
+    s.tool.linear_damping_ns_per_m =
+        t.number_or("linear_damping_ns_per_m", s.tool.linear_damping_ns_per_m, 0.0, 1e4);
+    s.tool.max_force_n = t.number_or("max_force_n", s.tool.max_force_n, 0.1, 1e5);
+    s.tool.gravity_compensation = t.boolean_or("gravity_compensation", true);
+    s.tool_start_m = vec3(t, "start_position_m", s.tool_start_m, -100.0, 100.0);
+  }
+  if (root.has("planes")) {
+    const auto ps = root.at("planes");
+    if (!ps.is_sequence()) ps.fail("", "must be a list of planes");
+    if (ps.size() > static_cast<std::size_t>(kMaxPlanes)) {
+      root.fail("planes", "has " + std::to_string(ps.size()) + " entries; at most " +
+                              std::to_string(kMaxPlanes) + " are allowed");
+    }
+    for (std::size_t i = 0; i < ps.size(); ++i) {
+      const auto p = ps.at(i);
+      p.reject_unknown_keys(
+          {"name", "normal", "offset_m", "stiffness_n_per_m", "damping_ns_per_m", "friction"});
+      Plane pl;
+      pl.id = static_cast<int>(100 + i);
+      pl.name = p.string_or("name", "plane" + std::to_string(i));
+      const auto n = p.numbers("normal", 3, -1e3, 1e3);
+      pl.normal = Eigen::Vector3d(n[0], n[1], n[2]);
+      if (pl.normal.norm() < 1e-6) p.fail("normal", "must not be the zero vector");
+      pl.normal.normalize();
+      pl.offset_m = p.number_or("offset_m", 0.0, -100.0, 100.0);
+      pl.stiffness_n_per_m = p.number_or("stiffness_n_per_m", pl.stiffness_n_per_m, 1.0, 1e8);
+      pl.damping_ns_per_m = p.number_or("damping_ns_per_m", pl.damping_ns_per_m, 0.0, 1e6);
+      pl.friction = p.number_or("friction", pl.friction, 0.0, 5.0);
+      s.planes.push_back(pl);
+    }
+  }
+  s.tool.plane_count = static_cast<int>(s.planes.size());
+  for (std::size_t i = 0; i < s.planes.size(); ++i) s.tool.planes[i] = s.planes[i];
+
+  if (root.has("robot")) s.robot_node = root.at("robot");
+  if (s.kind == "robot" && !s.robot_node) {
+    root.fail("robot", "is required when kind is 'robot'");
+  }
+  if (root.has("deformables")) {
+    const auto ds = root.at("deformables");
+    if (!ds.is_sequence()) ds.fail("", "must be a list of deformable bodies");
+    for (std::size_t i = 0; i < ds.size(); ++i) s.deformable_nodes.push_back(ds.at(i));
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (s.tool_start_m[i] < s.workspace_min_m[i] || s.tool_start_m[i] > s.workspace_max_m[i]) {
+      root.fail("tool.start_position_m", "must lie inside the command workspace");
+    }
+  }
+  return s;
+}
+
+SceneConfig load_scene(const std::string& file) {
+  return parse_scene(config::Node::load_file(file));
+}
+
+}  // namespace teleop::sim

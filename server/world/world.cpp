@@ -1,0 +1,58 @@
+#include "server/world/world.hpp"
+
+#include <cmath>
+
+namespace teleop::sim {
+
+ToolWorld::ToolWorld(const SceneConfig& scene) : model_(scene.tool) {
+  state_.position_m = scene.tool_start_m;
+  state_.hold_position_m = scene.tool_start_m;
+  out_.tip_position_m = state_.position_m;
+}
+
+void ToolWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) {
+  ToolInput in;
+  in.target_position_m = cmd.position_m;
+  in.target_orientation = cmd.orientation;
+  in.target_velocity_mps = cmd.velocity_mps;
+  in.target_angular_velocity_radps = cmd.angular_velocity_radps;
+  in.kp_override_n_per_m = cmd.kp_override_n_per_m;
+  in.hold = cmd.hold;
+  const ToolState before = state_;
+  tool_step(model_, state_, in, dt_s);
+
+  // numerical fault: restore the last good state, zero its velocity, report
+  if (!state_.position_m.allFinite() || !state_.velocity_mps.allFinite() ||
+      !state_.orientation.coeffs().allFinite()) {
+    state_ = before;
+    state_.velocity_mps.setZero();
+    state_.angular_velocity_radps.setZero();
+    state_.contact_force_n.setZero();
+    events.push(EventKind::kFault, Severity::kError, state_.sim_time_s, 0.0,
+                "tool step produced a non-finite state; restored the previous state");
+  }
+
+  out_.tip_position_m = state_.position_m;
+  out_.tip_orientation = state_.orientation;
+  out_.tip_velocity_mps = state_.velocity_mps;
+  out_.tip_angular_velocity_radps = state_.angular_velocity_radps;
+  out_.contact_force_n = state_.contact_force_n;
+  out_.penetration_m = state_.penetration_m;
+  out_.contact_object = state_.contact_object;
+  out_.in_contact = state_.contact_object >= 0;
+  out_.sim_time_s = state_.sim_time_s;
+  if (out_.in_contact != was_in_contact_) {
+    events.push(out_.in_contact ? EventKind::kContactBegin : EventKind::kContactEnd,
+                Severity::kInfo, out_.sim_time_s, out_.contact_object,
+                out_.in_contact ? "tool contact begins" : "tool contact ends");
+    was_in_contact_ = out_.in_contact;
+  }
+}
+
+std::unique_ptr<World> make_world(const SceneConfig& scene) {
+  if (scene.kind == "tool") return std::make_unique<ToolWorld>(scene);
+  throw config::ConfigError(scene.file + ": field 'kind': value '" + scene.kind +
+                            "' is not supported by this build yet (supported: tool)");
+}
+
+}  // namespace teleop::sim

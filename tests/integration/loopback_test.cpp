@@ -1,0 +1,227 @@
+// Multi-process tests over loopback DDS: real teleop_server and teleop_master processes,
+// each test on a domain id of its own (tests/support/domains.hpp).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "common/dds/endpoint.hpp"
+#include "common/util/clock.hpp"
+#include "teleop/idl/TeleopPubSubTypes.h"
+#include "tests/support/domains.hpp"
+#include "tests/support/process.hpp"
+
+namespace teleop::test {
+namespace {
+
+const std::string kServer = std::string(TELEOP_BINARY_DIR) + "/server/teleop_server";
+const std::string kMaster = std::string(TELEOP_BINARY_DIR) + "/client/teleop_master";
+
+std::string tmp(const std::string& name) {
+  return (std::filesystem::temp_directory_path() /
+          ("teleop_it_" + std::to_string(getpid()) + "_" + name))
+      .string();
+}
+
+TEST(Loopback, ServerAndMasterRoundTrip2000CommandsAt1kHz) {
+  const std::string d = std::to_string(domains::kRoundTrip);
+  const std::string master_json = tmp("master.json"), server_json = tmp("server.json");
+  const std::string log = tmp("master.csv");
+  Process server(kServer, {"--domain", d, "--duration", "60", "--summary-json", server_json},
+                 "rt_server");
+  Process master(kMaster,
+                 {"--domain", d, "--samples", "2500", "--summary-json", master_json, "--log", log,
+                  "--motion", "press"},
+                 "rt_master");
+  ASSERT_EQ(master.wait_for(60.0), 0) << master.err();
+  server.signal(SIGTERM);
+  ASSERT_EQ(server.wait_for(20.0), 0) << server.err();
+
+  const std::string m = Process::slurp(master_json);
+  const double sent = json_value(m, "sent");
+  const double received = json_value(m, "received");
+  EXPECT_EQ(sent, 2500) << m;
+  EXPECT_GE(received, 0.99 * sent) << m;
+  EXPECT_EQ(json_value(m, "lost"), sent - received) << m;
+  // generous bound: a loaded 2-core CI machine, plus up to one physics period of waiting
+  const double p99 = json_nested(m, "rtt_ms", "p99");
+  EXPECT_GT(p99, 0.0) << m;
+  EXPECT_LT(p99, 50.0) << m;
+  EXPECT_GE(json_nested(m, "rtt_ms", "count"), 0.9 * sent) << m;
+  EXPECT_FALSE(std::isnan(json_nested(m, "loop_jitter_us", "p50"))) << m;
+  EXPECT_FALSE(std::isnan(json_nested(m, "loop_jitter_us", "p99"))) << m;
+
+  const std::string s = Process::slurp(server_json);
+  EXPECT_GE(json_value(s, "commands_received"), received) << s;
+  EXPECT_EQ(json_value(s, "commands_rejected_nan"), 0) << s;
+  EXPECT_EQ(json_value(s, "faults"), 0) << s;
+  EXPECT_NE(master.out().find("session summary"), std::string::npos);
+  // the CSV log has a header and one row per command
+  const std::string csv = Process::slurp(log);
+  EXPECT_EQ(static_cast<int>(std::count(csv.begin(), csv.end(), '\n')), 2501);
+  // the press motion reaches the floor: some contact was felt
+  EXPECT_NE(csv.find(",1\n"), std::string::npos);
+}
+
+TEST(Loopback, UnknownFlagsPrintUsageAndExit2) {
+  Process s(kServer, {"--no-such-flag"}, "flag_server");
+  EXPECT_EQ(s.wait_for(10.0), 2);
+  EXPECT_NE(s.err().find("Usage"), std::string::npos) << s.err();
+  Process m(kMaster, {"--samples", "ten"}, "flag_master");
+  EXPECT_EQ(m.wait_for(10.0), 2);
+  Process m2(kMaster, {"--motion", "teleport"}, "flag_master2");
+  EXPECT_EQ(m2.wait_for(10.0), 2);
+  Process m3(kMaster, {"--rate", "0"}, "flag_master3");
+  EXPECT_EQ(m3.wait_for(10.0), 2);
+  EXPECT_NE(m3.err().find("--rate"), std::string::npos) << m3.err();
+}
+
+TEST(Loopback, BadSceneNamesFileFieldValueAndRangeAndExits2) {
+  const std::string scene = tmp("bad_scene.yaml");
+  std::ofstream(scene) << "name: bad\nphysics:\n  rate_hz: -5\n";
+  Process s(kServer, {"--scene", scene, "--domain", "200"}, "bad_scene");
+  EXPECT_EQ(s.wait_for(10.0), 2);
+  const std::string err = s.err();
+  EXPECT_NE(err.find(scene), std::string::npos) << err;
+  EXPECT_NE(err.find("physics.rate_hz"), std::string::npos) << err;
+  EXPECT_NE(err.find("-5"), std::string::npos) << err;
+  EXPECT_NE(err.find("[10, 20000]"), std::string::npos) << err;
+}
+
+TEST(Loopback, BadProfileOrDomainExits2) {
+  Process s(kServer, {"--profile", "no_such_profile"}, "bad_profile");
+  EXPECT_EQ(s.wait_for(10.0), 2);
+  EXPECT_NE(s.err().find("loopback"), std::string::npos) << s.err();  // lists what exists
+  Process m(kMaster, {"--domain", "999"}, "bad_domain");
+  EXPECT_EQ(m.wait_for(10.0), 2);
+  EXPECT_NE(m.err().find("[0, 232]"), std::string::npos) << m.err();
+}
+
+/// Publishes hand-made commands into a server, as a broken or hostile master would.
+class CommandInjector {
+ public:
+  explicit CommandInjector(int domain)
+      : participant_(dds::ParticipantOptions{"loopback", domain, "injector"}),
+        writer_(participant_, dds::topics::kMasterCommand, dds::TopicQos::kStream),
+        reader_(participant_, dds::topics::kSlaveState, dds::TopicQos::kStream,
+                [this](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo&) {
+                  holding_ = s.holding();
+                  ++states_;
+                  last_x_ = s.tip_position_m()[0];
+                }) {}
+
+  bool wait_matched(double timeout_s) {
+    const auto t0 = now_ns();
+    while (seconds_between(t0, now_ns()) < timeout_s) {
+      if (writer_.matched() > 0 && states_ > 0) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return false;
+  }
+  void send(MasterCommand c) {
+    c.send_time_ns(now_ns());
+    writer_.write(c);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  bool holding() const { return holding_; }
+  double last_x() const { return last_x_; }
+
+ private:
+  dds::Participant participant_;
+  dds::Writer<MasterCommandPubSubType> writer_;
+  std::atomic<bool> holding_{false};
+  std::atomic<int> states_{0};
+  std::atomic<double> last_x_{0.0};
+  dds::Reader<SlaveStatePubSubType> reader_;
+};
+
+MasterCommand command(std::uint64_t seq, double x) {
+  MasterCommand c;
+  c.seq(seq);
+  c.position_m() = {x, 0.0, 0.4};
+  c.orientation_wxyz() = {1, 0, 0, 0};
+  c.enabled(true);
+  return c;
+}
+
+TEST(Loopback, InvalidCommandsAreRejectedCountedAndNeverReachThePhysics) {
+  const int domain = domains::kBadCommands;
+  const std::string server_json = tmp("bad_cmd_server.json");
+  Process server(kServer,
+                 {"--domain", std::to_string(domain), "--duration", "60", "--summary-json",
+                  server_json, "--command-timeout", "5"},
+                 "bad_cmd_server");
+  CommandInjector inj(domain);
+  ASSERT_TRUE(inj.wait_matched(20.0));
+  std::uint64_t seq = 0;
+  for (int i = 0; i < 20; ++i) inj.send(command(++seq, 0.5));  // valid, x = 0.5
+  auto nan_cmd = command(++seq, std::nan(""));
+  for (int i = 0; i < 5; ++i) {
+    nan_cmd.seq(++seq);
+    inj.send(nan_cmd);
+  }
+  auto inf_cmd = command(++seq, 0.5);
+  inf_cmd.linear_velocity_mps()[1] = INFINITY;
+  inj.send(inf_cmd);
+  for (int i = 0; i < 4; ++i) inj.send(command(++seq, 50.0));  // far outside the workspace
+  inj.send(command(3, 0.9));                                   // stale: old sequence number
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  // the tool tracked only the valid commands
+  EXPECT_NEAR(inj.last_x(), 0.5, 0.02);
+  server.signal(SIGTERM);
+  ASSERT_EQ(server.wait_for(20.0), 0) << server.err();
+  const std::string s = Process::slurp(server_json);
+  EXPECT_EQ(json_value(s, "commands_rejected_nan"), 6) << s;
+  EXPECT_EQ(json_value(s, "commands_rejected_workspace"), 4) << s;
+  EXPECT_EQ(json_value(s, "commands_rejected_stale"), 1) << s;
+  EXPECT_EQ(json_value(s, "commands_accepted"), 20) << s;
+  EXPECT_EQ(json_value(s, "faults"), 0) << s;
+}
+
+TEST(Loopback, ServerHoldsTheSlaveWhenCommandsStop) {
+  const int domain = domains::kWatchdog;
+  const std::string server_json = tmp("wd_server.json");
+  Process server(kServer,
+                 {"--domain", std::to_string(domain), "--duration", "60", "--summary-json",
+                  server_json, "--command-timeout", "0.05"},
+                 "wd_server");
+  CommandInjector inj(domain);
+  ASSERT_TRUE(inj.wait_matched(20.0));
+  std::uint64_t seq = 0;
+  for (int i = 0; i < 100; ++i) inj.send(command(++seq, 0.5));
+  EXPECT_FALSE(inj.holding());
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));  // silence > 50 ms
+  EXPECT_TRUE(inj.holding());
+  for (int i = 0; i < 50; ++i) inj.send(command(++seq, 0.5));  // commands resume
+  EXPECT_FALSE(inj.holding());
+  server.signal(SIGTERM);
+  ASSERT_EQ(server.wait_for(20.0), 0);
+  EXPECT_EQ(json_value(Process::slurp(server_json), "watchdog_trips"), 1);
+}
+
+TEST(Loopback, MasterFadesForceToZeroWhenTheServerDisappears) {
+  const std::string d = std::to_string(domains::kLinkLoss);
+  const std::string master_json = tmp("ll_master.json"), log = tmp("ll_master.csv");
+  Process server(kServer, {"--domain", d, "--duration", "60"}, "ll_server");
+  Process master(kMaster,
+                 {"--domain", d, "--duration", "4", "--summary-json", master_json, "--log", log,
+                  "--motion", "press", "--link-timeout", "0.05"},
+                 "ll_master");
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  server.signal(SIGKILL);  // abrupt loss, no goodbye
+  ASSERT_EQ(master.wait_for(30.0), 0) << master.err();
+  const std::string m = Process::slurp(master_json);
+  EXPECT_GE(json_value(m, "link_losses"), 1) << m;
+  // the last rows of the log: link down and zero rendered force
+  const std::string csv = Process::slurp(log);
+  const auto last_line_start = csv.rfind('\n', csv.size() - 2) + 1;
+  const std::string last = csv.substr(last_line_start);
+  EXPECT_NE(last.find(",0,0,0,"), std::string::npos) << last;  // fm_x, fm_y, fm_z == 0
+  std::system("fastdds shm clean >/dev/null 2>&1");  // the killed server leaked SHM segments
+}
+
+}  // namespace
+}  // namespace teleop::test

@@ -1,0 +1,14 @@
+#pragma once
+// DDS domain ids owned by tests: each test that touches DDS uses its own, so tests running in
+// parallel never hear each other. Add new ids here; never reuse one.
+namespace teleop::test::domains {
+inline constexpr int kRoundTrip = 41;
+inline constexpr int kBadCommands = 42;
+inline constexpr int kWatchdog = 43;
+inline constexpr int kLinkLoss = 44;
+inline constexpr int kObservers = 45;
+inline constexpr int kDdsHelpers = 46;
+inline constexpr int kExperiment3 = 47;
+inline constexpr int kMeshTopics = 48;
+// 60-99: reserved for more integration tests; 100+: benchmarks
+}  // namespace teleop::test::domains
