@@ -5,6 +5,10 @@
 
 namespace teleop::sim {
 
+namespace {
+constexpr double kDampingRampDepthM = 1e-3;  // [m]
+}  // namespace
+
 void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input, double dt) {
   // hold: latch the pose once and track it with zero velocity
   if (input.hold && !state.was_holding) state.hold_position_m = state.position_m;
@@ -31,7 +35,10 @@ void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input,
     if (gap >= 0.0) continue;
     const double depth = -gap;
     const double vn = pl.normal.dot(state.velocity_mps);
-    const double mag = std::max(0.0, pl.stiffness_n_per_m * depth - pl.damping_ns_per_m * vn);
+    // damping ramps in over the first millimetre so the force is continuous at contact onset
+    const double ramp = std::min(1.0, depth / kDampingRampDepthM);
+    const double mag =
+        std::max(0.0, pl.stiffness_n_per_m * depth - ramp * pl.damping_ns_per_m * vn);
     f_contact += mag * pl.normal;
     if (depth > state.penetration_m) {
       state.penetration_m = depth;

@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -20,6 +22,8 @@ class Process {
   Process(const std::string& exe, const std::vector<std::string>& args, const std::string& tag)
       : out_path_("/tmp/teleop_test_" + tag + "_" + std::to_string(getpid()) + ".out"),
         err_path_("/tmp/teleop_test_" + tag + "_" + std::to_string(getpid()) + ".err") {
+    std::fflush(stdout);
+    std::fflush(stderr);
     pid_ = fork();
     if (pid_ == 0) {
       if (!freopen(out_path_.c_str(), "w", stdout)) _exit(126);
@@ -42,6 +46,7 @@ class Process {
   Process& operator=(const Process&) = delete;
 
   bool running() const { return pid_ > 0 && !done_; }
+  pid_t pid() const { return pid_; }
   void signal(int sig) {
     if (running()) kill(pid_, sig);
   }

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Installs missing packages, configures and builds (-j2). Used by run_session.sh and
+# run_tests.sh. BUILD_DIR (default: build) and CMAKE_ARGS may be set by the caller.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build_dir="${BUILD_DIR:-$root/build}"
+bash "$root/deploy/setup.sh"
+generator=()
+command -v ninja >/dev/null 2>&1 && generator=(-G Ninja)
+if [ ! -f "$build_dir/CMakeCache.txt" ]; then
+  # shellcheck disable=SC2086
+  cmake -S "$root" -B "$build_dir" "${generator[@]}" ${CMAKE_ARGS:-}
+fi
+cmake --build "$build_dir" -j2

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# The main job: set up, build, run a teleoperation session on the default scene with
+# teleop_server and teleop_master as separate processes on loopback, print a summary and
+# write charts.
+#   deploy/run_session.sh [--duration S] [--out DIR] [extra teleop_master flags...]
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+duration=10
+out="$root/out/session"
+extra=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --duration) duration="$2"; shift 2 ;;
+    --out) out="$2"; shift 2 ;;
+    *) extra+=("$1"); shift ;;
+  esac
+done
+bash "$root/deploy/build.sh"
+build_dir="${BUILD_DIR:-$root/build}"
+mkdir -p "$out"
+domain="${TELEOP_DOMAIN:-7}"
+
+echo "== teleop session: default scene, ${duration} s, loopback, domain ${domain} =="
+"$build_dir/server/teleop_server" --domain "$domain" --quiet \
+  --summary-json "$out/server.json" &
+server_pid=$!
+trap 'kill $server_pid 2>/dev/null || true' EXIT
+"$build_dir/client/teleop_master" --domain "$domain" --duration "$duration" \
+  --motion press --log "$out/master.csv" --summary-json "$out/master.json" "${extra[@]}"
+kill -TERM "$server_pid"
+wait "$server_pid" || true
+trap - EXIT
+
+/usr/bin/python3 "$root/tests/charts/session.py" "$out/master.csv" "$out/session.png" \
+  && echo "chart: $out/session.png"
+echo "server summary: $out/server.json"
+echo "master summary: $out/master.json"
