@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -221,6 +222,49 @@ TEST(Loopback, MasterFadesForceToZeroWhenTheServerDisappears) {
   const std::string last = csv.substr(last_line_start);
   EXPECT_NE(last.find(",0,0,0,"), std::string::npos) << last;  // fm_x, fm_y, fm_z == 0
   std::system("fastdds shm clean >/dev/null 2>&1");  // the killed server leaked SHM segments
+}
+
+}  // namespace
+}  // namespace teleop::test
+
+namespace teleop::test {
+namespace {
+
+/// Largest "<name> <rate> Hz" figure printed by teleop_monitor.
+double max_rate(const std::string& out, const std::string& name) {
+  double best = 0.0;
+  std::size_t pos = 0;
+  while ((pos = out.find(name, pos)) != std::string::npos) {
+    pos += name.size();
+    best = std::max(best, std::atof(out.c_str() + pos));
+  }
+  return best;
+}
+
+TEST(Loopback, ObserversJoinAndLeaveWithoutDisturbingTheLoop) {
+  const std::string d = std::to_string(domains::kMonitor);
+  const std::string master_json = tmp("obs_master.json");
+  const std::string monitor = std::string(TELEOP_BINARY_DIR) + "/client/teleop_monitor";
+  // server and master start together; observers join later and leave before the end
+  Process server(kServer, {"--domain", d, "--duration", "60"}, "obs_server");
+  Process master(kMaster, {"--domain", d, "--samples", "4000", "--summary-json", master_json},
+                 "obs_master");
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  Process mon1(monitor, {"--domain", d, "--duration", "2", "--period", "0.5"}, "obs_mon1");
+  Process mon2(monitor, {"--domain", d, "--duration", "1.5", "--period", "0.5"}, "obs_mon2");
+  ASSERT_EQ(mon1.wait_for(30.0), 0) << mon1.err();
+  ASSERT_EQ(mon2.wait_for(30.0), 0) << mon2.err();
+  ASSERT_EQ(master.wait_for(60.0), 0) << master.err();
+  server.signal(SIGTERM);
+  ASSERT_EQ(server.wait_for(20.0), 0);
+  for (const Process* mon : {&mon1, &mon2}) {
+    const std::string out = mon->out();
+    EXPECT_GT(max_rate(out, "slave_state"), 500.0) << out;
+    EXPECT_GT(max_rate(out, "master_state"), 50.0) << out;
+    EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos) << out;  // transient local
+  }
+  const std::string m = Process::slurp(master_json);
+  EXPECT_GE(json_value(m, "received"), 0.99 * json_value(m, "sent")) << m;
 }
 
 }  // namespace

@@ -10,5 +10,6 @@ inline constexpr int kObservers = 45;
 inline constexpr int kDdsHelpers = 46;
 inline constexpr int kExperiment3 = 47;
 inline constexpr int kMeshTopics = 48;
+inline constexpr int kMonitor = 49;
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
