@@ -28,7 +28,7 @@ TEST(RobotModel, LoadsThePuma560SceneFragment) {
   EXPECT_NEAR(m.links[5].com_m.z(), (0.09 * 0.032 + 0.1 * 0.2) / 0.19, 1e-12);
   EXPECT_NEAR(m.links[0].q_min_rad, -160.0 * M_PI / 180.0, 1e-12);
   EXPECT_NEAR(m.links[0].viscous_nms_per_rad, 5.80, 1e-12);
-  EXPECT_NEAR(m.q_home(1), M_PI / 4, 1e-12);
+  EXPECT_NEAR(m.q_home(1), 78.0 * M_PI / 180.0, 1e-12);
 }
 
 TEST(RobotModel, CombineMassesUsesParallelAxisTheorem) {

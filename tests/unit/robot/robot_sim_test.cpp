@@ -253,13 +253,19 @@ TEST(RobotSim, TipTouchesTheWall) {
   const RobotModel m = testing::puma();
   const std::vector<Plane> planes = default_robot_planes();
   RobotSim sim(m, planes);
-  run(sim, track(Eigen::Vector3d(0.25, 0.45, 0.45)), 1.5);
-  run(sim, track(Eigen::Vector3d(0.25, 0.6, 0.45)), 1.5);
+  // tool horizontal, pointing at the wall (+y), then a target 5 cm beyond the touching point
+  RobotInput in = track(Eigen::Vector3d(0.3, 0.45, 0.45));
+  in.target_orientation = Eigen::Quaterniond(Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()));
+  run(sim, in, 1.5);
+  in.target_position_m = Eigen::Vector3d(0.3, 0.6, 0.45);
+  run(sim, in, 1.5);
   const RobotState& s = sim.state();
   EXPECT_TRUE(s.tip_in_contact);
   EXPECT_EQ(s.tip_contact_plane, 101);
   EXPECT_LT(s.tip_contact_force_n.y(), -5.0);  // the wall pushes back along -y
   EXPECT_LT(s.tip_pose.translation().y(), 0.6 - m.tip_radius_m + 1e-3);
+  EXPECT_GT(s.tip_pose.translation().y(), 0.6 - m.tip_radius_m - 0.01);
+  EXPECT_EQ(s.link_contacts, 0);
 }
 
 TEST(RobotSim, QuickStepAlsoHoldsAndTracks) {
