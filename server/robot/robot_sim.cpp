@@ -164,6 +164,17 @@ RobotSim::RobotSim(const RobotModel& model, const std::vector<Plane>& planes,
     plane_geoms_[k] = dCreatePlane(nullptr, nrm.x(), nrm.y(), nrm.z(), pl.offset_m);
   }
 
+  // grow the contact joint group's arena to its largest size once (it keeps its memory when
+  // emptied), and run one step with every contact so that ODE's step arena is sized too
+  for (int k = 0; k < kMaxContacts; ++k) {
+    dContact c{};
+    c.geom.normal[2] = 1.0;
+    dJointAttach(dJointCreateContact(world_, contact_group_, &c), bodies_[0], nullptr);
+  }
+  dWorldStep(world_, 1e-6);
+  dWorldQuickStep(world_, 1e-6);
+  dJointGroupEmpty(contact_group_);
+
   state_.n = n;
   reset(model_.q_home);
 }
