@@ -28,10 +28,10 @@ using teleop::sim::robot::RobotSimOptions;
 
 /// One waypoint of the commanded tip path.
 struct Waypoint {
-  Eigen::Vector3d p;       ///< tip centre [m]
-  Eigen::Quaterniond R;    ///< tool orientation
-  double move_s;           ///< time to reach it from the previous waypoint [s]
-  double dwell_s;          ///< time spent at it [s]
+  Eigen::Vector3d p;     ///< tip centre [m]
+  Eigen::Quaterniond R;  ///< tool orientation
+  double move_s;         ///< time to reach it from the previous waypoint [s]
+  double dwell_s;        ///< time spent at it [s]
   const char* label;
 };
 
@@ -43,8 +43,7 @@ void min_jerk(double u, double& s, double& ds) {
 }
 
 int run_robot_reach(const teleop::CommandArgs& args) {
-  const std::string scene =
-      args.option("--scene", teleop::sim::robot::default_robot_scene_path());
+  const std::string scene = args.option("--scene", teleop::sim::robot::default_robot_scene_path());
   const std::string stepper = args.option("--stepper", "step");
   if (stepper != "step" && stepper != "quick") {
     throw teleop::config::ConfigError("--stepper: value '" + stepper +
@@ -86,13 +85,15 @@ int run_robot_reach(const teleop::CommandArgs& args) {
       {home, home_R, 1.0, 0.5, "home"},
   };
 
-  teleop::CsvWriter csv((args.out_dir / "robot_reach.csv").string(),
-                        {"t_s", "segment", "target_x_m", "target_y_m", "target_z_m", "tip_x_m",
-                         "tip_y_m", "tip_z_m", "error_m", "orientation_error_rad", "force_x_n",
-                         "force_y_n", "force_z_n", "force_n", "in_contact", "contact_plane",
-                         "penetration_m", "sigma_min_m", "q1_rad", "q2_rad", "q3_rad", "q4_rad",
-                         "q5_rad", "q6_rad", "tau1_nm", "tau2_nm", "tau3_nm", "tau4_nm",
-                         "tau5_nm", "tau6_nm", "link_contacts"});
+  teleop::CsvWriter csv(
+      (args.out_dir / "robot_reach.csv").string(),
+      {"t_s",           "segment",       "target_x_m",  "target_y_m", "target_z_m",
+       "tip_x_m",       "tip_y_m",       "tip_z_m",     "error_m",    "orientation_error_rad",
+       "force_x_n",     "force_y_n",     "force_z_n",   "force_n",    "in_contact",
+       "contact_plane", "penetration_m", "sigma_min_m", "q1_rad",     "q2_rad",
+       "q3_rad",        "q4_rad",        "q5_rad",      "q6_rad",     "tau1_nm",
+       "tau2_nm",       "tau3_nm",       "tau4_nm",     "tau5_nm",    "tau6_nm",
+       "link_contacts"});
   teleop::CsvWriter ev_csv((args.out_dir / "robot_reach_events.csv").string(),
                            {"t_s", "kind", "value", "message"});
 
@@ -113,9 +114,8 @@ int run_robot_reach(const teleop::CommandArgs& args) {
       double s = 1.0, ds = 0.0;
       if (move > 0.0) min_jerk(tl / move, s, ds);
       in.target_position_m = a.p + s * (b.p - a.p);
-      in.target_velocity_mps = move > 0.0 && tl < move
-                                   ? Eigen::Vector3d((ds / move) * (b.p - a.p))
-                                   : Eigen::Vector3d::Zero();
+      in.target_velocity_mps = move > 0.0 && tl < move ? Eigen::Vector3d((ds / move) * (b.p - a.p))
+                                                       : Eigen::Vector3d::Zero();
       in.target_orientation = a.R.slerp(s, b.R);
       const Eigen::AngleAxisd dR(b.R * a.R.inverse());
       in.target_angular_velocity_radps = move > 0.0 && tl < move
@@ -127,10 +127,10 @@ int run_robot_reach(const teleop::CommandArgs& args) {
       const auto& st = sim.state();
       const Eigen::Vector3d tip = st.tip_pose.translation();
       const double err = (tip - in.target_position_m).norm();
-      const double rot_err = teleop::sim::robot::rotation_vector(
-                                 in.target_orientation.toRotationMatrix() *
-                                 st.tip_pose.linear().transpose())
-                                 .norm();
+      const double rot_err =
+          teleop::sim::robot::rotation_vector(in.target_orientation.toRotationMatrix() *
+                                              st.tip_pose.linear().transpose())
+              .norm();
       const double f = st.tip_contact_force_n.norm();
       const bool pressing = std::string(b.label).find("press") != std::string::npos ||
                             std::string(b.label).find("touch") != std::string::npos;

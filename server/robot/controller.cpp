@@ -38,9 +38,9 @@ void controller_update(const RobotModel& model, ControllerState& s, const RobotI
     // task error at the reference configuration, plus the feed-forward twist
     forward_kinematics(model, s.q_ref, s.ref_frames);
     geometric_jacobian(model, s.ref_frames, s.ref_jacobian);
-    const Vector6d e = pose_error(in.target_position_m,
-                                  in.target_orientation.normalized().toRotationMatrix(),
-                                  s.ref_frames.tip.translation(), s.ref_frames.tip.linear());
+    const Vector6d e =
+        pose_error(in.target_position_m, in.target_orientation.normalized().toRotationMatrix(),
+                   s.ref_frames.tip.translation(), s.ref_frames.tip.linear());
     Eigen::Vector3d v = in.target_velocity_mps + ik.gain_per_s * e.head<3>();
     Eigen::Vector3d w = in.target_angular_velocity_radps + ik.gain_per_s * e.tail<3>();
     if (v.norm() > ik.max_tip_speed_mps) v *= ik.max_tip_speed_mps / v.norm();
@@ -143,8 +143,8 @@ void controller_update(const RobotModel& model, ControllerState& s, const RobotI
         ++s.limit_events;
         if (ev) {
           char msg[96];
-          std::snprintf(msg, sizeof(msg), "robot joint %d reference clamped at its limit (%.3f rad)",
-                        i + 1, qn);
+          std::snprintf(msg, sizeof(msg),
+                        "robot joint %d reference clamped at its limit (%.3f rad)", i + 1, qn);
           ev->push(EventKind::kLimit, Severity::kWarning, sim_time_s, static_cast<double>(i + 1),
                    msg);
         }
@@ -186,8 +186,8 @@ void joint_torque(const RobotModel& model, const JointCommand& cmd, const JointV
                   const JointVector& qd, JointVector& tau) {
   tau.resize(model.n);
   for (int i = 0; i < model.n; ++i) {
-    const double t = cmd.kp(i) * (cmd.q_ref(i) - q(i)) + cmd.kd(i) * (cmd.qd_ref(i) - qd(i)) +
-                     cmd.tau_ff(i);
+    const double t =
+        cmd.kp(i) * (cmd.q_ref(i) - q(i)) + cmd.kd(i) * (cmd.qd_ref(i) - qd(i)) + cmd.tau_ff(i);
     const double lim = model.links[i].torque_limit_nm;
     tau(i) = std::clamp(t, -lim, lim);
   }

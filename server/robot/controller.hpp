@@ -28,13 +28,13 @@ enum class ControlMode : std::uint8_t {
 struct RobotInput {
   ControlMode mode = ControlMode::kTrackPose;
   Eigen::Vector3d target_position_m = Eigen::Vector3d::Zero();  ///< tip centre, world [m]
-  Eigen::Quaterniond target_orientation = Eigen::Quaterniond::Identity();  ///< world
-  Eigen::Vector3d target_velocity_mps = Eigen::Vector3d::Zero();  ///< feed-forward [m/s]
+  Eigen::Quaterniond target_orientation = Eigen::Quaterniond::Identity();   ///< world
+  Eigen::Vector3d target_velocity_mps = Eigen::Vector3d::Zero();            ///< feed-forward [m/s]
   Eigen::Vector3d target_angular_velocity_radps = Eigen::Vector3d::Zero();  ///< [rad/s]
-  bool track_orientation = true;  ///< false: position only (3-row task)
-  JointVector target_q;           ///< kJointTarget goal [rad] (size n)
+  bool track_orientation = true;     ///< false: position only (3-row task)
+  JointVector target_q;              ///< kJointTarget goal [rad] (size n)
   bool gravity_compensation = true;  ///< add G(q) feed-forward
-  double gain_scale = 1.0;        ///< scales K_ps (Kd by its square root), (0, 10]
+  double gain_scale = 1.0;           ///< scales K_ps (Kd by its square root), (0, 10]
   /// External wrench on the tip from contact with the deformable body (computed elsewhere),
   /// world frame, at the tip centre: force [N] and torque [N m].
   Eigen::Vector3d external_force_n = Eigen::Vector3d::Zero();
@@ -43,22 +43,22 @@ struct RobotInput {
 
 /// Joint-level command produced by the controller for one step.
 struct JointCommand {
-  JointVector q_ref;       ///< position reference [rad]
-  JointVector qd_ref;      ///< velocity reference [rad/s]
-  JointVector kp;          ///< PD stiffness this step [N m/rad]
-  JointVector kd;          ///< PD damping this step [N m s/rad]
-  JointVector tau_ff;      ///< feed-forward torque: gravity + friction [N m]
-  JointVector tau_gravity; ///< the gravity part of tau_ff [N m]
+  JointVector q_ref;        ///< position reference [rad]
+  JointVector qd_ref;       ///< velocity reference [rad/s]
+  JointVector kp;           ///< PD stiffness this step [N m/rad]
+  JointVector kd;           ///< PD damping this step [N m s/rad]
+  JointVector tau_ff;       ///< feed-forward torque: gravity + friction [N m]
+  JointVector tau_gravity;  ///< the gravity part of tau_ff [N m]
 };
 
 /// Mutable controller state (all storage inline; reset with controller_reset).
 struct ControllerState {
-  JointVector q_ref;    ///< joint reference [rad]
-  JointVector qd_ref;   ///< reference velocity [rad/s]
-  Frames ref_frames;    ///< forward kinematics of q_ref
+  JointVector q_ref;   ///< joint reference [rad]
+  JointVector qd_ref;  ///< reference velocity [rad/s]
+  Frames ref_frames;   ///< forward kinematics of q_ref
   Jacobian ref_jacobian;
-  double sigma_min_m = 0.0;   ///< smallest weighted singular value of J at q_ref [m]
-  double damping_m = 0.0;     ///< DLS damping used last step [m]
+  double sigma_min_m = 0.0;  ///< smallest weighted singular value of J at q_ref [m]
+  double damping_m = 0.0;    ///< DLS damping used last step [m]
   bool near_singular = false;
   std::uint32_t limit_mask = 0;  ///< bit i: joint i's reference is clamped at a limit
   std::uint64_t limit_events = 0;

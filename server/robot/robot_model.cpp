@@ -40,8 +40,9 @@ Eigen::Matrix3d inertia(const config::Node& n, const std::string& key) {
   if (!n.has(key)) n.fail(key, "is required but missing");
   const config::Node c = n.at(key);
   if (!c.is_sequence() || (c.size() != 3 && c.size() != 6)) {
-    n.fail(key, "must be a list of 3 ([Ixx, Iyy, Izz]) or 6 ([Ixx, Iyy, Izz, Ixy, Ixz, Iyz]) "
-                "numbers [kg m^2]");
+    n.fail(key,
+           "must be a list of 3 ([Ixx, Iyy, Izz]) or 6 ([Ixx, Iyy, Izz, Ixy, Ixz, Iyz]) "
+           "numbers [kg m^2]");
   }
   const std::vector<double> v = n.numbers(key, c.size(), -1e4, 1e4);
   Eigen::Matrix3d i = Eigen::Matrix3d::Zero();
@@ -61,8 +62,9 @@ Eigen::Matrix3d inertia(const config::Node& n, const std::string& key) {
                     std::to_string(p.minCoeff()));
   }
   if (p(0) + p(1) < p(2) - tol || p(0) + p(2) < p(1) - tol || p(1) + p(2) < p(0) - tol) {
-    n.fail(key, "principal moments violate the triangle inequality (A + B >= C): not a rigid "
-                "body");
+    n.fail(key,
+           "principal moments violate the triangle inequality (A + B >= C): not a rigid "
+           "body");
   }
   return i;
 }
@@ -96,8 +98,8 @@ bool mesh_bounds(const std::string& file, double scale, Eigen::Vector3d& lo, Eig
 }
 
 LinkModel load_link(const config::Node& ln, int index, const std::filesystem::path& dir) {
-  ln.reject_unknown_keys({"name", "dh", "mass_kg", "com_m", "inertia_kgm2", "box", "mesh",
-                          "joint"});
+  ln.reject_unknown_keys(
+      {"name", "dh", "mass_kg", "com_m", "inertia_kgm2", "box", "mesh", "joint"});
   LinkModel l;
   l.name = ln.string_or("name", "link" + std::to_string(index + 1));
 
@@ -141,9 +143,8 @@ LinkModel load_link(const config::Node& ln, int index, const std::filesystem::pa
   if (!have_box) ln.fail("box", "is required (or a mesh from which to take it) but missing");
 
   const config::Node j = ln.at("joint");
-  j.reject_unknown_keys({"limits_deg", "max_speed_radps", "torque_limit_nm",
-                         "viscous_nms_per_rad", "coulomb_nm", "kp_nm_per_rad",
-                         "kd_nms_per_rad"});
+  j.reject_unknown_keys({"limits_deg", "max_speed_radps", "torque_limit_nm", "viscous_nms_per_rad",
+                         "coulomb_nm", "kp_nm_per_rad", "kd_nms_per_rad"});
   const std::vector<double> lim = j.numbers("limits_deg", 2, -720.0, 720.0);
   if (!(lim[0] < lim[1])) {
     j.fail("limits_deg", "lower limit " + std::to_string(lim[0]) +
@@ -178,8 +179,8 @@ RobotModel load_robot_model(const config::Node& rn) {
   if (!rn.is_map()) {
     throw config::ConfigError(rn.file() + ": field '" + rn.path() + "' must be a mapping");
   }
-  rn.reject_unknown_keys({"name", "source", "base", "gravity_mps2", "tip", "home_deg", "ik",
-                          "links"});
+  rn.reject_unknown_keys(
+      {"name", "source", "base", "gravity_mps2", "tip", "home_deg", "ik", "links"});
   const std::filesystem::path dir = std::filesystem::path(rn.file()).parent_path();
   RobotModel m;
   m.name = rn.string_or("name", "robot");
@@ -196,8 +197,8 @@ RobotModel load_robot_model(const config::Node& rn) {
 
   const config::Node links = rn.at("links");
   if (!links.is_sequence() || links.size() < 1 || links.size() > kMaxJoints) {
-    rn.fail("links", "must be a list of 1 to " + std::to_string(kMaxJoints) +
-                         " links; it has " + std::to_string(links.size()));
+    rn.fail("links", "must be a list of 1 to " + std::to_string(kMaxJoints) + " links; it has " +
+                         std::to_string(links.size()));
   }
   m.n = static_cast<int>(links.size());
   for (int i = 0; i < m.n; ++i) m.links[i] = load_link(links.at(i), i, dir);
@@ -230,8 +231,8 @@ RobotModel load_robot_model(const config::Node& rn) {
     p.limit_margin_rad =
         k.number_or("limit_margin_deg", p.limit_margin_rad / kDeg, 0.0, 30.0) * kDeg;
     p.max_tip_speed_mps = k.number_or("max_tip_speed_mps", p.max_tip_speed_mps, 1e-3, 100.0);
-    p.max_tip_angular_speed_radps = k.number_or(
-        "max_tip_angular_speed_radps", p.max_tip_angular_speed_radps, 1e-3, 100.0);
+    p.max_tip_angular_speed_radps =
+        k.number_or("max_tip_angular_speed_radps", p.max_tip_angular_speed_radps, 1e-3, 100.0);
     p.friction_compensation =
         k.number_or("friction_compensation", p.friction_compensation, 0.0, 1.0);
     p.friction_velocity_radps =
@@ -244,16 +245,16 @@ RobotModel load_robot_model(const config::Node& rn) {
     for (int i = 0; i < m.n; ++i) {
       const double q = h[i] * kDeg;
       if (q < m.links[i].q_min_rad || q > m.links[i].q_max_rad) {
-        rn.fail("home_deg", "joint " + std::to_string(i + 1) + " value " +
-                                std::to_string(h[i]) + " is outside its limits " +
-                                config::range_text(m.links[i].q_min_rad / kDeg,
-                                                   m.links[i].q_max_rad / kDeg));
+        rn.fail("home_deg",
+                "joint " + std::to_string(i + 1) + " value " + std::to_string(h[i]) +
+                    " is outside its limits " +
+                    config::range_text(m.links[i].q_min_rad / kDeg, m.links[i].q_max_rad / kDeg));
       }
       m.q_home(i) = q;
     }
   } else {
-    for (int i = 0; i < m.n; ++i) m.q_home(i) = std::clamp(0.0, m.links[i].q_min_rad,
-                                                           m.links[i].q_max_rad);
+    for (int i = 0; i < m.n; ++i)
+      m.q_home(i) = std::clamp(0.0, m.links[i].q_min_rad, m.links[i].q_max_rad);
   }
   return m;
 }

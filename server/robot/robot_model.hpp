@@ -41,50 +41,50 @@ struct DhParams {
 struct LinkModel {
   std::string name;
   DhParams dh;
-  double mass_kg = 1.0;                                     ///< link mass [kg]
-  Eigen::Vector3d com_m = Eigen::Vector3d::Zero();          ///< centre of mass in frame i [m]
-  Eigen::Matrix3d inertia_kgm2 = Eigen::Matrix3d::Identity();  ///< about the COM, frame-i axes
+  double mass_kg = 1.0;                                          ///< link mass [kg]
+  Eigen::Vector3d com_m = Eigen::Vector3d::Zero();               ///< centre of mass in frame i [m]
+  Eigen::Matrix3d inertia_kgm2 = Eigen::Matrix3d::Identity();    ///< about the COM, frame-i axes
   Eigen::Vector3d box_size_m = Eigen::Vector3d::Constant(0.05);  ///< full box extents [m]
   Eigen::Vector3d box_center_m = Eigen::Vector3d::Zero();        ///< box centre in frame i [m]
   std::string mesh_file;  ///< optional visual mesh (assimp); empty when none
   // joint i
-  double q_min_rad = -3.0;                ///< lower joint limit [rad]
-  double q_max_rad = 3.0;                 ///< upper joint limit [rad]
-  double qd_max_radps = 3.0;              ///< joint speed limit of the reference [rad/s]
-  double torque_limit_nm = 100.0;         ///< actuator torque saturation [N m]
-  double viscous_nms_per_rad = 0.0;       ///< viscous friction b, tau_f = -b qd [N m s/rad]
-  double coulomb_nm = 0.0;                ///< Coulomb friction level [N m]
-  double kp_nm_per_rad = 100.0;           ///< joint PD stiffness (K_ps, Fig. 10) [N m/rad]
-  double kd_nms_per_rad = 10.0;           ///< joint PD damping [N m s/rad]
+  double q_min_rad = -3.0;           ///< lower joint limit [rad]
+  double q_max_rad = 3.0;            ///< upper joint limit [rad]
+  double qd_max_radps = 3.0;         ///< joint speed limit of the reference [rad/s]
+  double torque_limit_nm = 100.0;    ///< actuator torque saturation [N m]
+  double viscous_nms_per_rad = 0.0;  ///< viscous friction b, tau_f = -b qd [N m s/rad]
+  double coulomb_nm = 0.0;           ///< Coulomb friction level [N m]
+  double kp_nm_per_rad = 100.0;      ///< joint PD stiffness (K_ps, Fig. 10) [N m/rad]
+  double kd_nms_per_rad = 10.0;      ///< joint PD damping [N m s/rad]
 };
 
 /// Parameters of the damped-least-squares inverse kinematics that turns a commanded tip pose
 /// into a joint reference (resolved-rate with variable damping near singularities).
 struct IkParams {
-  double gain_per_s = 40.0;               ///< task-space error feedback gain [1/s]
-  double orientation_weight_m = 0.2;      ///< length that weights angular rows vs linear [m]
-  double damping_max_m = 0.08;            ///< largest DLS damping lambda [m]
-  double singular_threshold_m = 0.04;     ///< damping starts below this sigma_min [m]
-  double limit_margin_rad = 0.02;         ///< reference stays this far inside joint limits
-  double max_tip_speed_mps = 1.5;         ///< clamp of the commanded tip speed [m/s]
+  double gain_per_s = 40.0;                  ///< task-space error feedback gain [1/s]
+  double orientation_weight_m = 0.2;         ///< length that weights angular rows vs linear [m]
+  double damping_max_m = 0.08;               ///< largest DLS damping lambda [m]
+  double singular_threshold_m = 0.04;        ///< damping starts below this sigma_min [m]
+  double limit_margin_rad = 0.02;            ///< reference stays this far inside joint limits
+  double max_tip_speed_mps = 1.5;            ///< clamp of the commanded tip speed [m/s]
   double max_tip_angular_speed_radps = 4.0;  ///< clamp of the commanded angular speed [rad/s]
-  double friction_compensation = 1.0;     ///< fraction of model friction fed forward [0, 1]
-  double friction_velocity_radps = 0.02;  ///< smoothing speed of the Coulomb feed-forward
+  double friction_compensation = 1.0;        ///< fraction of model friction fed forward [0, 1]
+  double friction_velocity_radps = 0.02;     ///< smoothing speed of the Coulomb feed-forward
 };
 
 /// The immutable robot model.
 struct RobotModel {
-  std::string name;      ///< e.g. "puma560"
-  std::string source;    ///< citation of the parameter source
-  int n = 0;             ///< number of joints (1..kMaxJoints)
+  std::string name;    ///< e.g. "puma560"
+  std::string source;  ///< citation of the parameter source
+  int n = 0;           ///< number of joints (1..kMaxJoints)
   std::array<LinkModel, kMaxJoints> links{};
-  Eigen::Isometry3d base = Eigen::Isometry3d::Identity();  ///< frame 0 in the world
+  Eigen::Isometry3d base = Eigen::Isometry3d::Identity();   ///< frame 0 in the world
   Eigen::Vector3d tool_offset_m = Eigen::Vector3d::Zero();  ///< tip centre in frame n [m]
-  double tip_radius_m = 0.05;   ///< spherical tip radius [m]
-  double tip_mass_kg = 0.0;     ///< tip sphere mass, already folded into links[n-1] [kg]
+  double tip_radius_m = 0.05;                               ///< spherical tip radius [m]
+  double tip_mass_kg = 0.0;  ///< tip sphere mass, already folded into links[n-1] [kg]
   Eigen::Vector3d gravity_mps2 = Eigen::Vector3d(0.0, 0.0, -9.81);  ///< [m/s^2]
   IkParams ik;
-  JointVector q_home;           ///< home configuration [rad]
+  JointVector q_home;  ///< home configuration [rad]
 
   /// Midpoint of joint i's limits [rad].
   double q_mid(int i) const { return 0.5 * (links[i].q_min_rad + links[i].q_max_rad); }

@@ -217,8 +217,8 @@ void RobotSim::place_bodies(const JointVector& q, const JointVector& qd) {
 void RobotSim::reset(const JointVector& q0) {
   const int n = model_.n;
   JointVector q = q0;
-  for (int i = 0; i < n; ++i) q(i) = std::clamp(q(i), model_.links[i].q_min_rad,
-                                                model_.links[i].q_max_rad);
+  for (int i = 0; i < n; ++i)
+    q(i) = std::clamp(q(i), model_.links[i].q_min_rad, model_.links[i].q_max_rad);
   place_bodies(q, JointVector::Zero(n));
   state_.q = q;  // read_state unwraps around the previous value
   state_.qd.setZero(n);
@@ -402,8 +402,8 @@ void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
     const double ff = std::clamp(cmd.tau_ff(i), -lim, lim);
     double pd = 0.0;
     if (cmd.kd(i) > 0.0) {
-      pd = cmd.kp(i) * (cmd.q_ref(i) - last_good_q_(i)) +
-           cmd.kd(i) * (cmd.qd_ref(i) - state_.qd(i));
+      pd =
+          cmd.kp(i) * (cmd.q_ref(i) - last_good_q_(i)) + cmd.kd(i) * (cmd.qd_ref(i) - state_.qd(i));
       const double fmax = std::max(0.0, lim - std::abs(ff));
       pd = std::clamp(pd, -fmax, fmax);
     }
@@ -412,8 +412,8 @@ void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
   state_.tau_gravity = cmd.tau_gravity;
 
   // 7. numerical faults: non-finite or runaway state -> restore the last good pose at rest
-  bool bad = !state_.q.allFinite() || !state_.qd.allFinite() ||
-             !state_.tip_pose.translation().allFinite();
+  bool bad =
+      !state_.q.allFinite() || !state_.qd.allFinite() || !state_.tip_pose.translation().allFinite();
   for (int i = 0; i < n && !bad; ++i) {
     bad = std::abs(state_.qd(i)) > options_.max_joint_speed_radps;
   }

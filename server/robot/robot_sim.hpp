@@ -42,10 +42,10 @@ enum class OdeStepper : std::uint8_t {
 /// Options of the simulation (not part of the robot's physics).
 struct RobotSimOptions {
   OdeStepper stepper = OdeStepper::kWorldStep;
-  int quick_step_iterations = 50;   ///< SOR iterations of dWorldQuickStep
-  double joint_erp = 0.2;           ///< ERP of hinge constraints (drift correction)
-  double joint_cfm = 1e-9;          ///< CFM of hinge constraints
-  bool link_plane_collisions = true;  ///< link boxes collide with planes (the tip always does)
+  int quick_step_iterations = 50;        ///< SOR iterations of dWorldQuickStep
+  double joint_erp = 0.2;                ///< ERP of hinge constraints (drift correction)
+  double joint_cfm = 1e-9;               ///< CFM of hinge constraints
+  bool link_plane_collisions = true;     ///< link boxes collide with planes (the tip always does)
   double max_joint_speed_radps = 200.0;  ///< a faster joint is a numerical fault
 };
 
@@ -58,22 +58,22 @@ struct RobotState {
   JointVector tau_gravity;   ///< gravity compensation part of tau [N m]
   JointVector tau_external;  ///< J^T gamma of the external tip wrench, eq. (4) [N m]
   Eigen::Isometry3d tip_pose = Eigen::Isometry3d::Identity();  ///< tip centre, world
-  Vector6d tip_twist = Vector6d::Zero();          ///< [m/s; rad/s] at the tip centre, world
-  Vector6d external_wrench = Vector6d::Zero();    ///< applied external tip wrench [N; N m]
-  Eigen::Vector3d tip_contact_force_n = Eigen::Vector3d::Zero();  ///< planes on the tip [N]
+  Vector6d tip_twist = Vector6d::Zero();        ///< [m/s; rad/s] at the tip centre, world
+  Vector6d external_wrench = Vector6d::Zero();  ///< applied external tip wrench [N; N m]
+  Eigen::Vector3d tip_contact_force_n = Eigen::Vector3d::Zero();    ///< planes on the tip [N]
   Eigen::Vector3d tip_contact_torque_nm = Eigen::Vector3d::Zero();  ///< about the tip centre
   double tip_penetration_m = 0.0;  ///< deepest tip penetration into a plane [m]
   bool tip_in_contact = false;     ///< the tip touches a plane
   int tip_contact_plane = -1;      ///< Plane::id of the deepest tip contact, -1 none
   int link_contacts = 0;           ///< contact points between link boxes and planes
   Eigen::Vector3d link_contact_force_n = Eigen::Vector3d::Zero();  ///< planes on the links [N]
-  Frames frames;                   ///< forward kinematics of q
-  Jacobian jacobian;               ///< geometric Jacobian at q (eq. 5)
-  ControllerState controller;      ///< joint reference, singularity and limit flags
-  JointCommand command;            ///< last joint command
+  Frames frames;                                                   ///< forward kinematics of q
+  Jacobian jacobian;           ///< geometric Jacobian at q (eq. 5)
+  ControllerState controller;  ///< joint reference, singularity and limit flags
+  JointCommand command;        ///< last joint command
   double sim_time_s = 0.0;
   std::uint64_t steps = 0;
-  std::uint64_t faults = 0;        ///< numerical faults detected and recovered
+  std::uint64_t faults = 0;  ///< numerical faults detected and recovered
 };
 
 /// Owns the ODE world of one robot and the rigid planes. Not copyable.
@@ -130,12 +130,12 @@ class RobotSim {
   std::array<dGeomID, kMaxJoints> boxes_{};
   dGeomID tip_geom_ = nullptr;
   std::array<dGeomID, kMaxPlanes> plane_geoms_{};
-  std::array<double, kMaxJoints> hinge_zero_{};   ///< q at which the hinge angle reads 0
+  std::array<double, kMaxJoints> hinge_zero_{};  ///< q at which the hinge angle reads 0
   std::array<bool, kMaxJoints> has_stops_{};
 
   std::array<dContactGeom, 8> scratch_{};
   std::array<dJointFeedback, kMaxContacts> feedback_{};
-  std::array<int, kMaxContacts> contact_kind_{};   ///< -1: tip; >= 0: link index
+  std::array<int, kMaxContacts> contact_kind_{};  ///< -1: tip; >= 0: link index
   std::array<Eigen::Vector3d, kMaxContacts> contact_pos_{};
   std::array<int, kMaxContacts> contact_plane_{};
   int contact_count_ = 0;

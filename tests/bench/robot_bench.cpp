@@ -20,8 +20,7 @@ namespace {
 using namespace teleop::sim::robot;
 
 double now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 /// Commanded input at step k of a scenario.
@@ -36,9 +35,8 @@ RobotInput scenario_input(const std::string& scenario, int k, double dt) {
     in.target_velocity_mps = 0.1 * w * Eigen::Vector3d(-std::sin(w * t), std::cos(w * t), 0.0);
   } else {
     // press on the floor 2 cm below the touching height, with a slow sideways wobble
-    in.target_orientation =
-        Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY()) *
-                           Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
+    in.target_orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY()) *
+                                               Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
     in.target_position_m = Eigen::Vector3d(0.45, 0.05 + 0.02 * std::sin(t), 0.03);
   }
   return in;
@@ -53,8 +51,8 @@ int run_robot_bench(const teleop::CommandArgs& args) {
   const int warm = 1500;  // reach the circle / the floor before timing
 
   teleop::CsvWriter csv((args.out_dir / "robot_bench.csv").string(),
-                        {"scenario", "stepper", "part", "samples", "median_us", "p90_us",
-                         "p99_us", "max_us", "mean_us"});
+                        {"scenario", "stepper", "part", "samples", "median_us", "p90_us", "p99_us",
+                         "max_us", "mean_us"});
   auto report = [&](const std::string& sc, const std::string& st, const std::string& part,
                     const std::vector<double>& v_s) {
     std::vector<double> us(v_s.size());
@@ -63,14 +61,15 @@ int run_robot_bench(const teleop::CommandArgs& args) {
     csv.row_text({sc, st, part, std::to_string(s.count), teleop::format_number(s.p50),
                   teleop::format_number(s.p90), teleop::format_number(s.p99),
                   teleop::format_number(s.max), teleop::format_number(s.mean)});
-    std::printf("  %-8s %-15s %-22s median %7.2f us  p90 %7.2f  p99 %7.2f  max %8.2f\n",
-                sc.c_str(), st.c_str(), part.c_str(), s.p50, s.p90, s.p99, s.max);
+    std::printf("  %-8s %-15s %-22s median %7.2f us  p90 %7.2f  p99 %7.2f  max %8.2f\n", sc.c_str(),
+                st.c_str(), part.c_str(), s.p50, s.p90, s.p99, s.max);
   };
 
   std::printf("robot step time, %d steps per case, dt = 1 ms:\n", steps);
   for (const std::string scenario : {"free", "contact"}) {
     for (const OdeStepper stepper : {OdeStepper::kWorldStep, OdeStepper::kWorldQuickStep}) {
-      const std::string sname = stepper == OdeStepper::kWorldStep ? "dWorldStep" : "dWorldQuickStep";
+      const std::string sname =
+          stepper == OdeStepper::kWorldStep ? "dWorldStep" : "dWorldQuickStep";
       RobotSimOptions opt;
       opt.stepper = stepper;
       RobotSim sim(model, planes, opt);

@@ -58,8 +58,8 @@ TEST(RobotKinematics, JacobianMatchesFiniteDifferences) {
       qp(i) += h;
       qm(i) -= h;
       const Eigen::Vector3d dp = (tip_pos(m, qp) - tip_pos(m, qm)) / (2 * h);
-      const Eigen::Vector3d dw = rotation_vector(tip_rot(m, qp) * tip_rot(m, qm).transpose()) /
-                                 (2 * h);
+      const Eigen::Vector3d dw =
+          rotation_vector(tip_rot(m, qp) * tip_rot(m, qm).transpose()) / (2 * h);
       EXPECT_LT((J.block<3, 1>(0, i) - dp).norm(), 1e-6) << "trial " << trial << " joint " << i;
       EXPECT_LT((J.block<3, 1>(3, i) - dw).norm(), 1e-6) << "trial " << trial << " joint " << i;
     }
@@ -78,8 +78,7 @@ TEST(RobotKinematics, TipVelocityIsJacobianTimesJointRates) {
     Jacobian J;
     geometric_jacobian(m, q, J);
     const Vector6d v = tip_twist(J, qd);
-    const Eigen::Vector3d fd =
-        (tip_pos(m, q + h * qd) - tip_pos(m, q - h * qd)) / (2 * h);
+    const Eigen::Vector3d fd = (tip_pos(m, q + h * qd) - tip_pos(m, q - h * qd)) / (2 * h);
     const Eigen::Vector3d wd =
         rotation_vector(tip_rot(m, q + h * qd) * tip_rot(m, q - h * qd).transpose()) / (2 * h);
     EXPECT_LT((v.head<3>() - fd).norm(), 1e-6 * (1 + fd.norm()));

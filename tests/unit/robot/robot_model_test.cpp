@@ -92,8 +92,8 @@ TEST(RobotModel, RejectsBadValuesNamingFileFieldAndRange) {
   e = expect_error(pendulum_with("kd_nms_per_rad: 5", "kd_nms_per_rad: abc"));
   EXPECT_NE(e.find("not a number"), std::string::npos) << e;
 
-  e = expect_error(pendulum_with("      box: {size_m: [0.5, 0.04, 0.04], center_m: [-0.25, 0, 0]}\n",
-                                 ""));
+  e = expect_error(
+      pendulum_with("      box: {size_m: [0.5, 0.04, 0.04], center_m: [-0.25, 0, 0]}\n", ""));
   EXPECT_NE(e.find("box"), std::string::npos) << e;
 
   e = expect_error("robot:\n  links: []\n  tip: {radius_m: 0.05}\n");
@@ -122,8 +122,9 @@ TEST(RobotModel, MeshWithoutBoxSetsTheBoxFromItsBounds) {
   EXPECT_NEAR(m.links[0].box_center_m.x(), -0.25, 1e-6);
   EXPECT_FALSE(m.links[0].mesh_file.empty());
 
-  std::string bad = pendulum_with("      box: {size_m: [0.5, 0.04, 0.04], center_m: [-0.25, 0, 0]}\n",
-                                  "      mesh: {file: missing.obj}\n");
+  std::string bad =
+      pendulum_with("      box: {size_m: [0.5, 0.04, 0.04], center_m: [-0.25, 0, 0]}\n",
+                    "      mesh: {file: missing.obj}\n");
   {
     std::ofstream f(file);
     f << bad;

@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
 #include <vector>
 
 #include "tests/support/alloc_counter.hpp"
@@ -60,8 +63,7 @@ TEST(RobotSim, JointAnglesAndTipAgreeWithKinematicsAfterReset) {
 }
 
 TEST(RobotSim, PendulumSmallAnglePeriodMatchesCompoundPendulum) {
-  const RobotModel m =
-      load_robot_model(config::Node::parse(testing::kPendulumYaml).at("robot"));
+  const RobotModel m = load_robot_model(config::Node::parse(testing::kPendulumYaml).at("robot"));
   RobotSim sim(m, {});
   JointVector q0(1);
   q0 << -M_PI / 2 + 3.0 * M_PI / 180.0;
@@ -84,6 +86,8 @@ TEST(RobotSim, PendulumSmallAnglePeriodMatchesCompoundPendulum) {
   }
   ASSERT_GE(crossings.size(), 4u);
   const double measured = (crossings.back() - crossings.front()) / (crossings.size() - 1);
+  std::printf("pendulum: analytic T = %.5f s, ODE T = %.5f s (%.3f %%)\n", T, measured,
+              100.0 * (measured - T) / T);
   EXPECT_NEAR(measured, T, 0.003 * T) << "analytic " << T << " s, ODE " << measured << " s";
   // and no energy was lost or gained: the amplitude stays at 3 deg
   double amp = 0.0;
@@ -134,8 +138,8 @@ TEST(RobotSim, TracksACartesianCircle) {
     in.target_velocity_mps = r * w * Eigen::Vector3d(-std::sin(w * t), std::cos(w * t), 0.0);
     sim.step(in, kDt, nullptr);
     if (t > period / 2) {
-      max_err = std::max(max_err,
-                         (sim.state().tip_pose.translation() - in.target_position_m).norm());
+      max_err =
+          std::max(max_err, (sim.state().tip_pose.translation() - in.target_position_m).norm());
       max_rot = std::max(max_rot, rotation_vector(tool_down().toRotationMatrix() *
                                                   sim.state().tip_pose.linear().transpose())
                                       .norm());
@@ -220,6 +224,11 @@ TEST(RobotSim, TipPushedIntoTheFloorStopsThereAndTheContactForceBalancesThePush)
   JointVector tau_c;
   wrench_to_joint_torque(s.jacobian, gamma, tau_c);
   const JointVector residual = s.tau - s.tau_gravity + tau_c;
+  std::printf(
+      "floor push: contact force (%.1f, %.1f, %.1f) N, tip z %.4f m, |residual| %.3f N m "
+      "of |J^T F| %.1f N m\n",
+      s.tip_contact_force_n.x(), s.tip_contact_force_n.y(), s.tip_contact_force_n.z(),
+      s.tip_pose.translation().z(), residual.norm(), tau_c.norm());
   EXPECT_LT(residual.norm(), 0.03 * tau_c.norm() + 0.2)
       << "tau_pd " << (s.tau - s.tau_gravity).transpose() << "\nJ^T f " << tau_c.transpose();
   // no link box went through the floor
@@ -255,7 +264,8 @@ TEST(RobotSim, TipTouchesTheWall) {
   RobotSim sim(m, planes);
   // tool horizontal, pointing at the wall (+y), then a target 5 cm beyond the touching point
   RobotInput in = track(Eigen::Vector3d(0.3, 0.45, 0.45));
-  in.target_orientation = Eigen::Quaterniond(Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()));
+  in.target_orientation =
+      Eigen::Quaterniond(Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()));
   run(sim, in, 1.5);
   in.target_position_m = Eigen::Vector3d(0.3, 0.6, 0.45);
   run(sim, in, 1.5);
@@ -307,6 +317,56 @@ TEST(RobotSim, StepDoesNotAllocateAfterWarmUp) {
   std::printf("allocations in 500 steps with contact: %llu\n",
               static_cast<unsigned long long>(allocs));
   EXPECT_EQ(allocs, 0u);
+}
+
+}  // namespace
+}  // namespace teleop::sim::robot
+
+namespace teleop::sim::robot {
+namespace {
+
+TEST(RobotScene, ArmReachesTheDefaultSceneSphereFloorAndWall) {
+  // default scene: elastic sphere of radius 0.25 m centred at (0.6, 0, 0.25) m, floor z = 0,
+  // wall y = 0.6 m; the tip centre must reach one tip radius off each surface (kinematics +
+  // controller only, position task)
+  const RobotModel m = testing::puma();
+  const double r = m.tip_radius_m, R = 0.25;
+  const Eigen::Vector3d c(0.6, 0.0, 0.25);
+  const std::vector<Eigen::Vector3d> goals = {
+      c + Eigen::Vector3d(0, 0, R + r),                        // sphere top
+      c + (R + r) * Eigen::Vector3d(-1, 0, 1).normalized(),    // near upper side
+      c + (R + r) * Eigen::Vector3d(0, -1, 0.3).normalized(),  // right flank
+      c + (R + r) * Eigen::Vector3d(0, 1, 0.3).normalized(),   // left flank
+      Eigen::Vector3d(0.3, 0.3, r),                            // floor beside it
+      Eigen::Vector3d(0.3, 0.6 - r, 0.45),                     // wall
+  };
+  for (const auto& g : goals) {
+    ControllerState cs;
+    controller_reset(m, cs, m.q_home);
+    RobotInput in;
+    in.track_orientation = false;
+    in.target_position_m = g;
+    JointCommand cmd;
+    for (int k = 0; k < 4000; ++k) {
+      controller_update(m, cs, in, cs.q_ref, cs.ref_frames, 1e-3, k * 1e-3, nullptr, cmd);
+    }
+    forward_kinematics(m, cs.q_ref, cs.ref_frames);
+    EXPECT_LT((cs.ref_frames.tip.translation() - g).norm(), 1e-3) << g.transpose();
+    EXPECT_EQ(cs.limit_mask, 0u) << g.transpose();
+  }
+}
+
+TEST(RobotScene, ReachExperimentRunsQuick) {
+  const std::string exe = std::string(TELEOP_BINARY_DIR) + "/server/teleop_experiment";
+  if (!std::filesystem::exists(exe)) GTEST_SKIP() << "build teleop_experiment first";
+  const auto out = std::filesystem::temp_directory_path() / "teleop_robot_reach_test";
+  std::filesystem::remove_all(out);
+  const std::string cmd =
+      exe + " robot-reach --quick --no-chart --out " + out.string() + " > /dev/null";
+  EXPECT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_TRUE(std::filesystem::exists(out / "robot_reach.csv"));
+  EXPECT_TRUE(std::filesystem::exists(out / "robot_reach_summary.csv"));
+  std::filesystem::remove_all(out);
 }
 
 }  // namespace
