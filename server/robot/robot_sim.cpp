@@ -11,15 +11,20 @@ namespace teleop::sim::robot {
 
 namespace {
 
-void ode_init_once() {
-  static std::once_flag once;
-  std::call_once(once, [] { dInitODE2(0); });
-  // per-thread ODE data (a no-op when ODE was built without thread-local storage)
+// ODE's per-thread data (collision caches): allocated once on each thread that builds or
+// steps a world (a no-op when ODE was built without thread-local storage).
+void ode_thread_init() {
   thread_local bool allocated = false;
   if (!allocated) {
     dAllocateODEDataForThread(dAllocateMaskAll);
     allocated = true;
   }
+}
+
+void ode_init_once() {
+  static std::once_flag once;
+  std::call_once(once, [] { dInitODE2(0); });
+  ode_thread_init();
 }
 
 void to_ode(const Eigen::Matrix3d& R, dMatrix3 out) {
@@ -318,6 +323,7 @@ void RobotSim::collide(double dt_s) {
 }
 
 void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
+  ode_thread_init();  // the server may step on another thread than the one that built us
   const int n = model_.n;
   const double t = state_.sim_time_s;
 

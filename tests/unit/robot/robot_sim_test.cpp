@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "tests/support/alloc_counter.hpp"
@@ -367,6 +368,25 @@ TEST(RobotScene, ReachExperimentRunsQuick) {
   EXPECT_TRUE(std::filesystem::exists(out / "robot_reach.csv"));
   EXPECT_TRUE(std::filesystem::exists(out / "robot_reach_summary.csv"));
   std::filesystem::remove_all(out);
+}
+
+}  // namespace
+}  // namespace teleop::sim::robot
+
+namespace teleop::sim::robot {
+namespace {
+
+TEST(RobotSim, StepsOnAnotherThreadThanTheBuilder) {
+  const RobotModel m = testing::puma();
+  RobotSim sim(m, default_robot_planes());
+  RobotInput in;
+  in.mode = ControlMode::kHold;
+  std::thread worker([&] {
+    for (int k = 0; k < 200; ++k) sim.step(in, 1e-3, nullptr);
+  });
+  worker.join();
+  EXPECT_EQ(sim.state().steps, 200u);
+  EXPECT_LT((sim.state().q - m.q_home).cwiseAbs().maxCoeff(), 1e-3);
 }
 
 }  // namespace
