@@ -78,19 +78,24 @@ struct DeformableParams {
   double centre_mass_fraction = 0.3;
 
   // mass-spring model
-  double edge_stiffness_n_per_m = 40.0;  ///< each edge spring [N/m] (membrane, level invariant)
+  double edge_stiffness_n_per_m = 150.0;  ///< each edge spring [N/m] (membrane, level invariant)
   /// Radial spring of node i: k_i = this * (area of node i) [N/m per m^2 of surface]; 0 = none.
   /// Default: 1.5e5 for mass_spring (46 N/m per node at level 4), 0 for the Navier models.
   double radial_stiffness_n_per_m3 = 1.5e5;
 
   // Navier model, eq. (1)-(2)
-  double youngs_modulus_pa = 3000.0;  ///< E [Pa]
+  double youngs_modulus_pa = 6000.0;  ///< E [Pa]
   double poisson_ratio = 0.3;         ///< nu [-], in [0, 0.49]
 
   // damping
   /// Stiffness-proportional damping: every spring/edge has damper c = beta * k [s].
   double stiffness_damping_s = 5e-4;
-  double mass_damping_per_s = 0.0;  ///< drag on each node, f = -alpha m v [1/s]
+  /// Damper of each radial spring, c_i = this * k_i [s] (damps the body bouncing on its
+  /// radial springs; ~0.7 of critical for a single node at the default stiffness).
+  double radial_damping_s = 5e-3;
+  /// Drag of each node relative to the body's mean velocity, f_i = -alpha m_i (v_i - v_mean):
+  /// damps deformation (slow modes too) but not translation [1/s].
+  double mass_damping_per_s = 10.0;
 
   // loads and contact
   Eigen::Vector3d gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);  ///< [m/s^2]

@@ -39,6 +39,7 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
   check_range("youngs_modulus_pa", params.youngs_modulus_pa, 1e-3, 1e12);
   check_range("poisson_ratio", params.poisson_ratio, 0.0, 0.49);
   check_range("stiffness_damping_s", params.stiffness_damping_s, 0.0, 1.0);
+  check_range("radial_damping_s", params.radial_damping_s, 0.0, 1.0);
   check_range("mass_damping_per_s", params.mass_damping_per_s, 0.0, 1e4);
   check_range("contact_frequency_rad_per_s", params.contact_frequency_rad_per_s, 0.0, 1e7);
   check_range("contact_damping_ratio", params.contact_damping_ratio, 0.0, 100.0);

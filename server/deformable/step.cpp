@@ -64,7 +64,7 @@ void update_rotations(const DeformableModel& m, DeformableState& s) {
     const Vec3 rX = Xi - c0;
     const double r2 = rX.squaredNorm();
     if (r2 > 0.0) a.noalias() += (len2 / r2) * (xi - c) * rX.transpose();
-    extract_rotation(a, s.rotation_q[static_cast<std::size_t>(i)], 8);
+    extract_rotation(a, s.rotation_q[static_cast<std::size_t>(i)], 24);
     s.rotation[static_cast<std::size_t>(i)] =
         s.rotation_q[static_cast<std::size_t>(i)].toRotationMatrix();
   }
@@ -83,11 +83,14 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
 
   // gravity, drag and the caller's loads
   if (flags.external) {
+    // drag relative to the mean velocity: damps deformation, keeps momentum
     const double alpha = p.mass_damping_per_s;
+    Vec3 vcm = Vec3::Zero();
+    if (alpha > 0.0) vcm = (v * m.mass_kg + m.centre_mass_kg * s.centre_v) / m.total_mass_kg;
     for (int i = 0; i < n; ++i) {
-      F.col(i) = m.mass_kg(i) * (p.gravity_mps2 - alpha * v.col(i)) + s.f_ext.col(i);
+      F.col(i) = m.mass_kg(i) * (p.gravity_mps2 - alpha * (v.col(i) - vcm)) + s.f_ext.col(i);
     }
-    if (m.has_centre) F.col(n) = m.centre_mass_kg * (p.gravity_mps2 - alpha * s.centre_v);
+    if (m.has_centre) F.col(n) = m.centre_mass_kg * (p.gravity_mps2 - alpha * (s.centre_v - vcm));
   }
 
   // edges
@@ -160,7 +163,7 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
       if (!(l > 1e-12)) continue;
       const Vec3 u = d / l;
       const double k = m.radial_k(i);
-      const double c = beta * k;
+      const double c = p.radial_damping_s * k;
       const double fs = -k * (l - m.radial_rest_m(i)) - c * (v.col(i) - s.centre_v).dot(u);
       F.col(i) += fs * u;
       fc -= fs * u;
