@@ -1,0 +1,450 @@
+#include "common/mesh/tri_mesh.hpp"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <assimp/Importer.hpp>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <sstream>
+#include <unordered_map>
+
+namespace teleop::mesh {
+
+namespace {
+
+std::uint64_t edge_key(int a, int b) {
+  const auto lo = static_cast<std::uint64_t>(std::min(a, b));
+  const auto hi = static_cast<std::uint64_t>(std::max(a, b));
+  return (lo << 32) | hi;
+}
+
+std::string point_text(const Eigen::Vector3d& p) {
+  std::ostringstream os;
+  os << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return os.str();
+}
+
+}  // namespace
+
+int icosphere_vertex_count(int level) { return 10 * (1 << (2 * level)) + 2; }
+int icosphere_triangle_count(int level) { return 20 * (1 << (2 * level)); }
+
+TriMesh make_icosphere(int level, double radius_m, const Eigen::Vector3d& centre_m) {
+  if (level < 0 || level > 6) {
+    throw MeshError("make_icosphere: level " + std::to_string(level) +
+                    " is outside the allowed range [0, 6]");
+  }
+  if (!(radius_m > 0.0) || !std::isfinite(radius_m)) {
+    throw MeshError("make_icosphere: radius_m " + std::to_string(radius_m) + " must be > 0");
+  }
+  // icosahedron: the 12 vertices (0, +-1, +-phi) and their cyclic permutations
+  const double phi = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Eigen::Vector3d> pts = {{-1, phi, 0}, {1, phi, 0}, {-1, -phi, 0}, {1, -phi, 0},
+                                      {0, -1, phi}, {0, 1, phi}, {0, -1, -phi}, {0, 1, -phi},
+                                      {phi, 0, -1}, {phi, 0, 1}, {-phi, 0, -1}, {-phi, 0, 1}};
+  for (auto& p : pts) p.normalize();
+  std::vector<std::array<int, 3>> tris = {
+      {0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+      {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+      {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  // orient every face outward (normal along its centroid)
+  for (auto& t : tris) {
+    const Eigen::Vector3d n = (pts[t[1]] - pts[t[0]]).cross(pts[t[2]] - pts[t[0]]);
+    if (n.dot(pts[t[0]] + pts[t[1]] + pts[t[2]]) < 0.0) std::swap(t[1], t[2]);
+  }
+  // subdivide: each triangle into four, midpoints pushed onto the unit sphere
+  for (int l = 0; l < level; ++l) {
+    std::unordered_map<std::uint64_t, int> midpoint;
+    midpoint.reserve(tris.size() * 2);
+    auto mid = [&](int a, int b) {
+      const auto key = edge_key(a, b);
+      auto it = midpoint.find(key);
+      if (it != midpoint.end()) return it->second;
+      pts.push_back((pts[a] + pts[b]).normalized());
+      const int id = static_cast<int>(pts.size()) - 1;
+      midpoint.emplace(key, id);
+      return id;
+    };
+    std::vector<std::array<int, 3>> next;
+    next.reserve(tris.size() * 4);
+    for (const auto& t : tris) {
+      const int ab = mid(t[0], t[1]), bc = mid(t[1], t[2]), ca = mid(t[2], t[0]);
+      next.push_back({t[0], ab, ca});
+      next.push_back({t[1], bc, ab});
+      next.push_back({t[2], ca, bc});
+      next.push_back({ab, bc, ca});
+    }
+    tris.swap(next);
+  }
+  TriMesh m;
+  m.vertices.resize(3, static_cast<Eigen::Index>(pts.size()));
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    m.vertices.col(static_cast<Eigen::Index>(i)) = centre_m + radius_m * pts[i];
+  }
+  m.triangles.resize(3, static_cast<Eigen::Index>(tris.size()));
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    m.triangles.col(static_cast<Eigen::Index>(t)) << tris[t][0], tris[t][1], tris[t][2];
+  }
+  build_adjacency(m);
+  validate_closed_manifold(m);
+  return m;
+}
+
+void build_adjacency(TriMesh& m) {
+  const int nv = m.vertex_count();
+  const int nt = m.triangle_count();
+  for (int t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int i = m.triangles(k, t);
+      if (i < 0 || i >= nv) {
+        throw MeshError("triangle " + std::to_string(t) + " refers to vertex " + std::to_string(i) +
+                        ", but the mesh has only " + std::to_string(nv) + " vertices");
+      }
+    }
+  }
+  // unique undirected edges, sorted by (a, b)
+  std::vector<std::uint64_t> keys;
+  keys.reserve(3 * static_cast<std::size_t>(std::max(nt, 0)));
+  for (int t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.triangles(k, t), b = m.triangles((k + 1) % 3, t);
+      if (a != b) keys.push_back(edge_key(a, b));
+    }
+  }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  m.edges.resize(2, static_cast<Eigen::Index>(keys.size()));
+  for (std::size_t e = 0; e < keys.size(); ++e) {
+    m.edges(0, static_cast<Eigen::Index>(e)) = static_cast<int>(keys[e] >> 32);
+    m.edges(1, static_cast<Eigen::Index>(e)) = static_cast<int>(keys[e] & 0xffffffffu);
+  }
+  // faces of each vertex (Fig. 3, column "Faces"), ascending by construction
+  m.vertex_face_offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
+  for (int t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int i = m.triangles(k, t);
+      // a triangle with a repeated vertex is listed once for it
+      if (k > 0 && m.triangles(0, t) == i) continue;
+      if (k > 1 && m.triangles(1, t) == i) continue;
+      ++m.vertex_face_offsets[static_cast<std::size_t>(i) + 1];
+    }
+  }
+  for (int i = 0; i < nv; ++i) {
+    m.vertex_face_offsets[static_cast<std::size_t>(i) + 1] +=
+        m.vertex_face_offsets[static_cast<std::size_t>(i)];
+  }
+  m.vertex_faces.assign(static_cast<std::size_t>(m.vertex_face_offsets.back()), -1);
+  {
+    std::vector<int> fill(m.vertex_face_offsets.begin(), m.vertex_face_offsets.end() - 1);
+    for (int t = 0; t < nt; ++t) {
+      for (int k = 0; k < 3; ++k) {
+        const int i = m.triangles(k, t);
+        if (k > 0 && m.triangles(0, t) == i) continue;
+        if (k > 1 && m.triangles(1, t) == i) continue;
+        m.vertex_faces[static_cast<std::size_t>(fill[static_cast<std::size_t>(i)]++)] = t;
+      }
+    }
+  }
+  // first neighbours of each vertex, from the edge list
+  m.vertex_neighbour_offsets.assign(static_cast<std::size_t>(nv) + 1, 0);
+  for (int e = 0; e < m.edge_count(); ++e) {
+    ++m.vertex_neighbour_offsets[static_cast<std::size_t>(m.edges(0, e)) + 1];
+    ++m.vertex_neighbour_offsets[static_cast<std::size_t>(m.edges(1, e)) + 1];
+  }
+  for (int i = 0; i < nv; ++i) {
+    m.vertex_neighbour_offsets[static_cast<std::size_t>(i) + 1] +=
+        m.vertex_neighbour_offsets[static_cast<std::size_t>(i)];
+  }
+  m.vertex_neighbours.assign(static_cast<std::size_t>(m.vertex_neighbour_offsets.back()), -1);
+  {
+    std::vector<int> fill(m.vertex_neighbour_offsets.begin(), m.vertex_neighbour_offsets.end() - 1);
+    for (int e = 0; e < m.edge_count(); ++e) {
+      const int a = m.edges(0, e), b = m.edges(1, e);
+      m.vertex_neighbours[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)]++)] = b;
+      m.vertex_neighbours[static_cast<std::size_t>(fill[static_cast<std::size_t>(b)]++)] = a;
+    }
+  }
+  for (int i = 0; i < nv; ++i) {
+    std::sort(
+        m.vertex_neighbours.begin() + m.vertex_neighbour_offsets[static_cast<std::size_t>(i)],
+        m.vertex_neighbours.begin() + m.vertex_neighbour_offsets[static_cast<std::size_t>(i) + 1]);
+  }
+}
+
+void validate_closed_manifold(const TriMesh& m) {
+  const int nv = m.vertex_count();
+  const int nt = m.triangle_count();
+  if (nt < 4 || nv < 4) {
+    throw MeshError("the mesh has " + std::to_string(nv) + " vertices and " + std::to_string(nt) +
+                    " triangles; a closed surface needs at least 4 of each");
+  }
+  if (static_cast<int>(m.vertex_face_offsets.size()) != nv + 1 ||
+      static_cast<int>(m.vertex_neighbour_offsets.size()) != nv + 1) {
+    throw MeshError("adjacency tables are missing or stale: call build_adjacency() first");
+  }
+  if (!m.vertices.allFinite()) {
+    for (int i = 0; i < nv; ++i) {
+      if (!m.vertices.col(i).allFinite()) {
+        throw MeshError("vertex " + std::to_string(i) + " has a non-finite coordinate");
+      }
+    }
+  }
+  // a triangle is degenerate when its area is below 1e-6 of its longest edge squared (a
+  // sliver of aspect ratio ~1e6; float-stored files put collinear points ~1e-8 off the line)
+  constexpr double kMinAreaRatio = 1e-6;
+  // degenerate triangles: repeated vertex or (near) zero area
+  for (int t = 0; t < nt; ++t) {
+    const int a = m.triangles(0, t), b = m.triangles(1, t), c = m.triangles(2, t);
+    if (a == b || b == c || c == a) {
+      throw MeshError("degenerate triangle " + std::to_string(t) + " (" + std::to_string(a) + ", " +
+                      std::to_string(b) + ", " + std::to_string(c) + ") repeats a vertex");
+    }
+    const Eigen::Vector3d ab = m.vertices.col(b) - m.vertices.col(a);
+    const Eigen::Vector3d ac = m.vertices.col(c) - m.vertices.col(a);
+    const Eigen::Vector3d bc = m.vertices.col(c) - m.vertices.col(b);
+    const double area = 0.5 * ab.cross(ac).norm();
+    const double longest2 = std::max({ab.squaredNorm(), ac.squaredNorm(), bc.squaredNorm()});
+    if (!(area > kMinAreaRatio * longest2)) {
+      std::ostringstream os;
+      os << "degenerate triangle " << t << " (" << a << ", " << b << ", " << c
+         << ") has zero area (" << area << " m^2) at " << point_text(m.vertices.col(a));
+      throw MeshError(os.str());
+    }
+  }
+  // unused vertices
+  for (int i = 0; i < nv; ++i) {
+    if (m.face_count_of(i) == 0) {
+      throw MeshError("vertex " + std::to_string(i) + " at " + point_text(m.vertices.col(i)) +
+                      " is not used by any triangle");
+    }
+  }
+  // every undirected edge: exactly two triangles, traversed in opposite directions
+  struct Use {
+    std::uint64_t key;
+    int tri;
+    bool forward;  // a < b in the triangle's winding
+  };
+  std::vector<Use> uses;
+  uses.reserve(static_cast<std::size_t>(nt) * 3);
+  for (int t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = m.triangles(k, t), b = m.triangles((k + 1) % 3, t);
+      uses.push_back({edge_key(a, b), t, a < b});
+    }
+  }
+  std::sort(uses.begin(), uses.end(), [](const Use& x, const Use& y) {
+    return x.key != y.key ? x.key < y.key : x.tri < y.tri;
+  });
+  for (std::size_t s = 0; s < uses.size();) {
+    std::size_t e = s;
+    while (e < uses.size() && uses[e].key == uses[s].key) ++e;
+    const int a = static_cast<int>(uses[s].key >> 32);
+    const int b = static_cast<int>(uses[s].key & 0xffffffffu);
+    const std::string edge = "edge (" + std::to_string(a) + ", " + std::to_string(b) + ") at " +
+                             point_text(0.5 * (m.vertices.col(a) + m.vertices.col(b)));
+    const std::size_t n = e - s;
+    if (n == 1) {
+      throw MeshError("open surface: " + edge + " belongs to only one triangle (" +
+                      std::to_string(uses[s].tri) + "); the mesh has a hole or boundary");
+    }
+    if (n > 2) {
+      std::string list;
+      for (std::size_t k = s; k < e; ++k) list += (k > s ? ", " : "") + std::to_string(uses[k].tri);
+      throw MeshError("non-manifold " + edge + " is shared by " + std::to_string(n) +
+                      " triangles (" + list + ")");
+    }
+    if (uses[s].forward == uses[s + 1].forward) {
+      throw MeshError("inconsistent orientation: triangles " + std::to_string(uses[s].tri) +
+                      " and " + std::to_string(uses[s + 1].tri) + " traverse " + edge +
+                      " in the same direction");
+    }
+    s = e;
+  }
+  // every vertex: its triangles form one closed fan (else two surfaces touch at the vertex)
+  std::vector<int> next_of(static_cast<std::size_t>(nv), -1);
+  for (int i = 0; i < nv; ++i) {
+    const int f0 = m.vertex_face_offsets[static_cast<std::size_t>(i)];
+    const int f1 = m.vertex_face_offsets[static_cast<std::size_t>(i) + 1];
+    int start = -1;
+    for (int f = f0; f < f1; ++f) {
+      const int t = m.vertex_faces[static_cast<std::size_t>(f)];
+      int k = 0;
+      while (m.triangles(k, t) != i) ++k;
+      const int p = m.triangles((k + 1) % 3, t), q = m.triangles((k + 2) % 3, t);
+      next_of[static_cast<std::size_t>(p)] = q;
+      if (start < 0) start = p;
+    }
+    int steps = 0, cur = start;
+    do {
+      cur = next_of[static_cast<std::size_t>(cur)];
+      ++steps;
+    } while (cur != start && cur >= 0 && steps <= f1 - f0);
+    // clean up for the next vertex
+    for (int f = f0; f < f1; ++f) {
+      const int t = m.vertex_faces[static_cast<std::size_t>(f)];
+      for (int k = 0; k < 3; ++k) next_of[static_cast<std::size_t>(m.triangles(k, t))] = -1;
+    }
+    if (steps != f1 - f0) {
+      throw MeshError("non-manifold vertex " + std::to_string(i) + " at " +
+                      point_text(m.vertices.col(i)) + ": its " + std::to_string(f1 - f0) +
+                      " triangles do not form a single fan (surfaces touch at a point)");
+    }
+  }
+  const double vol = enclosed_volume(m);
+  if (!(vol > 0.0)) {
+    std::ostringstream os;
+    os << "the surface is oriented inward: enclosed volume " << vol
+       << " m^3 is not positive (triangles must be counter-clockwise seen from outside)";
+    throw MeshError(os.str());
+  }
+}
+
+double enclosed_volume(const TriMesh& m) {
+  double v6 = 0.0;
+  for (int t = 0; t < m.triangle_count(); ++t) {
+    v6 += m.vertices.col(m.triangles(0, t))
+              .dot(m.vertices.col(m.triangles(1, t)).cross(m.vertices.col(m.triangles(2, t))));
+  }
+  return v6 / 6.0;
+}
+
+TriMesh make_mesh(Eigen::Matrix3Xd vertices, Eigen::Matrix3Xi triangles) {
+  TriMesh m;
+  m.vertices = std::move(vertices);
+  m.triangles = std::move(triangles);
+  build_adjacency(m);
+  validate_closed_manifold(m);
+  return m;
+}
+
+TriMesh load_mesh(const std::string& path, const LoadOptions& options) {
+  Assimp::Importer importer;
+  // triangulate polygons and bake node transforms; no welding or clean-up by assimp, so that
+  // defects are reported rather than silently repaired
+  const aiScene* scene =
+      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_PreTransformVertices);
+  if (scene == nullptr) {
+    throw MeshError(path + ": cannot read mesh: " + importer.GetErrorString());
+  }
+  std::vector<Eigen::Vector3d> raw;
+  std::vector<std::array<int, 3>> tris;
+  for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
+    const aiMesh* am = scene->mMeshes[mi];
+    const int base = static_cast<int>(raw.size());
+    for (unsigned v = 0; v < am->mNumVertices; ++v) {
+      const aiVector3D& p = am->mVertices[v];
+      raw.emplace_back(options.scale * static_cast<double>(p.x),
+                       options.scale * static_cast<double>(p.y),
+                       options.scale * static_cast<double>(p.z));
+    }
+    for (unsigned f = 0; f < am->mNumFaces; ++f) {
+      const aiFace& face = am->mFaces[f];
+      if (face.mNumIndices != 3) {
+        throw MeshError(path + ": mesh " + std::to_string(mi) + " face " + std::to_string(f) +
+                        " has " + std::to_string(face.mNumIndices) +
+                        " indices: points and lines are not a surface");
+      }
+      tris.push_back({base + static_cast<int>(face.mIndices[0]),
+                      base + static_cast<int>(face.mIndices[1]),
+                      base + static_cast<int>(face.mIndices[2])});
+    }
+  }
+  if (tris.empty()) throw MeshError(path + ": the file contains no triangles");
+  // weld duplicates: hash on a grid of cell = tolerance, compare with the 27 nearby cells
+  Eigen::Vector3d lo = raw[0], hi = raw[0];
+  for (const auto& p : raw) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const double tol = std::max(options.weld_tolerance * (hi - lo).norm(), 1e-300);
+  auto cell_of = [&](const Eigen::Vector3d& p) {
+    return Eigen::Vector3<long long>(static_cast<long long>(std::floor((p.x() - lo.x()) / tol)),
+                                     static_cast<long long>(std::floor((p.y() - lo.y()) / tol)),
+                                     static_cast<long long>(std::floor((p.z() - lo.z()) / tol)));
+  };
+  auto hash = [](long long x, long long y, long long z) {
+    return static_cast<std::uint64_t>(x) * 73856093ULL ^
+           static_cast<std::uint64_t>(y) * 19349663ULL ^
+           static_cast<std::uint64_t>(z) * 83492791ULL;
+  };
+  std::unordered_map<std::uint64_t, std::vector<int>> grid;
+  std::vector<Eigen::Vector3d> welded;
+  std::vector<int> remap(raw.size(), -1);
+  for (std::size_t i = 0; i < raw.size(); ++i) {
+    const auto c = cell_of(raw[i]);
+    int found = -1;
+    for (long long dx = -1; dx <= 1 && found < 0; ++dx) {
+      for (long long dy = -1; dy <= 1 && found < 0; ++dy) {
+        for (long long dz = -1; dz <= 1 && found < 0; ++dz) {
+          auto it = grid.find(hash(c.x() + dx, c.y() + dy, c.z() + dz));
+          if (it == grid.end()) continue;
+          for (int w : it->second) {
+            if ((welded[static_cast<std::size_t>(w)] - raw[i]).norm() <= tol) {
+              found = w;
+              break;
+            }
+          }
+        }
+      }
+    }
+    if (found < 0) {
+      found = static_cast<int>(welded.size());
+      welded.push_back(raw[i]);
+      grid[hash(c.x(), c.y(), c.z())].push_back(found);
+    }
+    remap[i] = found;
+  }
+  // drop vertices no triangle uses (e.g. stray points in the file)
+  std::vector<int> used(welded.size(), -1);
+  for (auto& t : tris) {
+    for (int& i : t) {
+      i = remap[static_cast<std::size_t>(i)];
+      used[static_cast<std::size_t>(i)] = 1;
+    }
+  }
+  int nv = 0;  // keep the file's vertex order
+  for (int& u : used) u = u > 0 ? nv++ : -1;
+  TriMesh m;
+  m.vertices.resize(3, nv);
+  for (std::size_t i = 0; i < welded.size(); ++i) {
+    if (used[i] >= 0) m.vertices.col(used[i]) = welded[i];
+  }
+  m.triangles.resize(3, static_cast<Eigen::Index>(tris.size()));
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      m.triangles(k, static_cast<Eigen::Index>(t)) =
+          used[static_cast<std::size_t>(tris[t][static_cast<std::size_t>(k)])];
+    }
+  }
+  if (options.fix_inward_orientation && enclosed_volume(m) < 0.0) {
+    m.triangles.row(1).swap(m.triangles.row(2));
+  }
+  try {
+    build_adjacency(m);
+    validate_closed_manifold(m);
+  } catch (const MeshError& e) {
+    throw MeshError(path + ": " + e.what() + " (indices after welding duplicate vertices)");
+  }
+  return m;
+}
+
+void save_obj(const TriMesh& m, const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw MeshError(path + ": cannot open for writing");
+  out.precision(17);
+  for (int i = 0; i < m.vertex_count(); ++i) {
+    out << "v " << m.vertices(0, i) << " " << m.vertices(1, i) << " " << m.vertices(2, i) << "\n";
+  }
+  for (int t = 0; t < m.triangle_count(); ++t) {
+    out << "f " << m.triangles(0, t) + 1 << " " << m.triangles(1, t) + 1 << " "
+        << m.triangles(2, t) + 1 << "\n";
+  }
+  if (!out) throw MeshError(path + ": write failed");
+}
+
+}  // namespace teleop::mesh

@@ -1,0 +1,246 @@
+#pragma once
+// The deformable body of the paper (sections "Geometrical model" and "Dynamical model"):
+// a closed triangle surface whose nodes carry mass and move under
+//   - a mass-spring model: edge springs plus radial springs to a centre node (the paper's
+//     volume-preserving constraint), with damping; or
+//   - the finite-difference Navier equation, eq. (2), with Lame coefficients from E and nu,
+//     either with the paper's linear strain (not rotation invariant) or co-rotated (each edge
+//     measured in the rotated rest frame of its two nodes: invariant under rigid motion);
+// integrated by explicit, symplectic (semi-implicit) or linearly implicit (backward) Euler.
+// Gravity, external point forces (f_ext), pinned nodes and penalty contact of every node with
+// rigid planes (floor, walls) with optional Coulomb friction. A body at rest sleeps.
+//
+// Model/state split: DeformableModel never changes during a run; DeformableState holds all
+// that does, including every scratch buffer; step() allocates nothing and is deterministic.
+//
+//   auto params = load_deformable_params(scene.at("deformable"));
+//   auto mesh = make_mesh_for(params);
+//   DeformableModel model = make_model(mesh, params, planes);
+//   DeformableState state = make_state(model);
+//   // each physics step:
+//   state.f_ext.setZero(); state.f_ext.col(i) += contact_force_n;   // caller's loads
+//   StepStatus st = step(model, state, 1e-3, &events);
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/config/config.hpp"
+#include "common/mesh/tri_mesh.hpp"
+#include "server/world/events.hpp"
+#include "server/world/plane.hpp"
+
+namespace teleop::sim::deformable {
+
+/// Which internal force law the body uses.
+enum class ModelKind : std::uint8_t {
+  kMassSpring = 0,          ///< edge springs + radial springs to a centre node
+  kNavierLinear = 1,        ///< eq. (2), linear strain (the paper's tested model)
+  kNavierCorotational = 2,  ///< eq. (2) measured in each edge's rotated rest frame
+};
+
+/// Time integrator.
+enum class IntegratorKind : std::uint8_t {
+  kExplicitEuler = 0,    ///< x += h v(t); v += h a(t): unstable without damping
+  kSymplecticEuler = 1,  ///< v += h a(t); x += h v(t+h): stable iff h w_max <= 2
+  kImplicitEuler = 2,    ///< (M - hD - h^2 K) dv = h (f + h K v), one Newton step, CG solve
+};
+
+/// "mass_spring", "navier_linear", "navier_corotational".
+const char* to_string(ModelKind kind);
+/// "explicit_euler", "symplectic_euler", "implicit_euler".
+const char* to_string(IntegratorKind kind);
+/// Parses the names above. @throws config::ConfigError naming the value and the choices.
+ModelKind parse_model_kind(const std::string& name);
+/// Parses the names above. @throws config::ConfigError naming the value and the choices.
+IntegratorKind parse_integrator_kind(const std::string& name);
+
+/// Parameters of one deformable object (the `deformable:` mapping of a scene). Defaults are the
+/// paper's sphere (radius 0.25 m, level 4) made of a soft foam; see docs/deformable.md.
+struct DeformableParams {
+  ModelKind model = ModelKind::kMassSpring;
+  IntegratorKind integrator = IntegratorKind::kSymplecticEuler;
+
+  // geometry: an icosphere unless mesh_file is set
+  int level = 4;                                           ///< icosphere subdivision [0, 6]
+  double radius_m = 0.25;                                  ///< icosphere radius [m]
+  Eigen::Vector3d centre_m = Eigen::Vector3d(0, 0, 0.25);  ///< icosphere centre / mesh offset [m]
+  std::string mesh_file;                                   ///< OBJ/STL/PLY; empty: icosphere
+  double mesh_scale = 1.0;                                 ///< file units to metres
+
+  // mass
+  double mass_kg = 2.0;  ///< total mass [kg] (density = mass / enclosed volume)
+  /// When > 0 it replaces mass_kg: mass = density * enclosed volume [kg/m^3].
+  double density_kg_per_m3 = 0.0;
+  /// Share of the mass carried by the centre node (only when radial springs exist) [-].
+  double centre_mass_fraction = 0.3;
+
+  // mass-spring model
+  double edge_stiffness_n_per_m = 40.0;  ///< each edge spring [N/m] (membrane, level invariant)
+  /// Radial spring of node i: k_i = this * (area of node i) [N/m per m^2 of surface]; 0 = none.
+  /// Default: 1.5e5 for mass_spring (46 N/m per node at level 4), 0 for the Navier models.
+  double radial_stiffness_n_per_m3 = 1.5e5;
+
+  // Navier model, eq. (1)-(2)
+  double youngs_modulus_pa = 3000.0;  ///< E [Pa]
+  double poisson_ratio = 0.3;         ///< nu [-], in [0, 0.49]
+
+  // damping
+  /// Stiffness-proportional damping: every spring/edge has damper c = beta * k [s].
+  double stiffness_damping_s = 5e-4;
+  double mass_damping_per_s = 0.0;  ///< drag on each node, f = -alpha m v [1/s]
+
+  // loads and contact
+  Eigen::Vector3d gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);  ///< [m/s^2]
+  /// Node-plane penalty: k_i = m_i w^2, c_i = 2 zeta m_i w (stable for explicit schemes when
+  /// h w < ~1; the planes' own stiffness is for the rigid tool). [rad/s]
+  double contact_frequency_rad_per_s = 600.0;
+  double contact_damping_ratio = 0.7;  ///< zeta [-]
+  bool friction = true;                ///< Coulomb friction with the planes' coefficients
+
+  // implicit Euler's conjugate-gradient solve
+  int cg_max_iterations = 60;  ///< fixed upper bound on iterations per step
+  double cg_tolerance = 1e-6;  ///< relative residual at which CG stops early
+
+  // sleeping and fault detection
+  double sleep_speed_mps = 2e-4;  ///< a node slower than this is still [m/s]
+  double sleep_time_s = 0.2;      ///< still and unloaded this long: sleep [s]
+  double max_speed_mps = 50.0;    ///< faster than this is a blow-up [m/s]
+};
+
+/// Reads and validates the `deformable:` YAML mapping. Unknown keys, wrong types and values out
+/// of range throw config::ConfigError naming file, field, value and range. Exactly one of
+/// mass_kg and density_kg_per_m3 may be given (density: mass = density * enclosed volume).
+DeformableParams load_deformable_params(const teleop::config::Node& node);
+
+/// The mesh the parameters describe: the icosphere (level, radius_m, centre_m) or mesh_file
+/// loaded, scaled and translated by centre_m. @throws mesh::MeshError.
+teleop::mesh::TriMesh make_mesh_for(const DeformableParams& params);
+
+/// Immutable description of one body. Built once by make_model().
+struct DeformableModel {
+  DeformableParams params;
+  teleop::mesh::TriMesh mesh;   ///< topology; mesh.vertices are the rest positions [m]
+  int node_count = 0;           ///< surface nodes N
+  bool has_centre = false;      ///< a centre node with radial springs exists
+  Eigen::VectorXd mass_kg;      ///< node masses [kg], size N
+  Eigen::VectorXd inv_mass;     ///< 1 / mass [1/kg]
+  Eigen::VectorXd area_m2;      ///< node areas (a third of each adjacent triangle) [m^2]
+  double centre_mass_kg = 0.0;  ///< centre node mass [kg] (0 without radial springs)
+  double total_mass_kg = 0.0;   ///< [kg]
+  double volume_m3 = 0.0;       ///< rest enclosed volume [m^3]
+  double density_kg_per_m3 = 0.0;
+  double lame_lambda_pa = 0.0;    ///< lambda = E nu / ((1 + nu)(1 - 2 nu)) [Pa]
+  double lame_mu_pa = 0.0;        ///< mu = E / (2 (1 + nu)) [Pa]
+  Eigen::Vector3d rest_centre_m;  ///< rest position of the centre node / centroid [m]
+
+  // one entry per mesh edge (i < j)
+  Eigen::Matrix2Xi edges;         ///< node pairs
+  Eigen::VectorXd rest_length_m;  ///< |X_j - X_i| [m]
+  Eigen::Matrix3Xd rest_dir;      ///< (X_j - X_i) / |X_j - X_i|
+  /// Mass-spring: edge spring k [N/m]. Navier: coefficient a of (d_j - d_i) [N/m].
+  Eigen::VectorXd edge_k_iso;
+  /// Navier: coefficient b of ((d_j - d_i).u) u [N/m]; mass-spring: unused (0).
+  Eigen::VectorXd edge_k_dir;
+
+  // radial springs (node i to the centre node)
+  Eigen::VectorXd radial_k;       ///< [N/m]
+  Eigen::VectorXd radial_rest_m;  ///< rest distance to the centre [m]
+
+  // contact with rigid planes (per node: k_i = m_i w^2, c_i = 2 zeta m_i w)
+  std::array<Plane, 8> planes{};
+  int plane_count = 0;
+  Eigen::VectorXd contact_k;  ///< [N/m]
+  Eigen::VectorXd contact_c;  ///< [N s/m]
+};
+
+/// Builds the model from a closed mesh (rest shape), parameters and the rigid planes (at most
+/// 8). @throws config::ConfigError for parameters out of range, mesh::MeshError for a bad mesh.
+DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformableParams& params,
+                           const std::vector<Plane>& planes = {});
+
+/// Result of one step.
+enum class StepStatus : std::uint8_t {
+  kOk = 0,          ///< advanced
+  kSleeping = 1,    ///< at rest and unloaded: no work done
+  kFaultReset = 2,  ///< NaN or blow-up detected: the body was reset to its rest shape, at rest
+  kBadInput = 3,    ///< dt not finite or <= 0, or a non-finite f_ext/pin target: nothing done
+};
+
+/// Mutable state of one body: positions, velocities, loads, outputs and all scratch memory.
+struct DeformableState {
+  Eigen::Matrix3Xd x;      ///< node positions [m], 3 x N
+  Eigen::Matrix3Xd v;      ///< node velocities [m/s]
+  Eigen::Matrix3Xd f_ext;  ///< external forces [N], written by the caller; step() keeps it
+  std::vector<std::uint8_t> pinned;  ///< 1: node i follows pin_target (held by the caller)
+  Eigen::Matrix3Xd pin_target;       ///< targets of pinned nodes [m]
+  Eigen::Vector3d centre_x = Eigen::Vector3d::Zero();  ///< centre node position [m]
+  Eigen::Vector3d centre_v = Eigen::Vector3d::Zero();  ///< centre node velocity [m/s]
+
+  bool sleeping = false;      ///< at rest and unloaded: step() does nothing until a load comes
+  bool wake_request = false;  ///< set by the caller to force a wake-up; cleared by step()
+  double still_time_s = 0.0;  ///< how long the body has been still and unloaded [s]
+  double sim_time_s = 0.0;    ///< simulated time [s]
+
+  // outputs of the last step
+  Eigen::Matrix3Xd force;  ///< total force on each node at the start of the step [N]
+  int contact_count = 0;   ///< node-plane contacts in the last step
+  Eigen::Vector3d plane_force_n = Eigen::Vector3d::Zero();  ///< sum of plane forces on the body
+  int cg_iterations = 0;                                    ///< implicit Euler: CG iterations
+  double cg_residual = 0.0;  ///< implicit Euler: final relative residual
+  std::uint64_t steps = 0;
+  std::uint64_t sleeping_steps = 0;
+  std::uint64_t fault_count = 0;
+  Eigen::Vector3d last_good_centroid = Eigen::Vector3d::Zero();  ///< [m]
+
+  // scratch (sized by make_state; never resized by step)
+  Eigen::Matrix3Xd work_f;  ///< forces, 3 x (N + 1): last column is the centre node
+  Eigen::Matrix3Xd work_dv, work_r, work_z, work_p, work_ap, work_diag, work_b;
+  Eigen::Matrix3Xd edge_dir;   ///< per edge direction w of the Jacobian block
+  Eigen::Matrix4Xd edge_coef;  ///< per edge (k_iso, k_dir, c_iso, c_dir) of the Jacobian
+  Eigen::Matrix3Xd radial_dir;
+  Eigen::Matrix4Xd radial_coef;
+  std::vector<int> contact_node;  ///< implicit Euler: contact list (capacity N * planes)
+  Eigen::Matrix3Xd contact_normal;
+  Eigen::Matrix2Xd contact_coef;               ///< (k, c) of each contact
+  std::vector<Eigen::Matrix3d> rotation;       ///< co-rotational frame of each node
+  std::vector<Eigen::Quaterniond> rotation_q;  ///< warm start of the polar decomposition
+};
+
+/// A state at rest in the rest shape, no loads, nothing pinned, scratch allocated.
+DeformableState make_state(const DeformableModel& model);
+
+/// Advances the body by dt_s [s] with the model's integrator. Never allocates, never throws.
+/// Faults (NaN, speed above max_speed_mps) reset the body and push a kFault event on `events`
+/// (may be null). Sleeping bodies return kSleeping at once unless f_ext is non-zero, a pinned
+/// node is away from its target or wake_request is set.
+StepStatus step(const DeformableModel& model, DeformableState& state, double dt_s,
+                teleop::sim::EventQueue* events);
+
+/// Internal forces (elastic + damping, no gravity, contact or f_ext) on each node at the
+/// current state [N], into `out` (3 x N, resized only if its size differs). Also refreshes the
+/// co-rotational frames in `state`. Not for the hot loop of other bodies: it writes scratch.
+void internal_forces(const DeformableModel& model, DeformableState& state, Eigen::Matrix3Xd& out);
+
+/// Kinetic energy of nodes and centre [J].
+double kinetic_energy(const DeformableModel& model, const DeformableState& state);
+/// Elastic energy of springs / Navier edges [J] (co-rotational: with the current frames).
+double elastic_energy(const DeformableModel& model, const DeformableState& state);
+/// Elastic + gravitational (relative to z = 0 along -g) + plane penalty energy [J].
+double potential_energy(const DeformableModel& model, const DeformableState& state);
+
+/// Centre of the body: the centre node when there is one, else the mass-weighted centroid [m].
+Eigen::Vector3d body_centre(const DeformableModel& model, const DeformableState& state);
+/// Mass-weighted centroid of all nodes (centre node included) [m].
+Eigen::Vector3d centroid(const DeformableModel& model, const DeformableState& state);
+
+/// Wakes a sleeping body (the next step integrates).
+inline void wake(DeformableState& state) {
+  state.sleeping = false;
+  state.wake_request = true;
+  state.still_time_s = 0.0;
+}
+
+}  // namespace teleop::sim::deformable

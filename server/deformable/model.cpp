@@ -1,0 +1,246 @@
+// Building the deformable model (masses, springs, Navier coefficients) and its state.
+#include <cmath>
+
+#include "server/deformable/deformable.hpp"
+
+namespace teleop::sim::deformable {
+
+namespace {
+
+[[noreturn]] void bad(const std::string& what) {
+  throw config::ConfigError("deformable parameters: " + what);
+}
+
+void check_range(const char* name, double v, double lo, double hi) {
+  if (!(v >= lo && v <= hi)) {
+    bad(std::string(name) + " = " + std::to_string(v) + " is outside " +
+        config::range_text(lo, hi));
+  }
+}
+
+}  // namespace
+
+teleop::mesh::TriMesh make_mesh_for(const DeformableParams& p) {
+  if (p.mesh_file.empty()) return teleop::mesh::make_icosphere(p.level, p.radius_m, p.centre_m);
+  teleop::mesh::LoadOptions opt;
+  opt.scale = p.mesh_scale;
+  teleop::mesh::TriMesh m = teleop::mesh::load_mesh(p.mesh_file, opt);
+  m.vertices.colwise() += p.centre_m;
+  return m;
+}
+
+DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformableParams& params,
+                           const std::vector<Plane>& planes) {
+  check_range("mass_kg", params.mass_kg, 1e-6, 1e6);
+  check_range("density_kg_per_m3", params.density_kg_per_m3, 0.0, 1e5);
+  check_range("centre_mass_fraction", params.centre_mass_fraction, 0.01, 0.9);
+  check_range("edge_stiffness_n_per_m", params.edge_stiffness_n_per_m, 0.0, 1e9);
+  check_range("radial_stiffness_n_per_m3", params.radial_stiffness_n_per_m3, 0.0, 1e12);
+  check_range("youngs_modulus_pa", params.youngs_modulus_pa, 1e-3, 1e12);
+  check_range("poisson_ratio", params.poisson_ratio, 0.0, 0.49);
+  check_range("stiffness_damping_s", params.stiffness_damping_s, 0.0, 1.0);
+  check_range("mass_damping_per_s", params.mass_damping_per_s, 0.0, 1e4);
+  check_range("contact_frequency_rad_per_s", params.contact_frequency_rad_per_s, 0.0, 1e7);
+  check_range("contact_damping_ratio", params.contact_damping_ratio, 0.0, 100.0);
+  check_range("cg_max_iterations", params.cg_max_iterations, 1, 1e5);
+  check_range("max_speed_mps", params.max_speed_mps, 1e-6, 1e9);
+  if (!params.gravity_mps2.allFinite()) bad("gravity_mps2 must be finite");
+  if (planes.size() > 8) bad("at most 8 planes, got " + std::to_string(planes.size()));
+  if (static_cast<int>(mesh.vertex_face_offsets.size()) != mesh.vertex_count() + 1) {
+    throw teleop::mesh::MeshError("make_model: the mesh has no adjacency tables");
+  }
+  teleop::mesh::validate_closed_manifold(mesh);
+
+  DeformableModel m;
+  m.params = params;
+  m.mesh = mesh;
+  const int n = mesh.vertex_count();
+  m.node_count = n;
+  const Eigen::Matrix3Xd& X = mesh.vertices;
+
+  // node areas: a third of each adjacent triangle; volume and its centroid
+  m.area_m2 = Eigen::VectorXd::Zero(n);
+  double vol6 = 0.0;
+  Eigen::Vector3d vc = Eigen::Vector3d::Zero();
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    const int a = mesh.triangles(0, t), b = mesh.triangles(1, t), c = mesh.triangles(2, t);
+    const double area = 0.5 * (X.col(b) - X.col(a)).cross(X.col(c) - X.col(a)).norm();
+    m.area_m2(a) += area / 3.0;
+    m.area_m2(b) += area / 3.0;
+    m.area_m2(c) += area / 3.0;
+    const double v6 = X.col(a).dot(X.col(b).cross(X.col(c)));
+    vol6 += v6;
+    vc += v6 * (X.col(a) + X.col(b) + X.col(c)) / 4.0;
+  }
+  m.volume_m3 = vol6 / 6.0;
+  m.rest_centre_m = vc / vol6;
+  const double total_area = m.area_m2.sum();
+
+  // masses
+  m.total_mass_kg =
+      params.density_kg_per_m3 > 0.0 ? params.density_kg_per_m3 * m.volume_m3 : params.mass_kg;
+  m.density_kg_per_m3 = m.total_mass_kg / m.volume_m3;
+  m.has_centre = params.radial_stiffness_n_per_m3 > 0.0;
+  m.centre_mass_kg = m.has_centre ? params.centre_mass_fraction * m.total_mass_kg : 0.0;
+  const double surface_mass = m.total_mass_kg - m.centre_mass_kg;
+  m.mass_kg = surface_mass * m.area_m2 / total_area;
+  m.inv_mass = m.mass_kg.cwiseInverse();
+
+  // Lame coefficients from E and nu
+  const double E = params.youngs_modulus_pa, nu = params.poisson_ratio;
+  m.lame_lambda_pa = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  m.lame_mu_pa = E / (2.0 * (1.0 + nu));
+
+  // edges
+  m.edges = mesh.edges;
+  const int ne = mesh.edge_count();
+  m.rest_length_m.resize(ne);
+  m.rest_dir.resize(3, ne);
+  for (int e = 0; e < ne; ++e) {
+    const Eigen::Vector3d d = X.col(m.edges(1, e)) - X.col(m.edges(0, e));
+    m.rest_length_m(e) = d.norm();
+    m.rest_dir.col(e) = d / m.rest_length_m(e);
+  }
+  m.edge_k_iso.resize(ne);
+  m.edge_k_dir.resize(ne);
+  if (params.model == ModelKind::kMassSpring) {
+    m.edge_k_iso.setConstant(params.edge_stiffness_n_per_m);
+    m.edge_k_dir.setZero();
+  } else {
+    // eq. (2): V_i (mu Lap d + (lambda + mu) grad div d)_i with the finite differences
+    //   Lap d_i = 2 / S_i sum_j (d_j - d_i) / l_ij,
+    //   grad div d_i = 2 / S_i sum_j ((d_j - d_i).u) u / l_ij,   S_i = sum_j l_ij,
+    // V_i = node volume share. The weight 2 V_i / S_i is averaged over the two ends of each
+    // edge so that the stiffness is symmetric (momentum and energy conserving).
+    Eigen::VectorXd s_sum = Eigen::VectorXd::Zero(n);
+    for (int e = 0; e < ne; ++e) {
+      s_sum(m.edges(0, e)) += m.rest_length_m(e);
+      s_sum(m.edges(1, e)) += m.rest_length_m(e);
+    }
+    const Eigen::VectorXd vol_i = m.volume_m3 * m.area_m2 / total_area;
+    for (int e = 0; e < ne; ++e) {
+      const int i = m.edges(0, e), j = m.edges(1, e);
+      const double w = vol_i(i) / s_sum(i) + vol_i(j) / s_sum(j);
+      m.edge_k_iso(e) = m.lame_mu_pa * w / m.rest_length_m(e);
+      m.edge_k_dir(e) = (m.lame_lambda_pa + m.lame_mu_pa) * w / m.rest_length_m(e);
+    }
+  }
+
+  // radial springs to the centre node
+  m.radial_k = Eigen::VectorXd::Zero(n);
+  m.radial_rest_m = Eigen::VectorXd::Zero(n);
+  if (m.has_centre) {
+    m.radial_k = params.radial_stiffness_n_per_m3 * m.area_m2;
+    for (int i = 0; i < n; ++i) m.radial_rest_m(i) = (X.col(i) - m.rest_centre_m).norm();
+  }
+
+  // contact with planes
+  m.plane_count = static_cast<int>(planes.size());
+  for (std::size_t k = 0; k < planes.size(); ++k) {
+    m.planes[k] = planes[k];
+    const double nn = planes[k].normal.norm();
+    if (!(nn > 0.0) || !std::isfinite(planes[k].offset_m)) {
+      bad("plane '" + planes[k].name + "' has a zero or non-finite normal/offset");
+    }
+    m.planes[k].normal /= nn;
+  }
+  const double w = params.contact_frequency_rad_per_s;
+  m.contact_k = m.mass_kg * w * w;
+  m.contact_c = m.mass_kg * (2.0 * params.contact_damping_ratio * w);
+  return m;
+}
+
+DeformableState make_state(const DeformableModel& m) {
+  const int n = m.node_count;
+  const int ne = static_cast<int>(m.edges.cols());
+  DeformableState s;
+  s.x = m.mesh.vertices;
+  s.v = Eigen::Matrix3Xd::Zero(3, n);
+  s.f_ext = Eigen::Matrix3Xd::Zero(3, n);
+  s.pinned.assign(static_cast<std::size_t>(n), 0);
+  s.pin_target = s.x;
+  s.centre_x = m.rest_centre_m;
+  s.centre_v.setZero();
+  s.force = Eigen::Matrix3Xd::Zero(3, n);
+  for (Eigen::Matrix3Xd* w : {&s.work_f, &s.work_dv, &s.work_r, &s.work_z, &s.work_p, &s.work_ap,
+                              &s.work_diag, &s.work_b}) {
+    *w = Eigen::Matrix3Xd::Zero(3, n + 1);
+  }
+  s.edge_dir = Eigen::Matrix3Xd::Zero(3, ne);
+  s.edge_coef = Eigen::Matrix4Xd::Zero(4, ne);
+  s.radial_dir = Eigen::Matrix3Xd::Zero(3, n);
+  s.radial_coef = Eigen::Matrix4Xd::Zero(4, n);
+  const int cap = n * std::max(m.plane_count, 1);
+  s.contact_node.assign(static_cast<std::size_t>(cap), -1);
+  s.contact_normal = Eigen::Matrix3Xd::Zero(3, cap);
+  s.contact_coef = Eigen::Matrix2Xd::Zero(2, cap);
+  s.rotation.assign(static_cast<std::size_t>(n), Eigen::Matrix3d::Identity());
+  s.rotation_q.assign(static_cast<std::size_t>(n), Eigen::Quaterniond::Identity());
+  s.last_good_centroid = centroid(m, s);
+  return s;
+}
+
+Eigen::Vector3d centroid(const DeformableModel& m, const DeformableState& s) {
+  Eigen::Vector3d c = s.x * m.mass_kg;
+  c += m.centre_mass_kg * s.centre_x;
+  return c / m.total_mass_kg;
+}
+
+Eigen::Vector3d body_centre(const DeformableModel& m, const DeformableState& s) {
+  if (m.has_centre) return s.centre_x;
+  return centroid(m, s);
+}
+
+double kinetic_energy(const DeformableModel& m, const DeformableState& s) {
+  double e = 0.0;
+  for (int i = 0; i < m.node_count; ++i) e += m.mass_kg(i) * s.v.col(i).squaredNorm();
+  e += m.centre_mass_kg * s.centre_v.squaredNorm();
+  return 0.5 * e;
+}
+
+double elastic_energy(const DeformableModel& m, const DeformableState& s) {
+  double e = 0.0;
+  const Eigen::Matrix3Xd& X = m.mesh.vertices;
+  for (int k = 0; k < m.edges.cols(); ++k) {
+    const int i = m.edges(0, k), j = m.edges(1, k);
+    const Eigen::Vector3d d = s.x.col(j) - s.x.col(i);
+    if (m.params.model == ModelKind::kMassSpring) {
+      const double stretch = d.norm() - m.rest_length_m(k);
+      e += m.edge_k_iso(k) * stretch * stretch;
+    } else {
+      Eigen::Vector3d strain;
+      if (m.params.model == ModelKind::kNavierLinear) {
+        strain = d - (X.col(j) - X.col(i));
+      } else {
+        const Eigen::Matrix3d r = 0.5 * (s.rotation[static_cast<std::size_t>(i)] +
+                                         s.rotation[static_cast<std::size_t>(j)]);
+        strain = r.transpose() * d - (X.col(j) - X.col(i));
+      }
+      const double along = strain.dot(m.rest_dir.col(k));
+      e += m.edge_k_iso(k) * strain.squaredNorm() + m.edge_k_dir(k) * along * along;
+    }
+  }
+  if (m.has_centre) {
+    for (int i = 0; i < m.node_count; ++i) {
+      const double stretch = (s.x.col(i) - s.centre_x).norm() - m.radial_rest_m(i);
+      e += m.radial_k(i) * stretch * stretch;
+    }
+  }
+  return 0.5 * e;
+}
+
+double potential_energy(const DeformableModel& m, const DeformableState& s) {
+  double e = elastic_energy(m, s);
+  const Eigen::Vector3d& g = m.params.gravity_mps2;
+  for (int i = 0; i < m.node_count; ++i) {
+    e -= m.mass_kg(i) * g.dot(s.x.col(i));
+    for (int k = 0; k < m.plane_count; ++k) {
+      const double d = m.planes[static_cast<std::size_t>(k)].signed_distance(s.x.col(i));
+      if (d < 0.0) e += 0.5 * m.contact_k(i) * d * d;
+    }
+  }
+  e -= m.centre_mass_kg * g.dot(s.centre_x);
+  return e;
+}
+
+}  // namespace teleop::sim::deformable

@@ -1,0 +1,138 @@
+// Parsing and validation of the `deformable:` YAML mapping.
+#include <cmath>
+
+#include "server/deformable/deformable.hpp"
+
+namespace teleop::sim::deformable {
+
+const char* to_string(ModelKind kind) {
+  switch (kind) {
+    case ModelKind::kMassSpring:
+      return "mass_spring";
+    case ModelKind::kNavierLinear:
+      return "navier_linear";
+    case ModelKind::kNavierCorotational:
+      return "navier_corotational";
+  }
+  return "?";
+}
+
+const char* to_string(IntegratorKind kind) {
+  switch (kind) {
+    case IntegratorKind::kExplicitEuler:
+      return "explicit_euler";
+    case IntegratorKind::kSymplecticEuler:
+      return "symplectic_euler";
+    case IntegratorKind::kImplicitEuler:
+      return "implicit_euler";
+  }
+  return "?";
+}
+
+ModelKind parse_model_kind(const std::string& name) {
+  for (auto k :
+       {ModelKind::kMassSpring, ModelKind::kNavierLinear, ModelKind::kNavierCorotational}) {
+    if (name == to_string(k)) return k;
+  }
+  throw config::ConfigError("deformable model '" + name +
+                            "' is unknown; choose mass_spring, navier_linear or "
+                            "navier_corotational");
+}
+
+IntegratorKind parse_integrator_kind(const std::string& name) {
+  for (auto k : {IntegratorKind::kExplicitEuler, IntegratorKind::kSymplecticEuler,
+                 IntegratorKind::kImplicitEuler}) {
+    if (name == to_string(k)) return k;
+  }
+  throw config::ConfigError("integrator '" + name +
+                            "' is unknown; choose explicit_euler, symplectic_euler or "
+                            "implicit_euler");
+}
+
+DeformableParams load_deformable_params(const teleop::config::Node& node) {
+  if (!node.is_map()) {
+    throw config::ConfigError(node.file() + ": field '" + node.path() +
+                              "' must be a mapping of deformable-body parameters");
+  }
+  node.reject_unknown_keys({"model",
+                            "integrator",
+                            "level",
+                            "radius_m",
+                            "centre_m",
+                            "mesh_file",
+                            "mesh_scale",
+                            "mass_kg",
+                            "density_kg_per_m3",
+                            "centre_mass_fraction",
+                            "edge_stiffness_n_per_m",
+                            "radial_stiffness_n_per_m3",
+                            "youngs_modulus_pa",
+                            "poisson_ratio",
+                            "stiffness_damping_s",
+                            "mass_damping_per_s",
+                            "gravity_mps2",
+                            "contact_frequency_rad_per_s",
+                            "contact_damping_ratio",
+                            "friction",
+                            "cg_max_iterations",
+                            "cg_tolerance",
+                            "sleep_speed_mps",
+                            "sleep_time_s",
+                            "max_speed_mps"});
+  DeformableParams p;
+  p.model = parse_model_kind(node.choice_or(
+      "model", "mass_spring", {"mass_spring", "navier_linear", "navier_corotational"}));
+  p.integrator = parse_integrator_kind(node.choice_or(
+      "integrator", "symplectic_euler", {"explicit_euler", "symplectic_euler", "implicit_euler"}));
+  p.level = static_cast<int>(node.integer_or("level", p.level, 0, 6));
+  p.radius_m = node.number_or("radius_m", p.radius_m, 1e-3, 100.0);
+  const auto c =
+      node.numbers_or("centre_m", {p.centre_m.x(), p.centre_m.y(), p.centre_m.z()}, -1e4, 1e4);
+  if (c.size() != 3) node.fail("centre_m", "must be a list of 3 numbers [x, y, z] in metres");
+  p.centre_m = Eigen::Vector3d(c[0], c[1], c[2]);
+  p.mesh_file = node.string_or("mesh_file", "");
+  p.mesh_scale = node.number_or("mesh_scale", 1.0, 1e-6, 1e6);
+  if (node.has("mass_kg") && node.has("density_kg_per_m3")) {
+    node.fail("density_kg_per_m3", "give either mass_kg or density_kg_per_m3, not both");
+  }
+  p.mass_kg = node.number_or("mass_kg", p.mass_kg, 1e-4, 1e5);
+  if (node.has("density_kg_per_m3")) {
+    p.density_kg_per_m3 = node.number("density_kg_per_m3", 1.0, 2.5e4);
+  }
+  p.centre_mass_fraction =
+      node.number_or("centre_mass_fraction", p.centre_mass_fraction, 0.01, 0.9);
+  p.edge_stiffness_n_per_m =
+      node.number_or("edge_stiffness_n_per_m", p.edge_stiffness_n_per_m, 0.0, 1e7);
+  const double radial_default =
+      p.model == ModelKind::kMassSpring ? p.radial_stiffness_n_per_m3 : 0.0;
+  p.radial_stiffness_n_per_m3 =
+      node.number_or("radial_stiffness_n_per_m3", radial_default, 0.0, 1e10);
+  p.youngs_modulus_pa = node.number_or("youngs_modulus_pa", p.youngs_modulus_pa, 1.0, 1e10);
+  p.poisson_ratio = node.number_or("poisson_ratio", p.poisson_ratio, 0.0, 0.49);
+  p.stiffness_damping_s = node.number_or("stiffness_damping_s", p.stiffness_damping_s, 0.0, 1.0);
+  p.mass_damping_per_s = node.number_or("mass_damping_per_s", p.mass_damping_per_s, 0.0, 1e3);
+  const auto g = node.numbers_or(
+      "gravity_mps2", {p.gravity_mps2.x(), p.gravity_mps2.y(), p.gravity_mps2.z()}, -100.0, 100.0);
+  if (g.size() != 3) node.fail("gravity_mps2", "must be a list of 3 numbers [m/s^2]");
+  p.gravity_mps2 = Eigen::Vector3d(g[0], g[1], g[2]);
+  p.contact_frequency_rad_per_s =
+      node.number_or("contact_frequency_rad_per_s", p.contact_frequency_rad_per_s, 1.0, 1e6);
+  p.contact_damping_ratio =
+      node.number_or("contact_damping_ratio", p.contact_damping_ratio, 0.0, 10.0);
+  p.friction = node.boolean_or("friction", p.friction);
+  p.cg_max_iterations =
+      static_cast<int>(node.integer_or("cg_max_iterations", p.cg_max_iterations, 1, 10000));
+  p.cg_tolerance = node.number_or("cg_tolerance", p.cg_tolerance, 1e-14, 1e-1);
+  p.sleep_speed_mps = node.number_or("sleep_speed_mps", p.sleep_speed_mps, 0.0, 1.0);
+  p.sleep_time_s = node.number_or("sleep_time_s", p.sleep_time_s, 0.0, 1e3);
+  p.max_speed_mps = node.number_or("max_speed_mps", p.max_speed_mps, 1e-3, 1e6);
+  if (p.model == ModelKind::kMassSpring && p.edge_stiffness_n_per_m <= 0.0 &&
+      p.radial_stiffness_n_per_m3 <= 0.0) {
+    node.fail("edge_stiffness_n_per_m",
+              "a mass-spring body needs edge_stiffness_n_per_m > 0 or "
+              "radial_stiffness_n_per_m3 > 0");
+  }
+  return p;
+}
+
+}  // namespace teleop::sim::deformable

@@ -1,0 +1,497 @@
+// Forces, integrators, sleeping and fault handling of the deformable body. Nothing here
+// allocates: every buffer lives in DeformableState and was sized by make_state().
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "server/deformable/deformable.hpp"
+
+namespace teleop::sim::deformable {
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+
+/// What compute_forces adds.
+struct ForceFlags {
+  bool external = true;   ///< gravity, drag, f_ext
+  bool contact = true;    ///< plane penalties and friction
+  bool jacobian = false;  ///< fill the blocks for the implicit solve
+};
+
+// Rotational part of A (polar decomposition), warm-started from q: Mueller et al. 2016,
+// "A robust method to extract the rotational part of deformations".
+void extract_rotation(const Mat3& a, Eigen::Quaterniond& q, int max_iterations) {
+  for (int it = 0; it < max_iterations; ++it) {
+    const Mat3 r = q.toRotationMatrix();
+    const Vec3 num = r.col(0).cross(a.col(0)) + r.col(1).cross(a.col(1)) + r.col(2).cross(a.col(2));
+    const double den =
+        std::fabs(r.col(0).dot(a.col(0)) + r.col(1).dot(a.col(1)) + r.col(2).dot(a.col(2))) + 1e-12;
+    const Vec3 omega = num / den;
+    const double w = omega.norm();
+    if (!(w > 1e-10)) break;
+    q = Eigen::Quaterniond(Eigen::AngleAxisd(w, omega / w)) * q;
+    q.normalize();
+  }
+}
+
+// Co-rotational frames: per node, the rotation of its one-ring (plus the direction to the
+// centroid, so that a nearly flat ring still fixes all three axes).
+void update_rotations(const DeformableModel& m, DeformableState& s) {
+  const Eigen::Matrix3Xd& X = m.mesh.vertices;
+  const int n = m.node_count;
+  Vec3 c = Vec3::Zero(), c0 = Vec3::Zero();
+  for (int i = 0; i < n; ++i) {
+    c += m.mass_kg(i) * s.x.col(i);
+    c0 += m.mass_kg(i) * X.col(i);
+  }
+  const double inv = 1.0 / m.mass_kg.sum();
+  c *= inv;
+  c0 *= inv;
+  const auto& off = m.mesh.vertex_neighbour_offsets;
+  const auto& nb = m.mesh.vertex_neighbours;
+  for (int i = 0; i < n; ++i) {
+    Mat3 a = Mat3::Zero();
+    const Vec3 xi = s.x.col(i), Xi = X.col(i);
+    double len2 = 0.0;
+    for (int k = off[static_cast<std::size_t>(i)]; k < off[static_cast<std::size_t>(i) + 1]; ++k) {
+      const int j = nb[static_cast<std::size_t>(k)];
+      const Vec3 dX = X.col(j) - Xi;
+      a.noalias() += (s.x.col(j) - xi) * dX.transpose();
+      len2 += dX.squaredNorm();
+    }
+    const Vec3 rX = Xi - c0;
+    const double r2 = rX.squaredNorm();
+    if (r2 > 0.0) a.noalias() += (len2 / r2) * (xi - c) * rX.transpose();
+    extract_rotation(a, s.rotation_q[static_cast<std::size_t>(i)], 8);
+    s.rotation[static_cast<std::size_t>(i)] =
+        s.rotation_q[static_cast<std::size_t>(i)].toRotationMatrix();
+  }
+}
+
+// Total force on every node (and the centre node, column N) into s.work_f at (s.x, s.v).
+void compute_forces(const DeformableModel& m, DeformableState& s, double h, ForceFlags flags) {
+  const int n = m.node_count;
+  const DeformableParams& p = m.params;
+  Eigen::Matrix3Xd& F = s.work_f;
+  F.setZero();
+  const Eigen::Matrix3Xd& x = s.x;
+  const Eigen::Matrix3Xd& v = s.v;
+  const Eigen::Matrix3Xd& X = m.mesh.vertices;
+  const double beta = p.stiffness_damping_s;
+
+  // gravity, drag and the caller's loads
+  if (flags.external) {
+    const double alpha = p.mass_damping_per_s;
+    for (int i = 0; i < n; ++i) {
+      F.col(i) = m.mass_kg(i) * (p.gravity_mps2 - alpha * v.col(i)) + s.f_ext.col(i);
+    }
+    if (m.has_centre) F.col(n) = m.centre_mass_kg * (p.gravity_mps2 - alpha * s.centre_v);
+  }
+
+  // edges
+  const int ne = static_cast<int>(m.edges.cols());
+  switch (p.model) {
+    case ModelKind::kMassSpring:
+      for (int e = 0; e < ne; ++e) {
+        const int i = m.edges(0, e), j = m.edges(1, e);
+        const Vec3 d = x.col(j) - x.col(i);
+        const double l = d.norm();
+        if (!(l > 1e-12)) continue;
+        const Vec3 u = d / l;
+        const double k = m.edge_k_iso(e);
+        const double c = beta * k;
+        const double fs = k * (l - m.rest_length_m(e)) + c * (v.col(j) - v.col(i)).dot(u);
+        F.col(i) += fs * u;
+        F.col(j) -= fs * u;
+        if (flags.jacobian) {
+          // clamped spring Jacobian: the transverse term only when stretched (keeps it SPD)
+          const double kt = k * std::max(0.0, 1.0 - m.rest_length_m(e) / l);
+          s.edge_dir.col(e) = u;
+          s.edge_coef.col(e) << kt, k - kt, 0.0, c;
+        }
+      }
+      break;
+    case ModelKind::kNavierLinear:
+      for (int e = 0; e < ne; ++e) {
+        const int i = m.edges(0, e), j = m.edges(1, e);
+        const Vec3 u0 = m.rest_dir.col(e);
+        const Vec3 strain = (x.col(j) - x.col(i)) - (X.col(j) - X.col(i));
+        const Vec3 rate = v.col(j) - v.col(i);
+        const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
+        const Vec3 f = a * (strain + beta * rate) + (b * (strain + beta * rate).dot(u0)) * u0;
+        F.col(i) += f;
+        F.col(j) -= f;
+        if (flags.jacobian) {
+          s.edge_dir.col(e) = u0;
+          s.edge_coef.col(e) << a, b, beta * a, beta * b;
+        }
+      }
+      break;
+    case ModelKind::kNavierCorotational:
+      update_rotations(m, s);
+      for (int e = 0; e < ne; ++e) {
+        const int i = m.edges(0, e), j = m.edges(1, e);
+        const Mat3 r = 0.5 * (s.rotation[static_cast<std::size_t>(i)] +
+                              s.rotation[static_cast<std::size_t>(j)]);
+        const Vec3 u0 = m.rest_dir.col(e);
+        const Vec3 strain = r.transpose() * (x.col(j) - x.col(i)) - (X.col(j) - X.col(i));
+        const Vec3 rate = r.transpose() * (v.col(j) - v.col(i));
+        const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
+        const Vec3 local = a * (strain + beta * rate) + (b * (strain + beta * rate).dot(u0)) * u0;
+        const Vec3 f = r * local;
+        F.col(i) += f;
+        F.col(j) -= f;
+        if (flags.jacobian) {
+          s.edge_dir.col(e) = (r * u0).normalized();
+          s.edge_coef.col(e) << a, b, beta * a, beta * b;
+        }
+      }
+      break;
+  }
+
+  // radial springs to the centre node
+  if (m.has_centre) {
+    Vec3 fc = Vec3::Zero();
+    for (int i = 0; i < n; ++i) {
+      const Vec3 d = x.col(i) - s.centre_x;
+      const double l = d.norm();
+      if (!(l > 1e-12)) continue;
+      const Vec3 u = d / l;
+      const double k = m.radial_k(i);
+      const double c = beta * k;
+      const double fs = -k * (l - m.radial_rest_m(i)) - c * (v.col(i) - s.centre_v).dot(u);
+      F.col(i) += fs * u;
+      fc -= fs * u;
+      if (flags.jacobian) {
+        const double kt = k * std::max(0.0, 1.0 - m.radial_rest_m(i) / l);
+        s.radial_dir.col(i) = u;
+        s.radial_coef.col(i) << kt, k - kt, 0.0, c;
+      }
+    }
+    F.col(n) += fc;
+  }
+
+  // node-plane penalty contact with Coulomb friction (regularised so that friction never
+  // reverses the sliding velocity within one step)
+  s.contact_count = 0;
+  s.plane_force_n.setZero();
+  if (flags.contact && m.plane_count > 0) {
+    int nc = 0;
+    for (int i = 0; i < n; ++i) {
+      for (int k = 0; k < m.plane_count; ++k) {
+        const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+        const double dist = pl.normal.dot(x.col(i)) - pl.offset_m;
+        if (dist >= 0.0) continue;
+        const Vec3 vi = v.col(i);
+        const double vn = pl.normal.dot(vi);
+        double fn = -m.contact_k(i) * dist - m.contact_c(i) * vn;
+        if (fn < 0.0) fn = 0.0;  // a wall pushes, never pulls
+        Vec3 f = fn * pl.normal;
+        if (p.friction && pl.friction > 0.0) {
+          const Vec3 vt = vi - vn * pl.normal;
+          const double st = vt.norm();
+          if (st > 1e-12) {
+            const double ft = std::min(pl.friction * fn, 0.5 * m.mass_kg(i) * st / h);
+            f -= (ft / st) * vt;
+          }
+        }
+        F.col(i) += f;
+        s.plane_force_n += f;
+        if (flags.jacobian) {
+          s.contact_node[static_cast<std::size_t>(nc)] = i;
+          s.contact_normal.col(nc) = pl.normal;
+          s.contact_coef.col(nc) << m.contact_k(i), m.contact_c(i);
+        }
+        ++nc;
+      }
+    }
+    s.contact_count = nc;
+  }
+}
+
+// out = mc * M p + cc * C p + kc * K p, where K and C are the (positive semi-definite)
+// stiffness and damping blocks stored by compute_forces(jacobian = true). Column N is the
+// centre node. Pinned nodes are held: their rows and columns are dropped.
+void apply_system(const DeformableModel& m, const DeformableState& s, const Eigen::Matrix3Xd& pv,
+                  Eigen::Matrix3Xd& out, double mc, double cc, double kc) {
+  const int n = m.node_count;
+  const double drag = cc * m.params.mass_damping_per_s;
+  for (int i = 0; i < n; ++i) out.col(i) = (mc + drag) * m.mass_kg(i) * pv.col(i);
+  out.col(n) = (mc + drag) * m.centre_mass_kg * pv.col(n);
+  const int ne = static_cast<int>(m.edges.cols());
+  for (int e = 0; e < ne; ++e) {
+    const int i = m.edges(0, e), j = m.edges(1, e);
+    const Eigen::Vector4d co = s.edge_coef.col(e);
+    const Vec3 w = s.edge_dir.col(e);
+    const double si = cc * co(2) + kc * co(0), sd = cc * co(3) + kc * co(1);
+    const Vec3 d = pv.col(i) - pv.col(j);
+    const Vec3 y = si * d + (sd * w.dot(d)) * w;
+    out.col(i) += y;
+    out.col(j) -= y;
+  }
+  if (m.has_centre) {
+    Vec3 yc = Vec3::Zero();
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector4d co = s.radial_coef.col(i);
+      const Vec3 w = s.radial_dir.col(i);
+      const double si = cc * co(2) + kc * co(0), sd = cc * co(3) + kc * co(1);
+      const Vec3 d = pv.col(i) - pv.col(n);
+      const Vec3 y = si * d + (sd * w.dot(d)) * w;
+      out.col(i) += y;
+      yc -= y;
+    }
+    out.col(n) += yc;
+  }
+  for (int c = 0; c < s.contact_count; ++c) {
+    const int i = s.contact_node[static_cast<std::size_t>(c)];
+    const Vec3 nrm = s.contact_normal.col(c);
+    const double sc = cc * s.contact_coef(1, c) + kc * s.contact_coef(0, c);
+    out.col(i) += (sc * nrm.dot(pv.col(i))) * nrm;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (s.pinned[static_cast<std::size_t>(i)]) out.col(i).setZero();
+  }
+}
+
+// Jacobi preconditioner: the diagonal of M + h C + h^2 K.
+void system_diagonal(const DeformableModel& m, DeformableState& s, double h) {
+  const int n = m.node_count;
+  Eigen::Matrix3Xd& dg = s.work_diag;
+  const double drag = 1.0 + h * m.params.mass_damping_per_s;
+  for (int i = 0; i < n; ++i) dg.col(i).setConstant(drag * m.mass_kg(i));
+  dg.col(n).setConstant(drag * m.centre_mass_kg);
+  const double h2 = h * h;
+  for (int e = 0; e < m.edges.cols(); ++e) {
+    const Eigen::Vector4d co = s.edge_coef.col(e);
+    const Vec3 w = s.edge_dir.col(e);
+    const Vec3 dd =
+        Vec3::Constant(h * co(2) + h2 * co(0)) + (h * co(3) + h2 * co(1)) * w.cwiseProduct(w);
+    dg.col(m.edges(0, e)) += dd;
+    dg.col(m.edges(1, e)) += dd;
+  }
+  if (m.has_centre) {
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector4d co = s.radial_coef.col(i);
+      const Vec3 w = s.radial_dir.col(i);
+      const Vec3 dd =
+          Vec3::Constant(h * co(2) + h2 * co(0)) + (h * co(3) + h2 * co(1)) * w.cwiseProduct(w);
+      dg.col(i) += dd;
+      dg.col(n) += dd;
+    }
+  }
+  for (int c = 0; c < s.contact_count; ++c) {
+    const Vec3 nrm = s.contact_normal.col(c);
+    dg.col(s.contact_node[static_cast<std::size_t>(c)]) +=
+        (h * s.contact_coef(1, c) + h2 * s.contact_coef(0, c)) * nrm.cwiseProduct(nrm);
+  }
+  if (!m.has_centre) dg.col(n).setOnes();  // unused column: keep it well defined
+}
+
+// Integration of positions and velocities by the chosen scheme; s.work_f holds the forces.
+void integrate(const DeformableModel& m, DeformableState& s, double h) {
+  const int n = m.node_count;
+  const auto kind = m.params.integrator;
+  if (kind == IntegratorKind::kExplicitEuler) {
+    for (int i = 0; i < n; ++i) {
+      s.x.col(i) += h * s.v.col(i);
+      if (!s.pinned[static_cast<std::size_t>(i)])
+        s.v.col(i) += (h * m.inv_mass(i)) * s.work_f.col(i);
+    }
+    if (m.has_centre) {
+      s.centre_x += h * s.centre_v;
+      s.centre_v += (h / m.centre_mass_kg) * s.work_f.col(n);
+    }
+    return;
+  }
+  if (kind == IntegratorKind::kSymplecticEuler) {
+    for (int i = 0; i < n; ++i) {
+      if (!s.pinned[static_cast<std::size_t>(i)])
+        s.v.col(i) += (h * m.inv_mass(i)) * s.work_f.col(i);
+      s.x.col(i) += h * s.v.col(i);
+    }
+    if (m.has_centre) {
+      s.centre_v += (h / m.centre_mass_kg) * s.work_f.col(n);
+      s.centre_x += h * s.centre_v;
+    }
+    return;
+  }
+  // linearly implicit Euler: (M + hC + h^2 K) dv = h (f - h K v), Jacobi-preconditioned CG
+  Eigen::Matrix3Xd& vfull = s.work_z;  // temporarily: velocities incl. centre
+  vfull.leftCols(n) = s.v;
+  vfull.col(n) = s.centre_v;
+  apply_system(m, s, vfull, s.work_ap, 0.0, 0.0, 1.0);  // K v
+  Eigen::Matrix3Xd& b = s.work_b;
+  b = h * (s.work_f - h * s.work_ap);
+  for (int i = 0; i < n; ++i) {
+    if (s.pinned[static_cast<std::size_t>(i)]) b.col(i).setZero();
+  }
+  if (!m.has_centre) b.col(n).setZero();
+  system_diagonal(m, s, h);
+  Eigen::Matrix3Xd& dv = s.work_dv;
+  Eigen::Matrix3Xd& r = s.work_r;
+  Eigen::Matrix3Xd& z = s.work_z;
+  Eigen::Matrix3Xd& pp = s.work_p;
+  Eigen::Matrix3Xd& ap = s.work_ap;
+  dv.setZero();
+  r = b;
+  z = r.cwiseQuotient(s.work_diag);
+  pp = z;
+  double rz = (r.array() * z.array()).sum();
+  const double rz0 = rz;
+  const double tol2 = m.params.cg_tolerance * m.params.cg_tolerance;
+  int it = 0;
+  const double h2 = h * h;
+  while (it < m.params.cg_max_iterations && rz > tol2 * rz0 && rz0 > 0.0) {
+    apply_system(m, s, pp, ap, 1.0, h, h2);
+    const double pap = (pp.array() * ap.array()).sum();
+    if (!(pap > 0.0)) break;
+    const double alpha = rz / pap;
+    dv += alpha * pp;
+    r -= alpha * ap;
+    z = r.cwiseQuotient(s.work_diag);
+    const double rz_new = (r.array() * z.array()).sum();
+    pp = z + (rz_new / rz) * pp;
+    rz = rz_new;
+    ++it;
+  }
+  s.cg_iterations = it;
+  s.cg_residual = rz0 > 0.0 ? std::sqrt(std::max(rz, 0.0) / rz0) : 0.0;
+  for (int i = 0; i < n; ++i) {
+    if (!s.pinned[static_cast<std::size_t>(i)]) s.v.col(i) += dv.col(i);
+    s.x.col(i) += h * s.v.col(i);
+  }
+  if (m.has_centre) {
+    s.centre_v += dv.col(n);
+    s.centre_x += h * s.centre_v;
+  }
+}
+
+bool loaded(const DeformableModel& m, const DeformableState& s) {
+  if (s.wake_request) return true;
+  if (!(s.f_ext.array() == 0.0).all()) return true;
+  for (int i = 0; i < m.node_count; ++i) {
+    if (s.pinned[static_cast<std::size_t>(i)] && s.pin_target.col(i) != s.x.col(i)) return true;
+  }
+  return false;
+}
+
+void reset_to_rest(const DeformableModel& m, DeformableState& s) {
+  const Vec3 shift =
+      s.last_good_centroid -
+      (m.mesh.vertices * m.mass_kg + m.centre_mass_kg * m.rest_centre_m) / m.total_mass_kg;
+  s.x = m.mesh.vertices;
+  s.x.colwise() += shift;
+  s.v.setZero();
+  s.centre_x = m.rest_centre_m + shift;
+  s.centre_v.setZero();
+  for (int i = 0; i < m.node_count; ++i) {
+    if (s.pinned[static_cast<std::size_t>(i)] && s.pin_target.col(i).allFinite()) {
+      s.x.col(i) = s.pin_target.col(i);
+    }
+    s.rotation[static_cast<std::size_t>(i)].setIdentity();
+    s.rotation_q[static_cast<std::size_t>(i)].setIdentity();
+  }
+  s.still_time_s = 0.0;
+}
+
+}  // namespace
+
+void internal_forces(const DeformableModel& m, DeformableState& s, Eigen::Matrix3Xd& out) {
+  ForceFlags flags;
+  flags.external = false;
+  flags.contact = false;
+  compute_forces(m, s, 1.0, flags);
+  if (out.cols() != m.node_count) out.resize(3, m.node_count);
+  out = s.work_f.leftCols(m.node_count);
+}
+
+StepStatus step(const DeformableModel& m, DeformableState& s, double h,
+                teleop::sim::EventQueue* events) {
+  const int n = m.node_count;
+  if (!(h > 0.0) || !std::isfinite(h) || !s.f_ext.allFinite()) {
+    if (events) {
+      events->push(EventKind::kFault, Severity::kWarning, s.sim_time_s, h,
+                   "deformable: step refused (dt <= 0 or non-finite, or non-finite f_ext)");
+    }
+    return StepStatus::kBadInput;
+  }
+  if (s.sleeping) {
+    if (!loaded(m, s)) {
+      s.sim_time_s += h;
+      ++s.sleeping_steps;
+      return StepStatus::kSleeping;
+    }
+    s.sleeping = false;
+    s.still_time_s = 0.0;
+  }
+  s.wake_request = false;
+
+  // held nodes: the velocity that takes them to their target in this step
+  bool pin_moving = false;
+  for (int i = 0; i < n; ++i) {
+    if (!s.pinned[static_cast<std::size_t>(i)]) continue;
+    if (!s.pin_target.col(i).allFinite()) {
+      s.pinned[static_cast<std::size_t>(i)] = 0;  // a bad target releases the node
+      continue;
+    }
+    s.v.col(i) = (s.pin_target.col(i) - s.x.col(i)) / h;
+    pin_moving = pin_moving || s.pin_target.col(i) != s.x.col(i);
+  }
+
+  ForceFlags flags;
+  flags.jacobian = m.params.integrator == IntegratorKind::kImplicitEuler;
+  compute_forces(m, s, h, flags);
+  s.force = s.work_f.leftCols(n);
+  integrate(m, s, h);
+  for (int i = 0; i < n; ++i) {
+    if (s.pinned[static_cast<std::size_t>(i)]) s.x.col(i) = s.pin_target.col(i);
+  }
+  s.sim_time_s += h;
+  ++s.steps;
+
+  // fault detection: non-finite values or a node faster than max_speed_mps
+  const double vmax2 = m.params.max_speed_mps * m.params.max_speed_mps;
+  double fastest2 = 0.0;
+  int fastest = -1;
+  bool finite = s.centre_x.allFinite() && s.centre_v.allFinite();
+  for (int i = 0; i < n; ++i) {
+    const double sp2 = s.v.col(i).squaredNorm();
+    if (!(sp2 <= fastest2)) {  // also catches NaN
+      fastest2 = sp2;
+      fastest = i;
+    }
+    finite = finite && std::isfinite(s.x(0, i) + s.x(1, i) + s.x(2, i));
+  }
+  if (!finite || !(fastest2 <= vmax2) || !(s.centre_v.squaredNorm() <= vmax2)) {
+    ++s.fault_count;
+    if (events) {
+      char msg[128];
+      std::snprintf(msg, sizeof(msg),
+                    "deformable: blow-up (node %d speed %.3g m/s%s); reset to rest shape", fastest,
+                    std::sqrt(fastest2), finite ? "" : ", NaN");
+      events->push(EventKind::kFault, Severity::kError, s.sim_time_s, std::sqrt(fastest2), msg);
+    }
+    reset_to_rest(m, s);
+    return StepStatus::kFaultReset;
+  }
+  s.last_good_centroid = centroid(m, s);
+
+  // sleeping: still, unloaded and no held node moving for sleep_time_s
+  const double sleep2 = m.params.sleep_speed_mps * m.params.sleep_speed_mps;
+  if (fastest2 < sleep2 && s.centre_v.squaredNorm() < sleep2 && !pin_moving &&
+      (s.f_ext.array() == 0.0).all()) {
+    s.still_time_s += h;
+    if (s.still_time_s >= m.params.sleep_time_s) {
+      s.sleeping = true;
+      s.v.setZero();
+      s.centre_v.setZero();
+    }
+  } else {
+    s.still_time_s = 0.0;
+  }
+  return StepStatus::kOk;
+}
+
+}  // namespace teleop::sim::deformable

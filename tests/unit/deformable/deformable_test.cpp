@@ -1,0 +1,404 @@
+// The deformable body: parameters, model construction, integrators, stability limits,
+// convergence order, contact, sleeping, faults and the no-allocation rule.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "server/deformable/deformable.hpp"
+#include "tests/support/alloc_counter.hpp"
+#include "tests/unit/deformable/test_helpers.hpp"
+
+namespace {
+
+using namespace teleop::sim::deformable;
+using namespace teleop::sim::deformable::testing;
+using teleop::config::ConfigError;
+using teleop::config::Node;
+
+const ModelKind kModels[] = {ModelKind::kMassSpring, ModelKind::kNavierLinear,
+                             ModelKind::kNavierCorotational};
+const IntegratorKind kIntegrators[] = {IntegratorKind::kExplicitEuler,
+                                       IntegratorKind::kSymplecticEuler,
+                                       IntegratorKind::kImplicitEuler};
+
+// ---------------------------------------------------------------------------------------------
+// parameters
+
+TEST(Params, LoadsYamlAndConvertsMaterial) {
+  const Node root = Node::parse(
+      "deformable:\n"
+      "  model: navier_corotational\n"
+      "  integrator: implicit_euler\n"
+      "  level: 2\n"
+      "  radius_m: 0.1\n"
+      "  centre_m: [0, 0, 0.1]\n"
+      "  density_kg_per_m3: 100\n"
+      "  youngs_modulus_pa: 2600\n"
+      "  poisson_ratio: 0.3\n"
+      "  gravity_mps2: [0, 0, 0]\n",
+      "scene.yaml");
+  const DeformableParams p = load_deformable_params(root.at("deformable"));
+  EXPECT_EQ(p.model, ModelKind::kNavierCorotational);
+  EXPECT_EQ(p.integrator, IntegratorKind::kImplicitEuler);
+  EXPECT_EQ(p.level, 2);
+  EXPECT_EQ(p.radial_stiffness_n_per_m3, 0.0);  // Navier default: no radial springs
+  const DeformableModel m = build(p);
+  EXPECT_NEAR(m.lame_mu_pa, 1000.0, 1e-9);
+  EXPECT_NEAR(m.lame_lambda_pa, 2600.0 * 0.3 / (1.3 * 0.4), 1e-9);
+  EXPECT_NEAR(m.density_kg_per_m3, 100.0, 1e-9);
+  EXPECT_NEAR(m.total_mass_kg, 100.0 * m.volume_m3, 1e-12);
+  EXPECT_FALSE(m.has_centre);
+}
+
+TEST(Params, ErrorsNameFileFieldAndRange) {
+  auto expect_error = [](const std::string& yaml, const std::string& needle) {
+    const Node root = Node::parse(yaml, "bad.yaml");
+    try {
+      load_deformable_params(root.at("deformable"));
+      ADD_FAILURE() << "no ConfigError for: " << yaml;
+    } catch (const ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("bad.yaml"), std::string::npos) << what;
+      EXPECT_NE(what.find(needle), std::string::npos) << what;
+    }
+  };
+  expect_error("deformable: {poisson_ratio: 0.5}", "deformable.poisson_ratio");
+  expect_error("deformable: {level: 9}", "deformable.level");
+  expect_error("deformable: {model: fem}", "deformable.model");
+  expect_error("deformable: {radus_m: 1}", "radus_m");
+  expect_error("deformable: {mass_kg: 1, density_kg_per_m3: 10}", "density_kg_per_m3");
+  expect_error("deformable: {centre_m: [1, 2]}", "centre_m");
+}
+
+TEST(Model, MassesAndTablesOfThePaperSphere) {
+  DeformableParams p;  // defaults: the paper's sphere, level 4, mass-spring
+  const DeformableModel m = build(p);
+  EXPECT_EQ(m.node_count, 2562);
+  EXPECT_EQ(m.edges.cols(), 7680);
+  EXPECT_TRUE(m.has_centre);
+  EXPECT_NEAR(m.mass_kg.sum() + m.centre_mass_kg, p.mass_kg, 1e-12);
+  EXPECT_NEAR(m.area_m2.sum(), 4 * M_PI * 0.25 * 0.25, 0.01);
+  EXPECT_NEAR((m.rest_centre_m - p.centre_m).norm(), 0.0, 1e-9);
+  EXPECT_TRUE((m.radial_k.array() > 0).all());
+}
+
+// ---------------------------------------------------------------------------------------------
+// dynamics
+
+class EveryModel : public ::testing::TestWithParam<std::tuple<ModelKind, IntegratorKind>> {};
+
+// A vertex pushed 5 mm out returns; the whole shape comes back to rest when damped.
+TEST_P(EveryModel, ReturnsToRestShapeWhenDamped) {
+  const auto [model, integ] = GetParam();
+  DeformableParams p = small_params(model, integ, 2);
+  p.stiffness_damping_s = 2e-3;
+  p.mass_damping_per_s = 2.0;
+  const double dt = integ == IntegratorKind::kExplicitEuler ? 1e-4 : 5e-4;
+  const DeformableModel m = build(p);
+  DeformableState s = make_state(m);
+  displace_radially(m, s, 0, 0.005);
+  const double e0 = shape_error(m, s);
+  EXPECT_NEAR(e0, 0.005, 1e-3);
+  for (int k = 0; k < static_cast<int>(3.0 / dt); ++k) {
+    ASSERT_EQ(step(m, s, dt, nullptr), StepStatus::kOk) << "step " << k;
+  }
+  EXPECT_LT(shape_error(m, s), 0.01 * e0) << to_string(model) << " " << to_string(integ);
+  EXPECT_LT(kinetic_energy(m, s), 1e-9);
+  EXPECT_EQ(s.fault_count, 0u);
+}
+
+// A step allocates nothing, for every model and integrator, with contact and a held node.
+TEST_P(EveryModel, StepAllocatesNothing) {
+  const auto [model, integ] = GetParam();
+  DeformableParams p = small_params(model, integ, 2);
+  p.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
+  teleop::sim::Plane floor;
+  floor.offset_m = -0.25 + 0.01;  // the sphere starts 1 cm into the floor
+  const DeformableModel m = build(p, {floor});
+  DeformableState s = make_state(m);
+  teleop::sim::EventQueue events;
+  s.pinned[5] = 1;
+  s.pin_target.col(5) = s.x.col(5) + Eigen::Vector3d(0, 0, 0.002);
+  s.f_ext.col(7) << 0.1, 0, 0;
+  step(m, s, 1e-4, &events);  // warm up (nothing lazily sized may remain)
+  {
+    teleop::test::NoAllocScope scope;
+    for (int k = 0; k < 20; ++k) step(m, s, 1e-4, &events);
+    EXPECT_EQ(scope.allocations(), 0u) << to_string(model) << " " << to_string(integ);
+  }
+  EXPECT_GT(s.contact_count, 0);
+  EXPECT_EQ(s.fault_count, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(All, EveryModel,
+                         ::testing::Combine(::testing::ValuesIn(kModels),
+                                            ::testing::ValuesIn(kIntegrators)),
+                         [](const auto& param_info) {
+                           return std::string(to_string(std::get<0>(param_info.param))) + "_" +
+                                  to_string(std::get<1>(param_info.param));
+                         });
+
+class UndampedModel : public ::testing::TestWithParam<ModelKind> {};
+
+// Undamped symplectic Euler: energy stays bounded over 1e5 steps (no drift, no growth).
+TEST_P(UndampedModel, SymplecticEulerKeepsEnergyBounded) {
+  DeformableParams p = small_params(GetParam(), IntegratorKind::kSymplecticEuler, 1);
+  p.stiffness_damping_s = 0.0;
+  const DeformableModel m = build(p);
+  DeformableState s = make_state(m);
+  const double h = 1.0 / omega_max(m, s);  // h w_max = 1: half the stability limit
+  displace_radially(m, s, 0, 0.005);
+  perturb(s, 1e-4, 3);
+  const double e0 = kinetic_energy(m, s) + elastic_energy(m, s);
+  double lo = e0, hi = e0;
+  for (int k = 0; k < 100000; ++k) {
+    step(m, s, h, nullptr);
+    if (k % 10 == 0) {
+      const double e = kinetic_energy(m, s) + elastic_energy(m, s);
+      lo = std::min(lo, e);
+      hi = std::max(hi, e);
+    }
+  }
+  EXPECT_EQ(s.fault_count, 0u);
+  EXPECT_LT(hi, 1.5 * e0) << to_string(GetParam());
+  EXPECT_GT(lo, 0.5 * e0) << to_string(GetParam());
+}
+
+INSTANTIATE_TEST_SUITE_P(All, UndampedModel, ::testing::ValuesIn(kModels),
+                         [](const auto& param_info) {
+                           return std::string(to_string(param_info.param));
+                         });
+
+// Runs an undamped body from a tiny random perturbation; true if it neither blew up nor grew.
+bool stays_bounded(const DeformableModel& m, double h, int steps) {
+  DeformableState s = make_state(m);
+  perturb(s, 1e-6, 11);
+  const double e0 = kinetic_energy(m, s) + elastic_energy(m, s);
+  for (int k = 0; k < steps; ++k) {
+    if (step(m, s, h, nullptr) == StepStatus::kFaultReset) return false;
+  }
+  const double e = kinetic_energy(m, s) + elastic_energy(m, s);
+  return s.fault_count == 0 && e < 1e4 * e0;
+}
+
+// The largest stable step of symplectic Euler, found by bisection, is 2 / w_max (within 10%),
+// with w_max from the eigenvalues of the mass-normalised stiffness. Explicit Euler diverges at
+// that step; implicit Euler stays bounded at ten times it.
+TEST_P(UndampedModel, StabilityLimitMatchesLargestEigenvalue) {
+  DeformableParams p = small_params(GetParam(), IntegratorKind::kSymplecticEuler, 1);
+  p.stiffness_damping_s = 0.0;
+  const DeformableModel m = build(p);
+  const DeformableState s0 = make_state(m);
+  const double w = omega_max(m, s0);
+  const double h_theory = 2.0 / w;
+  double lo = 0.5 * h_theory, hi = 1.5 * h_theory;
+  ASSERT_TRUE(stays_bounded(m, lo, 4000));
+  ASSERT_FALSE(stays_bounded(m, hi, 4000));
+  for (int it = 0; it < 14; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (stays_bounded(m, mid, 4000) ? lo : hi) = mid;
+  }
+  const double h_found = 0.5 * (lo + hi);
+  EXPECT_NEAR(h_found * w, 2.0, 0.2) << to_string(GetParam()) << " w_max " << w << " rad/s";
+  // explicit Euler diverges at the symplectic limit (at 0.9 of it, too)
+  DeformableParams pe = p;
+  pe.integrator = IntegratorKind::kExplicitEuler;
+  const DeformableModel me = build(pe);
+  EXPECT_FALSE(stays_bounded(me, 0.9 * h_found, 4000));
+  // implicit Euler is bounded (and dissipates) at ten times the limit
+  DeformableParams pi = p;
+  pi.integrator = IntegratorKind::kImplicitEuler;
+  const DeformableModel mi = build(pi);
+  DeformableState si = make_state(mi);
+  perturb(si, 1e-4, 5);
+  const double e0 = kinetic_energy(mi, si) + elastic_energy(mi, si);
+  for (int k = 0; k < 2000; ++k) step(mi, si, 10 * h_found, nullptr);
+  EXPECT_EQ(si.fault_count, 0u);
+  EXPECT_LT(kinetic_energy(mi, si) + elastic_energy(mi, si), e0);
+}
+
+class OrderTest : public ::testing::TestWithParam<IntegratorKind> {};
+
+// Halving dt halves the error: all three schemes are first order.
+TEST_P(OrderTest, HalvingStepHalvesError) {
+  DeformableParams p = small_params(ModelKind::kMassSpring, GetParam(), 1);
+  p.cg_tolerance = 1e-13;
+  p.cg_max_iterations = 1000;
+  const DeformableModel m = build(p);
+  const double t_end = 0.02;
+  auto run = [&](double h) {
+    DeformableState s = make_state(m);
+    displace_radially(m, s, 0, 0.005);
+    const int steps = static_cast<int>(std::lround(t_end / h));
+    for (int k = 0; k < steps; ++k) step(m, s, h, nullptr);
+    return Eigen::Matrix3Xd(s.x);
+  };
+  const Eigen::Matrix3Xd ref = run(t_end / 20480);
+  double err[3];
+  for (int k = 0; k < 3; ++k) err[k] = (run(t_end / (200 << k)) - ref).norm();
+  const double r1 = err[0] / err[1], r2 = err[1] / err[2];
+  EXPECT_NEAR(r1, 2.0, 0.4) << to_string(GetParam()) << " errors " << err[0] << " " << err[1];
+  EXPECT_NEAR(r2, 2.0, 0.4) << to_string(GetParam()) << " errors " << err[1] << " " << err[2];
+}
+
+INSTANTIATE_TEST_SUITE_P(All, OrderTest, ::testing::ValuesIn(kIntegrators),
+                         [](const auto& param_info) {
+                           return std::string(to_string(param_info.param));
+                         });
+
+// ---------------------------------------------------------------------------------------------
+// rotation: the linear strain of the paper is not invariant, the co-rotational variant is
+
+TEST(Rotation, LinearStrainResistsRigidRotationCorotationalDoesNot) {
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, 3).normalized()).matrix();
+  double force[2];
+  int idx = 0;
+  for (ModelKind k : {ModelKind::kNavierLinear, ModelKind::kNavierCorotational}) {
+    DeformableParams p = small_params(k, IntegratorKind::kSymplecticEuler, 2);
+    const DeformableModel m = build(p);
+    DeformableState s = make_state(m);
+    s.x = r * m.mesh.vertices;
+    Eigen::Matrix3Xd f;
+    internal_forces(m, s, f);
+    force[idx++] = f.colwise().norm().maxCoeff();
+  }
+  EXPECT_GT(force[0], 1e-3);  // linear strain: spurious restoring forces
+  EXPECT_LT(force[1], 1e-9);  // co-rotational: none
+}
+
+// ---------------------------------------------------------------------------------------------
+// loads and constraints
+
+TEST(Loads, PinnedNodeFollowsTargetAndNeighboursFollow) {
+  DeformableParams p = small_params(ModelKind::kNavierLinear, IntegratorKind::kSymplecticEuler, 2);
+  p.stiffness_damping_s = 5e-3;
+  p.mass_damping_per_s = 5.0;
+  const DeformableModel m = build(p);
+  DeformableState s = make_state(m);
+  const Eigen::Vector3d target = 0.99 * s.x.col(0);  // 2.5 mm inward, held
+  s.pinned[0] = 1;
+  s.pin_target.col(0) = target;
+  for (int k = 0; k < 4000; ++k) step(m, s, 5e-4, nullptr);
+  EXPECT_EQ((s.x.col(0) - target).norm(), 0.0);
+  const int nb = m.mesh.vertex_neighbours[0];
+  EXPECT_LT(s.x.col(nb).norm(), m.mesh.vertices.col(nb).norm() - 1e-5);  // dragged inward
+  EXPECT_LT(kinetic_energy(m, s), 1e-8);                                 // settled
+}
+
+TEST(Loads, PointForceDeformsAndReleases) {
+  DeformableParams p = small_params(ModelKind::kMassSpring, IntegratorKind::kImplicitEuler, 2);
+  p.mass_damping_per_s = 5.0;
+  const DeformableModel m = build(p);
+  DeformableState s = make_state(m);
+  s.f_ext.col(0) = -0.5 * m.mesh.vertices.col(0).normalized();  // 0.5 N inward
+  for (int k = 0; k < 2000; ++k) step(m, s, 1e-3, nullptr);
+  const double dented = m.mesh.vertices.col(0).norm() - (s.x.col(0) - s.centre_x).norm();
+  EXPECT_GT(dented, 1e-4);
+  s.f_ext.setZero();
+  for (int k = 0; k < 3000; ++k) step(m, s, 1e-3, nullptr);
+  EXPECT_LT(shape_error(m, s), 1e-5);
+}
+
+TEST(Loads, DroppedSphereSettlesOnTheFloorAndSleeps) {
+  DeformableParams p = small_params(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, 2);
+  p.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
+  p.centre_m = Eigen::Vector3d(0, 0, 0.4);  // 15 cm above the floor
+  p.sleep_time_s = 0.2;
+  p.mass_damping_per_s = 1.0;
+  teleop::sim::Plane floor;
+  floor.name = "floor";
+  teleop::sim::Plane wall;
+  wall.normal = Eigen::Vector3d(-1, 0, 0);
+  wall.offset_m = -0.3;  // x <= 0.3
+  const DeformableModel m = build(p, {floor, wall});
+  DeformableState s = make_state(m);
+  double min_z = 1.0;
+  int sleeping = 0;
+  for (int k = 0; k < 6000; ++k) {
+    if (step(m, s, 1e-3, nullptr) == StepStatus::kSleeping) ++sleeping;
+    min_z = std::min(min_z, s.x.row(2).minCoeff());
+  }
+  const Eigen::Vector3d c = centroid(m, s);
+  EXPECT_GT(c.z(), 0.20);  // resting: squashed a little, not fallen through
+  EXPECT_LT(c.z(), 0.25);
+  EXPECT_GT(min_z, -0.01);  // penetration of the floor stays small
+  EXPECT_GT(s.x.row(2).minCoeff(), -0.005);
+  EXPECT_TRUE(s.sleeping);
+  EXPECT_GT(sleeping, 100);
+  EXPECT_EQ(s.fault_count, 0u);
+  // a load wakes it
+  s.f_ext.col(0) << 1.0, 0, 0;
+  EXPECT_EQ(step(m, s, 1e-3, nullptr), StepStatus::kOk);
+  EXPECT_FALSE(s.sleeping);
+}
+
+TEST(Sleep, UntouchedBodyAtRestSleepsAndSkipsWork) {
+  DeformableParams p = small_params(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, 2);
+  p.sleep_time_s = 0.05;
+  const DeformableModel m = build(p);
+  DeformableState s = make_state(m);
+  int k = 0;
+  while (!s.sleeping && k < 1000) {
+    step(m, s, 1e-3, nullptr);
+    ++k;
+  }
+  EXPECT_TRUE(s.sleeping);
+  EXPECT_LE(k, 60);
+  const Eigen::Matrix3Xd before = s.x;
+  EXPECT_EQ(step(m, s, 1e-3, nullptr), StepStatus::kSleeping);
+  EXPECT_EQ(s.x, before);
+  // a held node away from its target wakes it
+  s.pinned[3] = 1;
+  s.pin_target.col(3) = s.x.col(3) * 1.01;
+  EXPECT_EQ(step(m, s, 1e-3, nullptr), StepStatus::kOk);
+  EXPECT_FALSE(s.sleeping);
+}
+
+// ---------------------------------------------------------------------------------------------
+// faults
+
+TEST(Faults, BlowUpIsDetectedReportedAndReset) {
+  DeformableParams p = small_params(ModelKind::kMassSpring, IntegratorKind::kExplicitEuler, 1);
+  p.stiffness_damping_s = 0.0;
+  const DeformableModel m = build(p);
+  DeformableState s = make_state(m);
+  s.x += Eigen::Matrix3Xd::Constant(3, m.node_count, 0.3);  // move it: reset keeps the place
+  s.last_good_centroid = centroid(m, s);
+  displace_radially(m, s, 0, 0.01);
+  teleop::sim::EventQueue events;
+  StepStatus st = StepStatus::kOk;
+  int k = 0;
+  for (; k < 10000 && st != StepStatus::kFaultReset; ++k) st = step(m, s, 0.05, &events);
+  ASSERT_EQ(st, StepStatus::kFaultReset) << "explicit Euler at a huge step must blow up";
+  EXPECT_EQ(s.fault_count, 1u);
+  teleop::sim::SimEvent ev;
+  ASSERT_TRUE(events.pop(ev));
+  EXPECT_EQ(ev.kind, teleop::sim::EventKind::kFault);
+  EXPECT_NE(std::string(ev.message).find("blow-up"), std::string::npos);
+  EXPECT_TRUE(s.x.allFinite());
+  EXPECT_LT(shape_error(m, s), 1e-12);  // rest shape
+  EXPECT_EQ(s.v.norm(), 0.0);
+  EXPECT_LT((centroid(m, s) - Eigen::Vector3d::Constant(0.3)).norm(), 0.5);
+}
+
+TEST(Faults, NanIsDetectedAndBadInputRefused) {
+  DeformableParams p =
+      small_params(ModelKind::kNavierCorotational, IntegratorKind::kImplicitEuler, 1);
+  const DeformableModel m = build(p);
+  DeformableState s = make_state(m);
+  teleop::sim::EventQueue events;
+  s.x(0, 4) = std::nan("");
+  EXPECT_EQ(step(m, s, 1e-3, &events), StepStatus::kFaultReset);
+  EXPECT_TRUE(s.x.allFinite());
+  EXPECT_EQ(step(m, s, 1e-3, &events), StepStatus::kOk);
+  s.f_ext(1, 2) = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(step(m, s, 1e-3, &events), StepStatus::kBadInput);
+  s.f_ext.setZero();
+  EXPECT_EQ(step(m, s, -1.0, &events), StepStatus::kBadInput);
+  EXPECT_EQ(step(m, s, std::nan(""), &events), StepStatus::kBadInput);
+  EXPECT_EQ(events.size(), 4u);
+  EXPECT_TRUE(s.x.allFinite());
+}
+
+}  // namespace
