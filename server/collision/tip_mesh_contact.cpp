@@ -1,0 +1,322 @@
+#include "server/collision/tip_mesh_contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace teleop::sim::collision {
+
+TipMeshContact::TipMeshContact(TipContactParams params, AabbTree::Options tree_options)
+    : params_(params), tree_(tree_options) {}
+
+void TipMeshContact::reset(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xi& tris) {
+  topo_.build(tris, static_cast<int>(x.cols()));
+  tree_.build(x, tris);
+  in_contact_ = false;
+  tri_ = -1;
+  faults_ = 0;
+}
+
+Eigen::Vector3d TipMeshContact::anchor_position(const Eigen::Matrix3Xd& x) const {
+  Eigen::Vector3d a = patch_offset_m_;
+  for (int i = 0; i < patch_size_; ++i) {
+    a += patch_w_[static_cast<std::size_t>(i)] * x.col(patch_node_[static_cast<std::size_t>(i)]);
+  }
+  return a;
+}
+
+void TipMeshContact::set_anchor(const Eigen::Matrix3Xd& x, int tri, const Eigen::Vector3d& bary) {
+  tri_ = tri;
+  bary_ = bary;
+  const Eigen::Matrix3Xi& tris = topo_.triangles();
+  const Eigen::Vector3d s =
+      bary[0] * x.col(tris(0, tri)) + bary[1] * x.col(tris(1, tri)) + bary[2] * x.col(tris(2, tri));
+  // the patch: the anchor triangle's corners first, then their one-ring
+  patch_size_ = 0;
+  auto add = [&](int v) {
+    for (int i = 0; i < patch_size_; ++i) {
+      if (patch_node_[static_cast<std::size_t>(i)] == v) return;
+    }
+    if (patch_size_ < kMaxPatch) {
+      patch_node_[static_cast<std::size_t>(patch_size_)] = v;
+      patch_w_[static_cast<std::size_t>(patch_size_)] = 0.0;
+      ++patch_size_;
+    }
+  };
+  for (int k = 0; k < 3; ++k) add(tris(k, tri));
+  const double blend = std::clamp(params_.patch_blend, 0.0, 1.0);
+  const double rho = params_.patch_radius_m;
+  if (blend > 0.0 && rho > 0.0) {
+    for (int k = 0; k < 3; ++k) {
+      const int v = tris(k, tri);
+      for (int j = 0; j < topo_.vertex_triangle_count(v); ++j) {
+        const int t = topo_.vertex_triangle(v, j);
+        for (int m = 0; m < 3; ++m) add(tris(m, t));
+      }
+    }
+  }
+  // kernel weights (1 - q^2)^2, q = distance / rho, normalised
+  double ksum = 0.0;
+  if (blend > 0.0 && rho > 0.0) {
+    for (int i = 0; i < patch_size_; ++i) {
+      const double q2 =
+          (x.col(patch_node_[static_cast<std::size_t>(i)]) - s).squaredNorm() / (rho * rho);
+      const double w = q2 < 1.0 ? (1.0 - q2) * (1.0 - q2) : 0.0;
+      patch_w_[static_cast<std::size_t>(i)] = w;
+      ksum += w;
+    }
+  }
+  const double kb = ksum > 0.0 ? blend / ksum : 0.0;
+  const double bb = ksum > 0.0 ? 1.0 - blend : 1.0;
+  for (int i = 0; i < patch_size_; ++i) patch_w_[static_cast<std::size_t>(i)] *= kb;
+  for (int k = 0; k < 3; ++k) patch_w_[static_cast<std::size_t>(k)] += bb * bary[k];
+  // the offset makes the anchor start exactly at the surface point s
+  patch_offset_m_.setZero();
+  patch_offset_m_ = s - anchor_position(x);
+}
+
+bool TipMeshContact::inside(const Eigen::Vector3d& p, const Eigen::Matrix3Xd& x) const {
+  if (!topo_.closed()) return false;
+  MeshClosest mc;
+  if (!tree_.closest_point(p, x, std::numeric_limits<double>::infinity(), mc)) return false;
+  const Eigen::Vector3d pn = topo_.pseudo_normal(x, mc.triangle, mc.feature);
+  return (p - mc.point).dot(pn) < 0.0;
+}
+
+double TipMeshContact::signed_distance(const Eigen::Vector3d& p, const Eigen::Matrix3Xd& x) const {
+  MeshClosest mc;
+  if (!tree_.closest_point(p, x, std::numeric_limits<double>::infinity(), mc)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  if (!topo_.closed()) return mc.distance_m;
+  const Eigen::Vector3d pn = topo_.pseudo_normal(x, mc.triangle, mc.feature);
+  return (p - mc.point).dot(pn) < 0.0 ? -mc.distance_m : mc.distance_m;
+}
+
+bool TipMeshContact::detect(const Eigen::Matrix3Xd& x, const Eigen::Vector3d& c0,
+                            const Eigen::Vector3d& c1, double r, TipContactResult& res) {
+  const double inf = std::numeric_limits<double>::infinity();
+  // broad phase: the swept tip must reach the mesh's box
+  const Aabb root = tree_.root_box();
+  if (!segment_intersects_aabb(c0, c1, root.lo, root.hi, r)) return false;
+
+  const Eigen::Vector3d seg = c1 - c0;
+  const double len = seg.norm();
+  const double tol = 1e-9 + 1e-7 * r;
+  MeshClosest mc;
+  bool hit = false;
+  Eigen::Vector3d touch_centre = c1;
+  // conservative advancement: the distance to the mesh is 1-Lipschitz along the path, so
+  // advancing by (distance - r) can never step over the first touch
+  double t = 0.0;
+  bool concluded = false;
+  for (int it = 0; it < kMaxCcdIterations; ++it) {
+    ++res.ccd_iterations;
+    const Eigen::Vector3d p = c0 + t * seg;
+    if (!tree_.closest_point(p, x, inf, mc)) return false;
+    const double gap = mc.distance_m - r;
+    if (gap <= tol) {
+      hit = true;
+      touch_centre = p;
+      concluded = true;
+      break;
+    }
+    if (len <= 0.0) {
+      concluded = true;
+      break;
+    }
+    t += gap / len;
+    if (t > 1.0) {
+      concluded = true;
+      break;
+    }
+  }
+  if (!concluded) {
+    // grazing path: fall back to the paper's eq. (8) on the centre path, then the end point
+    MeshSegmentHit sh;
+    if (tree_.first_segment_hit(c0, c1, x, sh)) {
+      hit = true;
+      mc.triangle = sh.triangle;
+      mc.bary = Eigen::Vector3d(1.0 - sh.u - sh.v, sh.u, sh.v);
+      mc.point = sh.point;
+      touch_centre = sh.point;
+    } else if (tree_.closest_point(c1, x, r, mc)) {
+      hit = true;
+      touch_centre = c1;
+    }
+  }
+  if (hit) {
+    set_anchor(x, mc.triangle, mc.bary);
+    if (topo_.closed()) {
+      side_ = 1.0;
+    } else {
+      const Eigen::Vector3d n = topo_.smooth_normal(x, tri_, bary_);
+      side_ = (touch_centre - mc.point).dot(n) >= 0.0 ? 1.0 : -1.0;
+    }
+    return true;
+  }
+  // a closed mesh has an inside: a tip found there is in contact with its nearest surface
+  if (topo_.closed() && tree_.closest_point(c1, x, inf, mc)) {
+    const Eigen::Vector3d pn = topo_.pseudo_normal(x, mc.triangle, mc.feature);
+    if ((c1 - mc.point).dot(pn) < 0.0) {
+      set_anchor(x, mc.triangle, mc.bary);
+      side_ = 1.0;
+      res.inside = true;
+      return true;
+    }
+  }
+  return false;
+}
+
+TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x,
+                                        const Eigen::Vector3d& tip_prev_m,
+                                        const Eigen::Vector3d& tip_now_m, double tip_radius_m,
+                                        const Eigen::Vector3d& tip_velocity_mps, double dt_s,
+                                        Eigen::Matrix3Xd& node_forces_n) {
+  return update(x, nullptr, tip_prev_m, tip_now_m, tip_radius_m, tip_velocity_mps, dt_s,
+                node_forces_n);
+}
+
+TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v,
+                                        const Eigen::Vector3d& tip_prev_m,
+                                        const Eigen::Vector3d& tip_now_m, double tip_radius_m,
+                                        const Eigen::Vector3d& tip_velocity_mps, double dt_s,
+                                        Eigen::Matrix3Xd& node_forces_n) {
+  TipContactResult res;
+  const bool was_in_contact = in_contact_;
+  // faults: non-finite input drops the contact and gives no force
+  if (!tip_prev_m.allFinite() || !tip_now_m.allFinite() || !tip_velocity_mps.allFinite() ||
+      !(tip_radius_m >= 0.0) || !(dt_s > 0.0) || !x.allFinite() ||
+      x.cols() != topo_.vertex_count()) {
+    in_contact_ = false;
+    ++faults_;
+    res.fault = true;
+    res.ended = was_in_contact;
+    return res;
+  }
+  tree_.rebuild_if_degraded(x);
+
+  const double r = tip_radius_m;
+  const double k = params_.stiffness_n_per_m;
+  const Eigen::Vector3d& c = tip_now_m;
+  Eigen::Vector3d anchor_vel = Eigen::Vector3d::Zero();
+
+  if (v != nullptr && v->cols() != x.cols()) v = nullptr;
+  auto patch_velocity = [&]() {
+    Eigen::Vector3d av = Eigen::Vector3d::Zero();
+    for (int i = 0; i < patch_size_; ++i) {
+      av +=
+          patch_w_[static_cast<std::size_t>(i)] * v->col(patch_node_[static_cast<std::size_t>(i)]);
+    }
+    return av;
+  };
+  if (in_contact_) {
+    const Eigen::Vector3d a = anchor_position(x);
+    if (v != nullptr) {
+      anchor_vel = patch_velocity();
+    } else if (anchor_velocity_valid_) {
+      anchor_vel = (a - anchor_prev_m_) / dt_s;
+    }
+    const Eigen::Vector3d n = side_ * topo_.smooth_normal(x, tri_, bary_);
+    if (r - (c - a).dot(n) <= 0.0) in_contact_ = false;  // the tip has left the surface
+  }
+  if (!in_contact_) {
+    if (!detect(x, tip_prev_m, tip_now_m, r, res)) {
+      res.ended = was_in_contact;
+      return res;
+    }
+    in_contact_ = true;
+    anchor_velocity_valid_ = false;
+    anchor_vel = v != nullptr ? patch_velocity() : Eigen::Vector3d::Zero();
+    entry_point_m_ = anchor_position(x);
+    res.began = !was_in_contact;
+  }
+
+  // contact law on the current anchor
+  Eigen::Vector3d a = anchor_position(x);
+  Eigen::Vector3d n = side_ * topo_.smooth_normal(x, tri_, bary_);
+  Eigen::Vector3d d = c - a;
+  double pen = r - d.dot(n);
+  const double pen_rate = -(tip_velocity_mps - anchor_vel).dot(n);
+  auto normal_force = [&](double x_pen) {
+    const double ramp =
+        params_.damping_ramp_m > 0.0 ? std::min(1.0, x_pen / params_.damping_ramp_m) : 1.0;
+    return std::max(0.0, k * x_pen + params_.damping_ns_per_m * ramp * pen_rate);
+  };
+  if (pen <= 0.0) {
+    // touched during the step but already clear of the surface at its end
+    in_contact_ = false;
+    res.began = false;
+    res.ended = was_in_contact;
+    return res;
+  }
+  double fn = normal_force(pen);
+  Eigen::Vector3d dt_vec = d - d.dot(n) * n;
+  Eigen::Vector3d ft = -k * dt_vec;
+  const double mu_s = std::max(0.0, params_.friction_static);
+  const double mu_k = std::clamp(params_.friction_kinetic, 0.0, mu_s);
+  if (ft.norm() > mu_s * fn) {
+    // kinetic friction: the proxy slides along the surface until |F_t| = mu_k F_n
+    res.sliding = true;
+    for (int it = 0; it < 3; ++it) {
+      const double len = dt_vec.norm();
+      const double keep = k > 0.0 ? mu_k * fn / k : 0.0;
+      if (len <= keep + 1e-7) break;
+      const Eigen::Vector3d target = a + dt_vec * (1.0 - keep / len);
+      MeshClosest mc;
+      if (!tree_.closest_point(target, x, std::numeric_limits<double>::infinity(), mc)) break;
+      set_anchor(x, mc.triangle, mc.bary);
+      a = anchor_position(x);
+      n = side_ * topo_.smooth_normal(x, tri_, bary_);
+      d = c - a;
+      pen = r - d.dot(n);
+      if (pen <= 0.0) break;
+      fn = normal_force(pen);
+      dt_vec = d - d.dot(n) * n;
+      if ((a - target).norm() < 1e-9) break;
+    }
+    if (pen <= 0.0) {
+      in_contact_ = false;
+      res.ended = was_in_contact;
+      res.began = false;
+      return res;
+    }
+    ft = -k * dt_vec;
+    const double ftn = ft.norm();
+    if (ftn > mu_k * fn && ftn > 0.0) ft *= mu_k * fn / ftn;
+  }
+
+  Eigen::Vector3d f = fn * n + ft;
+  if (params_.max_force_n > 0.0) {
+    const double fm = f.norm();
+    if (fm > params_.max_force_n) f *= params_.max_force_n / fm;
+  }
+  if (!f.allFinite()) {
+    in_contact_ = false;
+    ++faults_;
+    res = TipContactResult{};
+    res.fault = true;
+    res.ended = was_in_contact;
+    return res;
+  }
+  // equal and opposite: the reaction goes to the patch nodes with the anchor's weights
+  for (int i = 0; i < patch_size_; ++i) {
+    node_forces_n.col(patch_node_[static_cast<std::size_t>(i)]) -=
+        patch_w_[static_cast<std::size_t>(i)] * f;
+  }
+
+  anchor_prev_m_ = a;
+  anchor_velocity_valid_ = true;
+  res.in_contact = true;
+  res.force_on_tip_n = f;
+  res.contact_point_m = a;
+  res.normal = n;
+  res.entry_point_m = entry_point_m_;
+  res.penetration_m = pen;
+  res.normal_force_n = f.dot(n);
+  res.tangential_force_n = (f - f.dot(n) * n).norm();
+  res.triangle = tri_;
+  return res;
+}
+
+}  // namespace teleop::sim::collision

@@ -1,0 +1,150 @@
+#pragma once
+// Contact between the slave's spherical tip and one deformable closed triangle mesh (the
+// paper's "Interaction between virtual objects").
+//
+// Detection: an AabbTree over the mesh, refitted every step (rebuilt when degraded).
+// Onset is continuous along the tip centre's path within the step: conservative advancement
+// with the exact point-mesh distance finds the first instant the tip sphere touches the
+// surface (so no speed tunnels through), with the paper's segment-triangle test, eq. (8),
+// as a backstop, and for a closed mesh a pseudo-normal inside test catches a tip that is
+// already inside.
+//
+// Response (god-object / surface proxy): the surface point where the tip entered is kept as
+// a material point of the mesh (triangle + barycentric weights), so it moves with the
+// deforming surface. The proxy centre is that anchor plus r along the surface normal; the
+// penetration is x = r - (c - anchor).n and the normal force F = k x (+ a damping term that
+// is ramped in with x so the force is continuous at onset). Tangentially the anchor sticks
+// (static Coulomb friction) until the tangential force exceeds mu_s * F_n, then slides
+// along the surface keeping |F_t| = mu_k * F_n ("tip slippery").
+//
+// The anchor is carried by a patch of nodes: a = sum_i w_i x_i + delta, with weights w_i
+// (sum 1) fixed while the anchor stays put (a blend of the anchor triangle's barycentric
+// weights and a smooth kernel over its one-ring) and delta chosen so a starts exactly on the
+// surface. The reaction -w_i F goes to node i: the node forces sum to minus the tip force
+// (momentum is conserved) and, the weights being the gradient of a, the spring does the same
+// work on the nodes as on the tip (no energy is invented). Spreading the load over the patch
+// rather than three vertices is what keeps an explicit deformable step stable with a stiff
+// contact (the effective mass is the patch's) and avoids a crease under a point load.
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+
+#include "server/collision/aabb_tree.hpp"
+#include "server/collision/surface_topology.hpp"
+
+namespace teleop::sim::collision {
+
+/// Contact law parameters (from the scene).
+struct TipContactParams {
+  double stiffness_n_per_m = 1000.0;  ///< k of F = k x [N/m]
+  double damping_ns_per_m = 1.0;      ///< normal contact damping b [N s/m]; >= k dt / 2
+                                      ///< keeps the sampled contact passive
+  double damping_ramp_m = 2.0e-4;     ///< damping grows linearly to b over this depth [m]
+  double friction_static = 0.0;       ///< Coulomb static coefficient mu_s [-]
+  double friction_kinetic = 0.0;      ///< Coulomb kinetic coefficient mu_k <= mu_s [-]
+  double max_force_n = 0.0;           ///< saturation of |F| [N]; 0 = none
+  /// Radius of the node patch that shares the reaction [m] (weights fall off smoothly with
+  /// distance from the anchor, over the anchor triangle and its one-ring). About the tip
+  /// radius: a narrower patch than the tip digs a crease the proxy then wanders in.
+  double patch_radius_m = 0.06;
+  /// Share of the reaction spread over the patch, the rest going to the anchor triangle's
+  /// corners with barycentric weights [0..1]; 0 is the paper's three-vertex push.
+  double patch_blend = 0.8;
+};
+
+/// Outcome of one contact update.
+struct TipContactResult {
+  bool in_contact = false;  ///< the tip presses on the mesh after this step
+  bool began = false;       ///< contact started in this step
+  bool ended = false;       ///< contact ended in this step
+  bool inside = false;      ///< onset came from the inside test (tip found inside the mesh)
+  bool sliding = false;     ///< the proxy slid (kinetic friction) in this step
+  bool fault = false;       ///< non-finite input or output: contact dropped, force zero
+  Eigen::Vector3d force_on_tip_n = Eigen::Vector3d::Zero();   ///< force on the tip [N]
+  Eigen::Vector3d contact_point_m = Eigen::Vector3d::Zero();  ///< anchor on the surface [m]
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();           ///< unit outward normal
+  Eigen::Vector3d entry_point_m = Eigen::Vector3d::Zero();    ///< where contact began [m]
+  double penetration_m = 0.0;                                 ///< x = r - (c - anchor).n [m]
+  double normal_force_n = 0.0;                                ///< F_n [N]
+  double tangential_force_n = 0.0;                            ///< |F_t| [N]
+  int triangle = -1;                                          ///< anchor triangle
+  int ccd_iterations = 0;  ///< conservative-advancement iterations used
+};
+
+/// Tip-mesh contact of one deformable object. Not thread-safe; one per object.
+class TipMeshContact {
+ public:
+  explicit TipMeshContact(TipContactParams params = {}, AabbTree::Options tree_options = {});
+
+  /// Sizes everything for the mesh (x: 3 x N positions [m], tris: 3 x T, CCW from outside),
+  /// builds the tree and forgets any contact. Allocates.
+  void reset(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xi& tris);
+
+  /// One step: refits the tree to x, detects contact along tip_prev_m -> tip_now_m (centre of
+  /// the tip sphere of radius tip_radius_m), computes the force on the tip and adds the
+  /// reaction to node_forces_n (3 x N, +=). tip_velocity_mps feeds the contact damping,
+  /// dt_s (> 0) the surface velocity estimate. Allocates nothing.
+  TipContactResult update(const Eigen::Matrix3Xd& x, const Eigen::Vector3d& tip_prev_m,
+                          const Eigen::Vector3d& tip_now_m, double tip_radius_m,
+                          const Eigen::Vector3d& tip_velocity_mps, double dt_s,
+                          Eigen::Matrix3Xd& node_forces_n);
+
+  /// As above, with the nodes' velocities v (3 x N [m/s]) for the contact damping: the
+  /// anchor's velocity is then sum_i w_i v_i instead of a backward difference, which has no
+  /// lag. With it, damping b >= k dt / 2 makes the sampled contact passive for the body
+  /// (Colgate & Schenkel 1997). Pass nullptr to fall back to the difference.
+  TipContactResult update(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v,
+                          const Eigen::Vector3d& tip_prev_m, const Eigen::Vector3d& tip_now_m,
+                          double tip_radius_m, const Eigen::Vector3d& tip_velocity_mps, double dt_s,
+                          Eigen::Matrix3Xd& node_forces_n);
+
+  /// Forgets the current contact (the next update detects afresh).
+  void release() { in_contact_ = false; }
+
+  /// True when p is inside the closed mesh at positions x (tree must be refitted to x).
+  /// Always false for an open mesh.
+  bool inside(const Eigen::Vector3d& p, const Eigen::Matrix3Xd& x) const;
+
+  /// Signed distance of p from the surface [m] (negative inside; unsigned for open meshes).
+  double signed_distance(const Eigen::Vector3d& p, const Eigen::Matrix3Xd& x) const;
+
+  void set_params(const TipContactParams& p) { params_ = p; }
+  const TipContactParams& params() const { return params_; }
+  const AabbTree& tree() const { return tree_; }
+  AabbTree& tree() { return tree_; }
+  const SurfaceTopology& topology() const { return topo_; }
+  bool in_contact() const { return in_contact_; }
+  /// Faults (non-finite data) seen since reset().
+  std::uint64_t fault_count() const { return faults_; }
+
+  /// Conservative-advancement iteration cap before the eq. (8) backstop.
+  static constexpr int kMaxCcdIterations = 48;
+  /// Most nodes in a reaction patch.
+  static constexpr int kMaxPatch = 48;
+  /// Nodes sharing the current reaction (valid while in_contact()).
+  int patch_size() const { return patch_size_; }
+
+ private:
+  Eigen::Vector3d anchor_position(const Eigen::Matrix3Xd& x) const;
+  bool detect(const Eigen::Matrix3Xd& x, const Eigen::Vector3d& c0, const Eigen::Vector3d& c1,
+              double r, TipContactResult& res);
+  void set_anchor(const Eigen::Matrix3Xd& x, int tri, const Eigen::Vector3d& bary);
+
+  TipContactParams params_;
+  AabbTree tree_;
+  SurfaceTopology topo_;
+  bool in_contact_ = false;
+  int tri_ = -1;
+  Eigen::Vector3d bary_ = Eigen::Vector3d::Zero();
+  int patch_size_ = 0;
+  std::array<int, kMaxPatch> patch_node_{};
+  std::array<double, kMaxPatch> patch_w_{};
+  Eigen::Vector3d patch_offset_m_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d anchor_prev_m_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d entry_point_m_ = Eigen::Vector3d::Zero();
+  double side_ = 1.0;  ///< +1: outward normal is free space (always, for a closed mesh)
+  bool anchor_velocity_valid_ = false;
+  std::uint64_t faults_ = 0;
+};
+
+}  // namespace teleop::sim::collision
