@@ -58,7 +58,7 @@ bool LoopbackSession::step() {
   // slave side
   forward_.pop_newest(now, slave_cmd_);
   slave_.step(slave_cmd_, dt);
-  backward_.push(slave_.sample(), now);
+  if (!backward_outage_) backward_.push(slave_.sample(), now);
 
   // metrics (ground truth of the slave, since both run here)
   const SlaveSample truth = slave_.sample();

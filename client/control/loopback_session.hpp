@@ -59,6 +59,8 @@ class LoopbackSession {
   const SlaveSample& slave_at_master() const { return slave_rx_; }
   /// Force the controller asked for before the safety layer this cycle [N].
   const Eigen::Vector3d& controller_force_n() const { return controller_force_n_; }
+  /// Fault injection: while true, every slave sample is lost on the way back (a dead link).
+  void set_backward_outage(bool down) { backward_outage_ = down; }
   /// Summary JSON: metrics plus both channels' delay and loss.
   std::string summary_json() const;
 
@@ -77,6 +79,7 @@ class LoopbackSession {
   double last_rx_s_ = -1.0;
   double t_s_ = 0.0;
   bool started_ = false;
+  bool backward_outage_ = false;
   Eigen::Vector3d controller_force_n_ = Eigen::Vector3d::Zero();
 };
 

@@ -186,7 +186,7 @@ DelayConfig delay_config_from_yaml(const config::Node& node) {
     const std::string text = c.raw().as<std::string>();
     try {
       return config::parse_duration_s(key, text);
-    } catch (const ConfigError& e) {
+    } catch (const ConfigError&) {
       node.fail(key, "'" + text + "' is not a duration >= 0 (examples: 50ms, 0.2s, 150us, 0.05)");
     }
   };
