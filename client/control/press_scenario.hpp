@@ -1,0 +1,66 @@
+#pragma once
+// The paper's Fig. 13 task as an in-process scenario: an operator (SimulatedDevice) approaches
+// the top of an object, presses into it, slips sideways and departs, teleoperating a point
+// slave through delayed channels. The object is either the elastic sphere (a soft linear
+// spring, k ~ 500-2e4 N/m, radius 0.25 m on the floor) or a stiff wall (a plane at the same
+// height, k = 2e4 N/m). Used by the tests and by `teleop_bench delay`.
+#include <string>
+
+#include "client/control/loopback_session.hpp"
+#include "client/control/stability_analysis.hpp"
+#include "client/device/simulated_device.hpp"
+
+namespace teleop::master {
+
+/// Which object the slave presses.
+enum class Environment { kSphere, kWall };
+
+/// Knobs of the scenario.
+struct PressScenario {
+  std::string scheme = "position-position";  ///< controller scheme
+  Environment environment = Environment::kSphere;
+  double env_stiffness_n_per_m = 2000.0;  ///< k of the object [N/m]
+  double env_damping_ns_per_m = 5.0;      ///< b of the object [N s/m]
+  double gain = 0.0;                      ///< PP: K_pm = K_ps [N/m] (0: 400); FP: K_f (0: 1)
+  double one_way_delay_s = 0.0;           ///< delay each way [s]
+  double jitter_s = 0.0;                  ///< jitter each way [s]
+  double press_depth_m = 0.02;            ///< intended depth below the surface [m]
+  double duration_s = 0.0;  ///< 0: one pass of the script plus 3 s (free motion after departing)
+  std::uint64_t seed = 1;   ///< channel seeds (forward = seed, backward = seed + 1)
+  bool safety = true;       ///< safety layer on
+  HandImpedance hand;       ///< operator hand
+  double tremor_m = 1e-4;   ///< hand tremor amplitude per component [m] (see OperatorScript)
+};
+
+/// A built scenario: device, slave and loop configuration, ready to run.
+struct PressSetup {
+  SimulatedDeviceParams device;
+  PointSlaveParams slave;
+  LoopbackConfig loop;
+};
+
+/// Builds the setup for `s`. The sphere (radius 0.25 m) stands on the floor at the origin;
+/// the master origin maps to the tool centre touching its top (0, 0, 0.55) m.
+PressSetup build_press_setup(const PressScenario& s);
+
+/// The linear model of the same setup in steady contact (for the analytic boundary).
+LoopModel press_loop_model(const PressScenario& s, const PressSetup& setup);
+
+/// Result of one run.
+struct PressResult {
+  Verdict verdict = Verdict::kStable;
+  std::string reason;
+  double position_error_rms_m = 0.0;
+  double force_error_rms_n = 0.0;
+  double max_device_force_n = 0.0;
+  double max_controller_force_n = 0.0;  ///< before the safety layer [N]
+  double energy_min_j = 0.0;
+  double contact_time_s = 0.0;
+  bool safety_cut = false;
+  double analytic_margin_s = 0.0;  ///< one-way delay margin of the linear model [s]
+};
+
+/// Builds and runs one scenario. Allocates (setup); the loop itself does not.
+PressResult run_press(const PressScenario& s);
+
+}  // namespace teleop::master

@@ -1,0 +1,79 @@
+#include "client/control/stability_analysis.hpp"
+
+#include <cmath>
+
+namespace teleop::master {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}
+
+std::complex<double> loop_gain(const LoopModel& m, double w) {
+  const std::complex<double> s(0.0, w);
+  const double k_master =
+      m.hand_stiffness_n_per_m + (m.position_position ? m.master_gain_n_per_m : 0.0);
+  const std::complex<double> gm =
+      1.0 / (m.master_mass_kg * s * s + m.master_damping_ns_per_m * s + k_master);
+  const std::complex<double> gs =
+      (m.slave_kp_n_per_m + m.slave_kd_ns_per_m * s) /
+      (m.slave_mass_kg * s * s +
+       (m.slave_kd_ns_per_m + m.slave_damping_ns_per_m + m.env_damping_ns_per_m) * s +
+       m.slave_kp_n_per_m + m.env_stiffness_n_per_m);
+  if (m.position_position) return -m.master_gain_n_per_m * gm * gs;
+  return m.force_gain * (m.env_stiffness_n_per_m + m.env_damping_ns_per_m * s) * gm * gs;
+}
+
+DelayMargin delay_margin(const LoopModel& m, double w_min, double w_max) {
+  DelayMargin out;
+  out.dc_gain = std::abs(loop_gain(m, 0.0));
+  const int n = 4000;
+  const double lr = std::log(w_max / w_min);
+  auto mag1 = [&](double w) { return std::abs(loop_gain(m, w)) - 1.0; };
+  double w_prev = w_min;
+  double f_prev = mag1(w_prev);
+  for (int i = 1; i <= n; ++i) {
+    const double w = w_min * std::exp(lr * i / n);
+    const double f = mag1(w);
+    if ((f_prev > 0.0) != (f > 0.0)) {
+      // bisect the crossing |L| = 1
+      double a = w_prev, b = w, fa = f_prev;
+      for (int k = 0; k < 60; ++k) {
+        const double c = 0.5 * (a + b);
+        const double fc = mag1(c);
+        if ((fa > 0.0) == (fc > 0.0)) {
+          a = c;
+          fa = fc;
+        } else {
+          b = c;
+        }
+      }
+      const double wc = 0.5 * (a + b);
+      double pm = kPi + std::arg(loop_gain(m, wc));  // in [0, 2 pi]
+      pm = std::fmod(pm + 4.0 * kPi, 2.0 * kPi);
+      const double tau = pm / wc;
+      if (tau / 2.0 < out.one_way_s) {
+        out.one_way_s = tau / 2.0;
+        out.crossover_radps = wc;
+        out.phase_margin_rad = pm;
+      }
+    }
+    w_prev = w;
+    f_prev = f;
+  }
+  // |L| > 1 already at the lowest frequency with the wrong sign: unstable at any delay
+  if (f_prev > 0.0 && out.crossover_radps == 0.0 && out.dc_gain > 1.0) {
+    out.one_way_s = 0.0;
+  }
+  return out;
+}
+
+DelayMargin task_delay_margin(const LoopModel& m) {
+  LoopModel free = m;
+  free.env_stiffness_n_per_m = 0.0;
+  free.env_damping_ns_per_m = 0.0;
+  const DelayMargin a = delay_margin(m);
+  const DelayMargin b = delay_margin(free);
+  return a.one_way_s <= b.one_way_s ? a : b;
+}
+
+}  // namespace teleop::master

@@ -1,0 +1,232 @@
+#include "client/net/delay_config.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace teleop::master {
+
+using config::ConfigError;
+
+double PortableRng::normal() {
+  if (have_spare_) {
+    have_spare_ = false;
+    return spare_;
+  }
+  // Box-Muller on (0, 1] x [0, 1)
+  const double u1 = 1.0 - uniform01();
+  const double u2 = uniform01();
+  const double r = std::sqrt(-2.0 * std::log(u1));
+  const double a = 2.0 * 3.14159265358979323846 * u2;
+  spare_ = r * std::sin(a);
+  have_spare_ = true;
+  return r * std::cos(a);
+}
+
+void DelayConfig::validate() const {
+  auto check = [](const char* field, double v, double lo, double hi) {
+    if (!(v >= lo && v <= hi)) {
+      throw ConfigError(std::string("delay channel: ") + field + " = " + std::to_string(v) +
+                        " is out of the allowed range " + config::range_text(lo, hi));
+    }
+  };
+  check("delay_s", delay_s, 0.0, 10.0);
+  check("jitter_s", jitter_s, 0.0, 10.0);
+  check("loss_probability", loss_probability, 0.0, 1.0);
+  check("burst_p_good_to_bad", burst_p_good_to_bad, 0.0, 1.0);
+  if (burst_loss) {
+    if (!(burst_p_bad_to_good > 0.0 && burst_p_bad_to_good <= 1.0)) {
+      throw ConfigError("delay channel: burst p_bg = " + std::to_string(burst_p_bad_to_good) +
+                        " is out of the allowed range (0, 1] (0 would lose everything forever)");
+    }
+  }
+  if (capacity < 2 || capacity > (1u << 24)) {
+    throw ConfigError("delay channel: capacity = " + std::to_string(capacity) +
+                      " is out of the allowed range [2, 16777216]");
+  }
+}
+
+std::string DelayConfig::describe() const {
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), "delay %.3g ms, jitter %.3g ms %s%s, loss %.3g %%%s, seed %llu",
+                delay_s * 1e3, jitter_s * 1e3,
+                jitter_dist == JitterDist::kUniform ? "uniform" : "normal",
+                reorder ? " (reordering)" : "", loss_probability * 100.0,
+                burst_loss ? " + burst" : "", static_cast<unsigned long long>(seed));
+  std::string s = buf;
+  if (burst_loss) {
+    std::snprintf(buf, sizeof(buf), " (p_gb %.3g, p_bg %.3g)", burst_p_good_to_bad,
+                  burst_p_bad_to_good);
+    s += buf;
+  }
+  return s;
+}
+
+double DelayConfig::expected_loss() const {
+  // the bad state loses everything; the good state loses with the Bernoulli probability
+  double bad = 0.0;
+  if (burst_loss && burst_p_good_to_bad > 0.0) {
+    bad = burst_p_good_to_bad / (burst_p_good_to_bad + burst_p_bad_to_good);
+  }
+  return bad + (1.0 - bad) * loss_probability;
+}
+
+double DelayConfig::expected_jitter_stddev_s() const {
+  return jitter_dist == JitterDist::kUniform ? jitter_s / std::sqrt(3.0) : jitter_s;
+}
+
+bool delay_flag_takes_value(const std::string& flag) {
+  return flag == "--delay" || flag == "--jitter" || flag == "--jitter-dist" || flag == "--loss" ||
+         flag == "--burst-loss" || flag == "--seed" || flag == "--channel-capacity";
+}
+
+namespace {
+
+std::uint64_t parse_u64(const std::string& flag, const std::string& text, std::uint64_t lo,
+                        std::uint64_t hi) {
+  std::size_t pos = 0;
+  unsigned long long v = 0;
+  try {
+    if (!text.empty() && text[0] == '-') throw std::invalid_argument("negative");
+    v = std::stoull(text, &pos, 10);
+  } catch (const std::exception&) {
+    pos = 0;
+  }
+  if (pos == 0 || pos != text.size() || v < lo || v > hi) {
+    throw ConfigError("command line: " + flag + " '" + text +
+                      "' is not an integer in the allowed range [" + std::to_string(lo) + ", " +
+                      std::to_string(hi) + "]");
+  }
+  return v;
+}
+
+JitterDist parse_jitter_dist(const std::string& where, const std::string& text) {
+  if (text == "uniform") return JitterDist::kUniform;
+  if (text == "normal") return JitterDist::kNormal;
+  throw ConfigError(where + " '" + text +
+                    "' is not a jitter distribution (allowed: uniform, normal)");
+}
+
+void parse_burst(DelayConfig& cfg, const std::string& flag, const std::string& text) {
+  const auto comma = text.find(',');
+  if (comma == std::string::npos) {
+    throw ConfigError("command line: " + flag + " '" + text +
+                      "' must be two probabilities p_gb,p_bg (example: 1%,30%)");
+  }
+  cfg.burst_loss = true;
+  cfg.burst_p_good_to_bad = config::parse_probability(flag + " (p_gb)", text.substr(0, comma));
+  cfg.burst_p_bad_to_good = config::parse_probability(flag + " (p_bg)", text.substr(comma + 1));
+  if (cfg.burst_p_bad_to_good <= 0.0) {
+    throw ConfigError("command line: " + flag + " '" + text +
+                      "': p_bg must be > 0 (the bad state would never end)");
+  }
+}
+
+}  // namespace
+
+bool apply_delay_flag(DelayConfig& cfg, const std::string& flag, const std::string& value) {
+  if (flag == "--delay") {
+    cfg.delay_s = config::parse_duration_s(flag, value);
+  } else if (flag == "--jitter") {
+    cfg.jitter_s = config::parse_duration_s(flag, value);
+  } else if (flag == "--jitter-dist") {
+    cfg.jitter_dist = parse_jitter_dist("command line: " + flag, value);
+  } else if (flag == "--reorder") {
+    cfg.reorder = true;
+  } else if (flag == "--loss") {
+    cfg.loss_probability = config::parse_probability(flag, value);
+  } else if (flag == "--burst-loss") {
+    parse_burst(cfg, flag, value);
+  } else if (flag == "--seed") {
+    cfg.seed = parse_u64(flag, value, 0, std::numeric_limits<std::uint64_t>::max());
+  } else if (flag == "--channel-capacity") {
+    cfg.capacity = static_cast<std::size_t>(parse_u64(flag, value, 2, 1u << 24));
+  } else {
+    return false;
+  }
+  return true;
+}
+
+std::vector<std::string> parse_delay_flags(DelayConfig& cfg, const std::vector<std::string>& args) {
+  std::vector<std::string> rest;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    // accept --flag=value as well as --flag value
+    const auto eq = a.find('=');
+    const std::string flag = eq == std::string::npos ? a : a.substr(0, eq);
+    if (flag == "--reorder") {
+      apply_delay_flag(cfg, flag, "");
+    } else if (delay_flag_takes_value(flag)) {
+      std::string value;
+      if (eq != std::string::npos) {
+        value = a.substr(eq + 1);
+      } else if (i + 1 < args.size()) {
+        value = args[++i];
+      } else {
+        throw ConfigError("command line: " + flag + " needs a value");
+      }
+      apply_delay_flag(cfg, flag, value);
+    } else {
+      rest.push_back(a);
+    }
+  }
+  cfg.validate();
+  return rest;
+}
+
+DelayConfig delay_config_from_yaml(const config::Node& node) {
+  DelayConfig cfg;
+  if (!node.defined()) return cfg;
+  node.reject_unknown_keys(
+      {"delay", "jitter", "jitter_dist", "reorder", "loss", "burst_loss", "seed", "capacity"});
+  // a duration: a number in seconds or a string with a unit
+  auto duration = [&](const std::string& key, double fallback) {
+    if (!node.has(key)) return fallback;
+    const config::Node c = node.child(key);
+    const std::string text = c.raw().as<std::string>();
+    try {
+      return config::parse_duration_s(key, text);
+    } catch (const ConfigError&) {
+      node.fail(key, "'" + text + "' is not a duration >= 0 (examples: 50ms, 0.2s, 150us, 0.05)");
+    }
+  };
+  auto probability = [&](const config::Node& n, const std::string& key, const std::string& text) {
+    try {
+      return config::parse_probability(key, text);
+    } catch (const ConfigError&) {
+      n.fail(key, "'" + text + "' is not a probability in [0, 1] (examples: 1%, 0.01)");
+    }
+  };
+  cfg.delay_s = duration("delay", 0.0);
+  cfg.jitter_s = duration("jitter", 0.0);
+  const std::string dist = node.choice_or("jitter_dist", "uniform", {"uniform", "normal"});
+  cfg.jitter_dist = dist == "normal" ? JitterDist::kNormal : JitterDist::kUniform;
+  cfg.reorder = node.boolean_or("reorder", false);
+  if (node.has("loss")) {
+    cfg.loss_probability = probability(node, "loss", node.child("loss").raw().as<std::string>());
+  }
+  if (node.has("burst_loss")) {
+    const config::Node b = node.child("burst_loss");
+    if (!b.is_sequence() || b.size() != 2) {
+      node.fail("burst_loss", "must be a list of two probabilities [p_gb, p_bg]");
+    }
+    cfg.burst_loss = true;
+    cfg.burst_p_good_to_bad =
+        probability(node, "burst_loss", b.at(std::size_t{0}).raw().as<std::string>());
+    cfg.burst_p_bad_to_good =
+        probability(node, "burst_loss", b.at(std::size_t{1}).raw().as<std::string>());
+    if (cfg.burst_p_bad_to_good <= 0.0) {
+      node.fail("burst_loss", "p_bg must be > 0 (the bad state would never end), allowed (0, 1]");
+    }
+  }
+  cfg.seed = static_cast<std::uint64_t>(node.integer_or("seed", 1, 0, (1LL << 62)));
+  cfg.capacity = static_cast<std::size_t>(node.integer_or("capacity", 4096, 2, 1 << 24));
+  try {
+    cfg.validate();
+  } catch (const ConfigError& e) {
+    node.fail("delay", e.what());
+  }
+  return cfg;
+}
+
+}  // namespace teleop::master

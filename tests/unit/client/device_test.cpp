@@ -1,0 +1,223 @@
+// Haptic device layer: simulated device with operator model, replay, external adapter.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <vector>
+
+#include "client/device/device_idl.hpp"
+#include "client/device/external_device.hpp"
+#include "client/device/replay_device.hpp"
+#include "client/device/simulated_device.hpp"
+#include "common/config/config.hpp"
+#include "tests/support/alloc_counter.hpp"
+
+using namespace teleop::master;
+using teleop::config::ConfigError;
+
+namespace {
+
+std::string error_of(const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+SimulatedDeviceParams step_params() {
+  SimulatedDeviceParams p;
+  p.script.kind = ScriptKind::kStep;
+  p.script.start_m = Eigen::Vector3d(0.0, 0.0, 0.05);
+  p.script.step_m = Eigen::Vector3d(0.02, 0.0, 0.0);
+  p.script.step_time_s = 0.1;
+  return p;
+}
+
+TEST(OperatorScript, PressSlipVisitsApproachContactPressSlipDepart) {
+  const OperatorScript s = press_slip_script(Eigen::Vector3d(0.0, 0.0, 0.01), 0.02);
+  const double leg = s.segment_s + s.dwell_s;
+  // start above the top, touch the top, press below it, slip sideways, depart upwards
+  EXPECT_NEAR(intended_pose(s, 0.0).position_m.z(), 0.01 + s.approach_height_m, 1e-12);
+  EXPECT_NEAR(intended_pose(s, leg).position_m.z(), 0.01, 1e-12);
+  EXPECT_NEAR(intended_pose(s, 2 * leg).position_m.z(), 0.01 - 0.02, 1e-12);
+  EXPECT_NEAR(intended_pose(s, 3 * leg).position_m.x(), s.slip_m.x(), 1e-12);
+  EXPECT_NEAR(intended_pose(s, 4 * leg).position_m.z(), 0.01 + s.approach_height_m, 1e-12);
+  EXPECT_EQ(intended_pose(s, 4 * leg + 1.0).phase, 4);
+  // velocity is the derivative of position (minimum-jerk segments)
+  const double t = 1.7 * leg, h = 1e-6;
+  const Eigen::Vector3d fd =
+      (intended_pose(s, t + h).position_m - intended_pose(s, t - h).position_m) / (2 * h);
+  EXPECT_NEAR((fd - intended_pose(s, t).velocity_mps).norm(), 0.0, 1e-6);
+}
+
+TEST(OperatorScript, CircleStartsAtStartAndHasRadius) {
+  OperatorScript s;
+  s.kind = ScriptKind::kCircle;
+  s.start_m = Eigen::Vector3d(0.01, 0.02, 0.03);
+  EXPECT_NEAR((intended_pose(s, 0.0).position_m - s.start_m).norm(), 0.0, 1e-12);
+  const Eigen::Vector3d centre = s.start_m - s.circle_radius_m * s.circle_u;
+  for (double t : {0.3, 0.9, 1.7}) {
+    EXPECT_NEAR((intended_pose(s, t).position_m - centre).norm(), s.circle_radius_m, 1e-12);
+  }
+  EXPECT_THROW(parse_script_kind("spiral"), ConfigError);
+  EXPECT_EQ(parse_script_kind("press-slip"), ScriptKind::kPressSlip);
+}
+
+TEST(SimulatedDevice, HandTracksAStepWithoutForce) {
+  SimulatedDevice dev(step_params());
+  dev.configure();
+  dev.activate();
+  for (int i = 0; i < 3000; ++i) {
+    dev.write(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+    dev.advance(1e-3);
+  }
+  const DeviceReading r = dev.read();
+  EXPECT_TRUE(r.valid);
+  EXPECT_NEAR(r.position_m.x(), 0.02, 1e-4);
+  EXPECT_NEAR(r.linear_velocity_mps.norm(), 0.0, 1e-3);
+}
+
+TEST(SimulatedDevice, StaticForceDeflectsTheHandByFOverK) {
+  SimulatedDeviceParams p;
+  p.script.kind = ScriptKind::kHold;
+  SimulatedDevice dev(p);
+  dev.activate();
+  const Eigen::Vector3d f(0.0, 0.0, 3.0);
+  for (int i = 0; i < 5000; ++i) {
+    dev.write(f, Eigen::Vector3d::Zero());
+    dev.advance(1e-3);
+  }
+  // the hand spring balances the device force: x = F / K_h
+  EXPECT_NEAR(dev.read().position_m.z(), 3.0 / p.hand.stiffness_n_per_m, 1e-5);
+  EXPECT_NEAR(dev.hand_force_n().z(), -3.0, 1e-3);
+}
+
+TEST(SimulatedDevice, ClipsForceToSpecAndIsDeterministicAndAllocationFree) {
+  SimulatedDeviceParams p = step_params();
+  p.script.tremor_amplitude_m = 1e-4;
+  SimulatedDevice a(p), b(p);
+  a.activate();
+  b.activate();
+  {
+    teleop::test::NoAllocScope scope;
+    for (int i = 0; i < 2000; ++i) {
+      const Eigen::Vector3d f(50.0 * std::sin(0.01 * i), 0.0, 0.0);  // beyond the spec
+      a.write(f, Eigen::Vector3d::Zero());
+      b.write(f, Eigen::Vector3d::Zero());
+      a.advance(1e-3);
+      b.advance(1e-3);
+      EXPECT_LE(a.applied_force_n().norm(), p.spec.max_force_n + 1e-12);
+      const DeviceReading ra = a.read(), rb = b.read();
+      ASSERT_EQ(ra.position_m, rb.position_m);
+    }
+    EXPECT_EQ(scope.allocations(), 0u);
+  }
+}
+
+TEST(SimulatedDevice, InactiveDeviceRendersNothing) {
+  SimulatedDevice dev(step_params());
+  dev.configure();
+  dev.write(Eigen::Vector3d(5, 0, 0), Eigen::Vector3d::Zero());
+  dev.advance(1e-3);
+  EXPECT_FALSE(dev.read().valid);
+  EXPECT_EQ(dev.applied_force_n().norm(), 0.0);
+}
+
+TEST(ReplayDevice, InterpolatesPositionAndOrientation) {
+  const auto samples = parse_replay_csv(
+      "time_s,x,y,z,qw,qx,qy,qz\n"
+      "0.0,0,0,0,1,0,0,0\n"
+      "1.0,0.1,0,0,0.7071067811865476,0,0,0.7071067811865476\n",
+      "mem.csv");
+  ReplayDevice dev(samples);
+  dev.activate();
+  dev.advance(0.25);
+  const DeviceReading r = dev.read();
+  EXPECT_TRUE(r.valid);
+  EXPECT_NEAR(r.position_m.x(), 0.025, 1e-12);
+  EXPECT_NEAR(r.linear_velocity_mps.x(), 0.1, 1e-12);
+  // a quarter of a 90 degree turn about z
+  EXPECT_NEAR(Eigen::AngleAxisd(r.orientation).angle(), 0.25 * M_PI / 2, 1e-9);
+  EXPECT_NEAR(r.angular_velocity_radps.z(), M_PI / 2, 1e-9);
+  dev.advance(5.0);
+  EXPECT_TRUE(dev.finished());
+  EXPECT_NEAR(dev.read().position_m.x(), 0.1, 1e-12);
+}
+
+TEST(ReplayDevice, BadCsvNamesFileLineAndColumn) {
+  std::string msg = error_of([] { parse_replay_csv("0,0,0,0\n0.1,0,zero,0\n", "rec.csv"); });
+  EXPECT_NE(msg.find("rec.csv:2:7"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("'y'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("zero"), std::string::npos) << msg;
+
+  msg = error_of([] { parse_replay_csv("time_s,x,y,z\n0,0,0,0\n0,1,1,1\n", "t.csv"); });
+  EXPECT_NE(msg.find("t.csv:3:1"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("increase"), std::string::npos) << msg;
+
+  msg = error_of([] { parse_replay_csv("0,0,0\n", "short.csv"); });
+  EXPECT_NE(msg.find("short.csv:1"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("found 3"), std::string::npos) << msg;
+
+  msg = error_of([] {
+    ReplayDevice d("/nonexistent/replay.csv");
+    d.configure();
+  });
+  EXPECT_NE(msg.find("/nonexistent/replay.csv"), std::string::npos) << msg;
+}
+
+TEST(ExternalDevice, StaleSampleInvalidatesReadingAndZeroesCommand) {
+  ExternalDevice dev(DeviceSpec{}, 0.01);
+  dev.activate();
+  EXPECT_FALSE(dev.read().valid);  // nothing received yet
+  ExternalDeviceSample s;
+  s.seq = 1;
+  s.engaged = true;
+  s.position_m = Eigen::Vector3d(0.01, 0.02, 0.03);
+  EXPECT_TRUE(dev.on_sample(s));
+  EXPECT_FALSE(dev.on_sample(s));  // same seq again is ignored
+  dev.write(Eigen::Vector3d(100.0, 0.0, 0.0), Eigen::Vector3d::Zero());
+  dev.advance(0.005);
+  DeviceReading r = dev.read();
+  EXPECT_TRUE(r.valid);
+  EXPECT_EQ(r.position_m, s.position_m);
+  ExternalDeviceCommand c = dev.next_command();
+  EXPECT_TRUE(c.enable);
+  EXPECT_NEAR(c.force_n.x(), DeviceSpec{}.max_force_n, 1e-12);  // saturated to the spec
+  EXPECT_EQ(c.state_seq, 1u);
+  dev.advance(0.01);  // older than the timeout now
+  EXPECT_FALSE(dev.read().valid);
+  c = dev.next_command();
+  EXPECT_FALSE(c.enable);
+  EXPECT_EQ(c.force_n.norm(), 0.0);
+  EXPECT_EQ(dev.stale_events(), 1u);
+  s.seq = 2;
+  dev.on_sample(s);
+  EXPECT_TRUE(dev.read().valid);
+}
+
+TEST(ExternalDevice, ConvertsFromAndToTheIdlTypes) {
+  teleop::DeviceState m;
+  m.seq(7);
+  m.position_m({0.1, 0.2, 0.3});
+  m.orientation_wxyz({2.0, 0.0, 0.0, 0.0});  // not normalised on the wire
+  m.engaged(true);
+  m.buttons(3);
+  const ExternalDeviceSample s = from_idl(m);
+  EXPECT_EQ(s.seq, 7u);
+  EXPECT_NEAR(s.position_m.y(), 0.2, 1e-15);
+  EXPECT_NEAR(s.orientation.w(), 1.0, 1e-15);
+  EXPECT_EQ(s.buttons, 3u);
+  ExternalDeviceCommand c;
+  c.seq = 9;
+  c.force_n = Eigen::Vector3d(1, 2, 3);
+  c.enable = true;
+  const teleop::DeviceCommand out = to_idl(c, 1234);
+  EXPECT_EQ(out.seq(), 9u);
+  EXPECT_EQ(out.time_ns(), 1234);
+  EXPECT_EQ(out.force_n()[2], 3.0);
+  EXPECT_TRUE(out.enable());
+}
+
+}  // namespace
