@@ -1,5 +1,7 @@
 #include "server/world/scene.hpp"
 
+#include <filesystem>
+
 namespace teleop::sim {
 
 namespace {
@@ -86,7 +88,19 @@ SceneConfig parse_scene(const config::Node& root) {
   s.tool.plane_count = static_cast<int>(s.planes.size());
   for (std::size_t i = 0; i < s.planes.size(); ++i) s.tool.planes[i] = s.planes[i];
 
-  if (root.has("robot")) s.robot_node = root.at("robot");
+  if (root.has("robot")) {
+    // `robot: {include: FILE}` takes the `robot` mapping of another file (relative paths are
+    // relative to this scene file), so one robot description serves several scenes
+    const config::Node r = root.at("robot");
+    if (r.is_map() && r.has("include")) {
+      r.reject_unknown_keys({"include"});
+      std::filesystem::path inc = r.string("include");
+      if (inc.is_relative()) inc = std::filesystem::path(root.file()).parent_path() / inc;
+      s.robot_node = config::Node::load_file(inc.string()).at("robot");
+    } else {
+      s.robot_node = r;
+    }
+  }
   if (s.kind == "robot" && !s.robot_node) {
     root.fail("robot", "is required when kind is 'robot'");
   }

@@ -47,7 +47,8 @@ void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input,
   }
   state.contact_force_n = f_contact;
 
-  const Eigen::Vector3d f_total = f_ctrl + f_contact + model.mass_kg * model.gravity_mps2 -
+  const Eigen::Vector3d f_total = f_ctrl + f_contact + input.external_force_n +
+                                  model.mass_kg * model.gravity_mps2 -
                                   model.linear_damping_ns_per_m * state.velocity_mps;
   state.velocity_mps += dt * f_total / model.mass_kg;
   state.position_m += dt * state.velocity_mps;

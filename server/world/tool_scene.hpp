@@ -41,6 +41,8 @@ struct ToolInput {
   Eigen::Vector3d target_angular_velocity_radps = Eigen::Vector3d::Zero();
   double kp_override_n_per_m = 0.0;  ///< >0 replaces model.kp_n_per_m for this step
   bool hold = false;                 ///< true: track the current position with zero velocity
+  /// Force on the tool from bodies other than the planes (e.g. a deformable surface) [N].
+  Eigen::Vector3d external_force_n = Eigen::Vector3d::Zero();
 };
 
 struct ToolState {

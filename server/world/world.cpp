@@ -1,5 +1,7 @@
 #include "server/world/world.hpp"
 
+#include "server/world/scene_world.hpp"
+
 #include <cmath>
 
 namespace teleop::sim {
@@ -50,9 +52,12 @@ void ToolWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) {
 }
 
 std::unique_ptr<World> make_world(const SceneConfig& scene) {
-  if (scene.kind == "tool") return std::make_unique<ToolWorld>(scene);
-  throw config::ConfigError(scene.file + ": field 'kind': value '" + scene.kind +
-                            "' is not supported by this build yet (supported: tool)");
+  // the plain tool-only scene keeps its own small world; anything with a robot or a
+  // deformable body is assembled by SceneWorld
+  if (scene.kind == "tool" && scene.deformable_nodes.empty()) {
+    return std::make_unique<ToolWorld>(scene);
+  }
+  return std::make_unique<SceneWorld>(scene);
 }
 
 }  // namespace teleop::sim
