@@ -252,6 +252,48 @@ TEST(Verdict, SimulationAgreesWithTheAnalyticDelayMargin) {
   }
 }
 
+TEST(Verdict, StabilitySwitchesOfTheTheoryAreSeenInSimulation) {
+  // force-position, K_f = 0.5, held in steady contact with the sphere: unstable just beyond
+  // the first margin, stable again around 100 ms, unstable once more at 200 ms (theory and
+  // simulation agree; the press task is too short to show the slow growth, so hold 10 s)
+  PressScenario s = scenario("force-position", Environment::kSphere, 2000, 0.5, 0.0);
+  const LoopModel m = press_loop_model(s, build_press_setup(s));
+  const double first = task_delay_margin(m).one_way_s;
+  ASSERT_GT(first, 0.03);
+  ASSERT_LT(first, 0.045);
+  for (double d : {0.02, 0.055, 0.1, 0.2}) {
+    s.one_way_delay_s = d;
+    const bool theory = task_stable_at(m, d);
+    EXPECT_EQ(theory, d < first || (d > 0.09 && d < 0.12)) << d;
+    SteadyContact sc(s);
+    sc.setup.loop.duration_s = 10.0;
+    SimulatedDevice dev(sc.setup.device);
+    PointSlave slave(sc.setup.slave);
+    LoopbackSession session(sc.setup.loop, dev, slave);
+    session.run();
+    EXPECT_EQ(session.metrics().verdict() == Verdict::kStable, theory)
+        << d << " " << session.metrics().summary_json();
+  }
+}
+
+TEST(Verdict, LossesAreReportedInTheSummary) {
+  PressScenario s = scenario("position-position", Environment::kSphere, 2000, 400, 0.01);
+  PressSetup setup = build_press_setup(s);
+  setup.loop.forward.loss_probability = 0.1;
+  setup.loop.backward.burst_loss = true;
+  setup.loop.backward.burst_p_good_to_bad = 0.02;
+  setup.loop.backward.burst_p_bad_to_good = 0.2;
+  SimulatedDevice dev(setup.device);
+  PointSlave slave(setup.slave);
+  LoopbackSession session(setup.loop, dev, slave);
+  session.run();
+  EXPECT_NEAR(session.metrics().forward_loss(), 0.1, 0.02);
+  EXPECT_NEAR(session.metrics().backward_loss(), 0.02 / 0.22, 0.04);
+  const std::string j = session.summary_json();
+  EXPECT_NE(j.find("\"forward_loss\":0.0"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"backward\":{\"pushed\""), std::string::npos) << j;
+}
+
 TEST(Verdict, SustainedOscillationWithoutGrowthIsOscillating) {
   SessionMetrics m;
   MetricsSample s;
