@@ -154,6 +154,19 @@ TEST(Controller, WorkspaceMapScalesPositionAndClampsGainsToSpec) {
   EXPECT_EQ(sat.command.seq, 2u);
 }
 
+TEST(Controller, WorkspaceMapWithRotationRoundTrips) {
+  WorkspaceMap w;
+  w.offset_m = Eigen::Vector3d(0.1, -0.2, 0.55);
+  w.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()));
+  w.position_scale = 2.5;
+  w.force_scale = 0.3;
+  const Eigen::Vector3d x(0.01, 0.02, -0.03), f(1.0, -2.0, 0.5);
+  EXPECT_NEAR((w.to_master_position(w.to_slave_position(x)) - x).norm(), 0.0, 1e-15);
+  EXPECT_NEAR((w.to_master_force(w.to_slave_force(f)) - f).norm(), 0.0, 1e-14);
+  EXPECT_NEAR(w.to_slave_velocity(x).norm(), 2.5 * x.norm(), 1e-15);
+  EXPECT_NEAR(w.to_master_force(f).norm(), 0.3 * f.norm(), 1e-15);
+}
+
 TEST(Controller, BadParamsAndNamesGiveClearErrors) {
   std::string m = error_of([] { make_controller("wave"); });
   EXPECT_NE(m.find("position-position, force-position"), std::string::npos) << m;
