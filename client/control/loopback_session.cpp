@@ -80,6 +80,12 @@ bool LoopbackSession::step() {
   last_.link_ok = !safety_.link_lost();
   last_.safety_scale = cfg_.safety_enabled ? safety_.scale() : 1.0;
   metrics_.update(last_);
+  {
+    const ChannelCounters& fw = forward_.counters();
+    const ChannelCounters& bw = backward_.counters();
+    metrics_.set_losses(fw.pushed, fw.lost_random + fw.lost_burst + fw.lost_overflow, bw.pushed,
+                        bw.lost_random + bw.lost_burst + bw.lost_overflow);
+  }
   // a cut by the safety layer (saturation, energy) makes the run unstable even if the
   // windows evaluated so far did not show it
   if (cfg_.safety_enabled && safety_.cut()) metrics_.mark_unstable(safety_.cut_reason(), now);

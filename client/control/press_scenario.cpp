@@ -109,6 +109,7 @@ PressResult run_press(const PressScenario& s) {
   r.contact_time_s = m.contact_time_s();
   r.safety_cut = session.safety().cut();
   r.analytic_margin_s = task_delay_margin(press_loop_model(s, setup)).one_way_s;
+  r.analytic_stable = task_stable_at(press_loop_model(s, setup), s.one_way_delay_s);
   return r;
 }
 

@@ -58,6 +58,7 @@ struct PressResult {
   double contact_time_s = 0.0;
   bool safety_cut = false;
   double analytic_margin_s = 0.0;  ///< one-way delay margin of the linear model [s]
+  bool analytic_stable = true;     ///< the linear model is stable at this delay (exact count)
 };
 
 /// Builds and runs one scenario. Allocates (setup); the loop itself does not.

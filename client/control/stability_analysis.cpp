@@ -76,4 +76,58 @@ DelayMargin task_delay_margin(const LoopModel& m) {
   return a.one_way_s <= b.one_way_s ? a : b;
 }
 
+DelayCrossings delay_crossings(const LoopModel& m, double w_min, double w_max) {
+  DelayCrossings out;
+  const int n = 4000;
+  const double lr = std::log(w_max / w_min);
+  auto mag1 = [&](double w) { return std::abs(loop_gain(m, w)) - 1.0; };
+  double w_prev = w_min;
+  double f_prev = mag1(w_prev);
+  for (int i = 1; i <= n && out.count < DelayCrossings::kMax; ++i) {
+    const double w = w_min * std::exp(lr * i / n);
+    const double f = mag1(w);
+    if ((f_prev > 0.0) != (f > 0.0)) {
+      double a = w_prev, b = w, fa = f_prev;
+      for (int k = 0; k < 60; ++k) {
+        const double c = 0.5 * (a + b);
+        const double fc = mag1(c);
+        if ((fa > 0.0) == (fc > 0.0)) {
+          a = c;
+          fa = fc;
+        } else {
+          b = c;
+        }
+      }
+      const double wc = 0.5 * (a + b);
+      double pm = kPi + std::arg(loop_gain(m, wc));
+      pm = std::fmod(pm + 4.0 * kPi, 2.0 * kPi);
+      DelayCrossing& c = out.items[out.count++];
+      c.w_radps = wc;
+      c.first_round_trip_s = pm / wc;
+      c.destabilizing = f_prev > 0.0;  // |L| falls through 1
+    }
+    w_prev = w;
+    f_prev = f;
+  }
+  return out;
+}
+
+bool stable_at(const DelayCrossings& c, double one_way_s) {
+  const double tau = 2.0 * one_way_s;
+  int pairs = 0;
+  for (int i = 0; i < c.count; ++i) {
+    const DelayCrossing& x = c.items[i];
+    const double period = 2.0 * kPi / x.w_radps;
+    for (double t = x.first_round_trip_s; t < tau; t += period) pairs += x.destabilizing ? 1 : -1;
+  }
+  return pairs <= 0;
+}
+
+bool task_stable_at(const LoopModel& m, double one_way_s) {
+  LoopModel free = m;
+  free.env_stiffness_n_per_m = 0.0;
+  free.env_damping_ns_per_m = 0.0;
+  return stable_at(delay_crossings(m), one_way_s) && stable_at(delay_crossings(free), one_way_s);
+}
+
 }  // namespace teleop::master

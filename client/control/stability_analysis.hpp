@@ -49,6 +49,33 @@ struct DelayMargin {
 /// smallest delay margin over all crossovers.
 DelayMargin delay_margin(const LoopModel& m, double w_min_radps = 0.01, double w_max_radps = 1.0e4);
 
+/// One gain crossover w_c (|L_n(jw_c)| = 1) and the round-trip delays at which a root pair
+/// crosses the imaginary axis there: tau_n = (PM + 2 pi n) / w_c, n = 0, 1, ...
+/// The crossing is destabilising where |L_n| falls through 1 as w grows (roots move into the
+/// right half-plane) and stabilising where it rises through 1 (Cooke & van den Driessche 1986:
+/// sign of d/dw (1 - |L_n|^2)).
+struct DelayCrossing {
+  double w_radps = 0.0;             ///< crossover frequency [rad/s]
+  double first_round_trip_s = 0.0;  ///< tau_0 = PM / w_c [s]
+  bool destabilizing = true;        ///< direction of the root crossing
+};
+
+/// All crossovers of a loop (at most kMax; scan as delay_margin()).
+struct DelayCrossings {
+  static constexpr int kMax = 16;
+  DelayCrossing items[kMax];
+  int count = 0;
+};
+DelayCrossings delay_crossings(const LoopModel& m, double w_min_radps = 0.01,
+                               double w_max_radps = 1.0e4);
+
+/// Exact delay stability of the linear loop (stable at zero delay assumed): counts the root
+/// pairs that crossed into the right half-plane for round-trip delays below 2 T. Captures
+/// stability switches (a loop unstable at 50 ms may be stable again at 100 ms).
+bool stable_at(const DelayCrossings& c, double one_way_s);
+/// stable_at() for a task in contact and in free motion (both must be stable).
+bool task_stable_at(const LoopModel& m, double one_way_s);
+
 /// Margin of a task that moves both in free space and in contact: the smaller of the margin
 /// in contact (m as given) and in free motion (m with K_e = B_e = 0).
 DelayMargin task_delay_margin(const LoopModel& m);

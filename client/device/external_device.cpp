@@ -29,7 +29,8 @@ void ExternalDevice::deactivate() {
 }
 
 bool ExternalDevice::on_sample(const ExternalDeviceSample& s) {
-  if (have_sample_ && s.seq <= newest_.seq) return false;
+  // newest wins; an older seq is accepted only once the link is stale (a driver restart)
+  if (have_sample_ && s.seq <= newest_.seq && fresh()) return false;
   newest_ = s;
   have_sample_ = true;
   age_s_ = 0.0;

@@ -52,7 +52,8 @@ class ExternalDevice final : public HapticDevice {
   DeviceLifecycle state() const override { return state_; }
 
   /// Hands over the newest sample from the transport. Older or repeated seqs are ignored
-  /// (returns false). Real-time safe.
+  /// (returns false) while the held sample is fresh; once it is stale any seq is accepted
+  /// (a restarted driver counts from 0 again). Real-time safe.
   bool on_sample(const ExternalDeviceSample& sample);
   /// The command to publish now (force zero and enable false when stale or inactive).
   ExternalDeviceCommand next_command();

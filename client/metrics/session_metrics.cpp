@@ -152,12 +152,13 @@ std::string SessionMetrics::summary_json() const {
                 "\"contact_time_s\":%.6g,\"energy_j\":%.6g,\"energy_min_j\":%.6g,"
                 "\"max_device_force_n\":%.6g,\"saturated_time_s\":%.6g,"
                 "\"link_lost_time_s\":%.6g,\"oscillating_windows\":%llu,\"samples\":%llu,"
-                "\"nonfinite_samples\":%llu}",
+                "\"nonfinite_samples\":%llu,\"forward_loss\":%.6g,\"backward_loss\":%.6g}",
                 verdict_name(verdict_), reason_, unstable_time_s_, position_error_rms_m(), err_max_,
                 force_error_rms_n(), mean_contact_force_n(), contact_time_, energy_, energy_min_,
                 f_dev_max_, saturated_time_, link_lost_time_,
                 static_cast<unsigned long long>(osc_windows_total_),
-                static_cast<unsigned long long>(n_), static_cast<unsigned long long>(nonfinite_));
+                static_cast<unsigned long long>(n_), static_cast<unsigned long long>(nonfinite_),
+                forward_loss(), backward_loss());
   return buf;
 }
 

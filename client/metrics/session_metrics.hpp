@@ -100,6 +100,23 @@ class SessionMetrics {
   std::uint64_t samples() const { return n_; }                 ///< cycles seen
   std::uint64_t oscillating_windows() const { return osc_windows_total_; }  ///< windows
   std::uint64_t nonfinite_samples() const { return nonfinite_; }            ///< NaN/inf cycles
+  /// Records the link's losses so far (cumulative counters of the two delay channels or of
+  /// the DDS readers): samples sent and lost each way. Allocation-free.
+  void set_losses(std::uint64_t forward_sent, std::uint64_t forward_lost,
+                  std::uint64_t backward_sent, std::uint64_t backward_lost) {
+    fwd_sent_ = forward_sent;
+    fwd_lost_ = forward_lost;
+    bwd_sent_ = backward_sent;
+    bwd_lost_ = backward_lost;
+  }
+  /// Fraction of master->slave commands lost.
+  double forward_loss() const {
+    return fwd_sent_ ? static_cast<double>(fwd_lost_) / static_cast<double>(fwd_sent_) : 0.0;
+  }
+  /// Fraction of slave->master samples lost.
+  double backward_loss() const {
+    return bwd_sent_ ? static_cast<double>(bwd_lost_) / static_cast<double>(bwd_sent_) : 0.0;
+  }
   /// Mean contact force magnitude |F_env| in contact [N].
   double mean_contact_force_n() const;
 
@@ -128,6 +145,7 @@ class SessionMetrics {
   double saturated_time_ = 0.0;
   double link_lost_time_ = 0.0;
   std::uint64_t nonfinite_ = 0;
+  std::uint64_t fwd_sent_ = 0, fwd_lost_ = 0, bwd_sent_ = 0, bwd_lost_ = 0;
   double last_error_m_ = 0.0;
 
   // current window

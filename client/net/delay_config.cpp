@@ -179,11 +179,16 @@ DelayConfig delay_config_from_yaml(const config::Node& node) {
   if (!node.defined()) return cfg;
   node.reject_unknown_keys(
       {"delay", "jitter", "jitter_dist", "reorder", "loss", "burst_loss", "seed", "capacity"});
+  // the text of a scalar field (numbers and strings alike)
+  auto scalar = [&](const std::string& key) {
+    const config::Node c = node.child(key);
+    if (!c.raw().IsScalar()) node.fail(key, "must be a single value, not a list or mapping");
+    return c.raw().as<std::string>();
+  };
   // a duration: a number in seconds or a string with a unit
   auto duration = [&](const std::string& key, double fallback) {
     if (!node.has(key)) return fallback;
-    const config::Node c = node.child(key);
-    const std::string text = c.raw().as<std::string>();
+    const std::string text = scalar(key);
     try {
       return config::parse_duration_s(key, text);
     } catch (const ConfigError&) {
@@ -203,7 +208,7 @@ DelayConfig delay_config_from_yaml(const config::Node& node) {
   cfg.jitter_dist = dist == "normal" ? JitterDist::kNormal : JitterDist::kUniform;
   cfg.reorder = node.boolean_or("reorder", false);
   if (node.has("loss")) {
-    cfg.loss_probability = probability(node, "loss", node.child("loss").raw().as<std::string>());
+    cfg.loss_probability = probability(node, "loss", scalar("loss"));
   }
   if (node.has("burst_loss")) {
     const config::Node b = node.child("burst_loss");

@@ -285,6 +285,9 @@ TEST(DelayConfig, ParsesYamlAndRejectsBadFields) {
   EXPECT_NE(m.find("forward.loss"), std::string::npos) << m;
   m = err("forward: {burst_loss: [0.1]}");
   EXPECT_NE(m.find("forward.burst_loss"), std::string::npos) << m;
+  m = err("forward: {delay: [1, 2]}");
+  EXPECT_NE(m.find("forward.delay"), std::string::npos) << m;
+  EXPECT_NE(m.find("single value"), std::string::npos) << m;
   m = err("forward: {jitter_dist: cauchy}");
   EXPECT_NE(m.find("cauchy"), std::string::npos) << m;
 }

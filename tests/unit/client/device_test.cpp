@@ -195,6 +195,12 @@ TEST(ExternalDevice, StaleSampleInvalidatesReadingAndZeroesCommand) {
   s.seq = 2;
   dev.on_sample(s);
   EXPECT_TRUE(dev.read().valid);
+  // a restarted driver (seq from 0) is accepted once the link is stale
+  s.seq = 0;
+  EXPECT_FALSE(dev.on_sample(s));
+  dev.advance(0.02);
+  EXPECT_TRUE(dev.on_sample(s));
+  EXPECT_TRUE(dev.read().valid);
 }
 
 TEST(ExternalDevice, ConvertsFromAndToTheIdlTypes) {

@@ -1,0 +1,344 @@
+// teleop_bench delay --out DIR [--quick] [--no-chart]
+//
+// Delay-robustness sweep of the bilateral schemes, in-process (no DDS): the Fig. 13 press
+// task (SimulatedDevice + operator model -> controller -> DelayChannel -> slave -> back) at
+// 1 kHz, for each scheme, one-way delay 0-200 ms against the environment (elastic sphere,
+// stiff wall) and the gain (position-position: K_pm = K_ps; force-position: K_f), plus a
+// stiffness sweep (sphere k 500 - 2e4 N/m). Each run's verdict is compared with the analytic
+// delay margin of the linearised loop (client/control/stability_analysis.hpp).
+//
+// The wall cases also run with the server's own tool-only scene (teleop::sim::tool_step) as
+// the slave, to show the in-process point slave gives the same verdicts.
+//
+// Writes delay_map.csv, delay_boundary.csv (first delay margin vs gain), delay_theory.csv
+// (exact stable/unstable grid of the linear model), delay_summary.json; chart delay_map.png.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "client/control/press_scenario.hpp"
+#include "common/util/csv.hpp"
+#include "common/util/registry.hpp"
+#include "common/util/stats.hpp"
+#include "server/world/tool_scene.hpp"
+
+namespace {
+
+using namespace teleop::master;
+
+/// The server's tool-only scene as an in-process slave (planes only).
+class ToolSceneSlave final : public SlaveSimulator {
+ public:
+  explicit ToolSceneSlave(const PointSlaveParams& p) {
+    model_.mass_kg = p.mass_kg;
+    model_.radius_m = p.radius_m;
+    model_.kp_n_per_m = p.kp_n_per_m;
+    model_.kd_ns_per_m = p.kd_ns_per_m;
+    model_.linear_damping_ns_per_m = p.linear_damping_ns_per_m;
+    model_.max_force_n = p.max_force_n;
+    for (int i = 0; i < p.obstacle_count; ++i) {
+      const SlaveObstacle& o = p.obstacles[static_cast<std::size_t>(i)];
+      if (o.kind != SlaveObstacle::Kind::kPlane) continue;
+      teleop::sim::Plane& pl = model_.planes[static_cast<std::size_t>(model_.plane_count++)];
+      pl.id = o.id;
+      pl.normal = o.normal;
+      pl.offset_m = o.offset_m;
+      pl.stiffness_n_per_m = o.stiffness_n_per_m;
+      pl.damping_ns_per_m = o.damping_ns_per_m;
+    }
+  }
+  void reset(const Eigen::Vector3d& x) override {
+    state_ = teleop::sim::ToolState{};
+    state_.position_m = x;
+    seq_ = 0;
+  }
+  void step(const SlaveCommand& c, double dt) override {
+    teleop::sim::ToolInput in;
+    in.target_position_m = c.position_m;
+    in.target_velocity_mps = c.velocity_mps;
+    in.kp_override_n_per_m = c.position_gain_n_per_m;
+    in.hold = !c.enabled;
+    teleop::sim::tool_step(model_, state_, in, dt);
+    ++seq_;
+    cmd_seq_ = c.seq;
+    cmd_time_ = c.send_time_s;
+  }
+  SlaveSample sample() const override {
+    SlaveSample s;
+    s.seq = seq_;
+    s.command_seq = cmd_seq_;
+    s.command_send_time_s = cmd_time_;
+    s.sim_time_s = state_.sim_time_s;
+    s.position_m = state_.position_m;
+    s.orientation = state_.orientation;
+    s.velocity_mps = state_.velocity_mps;
+    s.contact_force_n = state_.contact_force_n;
+    s.penetration_m = state_.penetration_m;
+    s.in_contact = state_.contact_object >= 0;
+    s.valid = true;
+    return s;
+  }
+
+ private:
+  teleop::sim::ToolModel model_;
+  teleop::sim::ToolState state_;
+  std::uint64_t seq_ = 0, cmd_seq_ = 0;
+  double cmd_time_ = 0.0;
+};
+
+struct RunRow {
+  std::string sweep, scheme, environment, slave;
+  double k = 0, gain = 0, delay_ms = 0;
+  PressResult r;
+};
+
+PressResult run_with(const PressScenario& s, bool tool_scene) {
+  if (!tool_scene) return run_press(s);
+  const PressSetup setup = build_press_setup(s);
+  SimulatedDevice device(setup.device);
+  ToolSceneSlave slave(setup.slave);
+  LoopbackSession session(setup.loop, device, slave);
+  session.run();
+  PressResult r;
+  r.verdict = session.metrics().verdict();
+  r.reason = session.metrics().verdict_reason();
+  r.position_error_rms_m = session.metrics().position_error_rms_m();
+  r.force_error_rms_n = session.metrics().force_error_rms_n();
+  r.max_device_force_n = session.metrics().max_device_force_n();
+  r.energy_min_j = session.metrics().energy_min_j();
+  r.contact_time_s = session.metrics().contact_time_s();
+  r.safety_cut = session.safety().cut();
+  r.analytic_margin_s = task_delay_margin(press_loop_model(s, setup)).one_way_s;
+  r.analytic_stable = task_stable_at(press_loop_model(s, setup), s.one_way_delay_s);
+  return r;
+}
+
+int run_delay_bench(const teleop::CommandArgs& args) {
+  const bool quick = args.quick;
+  std::vector<double> delays_ms;
+  for (int d = 0; d <= 200; d += quick ? 50 : 10) delays_ms.push_back(d);
+  const std::vector<double> pp_gains =
+      quick ? std::vector<double>{200, 1000, 3000}
+            : std::vector<double>{100, 200, 300, 400, 600, 800, 1000, 1500, 2000, 3000};
+  const std::vector<double> fp_gains =
+      quick ? std::vector<double>{0.1, 0.5, 2.0}
+            : std::vector<double>{0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0, 1.5, 2.0, 3.0};
+  const std::vector<double> stiffness =
+      quick ? std::vector<double>{} : std::vector<double>{500, 1000, 2000, 5000, 10000, 20000};
+
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<RunRow> rows;
+  auto add = [&](const std::string& sweep, const std::string& scheme, Environment env, double k,
+                 double gain, double d_ms, bool tool_scene) {
+    PressScenario s;
+    s.scheme = scheme;
+    s.environment = env;
+    s.env_stiffness_n_per_m = k;
+    s.env_damping_ns_per_m = env == Environment::kWall ? 50.0 : 5.0;
+    s.gain = gain;
+    s.one_way_delay_s = d_ms * 1e-3;
+    RunRow row;
+    row.sweep = sweep;
+    row.scheme = scheme;
+    row.environment = env == Environment::kWall ? "wall" : "sphere";
+    row.slave = tool_scene ? "tool_scene" : "point";
+    row.k = k;
+    row.gain = gain;
+    row.delay_ms = d_ms;
+    row.r = run_with(s, tool_scene);
+    rows.push_back(row);
+  };
+  for (const std::string scheme : {"position-position", "force-position"}) {
+    const auto& gains = scheme == "position-position" ? pp_gains : fp_gains;
+    const double default_gain = scheme == "position-position" ? 400.0 : 1.0;
+    for (double g : gains) {
+      for (double d : delays_ms) {
+        add("gain", scheme, Environment::kSphere, 2000.0, g, d, false);
+        add("gain", scheme, Environment::kWall, 2.0e4, g, d, false);
+        add("gain", scheme, Environment::kWall, 2.0e4, g, d, true);
+      }
+    }
+    for (double k : stiffness) {
+      for (double d : delays_ms)
+        add("stiffness", scheme, Environment::kSphere, k, default_gain, d, false);
+    }
+  }
+  const double sweep_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // the per-run map
+  teleop::CsvWriter csv((args.out_dir / "delay_map.csv").string(),
+                        {"sweep", "scheme", "environment", "slave", "stiffness_n_per_m", "gain",
+                         "delay_ms", "verdict", "verdict_code", "reason", "theory_stable",
+                         "analytic_margin_ms", "position_error_rms_mm", "force_error_rms_n",
+                         "max_device_force_n", "energy_min_j", "contact_time_s", "safety_cut"});
+  int agree = 0, judged = 0, tool_agree = 0, tool_pairs = 0;
+  for (const RunRow& row : rows) {
+    const double margin_ms = row.r.analytic_margin_s * 1e3;
+    const bool theory_stable = row.r.analytic_stable;
+    const bool sim_stable = row.r.verdict == Verdict::kStable;
+    if (row.slave == "point") {
+      ++judged;
+      agree += theory_stable == sim_stable;
+    }
+    std::string reason = row.r.reason;
+    std::replace(reason.begin(), reason.end(), ',', ';');
+    std::replace(reason.begin(), reason.end(), ' ', '_');
+    csv.row_text({row.sweep, row.scheme, row.environment, row.slave, teleop::format_number(row.k),
+                  teleop::format_number(row.gain), teleop::format_number(row.delay_ms),
+                  verdict_name(row.r.verdict), std::to_string(static_cast<int>(row.r.verdict)),
+                  reason.empty() ? "-" : reason, theory_stable ? "1" : "0",
+                  std::isfinite(margin_ms) ? teleop::format_number(margin_ms) : "inf",
+                  teleop::format_number(row.r.position_error_rms_m * 1e3),
+                  teleop::format_number(row.r.force_error_rms_n),
+                  teleop::format_number(row.r.max_device_force_n),
+                  teleop::format_number(row.r.energy_min_j),
+                  teleop::format_number(row.r.contact_time_s), row.r.safety_cut ? "1" : "0"});
+  }
+  // tool-scene vs point slave on the same wall runs
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (rows[i].slave != "tool_scene") continue;
+    for (std::size_t j = 0; j < rows.size(); ++j) {
+      if (rows[j].slave == "point" && rows[j].sweep == rows[i].sweep &&
+          rows[j].scheme == rows[i].scheme && rows[j].environment == rows[i].environment &&
+          rows[j].gain == rows[i].gain && rows[j].delay_ms == rows[i].delay_ms &&
+          rows[j].k == rows[i].k) {
+        ++tool_pairs;
+        tool_agree += rows[j].r.verdict == rows[i].r.verdict;
+      }
+    }
+  }
+  csv.flush();
+
+  // the analytic boundary on a fine grid of gains and stiffnesses
+  teleop::CsvWriter bnd((args.out_dir / "delay_boundary.csv").string(),
+                        {"sweep", "scheme", "environment", "stiffness_n_per_m", "gain", "margin_ms",
+                         "crossover_radps", "phase_margin_deg"});
+  for (const std::string scheme : {"position-position", "force-position"}) {
+    const bool pp = scheme == "position-position";
+    for (int e = 0; e < 2; ++e) {
+      for (int i = 0; i <= 120; ++i) {
+        const double g =
+            pp ? 50.0 * std::pow(3200.0 / 50.0, i / 120.0) : 0.03 * std::pow(4.0 / 0.03, i / 120.0);
+        PressScenario s;
+        s.scheme = scheme;
+        s.environment = e ? Environment::kWall : Environment::kSphere;
+        s.env_stiffness_n_per_m = e ? 2.0e4 : 2000.0;
+        s.env_damping_ns_per_m = e ? 50.0 : 5.0;
+        s.gain = g;
+        const DelayMargin m = task_delay_margin(press_loop_model(s, build_press_setup(s)));
+        bnd.row_text({"gain", scheme, e ? "wall" : "sphere",
+                      teleop::format_number(s.env_stiffness_n_per_m), teleop::format_number(g),
+                      std::isfinite(m.one_way_s) ? teleop::format_number(m.one_way_s * 1e3) : "inf",
+                      teleop::format_number(m.crossover_radps),
+                      teleop::format_number(m.phase_margin_rad * 180.0 / M_PI)});
+      }
+    }
+    for (int i = 0; i <= 120; ++i) {
+      const double k = 300.0 * std::pow(3.0e4 / 300.0, i / 120.0);
+      PressScenario s;
+      s.scheme = scheme;
+      s.environment = Environment::kSphere;
+      s.env_stiffness_n_per_m = k;
+      s.gain = pp ? 400.0 : 1.0;
+      const DelayMargin m = task_delay_margin(press_loop_model(s, build_press_setup(s)));
+      bnd.row_text({"stiffness", scheme, "sphere", teleop::format_number(k),
+                    teleop::format_number(s.gain),
+                    std::isfinite(m.one_way_s) ? teleop::format_number(m.one_way_s * 1e3) : "inf",
+                    teleop::format_number(m.crossover_radps),
+                    teleop::format_number(m.phase_margin_rad * 180.0 / M_PI)});
+    }
+  }
+  bnd.flush();
+
+  // the exact stable/unstable regions of the linear model on a grid (stability switches)
+  teleop::CsvWriter grid((args.out_dir / "delay_theory.csv").string(),
+                         {"sweep", "scheme", "environment", "y", "delay_ms", "stable"});
+  const int ny = quick ? 12 : 40, nd = quick ? 21 : 51;
+  for (const std::string scheme : {"position-position", "force-position"}) {
+    const bool pp = scheme == "position-position";
+    for (int panel = 0; panel < 3; ++panel) {
+      for (int i = 0; i < ny; ++i) {
+        const double u = static_cast<double>(i) / (ny - 1);
+        PressScenario s;
+        s.scheme = scheme;
+        s.environment = panel == 1 ? Environment::kWall : Environment::kSphere;
+        s.env_stiffness_n_per_m = panel == 1 ? 2.0e4 : 2000.0;
+        s.env_damping_ns_per_m = panel == 1 ? 50.0 : 5.0;
+        double y = 0.0;
+        if (panel < 2) {
+          y = pp ? 70.0 * std::pow(4300.0 / 70.0, u) : 0.04 * std::pow(4.2 / 0.04, u);
+          s.gain = y;
+        } else {
+          y = 400.0 * std::pow(2.5e4 / 400.0, u);
+          s.env_stiffness_n_per_m = y;
+          s.gain = pp ? 400.0 : 1.0;
+        }
+        const LoopModel model = press_loop_model(s, build_press_setup(s));
+        LoopModel free = model;
+        free.env_stiffness_n_per_m = free.env_damping_ns_per_m = 0.0;
+        const DelayCrossings cc = delay_crossings(model), cf = delay_crossings(free);
+        for (int k = 0; k < nd; ++k) {
+          const double d_ms = 205.0 * k / (nd - 1);
+          const bool st = stable_at(cc, d_ms * 1e-3) && stable_at(cf, d_ms * 1e-3);
+          grid.row_text({panel == 2 ? "stiffness" : "gain", scheme, panel == 1 ? "wall" : "sphere",
+                         teleop::format_number(y), teleop::format_number(d_ms), st ? "1" : "0"});
+        }
+      }
+    }
+  }
+  grid.flush();
+
+  // cost of one haptic cycle of the whole in-process loop (timed here, not in tests)
+  PressScenario ts;
+  ts.one_way_delay_s = 0.05;
+  ts.jitter_s = 0.002;
+  const PressSetup setup = build_press_setup(ts);
+  SimulatedDevice dev(setup.device);
+  PointSlave slave(setup.slave);
+  LoopbackSession session(setup.loop, dev, slave);
+  session.start();
+  std::vector<double> step_us;
+  step_us.reserve(10000);
+  while (true) {
+    const auto a = std::chrono::steady_clock::now();
+    if (!session.step()) break;
+    step_us.push_back(
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count());
+  }
+  const teleop::Summary st = teleop::summarize(step_us);
+
+  char json[1024];
+  std::snprintf(json, sizeof(json),
+                "{\"runs\":%zu,\"sweep_wall_s\":%.3f,\"theory_agreement\":%.4f,"
+                "\"theory_judged_runs\":%d,\"tool_scene_vs_point_agreement\":%.4f,"
+                "\"tool_scene_pairs\":%d,\"loop_step_us_p50\":%.3f,\"loop_step_us_p99\":%.3f,"
+                "\"loop_step_us_max\":%.3f}\n",
+                rows.size(), sweep_s, judged ? static_cast<double>(agree) / judged : 0.0, judged,
+                tool_pairs ? static_cast<double>(tool_agree) / tool_pairs : 0.0, tool_pairs, st.p50,
+                st.p99, st.max);
+  std::ofstream((args.out_dir / "delay_summary.json").string()) << json;
+  std::printf(
+      "delay sweep: %zu runs in %.2f s; simulation agrees with the analytic margin in "
+      "%d/%d runs; tool scene = point slave in %d/%d wall runs; loop step p50 %.2f us, "
+      "p99 %.2f us\n",
+      rows.size(), sweep_s, agree, judged, tool_agree, tool_pairs, st.p50, st.p99);
+
+  if (!args.no_chart) {
+    teleop::run_chart_script(
+        "delay_map.py",
+        {(args.out_dir / "delay_map.csv").string(), (args.out_dir / "delay_boundary.csv").string(),
+         (args.out_dir / "delay_theory.csv").string(), (args.out_dir / "delay_map.png").string()});
+  }
+  return 0;
+}
+
+}  // namespace
+
+TELEOP_REGISTER_COMMAND(bench, "delay",
+                        "delay-robustness map of the bilateral schemes vs the analytic margin",
+                        run_delay_bench);
