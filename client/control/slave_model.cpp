@@ -1,5 +1,7 @@
 #include "client/control/slave_model.hpp"
 
+#include "server/world/plane.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -54,7 +56,10 @@ void PointSlave::step(const SlaveCommand& cmd, double dt) {
     }
     if (depth <= 0.0) continue;
     const double vn = n.dot(s.velocity_mps);
-    const double mag = std::max(0.0, o.stiffness_n_per_m * depth - o.damping_ns_per_m * vn);
+    // same law as the server's tool scene: damping ramps in over the first millimetre
+    const double ramp = std::min(1.0, depth / teleop::sim::kPlaneDampingRampM);
+    const double mag =
+        std::max(0.0, o.stiffness_n_per_m * depth - ramp * o.damping_ns_per_m * vn);
     f_env += mag * n;
     if (depth > deepest) {
       deepest = depth;

@@ -5,6 +5,10 @@
 
 namespace teleop::sim {
 
+/// Penalty damping of plane contacts ramps in linearly over this depth, so the contact force is
+/// continuous at onset (no b*v step when a moving tool first touches) [m].
+inline constexpr double kPlaneDampingRampM = 1e-3;
+
 /// A rigid half-space boundary: points x with normal.dot(x) >= offset are free space.
 struct Plane {
   int id = -1;  ///< SceneObject id

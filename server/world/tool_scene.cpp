@@ -5,10 +5,6 @@
 
 namespace teleop::sim {
 
-namespace {
-constexpr double kDampingRampDepthM = 1e-3;  // [m]
-}  // namespace
-
 void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input, double dt) {
   // hold: latch the pose once and track it with zero velocity
   if (input.hold && !state.was_holding) state.hold_position_m = state.position_m;
@@ -36,7 +32,7 @@ void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input,
     const double depth = -gap;
     const double vn = pl.normal.dot(state.velocity_mps);
     // damping ramps in over the first millimetre so the force is continuous at contact onset
-    const double ramp = std::min(1.0, depth / kDampingRampDepthM);
+    const double ramp = std::min(1.0, depth / kPlaneDampingRampM);
     const double mag =
         std::max(0.0, pl.stiffness_n_per_m * depth - ramp * pl.damping_ns_per_m * vn);
     f_contact += mag * pl.normal;
