@@ -391,3 +391,47 @@ TEST(RobotSim, StepsOnAnotherThreadThanTheBuilder) {
 
 }  // namespace
 }  // namespace teleop::sim::robot
+
+namespace teleop::sim::robot {
+namespace {
+
+/// Lowest world z of any corner of link boxes [first, last) at frames f [m].
+double lowest_box_corner_z(const RobotModel& m, const Frames& f, int first, int last) {
+  double lo = 1e9;
+  for (int i = first; i < last; ++i) {
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d s((c & 1) ? 0.5 : -0.5, (c & 2) ? 0.5 : -0.5, (c & 4) ? 0.5 : -0.5);
+      const Eigen::Vector3d corner =
+          m.links[i].box_center_m + s.cwiseProduct(m.links[i].box_size_m);
+      lo = std::min(lo, (f.T[i + 1] * corner).z());
+    }
+  }
+  return lo;
+}
+
+TEST(RobotSim, LinksCannotPassThroughTheFloor) {
+  // a joint goal that would put the wrist box 7 cm under the floor (tool folded sideways)
+  const RobotModel m = testing::puma();
+  JointVector goal = m.q_home;
+  goal(1) = -40.0 * M_PI / 180.0;
+  goal(2) = -150.0 * M_PI / 180.0;
+  goal(4) = -90.0 * M_PI / 180.0;
+  Frames fg;
+  forward_kinematics(m, goal, fg);
+  ASSERT_LT(lowest_box_corner_z(m, fg, 0, 5), -0.05);  // the goal really is under the floor
+
+  RobotSim sim(m, default_robot_planes());
+  RobotInput in;
+  in.mode = ControlMode::kJointTarget;
+  in.target_q = goal;
+  run(sim, in, 3.0);
+  const RobotState& s = sim.state();
+  EXPECT_GT(s.link_contacts, 0);
+  EXPECT_GT(s.link_contact_force_n.z(), 10.0);
+  EXPECT_GT(lowest_box_corner_z(m, s.frames, 0, m.n), -0.01);
+  EXPECT_GT(s.tip_pose.translation().z(), m.tip_radius_m - 0.01);
+  EXPECT_EQ(s.faults, 0u);
+}
+
+}  // namespace
+}  // namespace teleop::sim::robot
