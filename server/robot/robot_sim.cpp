@@ -326,6 +326,11 @@ void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
   ode_thread_init();  // the server may step on another thread than the one that built us
   const int n = model_.n;
   const double t = state_.sim_time_s;
+  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) {
+    ++state_.faults;
+    if (ev) ev->push(EventKind::kFault, Severity::kError, t, dt_s, "robot: step with bad dt");
+    return;
+  }
 
   // 1. controller: joint reference, gains and feed-forward from the measured state
   controller_update(model_, state_.controller, in, state_.q, state_.frames, dt_s, t, ev,

@@ -201,6 +201,21 @@ TEST(RobotSim, NonFiniteTargetIsIgnored) {
   EXPECT_LT((sim.state().q - m.q_home).cwiseAbs().maxCoeff(), 1e-2);
 }
 
+TEST(RobotSim, BadTimeStepIsAFaultNotACrash) {
+  const RobotModel m = testing::puma();
+  RobotSim sim(m, default_robot_planes());
+  EventQueue ev;
+  RobotInput in;
+  in.mode = ControlMode::kHold;
+  sim.step(in, 0.0, &ev);
+  sim.step(in, NAN, &ev);
+  sim.step(in, -1e-3, &ev);
+  EXPECT_EQ(sim.state().faults, 3u);
+  EXPECT_EQ(sim.state().steps, 0u);
+  EXPECT_TRUE(has_event(ev, EventKind::kFault));
+  EXPECT_TRUE(sim.state().q.allFinite());
+}
+
 TEST(RobotSim, TipPushedIntoTheFloorStopsThereAndTheContactForceBalancesThePush) {
   const RobotModel m = testing::puma_frictionless();
   const std::vector<Plane> planes = default_robot_planes();
