@@ -76,6 +76,10 @@ std::vector<Plane> default_robot_planes(double stiffness_n_per_m, double damping
 RobotSim::RobotSim(const RobotModel& model, const std::vector<Plane>& planes,
                    const RobotSimOptions& options)
     : model_(model), options_(options), planes_(planes) {
+  if (model_.n < 1 || model_.n > kMaxJoints) {
+    throw std::invalid_argument("RobotSim: the model has " + std::to_string(model_.n) +
+                                " joints; 1 to " + std::to_string(kMaxJoints) + " allowed");
+  }
   if (planes_.size() > static_cast<std::size_t>(kMaxPlanes)) {
     throw std::invalid_argument("RobotSim: " + std::to_string(planes_.size()) +
                                 " planes; at most " + std::to_string(kMaxPlanes));

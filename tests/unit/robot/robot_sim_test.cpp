@@ -201,6 +201,12 @@ TEST(RobotSim, NonFiniteTargetIsIgnored) {
   EXPECT_LT((sim.state().q - m.q_home).cwiseAbs().maxCoeff(), 1e-2);
 }
 
+TEST(RobotSim, RejectsAnEmptyModelAndTooManyPlanes) {
+  EXPECT_THROW(RobotSim(RobotModel{}, {}), std::invalid_argument);
+  const std::vector<Plane> many(RobotSim::kMaxPlanes + 1);
+  EXPECT_THROW(RobotSim(testing::puma(), many), std::invalid_argument);
+}
+
 TEST(RobotSim, BadTimeStepIsAFaultNotACrash) {
   const RobotModel m = testing::puma();
   RobotSim sim(m, default_robot_planes());
