@@ -69,6 +69,15 @@ void gravity_torque(const RobotModel& model, const Frames& frames, JointVector& 
   }
 }
 
+void link_box_poses(const RobotModel& model, const Frames& frames,
+                    std::array<Eigen::Isometry3d, kMaxJoints>& out) {
+  for (int i = 0; i < model.n; ++i) {
+    out[i].linear() = frames.T[i + 1].linear();
+    out[i].translation() = frames.T[i + 1] * model.links[i].box_center_m;
+    out[i].makeAffine();
+  }
+}
+
 Eigen::Vector3d rotation_vector(const Eigen::Matrix3d& R) {
   const Eigen::AngleAxisd aa(R);
   double angle = aa.angle();

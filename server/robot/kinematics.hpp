@@ -48,6 +48,11 @@ void gravity_torque(const RobotModel& model, const Frames& frames, JointVector& 
 Vector6d pose_error(const Eigen::Vector3d& p_d, const Eigen::Matrix3d& R_d,
                     const Eigen::Vector3d& p, const Eigen::Matrix3d& R);
 
+/// World pose of each link's box (centre and link axes) at `frames`, for drawing and for the
+/// scene description (box extents are model.links[i].box_size_m). out[i] is link i+1's box.
+void link_box_poses(const RobotModel& model, const Frames& frames,
+                    std::array<Eigen::Isometry3d, kMaxJoints>& out);
+
 /// Rotation vector (axis * angle [rad]) of a rotation matrix, robust near 0 and pi.
 Eigen::Vector3d rotation_vector(const Eigen::Matrix3d& R);
 

@@ -76,6 +76,10 @@ std::vector<Plane> default_robot_planes(double stiffness_n_per_m, double damping
 RobotSim::RobotSim(const RobotModel& model, const std::vector<Plane>& planes,
                    const RobotSimOptions& options)
     : model_(model), options_(options), planes_(planes) {
+  if (model_.n < 1 || model_.n > kMaxJoints) {
+    throw std::invalid_argument("RobotSim: the model has " + std::to_string(model_.n) +
+                                " joints; 1 to " + std::to_string(kMaxJoints) + " allowed");
+  }
   if (planes_.size() > static_cast<std::size_t>(kMaxPlanes)) {
     throw std::invalid_argument("RobotSim: " + std::to_string(planes_.size()) +
                                 " planes; at most " + std::to_string(kMaxPlanes));
@@ -326,6 +330,11 @@ void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
   ode_thread_init();  // the server may step on another thread than the one that built us
   const int n = model_.n;
   const double t = state_.sim_time_s;
+  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) {
+    ++state_.faults;
+    if (ev) ev->push(EventKind::kFault, Severity::kError, t, dt_s, "robot: step with bad dt");
+    return;
+  }
 
   // 1. controller: joint reference, gains and feed-forward from the measured state
   controller_update(model_, state_.controller, in, state_.q, state_.frames, dt_s, t, ev,

@@ -86,7 +86,8 @@ class RobotSim {
 
   /// Builds the ODE bodies, hinges and motors of `model` and a plane geom per plane; the robot
   /// starts at model.q_home. Calls dInitODE2(0) once per process.
-  /// @throws std::invalid_argument if there are more than kMaxPlanes planes.
+  /// @throws std::invalid_argument if there are more than kMaxPlanes planes or the model has
+  /// no joints (a model from load_robot_model() always has 1..kMaxJoints).
   RobotSim(const RobotModel& model, const std::vector<Plane>& planes,
            const RobotSimOptions& options = {});
   ~RobotSim();

@@ -66,21 +66,26 @@ int run_robot_bench(const teleop::CommandArgs& args) {
   };
 
   std::printf("robot step time, %d steps per case, dt = 1 ms:\n", steps);
-  for (const std::string scenario : {"free", "contact"}) {
+  // the same arm without the Coulomb friction rows (6 fewer constraint rows)
+  RobotModel no_coulomb = model;
+  for (int i = 0; i < no_coulomb.n; ++i) no_coulomb.links[i].coulomb_nm = 0.0;
+  for (const std::string scenario : {"free", "contact", "free_no_coulomb"}) {
+    const RobotModel& mdl = scenario == "free_no_coulomb" ? no_coulomb : model;
+    const std::string motion = scenario == "contact" ? "contact" : "free";
     for (const OdeStepper stepper : {OdeStepper::kWorldStep, OdeStepper::kWorldQuickStep}) {
       const std::string sname =
           stepper == OdeStepper::kWorldStep ? "dWorldStep" : "dWorldQuickStep";
       RobotSimOptions opt;
       opt.stepper = stepper;
-      RobotSim sim(model, planes, opt);
-      for (int k = 0; k < warm; ++k) sim.step(scenario_input(scenario, k, dt), dt, nullptr);
+      RobotSim sim(mdl, planes, opt);
+      for (int k = 0; k < warm; ++k) sim.step(scenario_input(motion, k, dt), dt, nullptr);
       std::vector<double> total, ode, coll;
       total.reserve(steps);
       ode.reserve(steps);
       coll.reserve(steps);
       int contact_steps = 0;
       for (int k = 0; k < steps; ++k) {
-        const RobotInput in = scenario_input(scenario, warm + k, dt);
+        const RobotInput in = scenario_input(motion, warm + k, dt);
         const double t0 = now_s();
         sim.step(in, dt, nullptr);
         total.push_back(now_s() - t0);

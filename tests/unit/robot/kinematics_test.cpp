@@ -136,6 +136,22 @@ TEST(RobotKinematics, GravityTorqueIsGradientOfPotentialEnergy) {
   }
 }
 
+TEST(RobotKinematics, LinkBoxPosesFollowTheLinkFrames) {
+  const RobotModel m = testing::puma();
+  Frames f;
+  forward_kinematics(m, m.q_home, f);
+  std::array<Eigen::Isometry3d, kMaxJoints> boxes;
+  link_box_poses(m, f, boxes);
+  for (int i = 0; i < m.n; ++i) {
+    EXPECT_LT((boxes[i].translation() - f.T[i + 1] * m.links[i].box_center_m).norm(), 1e-12);
+    EXPECT_LT((boxes[i].linear() - f.T[i + 1].linear()).norm(), 1e-12);
+  }
+  // the forearm box (link 3) lies between the elbow and the wrist centre
+  const Eigen::Vector3d elbow = f.T[2].translation(), wrist = f.T[4].translation();
+  const Eigen::Vector3d mid = 0.5 * (elbow + wrist);
+  EXPECT_LT((boxes[2].translation() - mid).norm(), 0.12);
+}
+
 TEST(RobotKinematics, KinematicsDoNotAllocate) {
   const RobotModel m = testing::puma();
   JointVector q = m.q_home;

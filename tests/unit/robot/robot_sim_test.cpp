@@ -99,6 +99,52 @@ TEST(RobotSim, PendulumSmallAnglePeriodMatchesCompoundPendulum) {
   EXPECT_NEAR(amp, 3.0 * M_PI / 180.0, 0.1 * M_PI / 180.0);
 }
 
+TEST(RobotSim, JointPdStepResponseMatchesSecondOrderSystem) {
+  // one joint, no gravity, no friction: I qdd = kp (q_ref - q) - kd qd, a mass-spring-damper
+  RobotModel m = load_robot_model(config::Node::parse(testing::kPendulumYaml).at("robot"));
+  m.gravity_mps2.setZero();
+  const double I = 0.0416667 + 2.0 * 0.25 * 0.25;  // about the pivot [kg m^2]
+  const double kp = 100.0, zeta = 0.2;
+  const double kd = 2.0 * zeta * std::sqrt(kp * I);
+  m.links[0].kp_nm_per_rad = kp;
+  m.links[0].kd_nms_per_rad = kd;
+  m.links[0].qd_max_radps = 1000.0;  // the reference jumps in one step
+  m.links[0].torque_limit_nm = 1e4;  // and its kick is not saturated
+  RobotSim sim(m, {});
+  const double q0 = sim.state().q(0), step = 0.1;
+  RobotInput in;
+  in.mode = ControlMode::kJointTarget;
+  in.target_q = JointVector::Constant(1, q0 + step);
+  // the reference jumps, so its velocity feed-forward kicks too: the loop is
+  // H(s) = (kd s + kp) / (I s^2 + kd s + kp), whose unit step response is
+  // y(t) = 1 - exp(-sigma t) (cos(wd t) - sigma / wd sin(wd t)), sigma = zeta wn
+  const double wn = std::sqrt(kp / I), sigma = zeta * wn;
+  const double wd = wn * std::sqrt(1.0 - zeta * zeta);
+  double max_dev = 0.0, peak = 0.0, peak_analytic = 0.0;
+  std::vector<double> up_crossings;
+  double prev = 0.0;
+  for (int k = 0; k < 1500; ++k) {
+    sim.step(in, kDt, nullptr);
+    const double t = sim.state().sim_time_s;
+    const double x = (sim.state().q(0) - q0) / step;  // normalised response
+    const double y =
+        1.0 - std::exp(-sigma * t) * (std::cos(wd * t) - sigma / wd * std::sin(wd * t));
+    max_dev = std::max(max_dev, std::abs(x - y));
+    peak = std::max(peak, x);
+    peak_analytic = std::max(peak_analytic, y);
+    if (prev < 1.0 && x >= 1.0) up_crossings.push_back(t);
+    prev = x;
+  }
+  std::printf("PD step: peak %.4f (analytic %.4f), max deviation %.4f of the step\n", peak,
+              peak_analytic, max_dev);
+  EXPECT_LT(max_dev, 0.03);
+  ASSERT_GE(up_crossings.size(), 3u);
+  const double Td = (up_crossings.back() - up_crossings.front()) / (up_crossings.size() - 1);
+  EXPECT_NEAR(Td, 2.0 * M_PI / wd, 0.02 * 2.0 * M_PI / wd);
+  // settles on the target
+  EXPECT_NEAR(sim.state().q(0), q0 + step, 1e-3);
+}
+
 TEST(RobotSim, GravityCompensationAloneHoldsTheArmStill) {
   const RobotModel m = testing::puma_frictionless();
   RobotSim sim(m, {});
@@ -199,6 +245,27 @@ TEST(RobotSim, NonFiniteTargetIsIgnored) {
   run(sim, in, 0.2);
   EXPECT_TRUE(sim.state().q.allFinite());
   EXPECT_LT((sim.state().q - m.q_home).cwiseAbs().maxCoeff(), 1e-2);
+}
+
+TEST(RobotSim, RejectsAnEmptyModelAndTooManyPlanes) {
+  EXPECT_THROW(RobotSim(RobotModel{}, {}), std::invalid_argument);
+  const std::vector<Plane> many(RobotSim::kMaxPlanes + 1);
+  EXPECT_THROW(RobotSim(testing::puma(), many), std::invalid_argument);
+}
+
+TEST(RobotSim, BadTimeStepIsAFaultNotACrash) {
+  const RobotModel m = testing::puma();
+  RobotSim sim(m, default_robot_planes());
+  EventQueue ev;
+  RobotInput in;
+  in.mode = ControlMode::kHold;
+  sim.step(in, 0.0, &ev);
+  sim.step(in, NAN, &ev);
+  sim.step(in, -1e-3, &ev);
+  EXPECT_EQ(sim.state().faults, 3u);
+  EXPECT_EQ(sim.state().steps, 0u);
+  EXPECT_TRUE(has_event(ev, EventKind::kFault));
+  EXPECT_TRUE(sim.state().q.allFinite());
 }
 
 TEST(RobotSim, TipPushedIntoTheFloorStopsThereAndTheContactForceBalancesThePush) {
@@ -387,6 +454,50 @@ TEST(RobotSim, StepsOnAnotherThreadThanTheBuilder) {
   worker.join();
   EXPECT_EQ(sim.state().steps, 200u);
   EXPECT_LT((sim.state().q - m.q_home).cwiseAbs().maxCoeff(), 1e-3);
+}
+
+}  // namespace
+}  // namespace teleop::sim::robot
+
+namespace teleop::sim::robot {
+namespace {
+
+/// Lowest world z of any corner of link boxes [first, last) at frames f [m].
+double lowest_box_corner_z(const RobotModel& m, const Frames& f, int first, int last) {
+  double lo = 1e9;
+  for (int i = first; i < last; ++i) {
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d s((c & 1) ? 0.5 : -0.5, (c & 2) ? 0.5 : -0.5, (c & 4) ? 0.5 : -0.5);
+      const Eigen::Vector3d corner =
+          m.links[i].box_center_m + s.cwiseProduct(m.links[i].box_size_m);
+      lo = std::min(lo, (f.T[i + 1] * corner).z());
+    }
+  }
+  return lo;
+}
+
+TEST(RobotSim, LinksCannotPassThroughTheFloor) {
+  // a joint goal that would put the wrist box 7 cm under the floor (tool folded sideways)
+  const RobotModel m = testing::puma();
+  JointVector goal = m.q_home;
+  goal(1) = -40.0 * M_PI / 180.0;
+  goal(2) = -150.0 * M_PI / 180.0;
+  goal(4) = -90.0 * M_PI / 180.0;
+  Frames fg;
+  forward_kinematics(m, goal, fg);
+  ASSERT_LT(lowest_box_corner_z(m, fg, 0, 5), -0.05);  // the goal really is under the floor
+
+  RobotSim sim(m, default_robot_planes());
+  RobotInput in;
+  in.mode = ControlMode::kJointTarget;
+  in.target_q = goal;
+  run(sim, in, 3.0);
+  const RobotState& s = sim.state();
+  EXPECT_GT(s.link_contacts, 0);
+  EXPECT_GT(s.link_contact_force_n.z(), 10.0);
+  EXPECT_GT(lowest_box_corner_z(m, s.frames, 0, m.n), -0.01);
+  EXPECT_GT(s.tip_pose.translation().z(), m.tip_radius_m - 0.01);
+  EXPECT_EQ(s.faults, 0u);
 }
 
 }  // namespace
