@@ -1,41 +1,98 @@
-// teleop_master: the master-side client: haptic loop, bilateral control, round-trip
-// measurement, over DDS.
+// teleop_master: the master-side client: a haptic device (simulated by default), a bilateral
+// controller (position-position or force-position), an injected delay channel in both
+// directions, metrics, a safety layer, over DDS.
 //
-//   teleop_master [--duration 10] [--samples N] [--rate 1000] [--domain D] [--profile P]
-//                 [--log FILE.csv] [--summary-json FILE] [--motion circle|press|hold]
+//   teleop_master [--scheme position-position|force-position] [--script press-slip]
+//                 [--delay 50ms --jitter 5ms --jitter-dist uniform|normal --reorder
+//                  --loss 1% --burst-loss P_GB,P_BG --seed N] [--config master.yaml]
+//                 [--duration S] [--samples N] [--domain D] [--profile P]
+//                 [--log FILE.csv] [--summary-json FILE]
 //
-// Exit status: 0 session done, 2 bad command line, 3 no server found, 1 runtime failure.
+// Exit status: 0 session done, 2 bad command line or config, 3 no server, 1 runtime failure.
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <optional>
+#include <sstream>
 
 #include "client/node/master_node.hpp"
 #include "common/config/config.hpp"
 #include "common/dds/participant.hpp"
+
+namespace {
+
+Eigen::Vector3d parse_point(const std::string& flag, const std::string& text) {
+  Eigen::Vector3d p;
+  char c1 = 0, c2 = 0;
+  std::istringstream in(text);
+  if (!(in >> p.x() >> c1 >> p.y() >> c2 >> p.z()) || c1 != ',' || c2 != ',' || !p.allFinite()) {
+    throw teleop::config::ConfigError("command line: " + flag + " '" + text +
+                                      "' is not a point 'x,y,z' in metres");
+  }
+  return p;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"teleop_master: master-side client of the teleoperation system"};
   teleop::master::MasterOptions o;
   std::optional<int> domain;
   std::optional<std::string> profile;
-  app.add_option("--duration", o.duration_s, "session length [s], 0-1e6 (0 = no limit)")
-      ->capture_default_str();
-  app.add_option("--samples", o.samples, "stop after N commands (0 = no limit)");
+  std::string config_file;
+  std::optional<std::string> contact_point;
+  std::optional<double> kps, kpm, bm, kf, alpha, beta, max_force;
+  std::optional<std::string> delay, jitter, jitter_dist, loss, burst_loss;
+  std::optional<std::uint64_t> seed;
+  bool reorder = false;
+  std::optional<double> link_timeout;
+  app.add_option("--duration", o.duration_s,
+                 "session length after homing [s], 0-1e6 (0 = the script's length + 1 s)");
+  app.add_option("--samples", o.samples, "stop after N haptic cycles (0 = no limit)");
   app.add_option("--rate", o.rate_hz, "haptic loop rate [Hz], 10-20000")->capture_default_str();
   app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
-  app.add_option("--log", o.log_csv, "per-cycle CSV log");
-  app.add_option("--summary-json", o.summary_json, "JSON summary at exit");
-  app.add_option("--motion", o.motion, "scripted device motion")
-      ->check(CLI::IsMember({"circle", "press", "hold"}))
+  app.add_option("--config", config_file,
+                 "YAML with `controller:`, `delay:` (both directions) mappings; flags win");
+  app.add_option("--scheme", o.controller.scheme, "bilateral control scheme")
+      ->check(CLI::IsMember({"position-position", "force-position"}))
+      ->capture_default_str();
+  app.add_option("--device", o.device, "haptic device")
+      ->check(CLI::IsMember({"simulated", "replay", "external"}))
+      ->capture_default_str();
+  app.add_option("--replay", o.replay_file, "CSV trajectory for --device replay");
+  app.add_option("--script", o.script, "operator script of the simulated device")
+      ->check(CLI::IsMember({"hold", "line", "circle", "step", "press-slip"}))
+      ->capture_default_str();
+  app.add_option("--press-depth", o.press_depth_m, "press-slip depth below the surface [m]")
+      ->capture_default_str();
+  app.add_option("--tremor", o.tremor_m, "operator tremor amplitude [m]");
+  app.add_option("--contact-point", contact_point,
+                 "slave point 'x,y,z' [m] of the master origin (default: top of the first "
+                 "deformable body, else the floor under the tip)");
+  app.add_option("--kps", kps, "slave position gain K_ps [N/m]");
+  app.add_option("--kpm", kpm, "master position gain K_pm [N/m] (0 = transparent choice)");
+  app.add_option("--bm", bm, "master damping B_m [N s/m]");
+  app.add_option("--force-gain", kf, "force-position reflection gain K_f [-]");
+  app.add_option("--position-scale", alpha, "slave metres per master metre [-]");
+  app.add_option("--force-scale", beta, "master newtons per slave newton [-]");
+  app.add_option("--max-force", max_force, "device force saturation [N] (0 = the spec's)");
+  app.add_option("--delay", delay, "one-way injected delay, each direction (e.g. 50ms)");
+  app.add_option("--jitter", jitter, "jitter scale (e.g. 5ms)");
+  app.add_option("--jitter-dist", jitter_dist, "uniform | normal");
+  app.add_flag("--reorder", reorder, "let jittered samples overtake each other");
+  app.add_option("--loss", loss, "Bernoulli loss probability (e.g. 1%)");
+  app.add_option("--burst-loss", burst_loss, "Gilbert-Elliott P_GB,P_BG (e.g. 0.01,0.2)");
+  app.add_option("--seed", seed, "random seed of the channels (backward uses seed + 1)");
+  app.add_option("--homing", o.homing_s, "time to bring the slave to the script start [s]")
       ->capture_default_str();
   app.add_option("--wait-server", o.wait_server_s, "wait for the server this long [s]")
       ->capture_default_str();
-  app.add_option("--link-timeout", o.link_timeout_s,
-                 "no SlaveState for this long fades the force to zero [s], 0.001-10")
-      ->capture_default_str();
-  app.add_flag("--quiet", o.quiet, "print only warnings, errors and nothing else");
+  app.add_option("--link-timeout", link_timeout,
+                 "no SlaveState for this long fades the force to zero [s], 0.001-10");
+  app.add_option("--log", o.log_csv, "per-cycle CSV log");
+  app.add_option("--summary-json", o.summary_json, "JSON summary at exit");
+  app.add_flag("--quiet", o.quiet, "print only warnings and errors");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -51,10 +108,66 @@ int main(int argc, char** argv) {
     check_flag("--duration", o.duration_s, 0.0, 1e6);
     check_flag("--rate", o.rate_hz, 10.0, 20000.0);
     check_flag("--wait-server", o.wait_server_s, 0.0, 3600.0);
-    check_flag("--link-timeout", o.link_timeout_s, 0.001, 10.0);
-    if (o.duration_s == 0 && o.samples == 0) {
-      std::cerr << "teleop_master: note: no --duration or --samples: runs until SIGINT\n";
+    check_flag("--homing", o.homing_s, 0.0, 60.0);
+    check_flag("--press-depth", o.press_depth_m, 0.0, 0.2);
+    check_flag("--tremor", o.tremor_m, 0.0, 0.01);
+    if (o.device == "replay" && o.replay_file.empty()) {
+      throw teleop::config::ConfigError("command line: --device replay needs --replay FILE.csv");
     }
+    // YAML first, flags on top
+    if (!config_file.empty()) {
+      const auto root = teleop::config::Node::load_file(config_file);
+      root.reject_unknown_keys({"controller", "delay", "forward_delay", "backward_delay"});
+      const std::string scheme = o.controller.scheme;
+      if (root.has("controller")) {
+        o.controller = teleop::master::controller_params_from_yaml(root.at("controller"));
+      }
+      if (app.count("--scheme")) o.controller.scheme = scheme;
+      if (root.has("delay")) {
+        o.forward = teleop::master::delay_config_from_yaml(root.at("delay"));
+        o.backward = o.forward;
+        o.backward.seed = o.forward.seed + 1;
+      }
+      if (root.has("forward_delay")) {
+        o.forward = teleop::master::delay_config_from_yaml(root.at("forward_delay"));
+      }
+      if (root.has("backward_delay")) {
+        o.backward = teleop::master::delay_config_from_yaml(root.at("backward_delay"));
+      }
+    }
+    if (kps) o.controller.slave_stiffness_n_per_m = *kps;
+    if (kpm) o.controller.master_stiffness_n_per_m = *kpm;
+    if (bm) o.controller.master_damping_ns_per_m = *bm;
+    if (kf) o.controller.force_gain = *kf;
+    if (alpha) o.controller.workspace.position_scale = *alpha;
+    if (beta) o.controller.workspace.force_scale = *beta;
+    if (max_force) o.controller.max_force_n = *max_force;
+    o.controller.validate();
+    std::vector<std::string> dflags;
+    auto add = [&](const char* f, const std::optional<std::string>& v) {
+      if (v) {
+        dflags.push_back(f);
+        dflags.push_back(*v);
+      }
+    };
+    add("--delay", delay);
+    add("--jitter", jitter);
+    add("--jitter-dist", jitter_dist);
+    add("--loss", loss);
+    add("--burst-loss", burst_loss);
+    if (seed) add("--seed", std::to_string(*seed));
+    if (reorder) dflags.push_back("--reorder");
+    if (!dflags.empty()) {
+      teleop::master::parse_delay_flags(o.forward, dflags);
+      teleop::master::parse_delay_flags(o.backward, dflags);
+      o.backward.seed = o.forward.seed + 1;
+    }
+    if (contact_point) {
+      o.contact_point_m = parse_point("--contact-point", *contact_point);
+      o.has_contact_point = true;
+    }
+    if (link_timeout)
+      o.safety.link_timeout_s = check_flag("--link-timeout", *link_timeout, 0.001, 10.0);
     teleop::master::MasterNode node(o);
     return node.run();
   } catch (const teleop::config::ConfigError& e) {

@@ -1,30 +1,50 @@
 #pragma once
-// The master's DDS node: a fixed-rate haptic loop that reads the device, writes
-// MasterCommand, reads the newest SlaveState, measures the round trip on its own clock
-// (SlaveState echoes the command's seq and send time), renders the force and writes the
-// device. When SlaveState stops arriving the rendered force fades to zero.
+// The master's DDS node: a fixed-rate haptic loop.
+//
+//   each cycle (1 kHz):  device.read -> controller.update (newest delayed SlaveState)
+//                        -> safety.filter -> device.write -> forward delay channel
+//                        -> MasterCommand writer;   SlaveState reader -> backward channel
+//
+// Before the operator's script starts, a homing phase brings the slave smoothly from where
+// it is to the script's start (no force rendered). The round trip is measured on the master's
+// own clock: SlaveState echoes the command's seq and send time, stamped when the command
+// entered the forward channel, so it includes both injected delays.
 #include <memory>
 #include <string>
 
+#include "client/control/bilateral_controller.hpp"
+#include "client/metrics/safety.hpp"
+#include "client/net/delay_config.hpp"
 #include "common/dds/participant.hpp"
 
 namespace teleop::master {
 
 struct MasterOptions {
   dds::ParticipantOptions dds;
-  double rate_hz = 1000.0;        ///< haptic loop rate [Hz]
-  double duration_s = 10.0;       ///< stop after this long [s] (0 = no limit)
-  std::uint64_t samples = 0;      ///< stop after this many commands (0 = no limit)
-  double wait_server_s = 15.0;    ///< wait this long for the server before starting [s]
-  double link_timeout_s = 0.1;    ///< no SlaveState for this long: link lost [s]
-  double force_fade_s = 0.05;     ///< force fades to zero over this time on link loss [s]
-  double state_rate_hz = 100.0;   ///< MasterState publication rate [Hz]
-  double drain_s = 0.3;           ///< after the last command, keep reading this long [s]
-  std::string motion = "circle";  ///< scripted device motion: circle | press | hold
-  double force_scale = 1.0;       ///< rendered force = force_scale * environment force
-  double max_force_n = 10.0;      ///< device force saturation [N]
-  std::string log_csv;            ///< per-cycle CSV log (optional)
-  std::string summary_json;       ///< JSON summary at exit (optional)
+  double rate_hz = 1000.0;       ///< haptic loop rate [Hz]
+  double duration_s = 0.0;       ///< stop after this long [s]; 0 = the script's length + 1 s
+  std::uint64_t samples = 0;     ///< stop after this many haptic cycles (0 = no limit)
+  double wait_server_s = 15.0;   ///< wait this long for the server before starting [s]
+  double homing_s = 1.5;         ///< time to bring the slave to the script start [s]
+  double state_rate_hz = 100.0;  ///< MasterState publication rate [Hz]
+  double drain_s = 0.3;          ///< after the last command, keep reading this long [s]
+
+  // device
+  std::string device = "simulated";   ///< simulated | replay | external
+  std::string replay_file;            ///< CSV for the replay device
+  std::string script = "press-slip";  ///< operator script: hold|line|circle|step|press-slip
+  double press_depth_m = 0.02;        ///< press-slip: intended depth below the surface [m]
+  double tremor_m = 0.0;              ///< operator tremor amplitude [m]
+  bool has_contact_point = false;     ///< contact_point_m given on the command line
+  Eigen::Vector3d contact_point_m = Eigen::Vector3d::Zero();  ///< slave point of master origin
+
+  ControllerParams controller;  ///< scheme, gains, workspace map
+  DelayConfig forward;          ///< master -> slave injected channel
+  DelayConfig backward;         ///< slave -> master injected channel
+  SafetyParams safety;
+
+  std::string log_csv;       ///< per-cycle CSV log (optional)
+  std::string summary_json;  ///< JSON summary at exit (optional)
   bool quiet = false;
 };
 

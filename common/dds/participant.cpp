@@ -166,6 +166,12 @@ void apply(Qos& q, TopicQos qos) {
 DataWriterQos writer_qos(Publisher* pub, TopicQos qos) {
   DataWriterQos q = pub->get_default_datawriter_qos();
   apply(q, qos);
+  if (qos == TopicQos::kStream) {
+    // same-host readers may read straight from the writer's history (Fast DDS data sharing
+    // for bounded types): with depth 1 a burst of writes overwrites samples before they are
+    // taken. A best-effort volatile writer sends each sample at once, so depth costs nothing.
+    q.history().depth = 16;
+  }
   if (qos != TopicQos::kStream) {
     // short heartbeat: small reliable samples in bursts recover quickly (REFERENCE.md)
     q.reliable_writer_qos().times.heartbeatPeriod.seconds = 0;
@@ -179,6 +185,11 @@ DataWriterQos writer_qos(Publisher* pub, TopicQos qos) {
 DataReaderQos reader_qos(Subscriber* sub, TopicQos qos) {
   DataReaderQos q = sub->get_default_datareader_qos();
   apply(q, qos);
+  if (qos == TopicQos::kStream) {
+    // the writer keeps only the newest sample; the reader holds a few so that a burst arriving
+    // between two takes (e.g. from a jittered channel) is counted, not silently overwritten
+    q.history().depth = 16;
+  }
   return q;
 }
 

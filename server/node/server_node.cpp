@@ -187,6 +187,11 @@ struct ServerNode::Impl {
       o.id(view.object_id);
       o.name("deformable" + std::to_string(i));
       o.kind(OBJECT_DEFORMABLE_MESH);
+      // bounding sphere at rest: centroid and largest node distance
+      const Eigen::Vector3d centre = view.positions->rowwise().mean();
+      const double radius = (view.positions->colwise() - centre).colwise().norm().maxCoeff();
+      copy3(o.position_m(), centre);
+      o.size_m()[0] = radius;
       d.objects().push_back(o);
       MeshTopology t;
       t.object_id(view.object_id);

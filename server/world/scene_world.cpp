@@ -8,16 +8,16 @@ collision::TipContactParams load_tip_contact_params(const config::Node& node) {
   collision::TipContactParams p;
   if (!node.defined()) return p;
   node.reject_unknown_keys({"stiffness_n_per_m", "damping_ns_per_m", "damping_ramp_m",
-                            "friction_static", "friction_kinetic", "max_force_n",
-                            "patch_radius_m", "patch_blend"});
+                            "friction_static", "friction_kinetic", "max_force_n", "patch_radius_m",
+                            "patch_blend"});
   p.stiffness_n_per_m = node.number_or("stiffness_n_per_m", p.stiffness_n_per_m, 1.0, 1e7);
   p.damping_ns_per_m = node.number_or("damping_ns_per_m", p.damping_ns_per_m, 0.0, 1e5);
   p.damping_ramp_m = node.number_or("damping_ramp_m", p.damping_ramp_m, 0.0, 0.1);
   p.friction_static = node.number_or("friction_static", p.friction_static, 0.0, 5.0);
   p.friction_kinetic = node.number_or("friction_kinetic", p.friction_kinetic, 0.0, 5.0);
   if (p.friction_kinetic > p.friction_static) {
-    node.fail("friction_kinetic", "must not exceed friction_static (" +
-                                      std::to_string(p.friction_static) + ")");
+    node.fail("friction_kinetic",
+              "must not exceed friction_static (" + std::to_string(p.friction_static) + ")");
   }
   p.max_force_n = node.number_or("max_force_n", p.max_force_n, 0.0, 1e5);
   p.patch_radius_m = node.number_or("patch_radius_m", p.patch_radius_m, 0.0, 1.0);
@@ -46,8 +46,7 @@ SceneWorld::SceneWorld(const SceneConfig& scene) : scene_(scene) {
     auto e = std::make_unique<DeformableEntry>();
     e->object_id = static_cast<int>(n.integer_or("id", next_id, 10, 99));
     next_id = e->object_id + 1;
-    const deformable::DeformableParams params =
-        deformable::load_deformable_params(n.at("body"));
+    const deformable::DeformableParams params = deformable::load_deformable_params(n.at("body"));
     e->model = deformable::make_model(deformable::make_mesh_for(params), params, scene.planes);
     e->state = deformable::make_state(e->model);
     e->contact.set_params(load_tip_contact_params(n.child("contact")));
@@ -91,10 +90,10 @@ void SceneWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) 
       if (b.state.sleeping) deformable::wake(b.state);
     }
     if (b.last.in_contact != was) {
-      events.push(b.last.in_contact ? EventKind::kContactBegin : EventKind::kContactEnd,
-                  Severity::kInfo, out_.sim_time_s, b.object_id,
-                  b.last.in_contact ? "tip touches the deformable body"
-                                    : "tip leaves the deformable body");
+      events.push(
+          b.last.in_contact ? EventKind::kContactBegin : EventKind::kContactEnd, Severity::kInfo,
+          out_.sim_time_s, b.object_id,
+          b.last.in_contact ? "tip touches the deformable body" : "tip leaves the deformable body");
     }
     const deformable::StepStatus st = deformable::step(b.model, b.state, dt_s, &events);
     if (st == deformable::StepStatus::kFaultReset) b.contact.release();

@@ -52,7 +52,8 @@ std::vector<std::string> local_addresses(const std::string& table,
 
 TEST(NetworkRules, DefaultProfileBindsOnlyToLoopback) {
   Process server(std::string(TELEOP_BINARY_DIR) + "/server/teleop_server",
-                 {"--domain", std::to_string(domains::kObservers), "--duration", "10"},
+                 {"--domain", std::to_string(domains::kObservers), "--duration", "10", "--scene",
+                  std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/tool_only.yaml"},
                  "netrules_server");
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   ASSERT_TRUE(server.running());

@@ -7,8 +7,8 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -85,10 +85,13 @@ class Process {
 
 /// Reads a number following "\"key\": " in a JSON text (flat or nested: first match wins).
 inline double json_value(const std::string& json, const std::string& key) {
-  const std::string needle = "\"" + key + "\": ";
+  const std::string needle = "\"" + key + "\":";
   const auto pos = json.find(needle);
   if (pos == std::string::npos) return std::nan("");
-  return std::stod(json.substr(pos + needle.size()));
+  std::size_t p = pos + needle.size();
+  while (p < json.size() && json[p] == ' ') ++p;
+  if (json.compare(p, 4, "null") == 0) return std::nan("");
+  return std::stod(json.substr(p));
 }
 
 /// Reads "outer": {... "inner": value ...}.
