@@ -192,6 +192,7 @@ struct DeformableState {
   // outputs of the last step
   Eigen::Matrix3Xd force;  ///< total force on each node at the start of the step [N]
   int contact_count = 0;   ///< node-plane contacts in the last step
+  int pinned_count = 0;    ///< pinned nodes in the last step
   Eigen::Vector3d plane_force_n = Eigen::Vector3d::Zero();  ///< sum of plane forces on the body
   int cg_iterations = 0;                                    ///< implicit Euler: CG iterations
   double cg_residual = 0.0;  ///< implicit Euler: final relative residual
