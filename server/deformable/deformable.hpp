@@ -210,8 +210,8 @@ struct DeformableState {
   Eigen::Matrix4Xd radial_coef;
   std::vector<int> contact_node;  ///< implicit Euler: contact list (capacity N * planes)
   Eigen::Matrix3Xd contact_normal;
-  Eigen::Matrix2Xd contact_coef;               ///< (k, c) of each contact
-  std::vector<Eigen::Matrix3d> rotation;       ///< co-rotational frame of each node
+  Eigen::Matrix4Xd contact_coef;          ///< (k, c, spring force, friction mu) of each contact
+  std::vector<Eigen::Matrix3d> rotation;  ///< co-rotational frame of each node
   std::vector<Eigen::Quaterniond> rotation_q;  ///< warm start of the polar decomposition
 };
 

@@ -15,9 +15,9 @@ using Mat3 = Eigen::Matrix3d;
 
 /// What compute_forces adds.
 struct ForceFlags {
-  bool external = true;   ///< gravity, drag, f_ext
-  bool contact = true;    ///< plane penalties and friction
-  bool jacobian = false;  ///< fill the blocks for the implicit solve
+  bool external = true;         ///< gravity, drag, f_ext
+  bool contact = true;          ///< plane penalties and friction
+  bool jacobian = false;        ///< fill the blocks for the implicit solve
   int rotation_iterations = 4;  ///< co-rotational: polar-decomposition iterations per node
 };
 
@@ -210,8 +210,11 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
     F.col(n) += fc;
   }
 
-  // node-plane penalty contact with Coulomb friction (regularised so that friction never
-  // reverses the sliding velocity within one step)
+  // node-plane penalty contact. Implicit Euler: spring, damping and (rate-limited) Coulomb
+  // friction as forces here, damping also in its matrix. Explicit/symplectic Euler: only the
+  // spring here; damping and friction are applied implicitly per node in apply_contact_impulses()
+  // (an explicit damper on a light node next to the stability limit of the membrane would not be
+  // stable).
   s.contact_count = 0;
   s.plane_force_n.setZero();
   if (flags.contact && m.plane_count > 0) {
@@ -221,9 +224,19 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
         const Plane& pl = m.planes[static_cast<std::size_t>(k)];
         const double dist = pl.normal.dot(x.col(i)) - pl.offset_m;
         if (dist >= 0.0) continue;
+        const double spring = -m.contact_k(i) * dist;
+        s.contact_node[static_cast<std::size_t>(nc)] = i;
+        s.contact_normal.col(nc) = pl.normal;
+        s.contact_coef.col(nc) << m.contact_k(i), m.contact_c(i), spring,
+            p.friction ? pl.friction : 0.0;
+        ++nc;
+        if (!flags.jacobian) {
+          F.col(i) += spring * pl.normal;
+          continue;
+        }
         const Vec3 vi = v.col(i);
         const double vn = pl.normal.dot(vi);
-        double fn = -m.contact_k(i) * dist - m.contact_c(i) * vn;
+        double fn = spring - m.contact_c(i) * vn;
         if (fn < 0.0) fn = 0.0;  // a wall pushes, never pulls
         Vec3 f = fn * pl.normal;
         if (p.friction && pl.friction > 0.0) {
@@ -236,15 +249,42 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
         }
         F.col(i) += f;
         s.plane_force_n += f;
-        if (flags.jacobian) {
-          s.contact_node[static_cast<std::size_t>(nc)] = i;
-          s.contact_normal.col(nc) = pl.normal;
-          s.contact_coef.col(nc) << m.contact_k(i), m.contact_c(i);
-        }
-        ++nc;
       }
     }
     s.contact_count = nc;
+  }
+}
+
+// Explicit and symplectic Euler: contact damping and Coulomb friction as velocity impulses,
+// after the velocity update (implicit in the damping, so stable for any damping ratio):
+//   v_n <- v_n / (1 + h c / m), never pulling (total normal impulse >= 0);
+//   tangential impulse <= mu * normal impulse, and never more than stops the sliding.
+void apply_contact_impulses(const DeformableModel& m, DeformableState& s, double h) {
+  for (int c = 0; c < s.contact_count; ++c) {
+    const int i = s.contact_node[static_cast<std::size_t>(c)];
+    if (s.pinned_count > 0 && s.pinned[static_cast<std::size_t>(i)]) continue;
+    const Vec3 nrm = s.contact_normal.col(c);
+    const double mass = m.mass_kg(i);
+    const double spring_impulse = h * s.contact_coef(2, c);
+    Vec3 vi = s.v.col(i);
+    const double vn = nrm.dot(vi);
+    double dvn = vn / (1.0 + h * s.contact_coef(1, c) / mass) - vn;
+    dvn = std::max(dvn, -spring_impulse / mass);
+    vi += dvn * nrm;
+    const double jn = spring_impulse + mass * dvn;  // >= 0
+    Vec3 impulse = jn * nrm;
+    const double mu = s.contact_coef(3, c);
+    if (mu > 0.0) {
+      const Vec3 vt = vi - nrm.dot(vi) * nrm;
+      const double st = vt.norm();
+      if (st > 1e-12) {
+        const double jt = std::min(mu * jn, mass * st);
+        vi -= (jt / (mass * st)) * vt;
+        impulse -= (jt / st) * vt;
+      }
+    }
+    s.v.col(i) = vi;
+    s.plane_force_n += impulse / h;
   }
 }
 
@@ -338,6 +378,7 @@ void integrate(const DeformableModel& m, DeformableState& s, double h) {
       if (!s.pinned[static_cast<std::size_t>(i)])
         s.v.col(i) += (h * m.inv_mass(i)) * s.work_f.col(i);
     }
+    apply_contact_impulses(m, s, h);
     if (m.has_centre) {
       s.centre_x += h * s.centre_v;
       s.centre_v += (h / m.centre_mass_kg) * s.work_f.col(n);
@@ -348,8 +389,9 @@ void integrate(const DeformableModel& m, DeformableState& s, double h) {
     for (int i = 0; i < n; ++i) {
       if (!s.pinned[static_cast<std::size_t>(i)])
         s.v.col(i) += (h * m.inv_mass(i)) * s.work_f.col(i);
-      s.x.col(i) += h * s.v.col(i);
     }
+    apply_contact_impulses(m, s, h);
+    for (int i = 0; i < n; ++i) s.x.col(i) += h * s.v.col(i);
     if (m.has_centre) {
       s.centre_v += (h / m.centre_mass_kg) * s.work_f.col(n);
       s.centre_x += h * s.centre_v;

@@ -310,7 +310,6 @@ TEST(Loads, DroppedSphereSettlesOnTheFloorAndSleeps) {
   p.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
   p.centre_m = Eigen::Vector3d(0, 0, 0.4);  // 15 cm above the floor
   p.sleep_time_s = 0.2;
-  p.mass_damping_per_s = 1.0;
   teleop::sim::Plane floor;
   floor.name = "floor";
   teleop::sim::Plane wall;
