@@ -18,7 +18,7 @@ struct ForceFlags {
   bool external = true;         ///< gravity, drag, f_ext
   bool contact = true;          ///< plane penalties and friction
   bool jacobian = false;        ///< fill the blocks for the implicit solve
-  int rotation_iterations = 4;  ///< co-rotational: polar-decomposition iterations per node
+  int rotation_iterations = 2;  ///< co-rotational: polar-decomposition iterations per node
 };
 
 // Rotational part of A (polar decomposition), warm-started from q: Mueller et al. 2016,
@@ -32,7 +32,13 @@ void extract_rotation(const Mat3& a, Eigen::Quaterniond& q, int max_iterations) 
     const Vec3 omega = num / den;
     const double w = omega.norm();
     if (!(w > 1e-9)) break;  // rotation increment below 1e-9 rad: converged
-    q = Eigen::Quaterniond(Eigen::AngleAxisd(w, omega / w)) * q;
+    if (w < 0.05) {
+      // small increment: first-order quaternion (no trigonometry), then normalised
+      const Eigen::Quaterniond dq(1.0, 0.5 * omega.x(), 0.5 * omega.y(), 0.5 * omega.z());
+      q = dq * q;
+    } else {
+      q = Eigen::Quaterniond(Eigen::AngleAxisd(w, omega / w)) * q;
+    }
     q.normalize();
   }
 }
@@ -170,10 +176,13 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
         const Mat3 r = 0.5 * (s.rotation[static_cast<std::size_t>(i)] +
                               s.rotation[static_cast<std::size_t>(j)]);
         const Vec3 u0 = m.rest_dir.col(e);
-        const Vec3 g = r.transpose() * ((x.col(j) - x.col(i)) + beta * (v.col(j) - v.col(i))) -
-                       (X.col(j) - X.col(i));
+        // hand-written 3x3 products (Eigen does not inline these mixed expressions here)
+        const Vec3 q = (x.col(j) - x.col(i)) + beta * (v.col(j) - v.col(i));
+        const Vec3 g =
+            Vec3(r.col(0).dot(q), r.col(1).dot(q), r.col(2).dot(q)) - (X.col(j) - X.col(i));
         const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
-        const Vec3 f = r * (a * g + (b * g.dot(u0)) * u0);
+        const Vec3 loc = a * g + (b * g.dot(u0)) * u0;
+        const Vec3 f = r.col(0) * loc.x() + r.col(1) * loc.y() + r.col(2) * loc.z();
         acc += f;
         F.col(j) -= f;
         if (flags.jacobian) {

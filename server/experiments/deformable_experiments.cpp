@@ -176,7 +176,8 @@ int navier_free_vertex(const teleop::CommandArgs& a) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Figs. 6-7: a vertex held 5 mm inside at all times; distance and force of a neighbour.
+// Figs. 6-7: a vertex held 5 mm inside at all times (the opposite one fixed); distance and force
+// of a neighbour.
 int navier_held_vertex(const teleop::CommandArgs& a) {
   const int level = option_int(a, "--level", a.quick ? 2 : 4, 0, 6);
   const double dt = option_double(a, "--dt", 5e-4, 1e-6, 1e-2);
@@ -197,6 +198,14 @@ int navier_held_vertex(const teleop::CommandArgs& a) {
     const double rj0 = (m.mesh.vertices.col(j) - m.rest_centre_m).norm();
     s.pinned[static_cast<std::size_t>(i)] = 1;
     s.pin_target.col(i) = m.mesh.vertices.col(i) - push * u;
+    // the opposite node is held at rest: the sphere rests on a support. (Holding only one node
+    // of a free body in zero gravity just translates the whole body by 5 mm: no dent.)
+    int bottom = 0;
+    for (int k = 1; k < m.node_count; ++k) {
+      if (m.mesh.vertices(2, k) < m.mesh.vertices(2, bottom)) bottom = k;
+    }
+    s.pinned[static_cast<std::size_t>(bottom)] = 1;
+    s.pin_target.col(bottom) = m.mesh.vertices.col(bottom);
     Eigen::Matrix3Xd f;
     const int steps = static_cast<int>(std::lround(t_end / dt));
     const int every = std::max(1, static_cast<int>(std::lround(5e-4 / dt)));
