@@ -18,12 +18,14 @@ struct ForceFlags {
   bool external = true;         ///< gravity, drag, f_ext
   bool contact = true;          ///< plane penalties and friction
   bool jacobian = false;        ///< fill the blocks for the implicit solve
-  int rotation_iterations = 2;  ///< co-rotational: polar-decomposition iterations per node
+  int rotation_iterations = 8;  ///< co-rotational: polar-decomposition iterations per node (max)
+  double rotation_tolerance_rad = 1e-7;  ///< co-rotational: stop when the increment is smaller
 };
 
 // Rotational part of A (polar decomposition), warm-started from q: Mueller et al. 2016,
 // "A robust method to extract the rotational part of deformations".
-void extract_rotation(const Mat3& a, Eigen::Quaterniond& q, int max_iterations) {
+void extract_rotation(const Mat3& a, Eigen::Quaterniond& q, int max_iterations,
+                      double tolerance_rad) {
   for (int it = 0; it < max_iterations; ++it) {
     const Mat3 r = q.toRotationMatrix();
     const Vec3 num = r.col(0).cross(a.col(0)) + r.col(1).cross(a.col(1)) + r.col(2).cross(a.col(2));
@@ -31,7 +33,7 @@ void extract_rotation(const Mat3& a, Eigen::Quaterniond& q, int max_iterations) 
         std::fabs(r.col(0).dot(a.col(0)) + r.col(1).dot(a.col(1)) + r.col(2).dot(a.col(2))) + 1e-12;
     const Vec3 omega = num / den;
     const double w = omega.norm();
-    if (!(w > 1e-9)) break;  // rotation increment below 1e-9 rad: converged
+    if (!(w > tolerance_rad)) break;  // converged
     if (w < 0.05) {
       // small increment: first-order quaternion (no trigonometry), then normalised
       const Eigen::Quaterniond dq(1.0, 0.5 * omega.x(), 0.5 * omega.y(), 0.5 * omega.z());
@@ -45,7 +47,8 @@ void extract_rotation(const Mat3& a, Eigen::Quaterniond& q, int max_iterations) 
 
 // Co-rotational frames: per node, the rotation of its one-ring (plus the direction to the
 // centroid, so that a nearly flat ring still fixes all three axes).
-void update_rotations(const DeformableModel& m, DeformableState& s, int max_iterations) {
+void update_rotations(const DeformableModel& m, DeformableState& s, int max_iterations,
+                      double tolerance_rad) {
   const Eigen::Matrix3Xd& X = m.mesh.vertices;
   const int n = m.node_count;
   Vec3 c = Vec3::Zero(), c0 = Vec3::Zero();
@@ -71,7 +74,7 @@ void update_rotations(const DeformableModel& m, DeformableState& s, int max_iter
     const Vec3 rX = Xi - c0;
     const double r2 = rX.squaredNorm();
     if (r2 > 0.0) a.noalias() += (len2 / r2) * (xi - c) * rX.transpose();
-    extract_rotation(a, s.rotation_q[static_cast<std::size_t>(i)], max_iterations);
+    extract_rotation(a, s.rotation_q[static_cast<std::size_t>(i)], max_iterations, tolerance_rad);
     s.rotation[static_cast<std::size_t>(i)] =
         s.rotation_q[static_cast<std::size_t>(i)].toRotationMatrix();
   }
@@ -163,7 +166,7 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
     }
     case ModelKind::kNavierCorotational: {
       // warm-started: a few iterations per step track the motion; a cold query converges
-      update_rotations(m, s, flags.rotation_iterations);
+      update_rotations(m, s, flags.rotation_iterations, flags.rotation_tolerance_rad);
       int cur = ne > 0 ? m.edges(0, 0) : 0;
       Vec3 acc = Vec3::Zero();
       for (int e = 0; e < ne; ++e) {
@@ -492,7 +495,8 @@ void internal_forces(const DeformableModel& m, DeformableState& s, Eigen::Matrix
   ForceFlags flags;
   flags.external = false;
   flags.contact = false;
-  flags.rotation_iterations = 64;
+  flags.rotation_iterations = 200;
+  flags.rotation_tolerance_rad = 1e-13;
   compute_forces(m, s, 1.0, flags);
   if (out.cols() != m.node_count) out.resize(3, m.node_count);
   out = s.work_f.leftCols(m.node_count);
