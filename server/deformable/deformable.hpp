@@ -107,7 +107,7 @@ struct DeformableParams {
 
   // implicit Euler's conjugate-gradient solve
   int cg_max_iterations = 60;  ///< fixed upper bound on iterations per step
-  double cg_tolerance = 1e-6;  ///< relative residual at which CG stops early
+  double cg_tolerance = 1e-4;  ///< relative residual at which CG stops early
 
   // sleeping and fault detection
   double sleep_speed_mps = 2e-4;  ///< a node slower than this is still [m/s]

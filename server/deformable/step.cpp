@@ -346,7 +346,7 @@ void apply_system(const DeformableModel& m, const DeformableState& s, const Eige
   }
 }
 
-// Jacobi preconditioner: the diagonal of M + h C + h^2 K.
+// Jacobi preconditioner: the inverse of the diagonal of M + h C + h^2 K, into s.work_diag.
 void system_diagonal(const DeformableModel& m, DeformableState& s, double h) {
   const int n = m.node_count;
   Eigen::Matrix3Xd& dg = s.work_diag;
@@ -378,6 +378,7 @@ void system_diagonal(const DeformableModel& m, DeformableState& s, double h) {
         (h * s.contact_coef(1, c) + h2 * s.contact_coef(0, c)) * nrm.cwiseProduct(nrm);
   }
   if (!m.has_centre) dg.col(n).setOnes();  // unused column: keep it well defined
+  dg = dg.cwiseInverse();                   // stored inverted: CG multiplies
 }
 
 // Integration of positions and velocities by the chosen scheme; s.work_f holds the forces.
@@ -429,7 +430,7 @@ void integrate(const DeformableModel& m, DeformableState& s, double h) {
   Eigen::Matrix3Xd& ap = s.work_ap;
   dv.setZero();
   r = b;
-  z = r.cwiseQuotient(s.work_diag);
+  z = r.cwiseProduct(s.work_diag);
   pp = z;
   double rz = (r.array() * z.array()).sum();
   const double rz0 = rz;
@@ -443,7 +444,7 @@ void integrate(const DeformableModel& m, DeformableState& s, double h) {
     const double alpha = rz / pap;
     dv += alpha * pp;
     r -= alpha * ap;
-    z = r.cwiseQuotient(s.work_diag);
+    z = r.cwiseProduct(s.work_diag);
     const double rz_new = (r.array() * z.array()).sum();
     pp = z + (rz_new / rz) * pp;
     rz = rz_new;

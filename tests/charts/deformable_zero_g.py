@@ -34,6 +34,8 @@ def main():
     ax[1, 0].set(xlabel="deformation r - r0 [mm]", ylabel="radial internal force [N]",
                  title="Fig. 16: force against deformation")
     ax[1, 1].set(xlabel="t [s]", ylabel="max shape error [mm]", title="shape recovery")
+    for a in (ax[0, 0], ax[0, 1]):
+        a.set_xlim(0, 0.08)
     for a in ax.flat:
         a.grid(True, alpha=0.3)
         a.legend(fontsize=8)

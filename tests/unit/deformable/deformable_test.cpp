@@ -406,3 +406,22 @@ TEST(Faults, NanIsDetectedAndBadInputRefused) {
 }
 
 }  // namespace
+
+namespace {
+
+// The scene files in deploy/scenes/ hold valid `deformable:` mappings that build a model.
+TEST(Scenes, SphereScenesLoad) {
+  for (const char* name : {"sphere_zero_g.yaml", "sphere_gravity.yaml", "sphere_navier.yaml"}) {
+    SCOPED_TRACE(name);
+    const auto root =
+        teleop::config::Node::load_file(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/" + name);
+    auto p = teleop::sim::deformable::load_deformable_params(root.at("deformable"));
+    p.level = 2;  // keep the test small
+    const auto m =
+        teleop::sim::deformable::make_model(teleop::sim::deformable::make_mesh_for(p), p);
+    EXPECT_EQ(m.node_count, 162);
+    EXPECT_GT(m.total_mass_kg, 1.0);
+  }
+}
+
+}  // namespace
