@@ -107,7 +107,7 @@ struct DeformableParams {
 
   // implicit Euler's conjugate-gradient solve
   int cg_max_iterations = 60;  ///< fixed upper bound on iterations per step
-  double cg_tolerance = 1e-6;  ///< relative residual at which CG stops early
+  double cg_tolerance = 1e-4;  ///< relative residual at which CG stops early
 
   // sleeping and fault detection
   double sleep_speed_mps = 2e-4;  ///< a node slower than this is still [m/s]
@@ -192,6 +192,7 @@ struct DeformableState {
   // outputs of the last step
   Eigen::Matrix3Xd force;  ///< total force on each node at the start of the step [N]
   int contact_count = 0;   ///< node-plane contacts in the last step
+  int pinned_count = 0;    ///< pinned nodes in the last step
   Eigen::Vector3d plane_force_n = Eigen::Vector3d::Zero();  ///< sum of plane forces on the body
   int cg_iterations = 0;                                    ///< implicit Euler: CG iterations
   double cg_residual = 0.0;  ///< implicit Euler: final relative residual
@@ -209,8 +210,8 @@ struct DeformableState {
   Eigen::Matrix4Xd radial_coef;
   std::vector<int> contact_node;  ///< implicit Euler: contact list (capacity N * planes)
   Eigen::Matrix3Xd contact_normal;
-  Eigen::Matrix2Xd contact_coef;               ///< (k, c) of each contact
-  std::vector<Eigen::Matrix3d> rotation;       ///< co-rotational frame of each node
+  Eigen::Matrix4Xd contact_coef;          ///< (k, c, spring force, friction mu) of each contact
+  std::vector<Eigen::Matrix3d> rotation;  ///< co-rotational frame of each node
   std::vector<Eigen::Quaterniond> rotation_q;  ///< warm start of the polar decomposition
 };
 

@@ -174,7 +174,7 @@ DeformableState make_state(const DeformableModel& m) {
   const int cap = n * std::max(m.plane_count, 1);
   s.contact_node.assign(static_cast<std::size_t>(cap), -1);
   s.contact_normal = Eigen::Matrix3Xd::Zero(3, cap);
-  s.contact_coef = Eigen::Matrix2Xd::Zero(2, cap);
+  s.contact_coef = Eigen::Matrix4Xd::Zero(4, cap);
   s.rotation.assign(static_cast<std::size_t>(n), Eigen::Matrix3d::Identity());
   s.rotation_q.assign(static_cast<std::size_t>(n), Eigen::Quaterniond::Identity());
   s.last_good_centroid = centroid(m, s);

@@ -310,7 +310,6 @@ TEST(Loads, DroppedSphereSettlesOnTheFloorAndSleeps) {
   p.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
   p.centre_m = Eigen::Vector3d(0, 0, 0.4);  // 15 cm above the floor
   p.sleep_time_s = 0.2;
-  p.mass_damping_per_s = 1.0;
   teleop::sim::Plane floor;
   floor.name = "floor";
   teleop::sim::Plane wall;
@@ -404,6 +403,25 @@ TEST(Faults, NanIsDetectedAndBadInputRefused) {
   EXPECT_EQ(step(m, s, std::nan(""), &events), StepStatus::kBadInput);
   EXPECT_EQ(events.size(), 4u);
   EXPECT_TRUE(s.x.allFinite());
+}
+
+}  // namespace
+
+namespace {
+
+// The scene files in deploy/scenes/ hold valid `deformable:` mappings that build a model.
+TEST(Scenes, SphereScenesLoad) {
+  for (const char* name : {"sphere_zero_g.yaml", "sphere_gravity.yaml", "sphere_navier.yaml"}) {
+    SCOPED_TRACE(name);
+    const auto root =
+        teleop::config::Node::load_file(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/" + name);
+    auto p = teleop::sim::deformable::load_deformable_params(root.at("deformable"));
+    p.level = 2;  // keep the test small
+    const auto m =
+        teleop::sim::deformable::make_model(teleop::sim::deformable::make_mesh_for(p), p);
+    EXPECT_EQ(m.node_count, 162);
+    EXPECT_GT(m.total_mass_kg, 1.0);
+  }
 }
 
 }  // namespace
