@@ -26,11 +26,9 @@ void TipMeshContact::reset(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xi& tr
 }
 
 Eigen::Vector3d TipMeshContact::anchor_position(const Eigen::Matrix3Xd& x) const {
-  Eigen::Vector3d a = patch_offset_m_;
-  for (int i = 0; i < patch_size_; ++i) {
-    a += patch_w_[static_cast<std::size_t>(i)] * x.col(patch_node_[static_cast<std::size_t>(i)]);
-  }
-  return a;
+  // the exact surface point: barycentric on the anchor triangle
+  const Eigen::Matrix3Xi& t = topo_.triangles();
+  return bary_[0] * x.col(t(0, tri_)) + bary_[1] * x.col(t(1, tri_)) + bary_[2] * x.col(t(2, tri_));
 }
 
 void TipMeshContact::set_anchor(const Eigen::Matrix3Xd& x, int tri, const Eigen::Vector3d& bary) {
@@ -78,9 +76,6 @@ void TipMeshContact::set_anchor(const Eigen::Matrix3Xd& x, int tri, const Eigen:
   const double bb = ksum > 0.0 ? 1.0 - blend : 1.0;
   for (int i = 0; i < patch_size_; ++i) patch_w_[static_cast<std::size_t>(i)] *= kb;
   for (int k = 0; k < 3; ++k) patch_w_[static_cast<std::size_t>(k)] += bb * bary[k];
-  // the offset makes the anchor start exactly at the surface point s
-  patch_offset_m_.setZero();
-  patch_offset_m_ = s - anchor_position(x);
 }
 
 bool TipMeshContact::inside(const Eigen::Vector3d& p, const Eigen::Matrix3Xd& x) const {

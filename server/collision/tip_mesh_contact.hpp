@@ -24,14 +24,14 @@
 // (the proxy alone on a coarse mesh between nodes, on a thin sheet or with the centre
 // through the surface). Friction always acts through the proxy.
 //
-// The anchor is carried by a patch of nodes: a = sum_i w_i x_i + delta, with weights w_i
-// (sum 1) fixed while the anchor stays put (a blend of the anchor triangle's barycentric
-// weights and a smooth kernel over its one-ring) and delta chosen so a starts exactly on the
-// surface. The reaction -w_i F goes to node i: the node forces sum to minus the tip force
-// (momentum is conserved) and, the weights being the gradient of a, the spring does the same
-// work on the nodes as on the tip (no energy is invented). Spreading the load over the patch
-// rather than three vertices is what keeps an explicit deformable step stable with a stiff
-// contact (the effective mass is the patch's) and avoids a crease under a point load.
+// The anchor is the surface point (anchor triangle + barycentric weights), so it moves with
+// the deforming surface. The proxy's reaction is spread over a patch of nodes with weights
+// w_i (sum 1): a blend of the anchor's barycentric weights and a smooth kernel over the
+// anchor triangle's one-ring, so the node forces sum to exactly minus the tip force
+// (momentum is conserved). Spreading the load over the patch rather than three vertices
+// keeps an explicit deformable step stable with a stiff contact (the effective mass is the
+// patch's) and avoids a crease under a point load; with patch_blend = 0 the weights are the
+// barycentric ones (the paper's three-vertex push, exactly energy-consistent).
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
@@ -160,7 +160,6 @@ class TipMeshContact {
   int patch_size_ = 0;
   std::array<int, kMaxPatch> patch_node_{};
   std::array<double, kMaxPatch> patch_w_{};
-  Eigen::Vector3d patch_offset_m_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d anchor_prev_m_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d entry_point_m_ = Eigen::Vector3d::Zero();
   double side_ = 1.0;  ///< +1: outward normal is free space (always, for a closed mesh)

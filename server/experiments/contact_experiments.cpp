@@ -66,7 +66,7 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
   teleop::CsvWriter csv(
       (args.out_dir / "contact_force_curve.csv").string(),
       {"speed_mps", "phase", "t_s", "tip_z_m", "deformation_m", "surface_deflection_m",
-       "penetration_m", "force_n", "force_z_n", "in_contact"});
+       "penetration_m", "force_n", "force_z_n", "in_contact", "node_contacts", "triangle"});
   teleop::CsvWriter fits((args.out_dir / "contact_force_fit.csv").string(),
                          {"speed_mps", "k_lin_n_per_m", "rms_lin_n", "c_hertz_n_per_m1p5",
                           "estar_pa", "rms_hertz_n", "peak_force_n", "faults"});
@@ -112,7 +112,8 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
       if (res.in_contact || phase > 0 || !std::isnan(z_touch)) {
         csv.row({speed, static_cast<double>(phase), t, tip.z(), deformation, deflection,
                  res.penetration_m, res.force_on_tip_n.norm(), res.force_on_tip_n.z(),
-                 res.in_contact ? 1.0 : 0.0});
+                 res.in_contact ? 1.0 : 0.0, static_cast<double>(res.node_contacts),
+                 static_cast<double>(res.triangle)});
       }
       if (phase == 0 && res.in_contact) {
         xs.push_back(deformation);
