@@ -39,7 +39,7 @@ class AabbTree {
  public:
   /// Build options.
   struct Options {
-    int max_leaf_triangles = 4;  ///< triangles per leaf (1..8)
+    int max_leaf_triangles = 8;  ///< triangles per leaf (1..8)
     double rebuild_ratio = 1.5;  ///< rebuild when quality_ratio() exceeds this [-]
   };
 
