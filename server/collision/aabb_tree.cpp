@@ -24,9 +24,12 @@ void AabbTree::build(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xi& tris) {
   tri_index_.resize(n);
   for (std::size_t i = 0; i < n; ++i) tri_index_[i] = static_cast<std::int32_t>(i);
   tri_verts_.resize(3 * n);
+  leaf_verts_.resize(3 * n);
   centroids_.resize(3, static_cast<Eigen::Index>(n));
   nodes_.assign(std::max<std::size_t>(1, 2 * n), Node{});
   build_stack_.assign(2 * kMaxDepth + 8, {0, 0, 0, 0});
+  leaves_.reserve(n);
+  internal_reverse_.reserve(n);
   rebuild_count_ = 0;
   build_recursive_free(x);
   refit(x);
@@ -103,10 +106,34 @@ void AabbTree::build_recursive_free(const Eigen::Matrix3Xd& x) {
     build_stack_[static_cast<std::size_t>(sp++)] = {mid, e, idx, d + 1};  // right, later
     build_stack_[static_cast<std::size_t>(sp++)] = {b, mid, -1, d + 1};   // left, next
   }
+  // leaf and internal node lists for the refit sweeps
+  leaves_.clear();
+  internal_reverse_.clear();
+  for (int i = node_count_ - 1; i >= 0; --i) {
+    if (nodes_[static_cast<std::size_t>(i)].count > 0) {
+      leaves_.push_back(i);
+    } else {
+      internal_reverse_.push_back(i);
+    }
+  }
   // vertex ids in leaf order, for cache-friendly refits and leaf tests
   for (int i = 0; i < n; ++i) {
     const int t = tri_index_[static_cast<std::size_t>(i)];
     for (int k = 0; k < 3; ++k) tri_verts_[static_cast<std::size_t>(3 * i + k)] = tris_(k, t);
+  }
+  // each leaf's distinct vertices: adjacent triangles share them, so a refit reads fewer
+  int vslot = 0;
+  for (const std::int32_t li : leaves_) {
+    Node& nd = nodes_[static_cast<std::size_t>(li)];
+    nd.vfirst = vslot;
+    for (int k = 3 * nd.first; k < 3 * (nd.first + nd.count); ++k) {
+      const std::int32_t v = tri_verts_[static_cast<std::size_t>(k)];
+      bool seen = false;
+      for (int j = nd.vfirst; j < vslot; ++j)
+        seen = seen || leaf_verts_[static_cast<std::size_t>(j)] == v;
+      if (!seen) leaf_verts_[static_cast<std::size_t>(vslot++)] = v;
+    }
+    nd.vcount = vslot - nd.vfirst;
   }
 }
 
@@ -114,8 +141,8 @@ void AabbTree::compute_leaf_box(Node& nd, const Eigen::Matrix3Xd& x) const {
   const double* xs = x.data();
   double lo0 = std::numeric_limits<double>::infinity(), lo1 = lo0, lo2 = lo0;
   double hi0 = -lo0, hi1 = -lo0, hi2 = -lo0;
-  const std::int32_t* v = tri_verts_.data() + 3 * nd.first;
-  for (int k = 0; k < 3 * nd.count; ++k) {
+  const std::int32_t* v = leaf_verts_.data() + nd.vfirst;
+  for (int k = 0; k < nd.vcount; ++k) {
     const double* p = xs + 3 * static_cast<std::ptrdiff_t>(v[k]);
     lo0 = std::min(lo0, p[0]);
     hi0 = std::max(hi0, p[0]);
@@ -133,19 +160,17 @@ void AabbTree::compute_leaf_box(Node& nd, const Eigen::Matrix3Xd& x) const {
 }
 
 void AabbTree::refit(const Eigen::Matrix3Xd& x) {
-  // children always follow their parent in pre-order: a reverse sweep is bottom-up
+  // leaves first (a tight loop over the leaf list), then the internal nodes in reverse
+  // pre-order: children always follow their parent, so that sweep is bottom-up
+  for (const std::int32_t li : leaves_) compute_leaf_box(nodes_[static_cast<std::size_t>(li)], x);
   double cost = 0.0;
-  for (int i = node_count_ - 1; i >= 0; --i) {
+  for (const std::int32_t i : internal_reverse_) {
     Node& nd = nodes_[static_cast<std::size_t>(i)];
-    if (nd.count > 0) {
-      compute_leaf_box(nd, x);
-      continue;
-    }
     const Node& l = nodes_[static_cast<std::size_t>(i + 1)];
     const Node& r = nodes_[static_cast<std::size_t>(nd.right)];
     for (int k = 0; k < 3; ++k) {
-      nd.lo[k] = std::min(l.lo[k], r.lo[k]);
-      nd.hi[k] = std::max(l.hi[k], r.hi[k]);
+      nd.lo[k] = l.lo[k] < r.lo[k] ? l.lo[k] : r.lo[k];
+      nd.hi[k] = l.hi[k] > r.hi[k] ? l.hi[k] : r.hi[k];
     }
     cost += box_area(nd.lo, nd.hi);
   }

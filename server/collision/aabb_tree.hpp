@@ -39,7 +39,7 @@ class AabbTree {
  public:
   /// Build options.
   struct Options {
-    int max_leaf_triangles = 2;  ///< triangles per leaf (1..8)
+    int max_leaf_triangles = 8;  ///< triangles per leaf (1..8)
     double rebuild_ratio = 1.5;  ///< rebuild when quality_ratio() exceeds this [-]
   };
 
@@ -109,6 +109,8 @@ class AabbTree {
     std::int32_t right = -1;  ///< internal: index of the right child (left is this + 1)
     std::int32_t first = 0;   ///< leaf: first slot in tri_index_
     std::int32_t count = 0;   ///< leaf: triangle count (0 for internal nodes)
+    std::int32_t vfirst = 0;  ///< leaf: first slot in leaf_verts_ (its distinct vertices)
+    std::int32_t vcount = 0;  ///< leaf: number of distinct vertices
   };
 
   void build_recursive_free(const Eigen::Matrix3Xd& x);
@@ -119,10 +121,13 @@ class AabbTree {
   std::vector<Node> nodes_;
   int node_count_ = 0;
   int depth_ = 0;
-  std::vector<std::int32_t> tri_index_;                   ///< triangle ids in leaf order
-  std::vector<std::int32_t> tri_verts_;                   ///< 3 vertex ids per slot, in leaf order
-  Eigen::Matrix3Xi tris_;                                 ///< copy of the topology (original order)
-  Eigen::Matrix3Xd centroids_;                            ///< scratch for (re)builds
+  std::vector<std::int32_t> leaves_;            ///< leaf node ids
+  std::vector<std::int32_t> internal_reverse_;  ///< internal node ids, children first
+  std::vector<std::int32_t> tri_index_;         ///< triangle ids in leaf order
+  std::vector<std::int32_t> tri_verts_;         ///< 3 vertex ids per slot, in leaf order
+  std::vector<std::int32_t> leaf_verts_;        ///< distinct vertex ids of each leaf (for refits)
+  Eigen::Matrix3Xi tris_;                       ///< copy of the topology (original order)
+  Eigen::Matrix3Xd centroids_;                  ///< scratch for (re)builds
   std::vector<std::array<std::int32_t, 4>> build_stack_;  ///< scratch for (re)builds
   double cost_ = 0.0;
   double built_cost_ = 0.0;

@@ -15,14 +15,20 @@ void TipMeshContact::reset(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xi& tr
   in_contact_ = false;
   tri_ = -1;
   faults_ = 0;
+  const auto nv = static_cast<std::size_t>(x.cols());
+  hit_tris_.clear();
+  hit_tris_.reserve(static_cast<std::size_t>(tris.cols()));
+  stamp_.assign(nv, 0u);
+  stamp_counter_ = 0;
+  node_list_.assign(nv, -1);
+  node_force_.setZero(3, static_cast<Eigen::Index>(nv));
+  node_contacts_ = 0;
 }
 
 Eigen::Vector3d TipMeshContact::anchor_position(const Eigen::Matrix3Xd& x) const {
-  Eigen::Vector3d a = patch_offset_m_;
-  for (int i = 0; i < patch_size_; ++i) {
-    a += patch_w_[static_cast<std::size_t>(i)] * x.col(patch_node_[static_cast<std::size_t>(i)]);
-  }
-  return a;
+  // the exact surface point: barycentric on the anchor triangle
+  const Eigen::Matrix3Xi& t = topo_.triangles();
+  return bary_[0] * x.col(t(0, tri_)) + bary_[1] * x.col(t(1, tri_)) + bary_[2] * x.col(t(2, tri_));
 }
 
 void TipMeshContact::set_anchor(const Eigen::Matrix3Xd& x, int tri, const Eigen::Vector3d& bary) {
@@ -70,9 +76,6 @@ void TipMeshContact::set_anchor(const Eigen::Matrix3Xd& x, int tri, const Eigen:
   const double bb = ksum > 0.0 ? 1.0 - blend : 1.0;
   for (int i = 0; i < patch_size_; ++i) patch_w_[static_cast<std::size_t>(i)] *= kb;
   for (int k = 0; k < 3; ++k) patch_w_[static_cast<std::size_t>(k)] += bb * bary[k];
-  // the offset makes the anchor start exactly at the surface point s
-  patch_offset_m_.setZero();
-  patch_offset_m_ = s - anchor_position(x);
 }
 
 bool TipMeshContact::inside(const Eigen::Vector3d& p, const Eigen::Matrix3Xd& x) const {
@@ -243,24 +246,67 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
         params_.damping_ramp_m > 0.0 ? std::min(1.0, x_pen / params_.damping_ramp_m) : 1.0;
     return std::max(0.0, k * x_pen + params_.damping_ns_per_m * ramp * pen_rate);
   };
-  if (pen <= 0.0) {
+  double fn = pen > 0.0 ? normal_force(pen) : 0.0;
+
+  // node penalty: surface nodes inside the tip sphere, on the body side of its centre, are
+  // pushed radially out of it (area contact of a large tip on a fine mesh)
+  Eigen::Vector3d f_nodes_tip = Eigen::Vector3d::Zero();
+  node_contacts_ = 0;
+  double max_node_depth = 0.0;
+  if (params_.node_stiffness_n_per_m > 0.0 && pen < r) {  // centre outside the surface
+    tree_.query_sphere(c, r, x, hit_tris_);
+    if (++stamp_counter_ == 0) {
+      std::fill(stamp_.begin(), stamp_.end(), 0u);
+      stamp_counter_ = 1;
+    }
+    const Eigen::Matrix3Xi& tris = topo_.triangles();
+    for (const int t : hit_tris_) {
+      for (int kk = 0; kk < 3; ++kk) {
+        const int vi = tris(kk, t);
+        if (stamp_[static_cast<std::size_t>(vi)] == stamp_counter_) continue;
+        stamp_[static_cast<std::size_t>(vi)] = stamp_counter_;
+        const Eigen::Vector3d dv = x.col(vi) - c;
+        const double dist = dv.norm();
+        if (dist >= r || dist < 1e-12) continue;
+        const Eigen::Vector3d u = dv / dist;
+        if (u.dot(n) >= 0.0) continue;  // not between the tip centre and the body
+        const double depth = r - dist;
+        double rate = 0.0;  // compression rate
+        if (v != nullptr) rate = -(v->col(vi) - tip_velocity_mps).dot(u);
+        const double ramp =
+            params_.damping_ramp_m > 0.0 ? std::min(1.0, depth / params_.damping_ramp_m) : 1.0;
+        const double mag = std::max(0.0, params_.node_stiffness_n_per_m * depth +
+                                             params_.node_damping_ns_per_m * ramp * rate);
+        if (node_contacts_ < static_cast<int>(node_list_.size())) {
+          node_list_[static_cast<std::size_t>(node_contacts_)] = vi;
+          node_force_.col(node_contacts_) = mag * u;
+          ++node_contacts_;
+          f_nodes_tip -= mag * u;
+          max_node_depth = std::max(max_node_depth, depth);
+        }
+      }
+    }
+  }
+  if (pen <= 0.0 && node_contacts_ == 0) {
     // touched during the step but already clear of the surface at its end
     in_contact_ = false;
     res.began = false;
     res.ended = was_in_contact;
     return res;
   }
-  double fn = normal_force(pen);
+  const double fn_nodes = f_nodes_tip.dot(n);
+  double fn_eff = std::max(fn, fn_nodes);
+
   Eigen::Vector3d dt_vec = d - d.dot(n) * n;
   Eigen::Vector3d ft = -k * dt_vec;
   const double mu_s = std::max(0.0, params_.friction_static);
   const double mu_k = std::clamp(params_.friction_kinetic, 0.0, mu_s);
-  if (ft.norm() > mu_s * fn) {
+  if (ft.norm() > mu_s * fn_eff) {
     // kinetic friction: the proxy slides along the surface until |F_t| = mu_k F_n
     res.sliding = true;
     for (int it = 0; it < 3; ++it) {
       const double len = dt_vec.norm();
-      const double keep = k > 0.0 ? mu_k * fn / k : 0.0;
+      const double keep = k > 0.0 ? mu_k * fn_eff / k : 0.0;
       if (len <= keep + 1e-7) break;
       const Eigen::Vector3d target = a + dt_vec * (1.0 - keep / len);
       MeshClosest mc;
@@ -270,12 +316,13 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
       n = side_ * topo_.smooth_normal(x, tri_, bary_);
       d = c - a;
       pen = r - d.dot(n);
-      if (pen <= 0.0) break;
-      fn = normal_force(pen);
+      if (pen <= 0.0 && node_contacts_ == 0) break;
+      fn = pen > 0.0 ? normal_force(pen) : 0.0;
+      fn_eff = std::max(fn, fn_nodes);
       dt_vec = d - d.dot(n) * n;
       if ((a - target).norm() < 1e-9) break;
     }
-    if (pen <= 0.0) {
+    if (pen <= 0.0 && node_contacts_ == 0) {
       in_contact_ = false;
       res.ended = was_in_contact;
       res.began = false;
@@ -283,13 +330,18 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
     }
     ft = -k * dt_vec;
     const double ftn = ft.norm();
-    if (ftn > mu_k * fn && ftn > 0.0) ft *= mu_k * fn / ftn;
+    if (ftn > mu_k * fn_eff && ftn > 0.0) ft *= mu_k * fn_eff / ftn;
   }
 
-  Eigen::Vector3d f = fn * n + ft;
+  // the larger normal response acts: node penalty (area contact) or the proxy spring (a
+  // face touched between nodes, a thin sheet, or a tip through the surface)
+  const bool use_nodes = node_contacts_ > 0 && fn_nodes > fn;
+  Eigen::Vector3d f = use_nodes ? Eigen::Vector3d(f_nodes_tip + ft) : Eigen::Vector3d(fn * n + ft);
+  double scale = 1.0;
   if (params_.max_force_n > 0.0) {
     const double fm = f.norm();
-    if (fm > params_.max_force_n) f *= params_.max_force_n / fm;
+    if (fm > params_.max_force_n) scale = params_.max_force_n / fm;
+    f *= scale;
   }
   if (!f.allFinite()) {
     in_contact_ = false;
@@ -299,11 +351,20 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
     res.ended = was_in_contact;
     return res;
   }
-  // equal and opposite: the reaction goes to the patch nodes with the anchor's weights
+  // equal and opposite: node penalty forces to their nodes, the proxy's share to the patch
+  // nodes with the anchor's weights; the node forces sum to exactly -f
+  const Eigen::Vector3d f_patch = use_nodes ? Eigen::Vector3d(scale * ft) : f;
   for (int i = 0; i < patch_size_; ++i) {
     node_forces_n.col(patch_node_[static_cast<std::size_t>(i)]) -=
-        patch_w_[static_cast<std::size_t>(i)] * f;
+        patch_w_[static_cast<std::size_t>(i)] * f_patch;
   }
+  if (use_nodes) {
+    for (int i = 0; i < node_contacts_; ++i) {
+      node_forces_n.col(node_list_[static_cast<std::size_t>(i)]) += scale * node_force_.col(i);
+    }
+  }
+  res.node_contacts = use_nodes ? node_contacts_ : 0;
+  res.max_node_depth_m = max_node_depth;
 
   anchor_prev_m_ = a;
   anchor_velocity_valid_ = true;

@@ -17,17 +17,25 @@
 // (static Coulomb friction) until the tangential force exceeds mu_s * F_n, then slides
 // along the surface keeping |F_t| = mu_k * F_n ("tip slippery").
 //
-// The anchor is carried by a patch of nodes: a = sum_i w_i x_i + delta, with weights w_i
-// (sum 1) fixed while the anchor stays put (a blend of the anchor triangle's barycentric
-// weights and a smooth kernel over its one-ring) and delta chosen so a starts exactly on the
-// surface. The reaction -w_i F goes to node i: the node forces sum to minus the tip force
-// (momentum is conserved) and, the weights being the gradient of a, the spring does the same
-// work on the nodes as on the tip (no energy is invented). Spreading the load over the patch
-// rather than three vertices is what keeps an explicit deformable step stable with a stiff
-// contact (the effective mass is the patch's) and avoids a crease under a point load.
+// Area contact: a tip much larger than the triangles presses many nodes at once. Every
+// surface node inside the tip sphere (on the body side of its centre) is pushed radially out
+// of it by a penalty k_node (r - |x_i - c|), the tip taking the sum; a conservative, smooth
+// law that stays stable with an explicit body. The larger of this and the proxy spring acts
+// (the proxy alone on a coarse mesh between nodes, on a thin sheet or with the centre
+// through the surface). Friction always acts through the proxy.
+//
+// The anchor is the surface point (anchor triangle + barycentric weights), so it moves with
+// the deforming surface. The proxy's reaction is spread over a patch of nodes with weights
+// w_i (sum 1): a blend of the anchor's barycentric weights and a smooth kernel over the
+// anchor triangle's one-ring, so the node forces sum to exactly minus the tip force
+// (momentum is conserved). Spreading the load over the patch rather than three vertices
+// keeps an explicit deformable step stable with a stiff contact (the effective mass is the
+// patch's) and avoids a crease under a point load; with patch_blend = 0 the weights are the
+// barycentric ones (the paper's three-vertex push, exactly energy-consistent).
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <vector>
 
 #include "server/collision/aabb_tree.hpp"
 #include "server/collision/surface_topology.hpp"
@@ -36,13 +44,13 @@ namespace teleop::sim::collision {
 
 /// Contact law parameters (from the scene).
 struct TipContactParams {
-  double stiffness_n_per_m = 1000.0;  ///< k of F = k x [N/m]
-  double damping_ns_per_m = 1.0;      ///< normal contact damping b [N s/m]; >= k dt / 2
-                                      ///< keeps the sampled contact passive
-  double damping_ramp_m = 2.0e-4;     ///< damping grows linearly to b over this depth [m]
-  double friction_static = 0.0;       ///< Coulomb static coefficient mu_s [-]
-  double friction_kinetic = 0.0;      ///< Coulomb kinetic coefficient mu_k <= mu_s [-]
-  double max_force_n = 0.0;           ///< saturation of |F| [N]; 0 = none
+  double stiffness_n_per_m = 300.0;  ///< k of F = k x for the proxy spring [N/m]
+  double damping_ns_per_m = 1.0;     ///< normal contact damping b [N s/m]; >= k dt / 2
+                                     ///< keeps the sampled contact passive
+  double damping_ramp_m = 2.0e-4;    ///< damping grows linearly to b over this depth [m]
+  double friction_static = 0.0;      ///< Coulomb static coefficient mu_s [-]
+  double friction_kinetic = 0.0;     ///< Coulomb kinetic coefficient mu_k <= mu_s [-]
+  double max_force_n = 0.0;          ///< saturation of |F| [N]; 0 = none
   /// Radius of the node patch that shares the reaction [m] (weights fall off smoothly with
   /// distance from the anchor, over the anchor triangle and its one-ring). About the tip
   /// radius: a narrower patch than the tip digs a crease the proxy then wanders in.
@@ -50,6 +58,11 @@ struct TipContactParams {
   /// Share of the reaction spread over the patch, the rest going to the anchor triangle's
   /// corners with barycentric weights [0..1]; 0 is the paper's three-vertex push.
   double patch_blend = 0.8;
+  /// Penalty stiffness of each surface node inside the tip sphere [N/m]; 0 = the paper's
+  /// single-point proxy only. Keep k_node dt^2 / m_node well below 1 for an explicit body.
+  double node_stiffness_n_per_m = 200.0;
+  /// Damping of each node penalty (compression only, ramped in) [N s/m]; >= k_node dt / 2.
+  double node_damping_ns_per_m = 0.2;
 };
 
 /// Outcome of one contact update.
@@ -68,7 +81,9 @@ struct TipContactResult {
   double normal_force_n = 0.0;                                ///< F_n [N]
   double tangential_force_n = 0.0;                            ///< |F_t| [N]
   int triangle = -1;                                          ///< anchor triangle
-  int ccd_iterations = 0;  ///< conservative-advancement iterations used
+  int ccd_iterations = 0;         ///< conservative-advancement iterations used
+  int node_contacts = 0;          ///< nodes carrying node-penalty forces (0: proxy spring acts)
+  double max_node_depth_m = 0.0;  ///< deepest node inside the tip sphere [m]
 };
 
 /// Tip-mesh contact of one deformable object. Not thread-safe; one per object.
@@ -136,10 +151,15 @@ class TipMeshContact {
   bool in_contact_ = false;
   int tri_ = -1;
   Eigen::Vector3d bary_ = Eigen::Vector3d::Zero();
+  std::vector<int> hit_tris_;         ///< scratch: triangles near the tip
+  std::vector<std::uint32_t> stamp_;  ///< scratch: node visited marks
+  std::uint32_t stamp_counter_ = 0;
+  std::vector<int> node_list_;   ///< scratch: nodes inside the tip sphere
+  Eigen::Matrix3Xd node_force_;  ///< scratch: their penalty forces [N]
+  int node_contacts_ = 0;
   int patch_size_ = 0;
   std::array<int, kMaxPatch> patch_node_{};
   std::array<double, kMaxPatch> patch_w_{};
-  Eigen::Vector3d patch_offset_m_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d anchor_prev_m_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d entry_point_m_ = Eigen::Vector3d::Zero();
   double side_ = 1.0;  ///< +1: outward normal is free space (always, for a closed mesh)

@@ -95,7 +95,7 @@ void check_against_brute(const tc::AabbTree& tree, const tc::testing::Mesh& m, s
 
 TEST(AabbTree, RandomSoupsAgreeWithBruteForce) {
   std::mt19937 rng(42);
-  for (int leaf : {1, 2, 4}) {
+  for (int leaf : {1, 2, 4, 8}) {
     for (int n : {1, 7, 100, 1000}) {
       auto m = tc::testing::random_soup(n, 0.15, rng);
       tc::AabbTree tree(tc::AabbTree::Options{leaf, 1.5});

@@ -95,6 +95,11 @@ PressLog press_cycle(tc::TipMeshContact& contact, tc::testing::Mesh& m, ToyBody*
     // equal and opposite, every step
     EXPECT_NEAR((fn.rowwise().sum() + res.force_on_tip_n).norm(), 0.0, 1e-9);
     log.work_on_tip_j += 0.5 * (res.force_on_tip_n + f_prev).dot(now - prev);
+    if (std::getenv("TIP_DEBUG") && (res.force_on_tip_n - f_prev).norm() > 1.0) {
+      std::printf("jump at %d: z %.4f |F| %.3f -> %.3f nodes %d pen %.4f contact %d\n", i, now.z(),
+                  f_prev.norm(), res.force_on_tip_n.norm(), res.node_contacts, res.penetration_m,
+                  res.in_contact);
+    }
     log.max_force_jump_n = std::max(log.max_force_jump_n, (res.force_on_tip_n - f_prev).norm());
     log.peak_force_n = std::max(log.peak_force_n, res.force_on_tip_n.norm());
     log.peak_pen_m = std::max(log.peak_pen_m, res.penetration_m);

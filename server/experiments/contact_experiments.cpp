@@ -1,0 +1,155 @@
+// teleop_experiment contact-force-curve: the tip, moved kinematically, presses into the
+// deformable sphere (radius 0.25 m, level 4, the default mass-spring model, resting on the
+// floor under gravity) to 30 mm and is withdrawn, at several speeds. The reaction force
+// against the deformation reproduces the paper's Figs. 16-17; a linear law F = k x and the
+// Hertz law F = c x^(3/2) are fitted to the same data for comparison.
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "common/util/csv.hpp"
+#include "common/util/registry.hpp"
+#include "server/collision/tip_mesh_contact.hpp"
+#include "server/deformable/deformable.hpp"
+
+namespace {
+
+namespace tc = teleop::sim::collision;
+namespace df = teleop::sim::deformable;
+
+struct Fit {
+  double k_lin = 0, rms_lin = 0, c_hertz = 0, rms_hertz = 0;
+};
+
+Fit fit_laws(const std::vector<double>& x, const std::vector<double>& f) {
+  Fit r;
+  double sxf = 0, sxx = 0, shf = 0, shh = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double h = std::pow(x[i], 1.5);
+    sxf += x[i] * f[i];
+    sxx += x[i] * x[i];
+    shf += h * f[i];
+    shh += h * h;
+  }
+  r.k_lin = sxx > 0 ? sxf / sxx : 0;
+  r.c_hertz = shh > 0 ? shf / shh : 0;
+  double el = 0, eh = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    el += std::pow(f[i] - r.k_lin * x[i], 2);
+    eh += std::pow(f[i] - r.c_hertz * std::pow(x[i], 1.5), 2);
+  }
+  const double n = std::max<double>(1.0, static_cast<double>(x.size()));
+  r.rms_lin = std::sqrt(el / n);
+  r.rms_hertz = std::sqrt(eh / n);
+  return r;
+}
+
+int run_contact_force_curve(const teleop::CommandArgs& args) {
+  std::filesystem::create_directories(args.out_dir);
+  const double dt = 1e-3;
+  const double tip_r = 0.05;
+  const double target_depth = 0.03;
+  const std::vector<double> speeds =
+      args.quick ? std::vector<double>{0.05, 0.2} : std::vector<double>{0.01, 0.05, 0.2};
+
+  tc::TipContactParams cp;
+  cp.stiffness_n_per_m = std::stod(args.option("--stiffness", "300"));
+  cp.damping_ns_per_m = std::stod(args.option("--damping", "1"));
+  cp.friction_static = std::stod(args.option("--mu", "0.5"));
+  cp.friction_kinetic = 0.8 * cp.friction_static;
+
+  teleop::CsvWriter csv(
+      (args.out_dir / "contact_force_curve.csv").string(),
+      {"speed_mps", "phase", "t_s", "tip_z_m", "deformation_m", "surface_deflection_m",
+       "penetration_m", "force_n", "force_z_n", "in_contact", "node_contacts", "triangle"});
+  teleop::CsvWriter fits((args.out_dir / "contact_force_fit.csv").string(),
+                         {"speed_mps", "k_lin_n_per_m", "rms_lin_n", "c_hertz_n_per_m1p5",
+                          "estar_pa", "rms_hertz_n", "peak_force_n", "faults"});
+  const double r_eff = 1.0 / (1.0 / tip_r + 1.0 / 0.25);
+
+  for (const double speed : speeds) {
+    df::DeformableParams params;  // the deform module's defaults: the paper's sphere
+    params.integrator = df::parse_integrator_kind(args.option("--integrator", "implicit_euler"));
+    teleop::sim::Plane floor;
+    floor.id = 0;
+    floor.name = "floor";
+    const auto mesh = df::make_mesh_for(params);
+    const df::DeformableModel model = df::make_model(mesh, params, {floor});
+    df::DeformableState state = df::make_state(model);
+    teleop::sim::EventQueue events;
+    // settle on the floor
+    for (int i = 0; i < 1500; ++i) df::step(model, state, dt, &events);
+    double top = -1e9;
+    for (int i = 0; i < state.x.cols(); ++i) top = std::max(top, state.x(2, i));
+
+    tc::TipMeshContact contact(cp);
+    contact.reset(state.x, model.mesh.triangles);
+    Eigen::Vector3d tip(0.0, 0.0, top + tip_r + 0.005);
+    Eigen::Vector3d prev = tip;
+    double t = 0.0, z_touch = NAN;
+    int phase = 0, hold_steps = 0;
+    std::vector<double> xs, fs;
+    double peak = 0.0;
+    const int max_steps = static_cast<int>(4.0 * (target_depth + 0.02) / (speed * dt)) + 2000;
+    for (int n = 0; n < max_steps; ++n) {
+      // kinematic tip: press, hold 100 ms, withdraw
+      Eigen::Vector3d vel = Eigen::Vector3d::Zero();
+      if (phase == 0) vel.z() = -speed;
+      if (phase == 2) vel.z() = speed;
+      tip += vel * dt;
+      state.f_ext.setZero();
+      const tc::TipContactResult res =
+          contact.update(state.x, &state.v, prev, tip, tip_r, vel, dt, state.f_ext);
+      if (res.in_contact && std::isnan(z_touch)) z_touch = res.entry_point_m.z() + tip_r;
+      const double deformation = std::isnan(z_touch) ? 0.0 : std::max(0.0, z_touch - tip.z());
+      const double deflection =
+          res.in_contact ? std::max(0.0, res.entry_point_m.z() - res.contact_point_m.z()) : 0.0;
+      if (res.in_contact || phase > 0 || !std::isnan(z_touch)) {
+        csv.row({speed, static_cast<double>(phase), t, tip.z(), deformation, deflection,
+                 res.penetration_m, res.force_on_tip_n.norm(), res.force_on_tip_n.z(),
+                 res.in_contact ? 1.0 : 0.0, static_cast<double>(res.node_contacts),
+                 static_cast<double>(res.triangle)});
+      }
+      if (phase == 0 && res.in_contact) {
+        xs.push_back(deformation);
+        fs.push_back(res.force_on_tip_n.z());
+      }
+      peak = std::max(peak, res.force_on_tip_n.norm());
+      if (phase == 0 && deformation >= target_depth) phase = 1;
+      if (phase == 1 && ++hold_steps >= 100) phase = 2;
+      if (state.sleeping && res.in_contact) df::wake(state);
+      df::step(model, state, dt, &events);
+      prev = tip;
+      t += dt;
+      if (phase == 2 && !res.in_contact && tip.z() > z_touch + 0.005) break;
+    }
+    const Fit fit = fit_laws(xs, fs);
+    const double estar = fit.c_hertz / ((4.0 / 3.0) * std::sqrt(r_eff));
+    fits.row({speed, fit.k_lin, fit.rms_lin, fit.c_hertz, estar, fit.rms_hertz, peak,
+              static_cast<double>(contact.fault_count() + state.fault_count)});
+    std::printf(
+        "speed %.3f m/s: peak %.2f N; linear k = %.1f N/m (rms %.3f N); Hertz c = %.1f N/m^1.5 "
+        "(E* = %.0f Pa, rms %.3f N); closer to %s\n",
+        speed, peak, fit.k_lin, fit.rms_lin, fit.c_hertz, estar, fit.rms_hertz,
+        fit.rms_lin <= fit.rms_hertz ? "linear" : "Hertz");
+  }
+  csv.flush();
+  fits.flush();
+  if (!args.no_chart) {
+    teleop::run_chart_script("contact_force_curve.py", {args.out_dir.string()});
+  }
+  return 0;
+}
+
+}  // namespace
+
+TELEOP_REGISTER_COMMAND(experiments, "contact-force-curve",
+                        "tip pressed 30 mm into the deformable sphere and withdrawn at several "
+                        "speeds: force vs deformation (paper Figs. 16-17) with linear and Hertz "
+                        "fits",
+                        run_contact_force_curve);
