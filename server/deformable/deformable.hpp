@@ -204,8 +204,10 @@ struct DeformableState {
   // scratch (sized by make_state; never resized by step)
   Eigen::Matrix3Xd work_f;  ///< forces, 3 x (N + 1): last column is the centre node
   Eigen::Matrix3Xd work_dv, work_r, work_z, work_p, work_ap, work_diag, work_b;
-  Eigen::Matrix3Xd edge_dir;   ///< per edge direction w of the Jacobian block
-  Eigen::Matrix4Xd edge_coef;  ///< per edge (k_iso, k_dir, c_iso, c_dir) of the Jacobian
+  Eigen::VectorXd edge_scratch;  ///< per edge scalar (1 / length)
+  Eigen::VectorXd node_scratch;  ///< per node scalar (1 / distance to the centre)
+  Eigen::Matrix3Xd edge_dir;     ///< per edge direction w of the Jacobian block
+  Eigen::Matrix4Xd edge_coef;    ///< per edge (k_iso, k_dir, c_iso, c_dir) of the Jacobian
   Eigen::Matrix3Xd radial_dir;
   Eigen::Matrix4Xd radial_coef;
   std::vector<int> contact_node;  ///< implicit Euler: contact list (capacity N * planes)

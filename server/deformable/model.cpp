@@ -167,6 +167,8 @@ DeformableState make_state(const DeformableModel& m) {
                               &s.work_diag, &s.work_b}) {
     *w = Eigen::Matrix3Xd::Zero(3, n + 1);
   }
+  s.edge_scratch = Eigen::VectorXd::Zero(ne);
+  s.node_scratch = Eigen::VectorXd::Zero(n);
   s.edge_dir = Eigen::Matrix3Xd::Zero(3, ne);
   s.edge_coef = Eigen::Matrix4Xd::Zero(4, ne);
   s.radial_dir = Eigen::Matrix3Xd::Zero(3, n);
