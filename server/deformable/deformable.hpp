@@ -78,19 +78,24 @@ struct DeformableParams {
   double centre_mass_fraction = 0.3;
 
   // mass-spring model
-  double edge_stiffness_n_per_m = 40.0;  ///< each edge spring [N/m] (membrane, level invariant)
+  double edge_stiffness_n_per_m = 150.0;  ///< each edge spring [N/m] (membrane, level invariant)
   /// Radial spring of node i: k_i = this * (area of node i) [N/m per m^2 of surface]; 0 = none.
   /// Default: 1.5e5 for mass_spring (46 N/m per node at level 4), 0 for the Navier models.
   double radial_stiffness_n_per_m3 = 1.5e5;
 
   // Navier model, eq. (1)-(2)
-  double youngs_modulus_pa = 3000.0;  ///< E [Pa]
+  double youngs_modulus_pa = 6000.0;  ///< E [Pa]
   double poisson_ratio = 0.3;         ///< nu [-], in [0, 0.49]
 
   // damping
   /// Stiffness-proportional damping: every spring/edge has damper c = beta * k [s].
   double stiffness_damping_s = 5e-4;
-  double mass_damping_per_s = 0.0;  ///< drag on each node, f = -alpha m v [1/s]
+  /// Damper of each radial spring, c_i = this * k_i [s] (damps the body bouncing on its
+  /// radial springs; ~0.7 of critical for a single node at the default stiffness).
+  double radial_damping_s = 5e-3;
+  /// Drag of each node relative to the body's mean velocity, f_i = -alpha m_i (v_i - v_mean):
+  /// damps deformation (slow modes too) but not translation [1/s].
+  double mass_damping_per_s = 10.0;
 
   // loads and contact
   Eigen::Vector3d gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);  ///< [m/s^2]
@@ -102,7 +107,7 @@ struct DeformableParams {
 
   // implicit Euler's conjugate-gradient solve
   int cg_max_iterations = 60;  ///< fixed upper bound on iterations per step
-  double cg_tolerance = 1e-6;  ///< relative residual at which CG stops early
+  double cg_tolerance = 1e-4;  ///< relative residual at which CG stops early
 
   // sleeping and fault detection
   double sleep_speed_mps = 2e-4;  ///< a node slower than this is still [m/s]
@@ -187,6 +192,7 @@ struct DeformableState {
   // outputs of the last step
   Eigen::Matrix3Xd force;  ///< total force on each node at the start of the step [N]
   int contact_count = 0;   ///< node-plane contacts in the last step
+  int pinned_count = 0;    ///< pinned nodes in the last step
   Eigen::Vector3d plane_force_n = Eigen::Vector3d::Zero();  ///< sum of plane forces on the body
   int cg_iterations = 0;                                    ///< implicit Euler: CG iterations
   double cg_residual = 0.0;  ///< implicit Euler: final relative residual
@@ -198,14 +204,16 @@ struct DeformableState {
   // scratch (sized by make_state; never resized by step)
   Eigen::Matrix3Xd work_f;  ///< forces, 3 x (N + 1): last column is the centre node
   Eigen::Matrix3Xd work_dv, work_r, work_z, work_p, work_ap, work_diag, work_b;
-  Eigen::Matrix3Xd edge_dir;   ///< per edge direction w of the Jacobian block
-  Eigen::Matrix4Xd edge_coef;  ///< per edge (k_iso, k_dir, c_iso, c_dir) of the Jacobian
+  Eigen::VectorXd edge_scratch;  ///< per edge scalar (1 / length)
+  Eigen::VectorXd node_scratch;  ///< per node scalar (1 / distance to the centre)
+  Eigen::Matrix3Xd edge_dir;     ///< per edge direction w of the Jacobian block
+  Eigen::Matrix4Xd edge_coef;    ///< per edge (k_iso, k_dir, c_iso, c_dir) of the Jacobian
   Eigen::Matrix3Xd radial_dir;
   Eigen::Matrix4Xd radial_coef;
   std::vector<int> contact_node;  ///< implicit Euler: contact list (capacity N * planes)
   Eigen::Matrix3Xd contact_normal;
-  Eigen::Matrix2Xd contact_coef;               ///< (k, c) of each contact
-  std::vector<Eigen::Matrix3d> rotation;       ///< co-rotational frame of each node
+  Eigen::Matrix4Xd contact_coef;          ///< (k, c, spring force, friction mu) of each contact
+  std::vector<Eigen::Matrix3d> rotation;  ///< co-rotational frame of each node
   std::vector<Eigen::Quaterniond> rotation_q;  ///< warm start of the polar decomposition
 };
 

@@ -39,6 +39,7 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
   check_range("youngs_modulus_pa", params.youngs_modulus_pa, 1e-3, 1e12);
   check_range("poisson_ratio", params.poisson_ratio, 0.0, 0.49);
   check_range("stiffness_damping_s", params.stiffness_damping_s, 0.0, 1.0);
+  check_range("radial_damping_s", params.radial_damping_s, 0.0, 1.0);
   check_range("mass_damping_per_s", params.mass_damping_per_s, 0.0, 1e4);
   check_range("contact_frequency_rad_per_s", params.contact_frequency_rad_per_s, 0.0, 1e7);
   check_range("contact_damping_ratio", params.contact_damping_ratio, 0.0, 100.0);
@@ -166,6 +167,8 @@ DeformableState make_state(const DeformableModel& m) {
                               &s.work_diag, &s.work_b}) {
     *w = Eigen::Matrix3Xd::Zero(3, n + 1);
   }
+  s.edge_scratch = Eigen::VectorXd::Zero(ne);
+  s.node_scratch = Eigen::VectorXd::Zero(n);
   s.edge_dir = Eigen::Matrix3Xd::Zero(3, ne);
   s.edge_coef = Eigen::Matrix4Xd::Zero(4, ne);
   s.radial_dir = Eigen::Matrix3Xd::Zero(3, n);
@@ -173,7 +176,7 @@ DeformableState make_state(const DeformableModel& m) {
   const int cap = n * std::max(m.plane_count, 1);
   s.contact_node.assign(static_cast<std::size_t>(cap), -1);
   s.contact_normal = Eigen::Matrix3Xd::Zero(3, cap);
-  s.contact_coef = Eigen::Matrix2Xd::Zero(2, cap);
+  s.contact_coef = Eigen::Matrix4Xd::Zero(4, cap);
   s.rotation.assign(static_cast<std::size_t>(n), Eigen::Matrix3d::Identity());
   s.rotation_q.assign(static_cast<std::size_t>(n), Eigen::Quaterniond::Identity());
   s.last_good_centroid = centroid(m, s);

@@ -69,6 +69,7 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
                             "youngs_modulus_pa",
                             "poisson_ratio",
                             "stiffness_damping_s",
+                            "radial_damping_s",
                             "mass_damping_per_s",
                             "gravity_mps2",
                             "contact_frequency_rad_per_s",
@@ -110,6 +111,7 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   p.youngs_modulus_pa = node.number_or("youngs_modulus_pa", p.youngs_modulus_pa, 1.0, 1e10);
   p.poisson_ratio = node.number_or("poisson_ratio", p.poisson_ratio, 0.0, 0.49);
   p.stiffness_damping_s = node.number_or("stiffness_damping_s", p.stiffness_damping_s, 0.0, 1.0);
+  p.radial_damping_s = node.number_or("radial_damping_s", p.radial_damping_s, 0.0, 1.0);
   p.mass_damping_per_s = node.number_or("mass_damping_per_s", p.mass_damping_per_s, 0.0, 1e3);
   const auto g = node.numbers_or(
       "gravity_mps2", {p.gravity_mps2.x(), p.gravity_mps2.y(), p.gravity_mps2.z()}, -100.0, 100.0);

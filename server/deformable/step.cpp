@@ -15,14 +15,17 @@ using Mat3 = Eigen::Matrix3d;
 
 /// What compute_forces adds.
 struct ForceFlags {
-  bool external = true;   ///< gravity, drag, f_ext
-  bool contact = true;    ///< plane penalties and friction
-  bool jacobian = false;  ///< fill the blocks for the implicit solve
+  bool external = true;         ///< gravity, drag, f_ext
+  bool contact = true;          ///< plane penalties and friction
+  bool jacobian = false;        ///< fill the blocks for the implicit solve
+  int rotation_iterations = 8;  ///< co-rotational: polar-decomposition iterations per node (max)
+  double rotation_tolerance_rad = 1e-7;  ///< co-rotational: stop when the increment is smaller
 };
 
 // Rotational part of A (polar decomposition), warm-started from q: Mueller et al. 2016,
 // "A robust method to extract the rotational part of deformations".
-void extract_rotation(const Mat3& a, Eigen::Quaterniond& q, int max_iterations) {
+void extract_rotation(const Mat3& a, Eigen::Quaterniond& q, int max_iterations,
+                      double tolerance_rad) {
   for (int it = 0; it < max_iterations; ++it) {
     const Mat3 r = q.toRotationMatrix();
     const Vec3 num = r.col(0).cross(a.col(0)) + r.col(1).cross(a.col(1)) + r.col(2).cross(a.col(2));
@@ -30,15 +33,22 @@ void extract_rotation(const Mat3& a, Eigen::Quaterniond& q, int max_iterations) 
         std::fabs(r.col(0).dot(a.col(0)) + r.col(1).dot(a.col(1)) + r.col(2).dot(a.col(2))) + 1e-12;
     const Vec3 omega = num / den;
     const double w = omega.norm();
-    if (!(w > 1e-10)) break;
-    q = Eigen::Quaterniond(Eigen::AngleAxisd(w, omega / w)) * q;
+    if (!(w > tolerance_rad)) break;  // converged
+    if (w < 0.05) {
+      // small increment: first-order quaternion (no trigonometry), then normalised
+      const Eigen::Quaterniond dq(1.0, 0.5 * omega.x(), 0.5 * omega.y(), 0.5 * omega.z());
+      q = dq * q;
+    } else {
+      q = Eigen::Quaterniond(Eigen::AngleAxisd(w, omega / w)) * q;
+    }
     q.normalize();
   }
 }
 
 // Co-rotational frames: per node, the rotation of its one-ring (plus the direction to the
 // centroid, so that a nearly flat ring still fixes all three axes).
-void update_rotations(const DeformableModel& m, DeformableState& s) {
+void update_rotations(const DeformableModel& m, DeformableState& s, int max_iterations,
+                      double tolerance_rad) {
   const Eigen::Matrix3Xd& X = m.mesh.vertices;
   const int n = m.node_count;
   Vec3 c = Vec3::Zero(), c0 = Vec3::Zero();
@@ -64,7 +74,7 @@ void update_rotations(const DeformableModel& m, DeformableState& s) {
     const Vec3 rX = Xi - c0;
     const double r2 = rX.squaredNorm();
     if (r2 > 0.0) a.noalias() += (len2 / r2) * (xi - c) * rX.transpose();
-    extract_rotation(a, s.rotation_q[static_cast<std::size_t>(i)], 8);
+    extract_rotation(a, s.rotation_q[static_cast<std::size_t>(i)], max_iterations, tolerance_rad);
     s.rotation[static_cast<std::size_t>(i)] =
         s.rotation_q[static_cast<std::size_t>(i)].toRotationMatrix();
   }
@@ -75,7 +85,8 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
   const int n = m.node_count;
   const DeformableParams& p = m.params;
   Eigen::Matrix3Xd& F = s.work_f;
-  F.setZero();
+  if (!flags.external) F.setZero();
+  F.col(n).setZero();
   const Eigen::Matrix3Xd& x = s.x;
   const Eigen::Matrix3Xd& v = s.v;
   const Eigen::Matrix3Xd& X = m.mesh.vertices;
@@ -83,89 +94,134 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
 
   // gravity, drag and the caller's loads
   if (flags.external) {
+    // drag relative to the mean velocity: damps deformation, keeps momentum
     const double alpha = p.mass_damping_per_s;
+    Vec3 vcm = Vec3::Zero();
+    if (alpha > 0.0) vcm = (v * m.mass_kg + m.centre_mass_kg * s.centre_v) / m.total_mass_kg;
     for (int i = 0; i < n; ++i) {
-      F.col(i) = m.mass_kg(i) * (p.gravity_mps2 - alpha * v.col(i)) + s.f_ext.col(i);
+      F.col(i) = m.mass_kg(i) * (p.gravity_mps2 - alpha * (v.col(i) - vcm)) + s.f_ext.col(i);
     }
-    if (m.has_centre) F.col(n) = m.centre_mass_kg * (p.gravity_mps2 - alpha * s.centre_v);
+    if (m.has_centre) F.col(n) = m.centre_mass_kg * (p.gravity_mps2 - alpha * (s.centre_v - vcm));
   }
 
   // edges
   const int ne = static_cast<int>(m.edges.cols());
   switch (p.model) {
-    case ModelKind::kMassSpring:
+    case ModelKind::kMassSpring: {
+      // 1 / length of every edge first, in a separate pass the compiler vectorises (sqrt and
+      // division two at a time, off the critical path of the force loop)
+      Eigen::VectorXd& inv_len = s.edge_scratch;
+      for (int e = 0; e < ne; ++e) {
+        inv_len(e) = (x.col(m.edges(1, e)) - x.col(m.edges(0, e))).squaredNorm();
+      }
+      inv_len = inv_len.array().max(1e-24).sqrt().inverse();
+      // edges are sorted by their first node: accumulate its force in a register
+      int cur = ne > 0 ? m.edges(0, 0) : 0;
+      Vec3 acc = Vec3::Zero();
       for (int e = 0; e < ne; ++e) {
         const int i = m.edges(0, e), j = m.edges(1, e);
+        if (i != cur) {
+          F.col(cur) += acc;
+          acc.setZero();
+          cur = i;
+        }
         const Vec3 d = x.col(j) - x.col(i);
-        const double l = d.norm();
-        if (!(l > 1e-12)) continue;
-        const Vec3 u = d / l;
+        const double inv_l = inv_len(e);
+        const Vec3 u = d * inv_l;
         const double k = m.edge_k_iso(e);
         const double c = beta * k;
-        const double fs = k * (l - m.rest_length_m(e)) + c * (v.col(j) - v.col(i)).dot(u);
-        F.col(i) += fs * u;
-        F.col(j) -= fs * u;
+        const double fs =
+            k * (d.squaredNorm() * inv_l - m.rest_length_m(e)) + c * (v.col(j) - v.col(i)).dot(u);
+        const Vec3 f = fs * u;
+        acc += f;
+        F.col(j) -= f;
         if (flags.jacobian) {
           // clamped spring Jacobian: the transverse term only when stretched (keeps it SPD)
-          const double kt = k * std::max(0.0, 1.0 - m.rest_length_m(e) / l);
+          const double kt = k * std::max(0.0, 1.0 - m.rest_length_m(e) * inv_l);
           s.edge_dir.col(e) = u;
           s.edge_coef.col(e) << kt, k - kt, 0.0, c;
         }
       }
+      if (ne > 0) F.col(cur) += acc;
       break;
-    case ModelKind::kNavierLinear:
+    }
+    case ModelKind::kNavierLinear: {
+      int cur = ne > 0 ? m.edges(0, 0) : 0;
+      Vec3 acc = Vec3::Zero();
       for (int e = 0; e < ne; ++e) {
         const int i = m.edges(0, e), j = m.edges(1, e);
+        if (i != cur) {
+          F.col(cur) += acc;
+          acc.setZero();
+          cur = i;
+        }
         const Vec3 u0 = m.rest_dir.col(e);
         const Vec3 strain = (x.col(j) - x.col(i)) - (X.col(j) - X.col(i));
-        const Vec3 rate = v.col(j) - v.col(i);
+        const Vec3 g = strain + beta * (v.col(j) - v.col(i));
         const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
-        const Vec3 f = a * (strain + beta * rate) + (b * (strain + beta * rate).dot(u0)) * u0;
-        F.col(i) += f;
+        const Vec3 f = a * g + (b * g.dot(u0)) * u0;
+        acc += f;
         F.col(j) -= f;
         if (flags.jacobian) {
           s.edge_dir.col(e) = u0;
           s.edge_coef.col(e) << a, b, beta * a, beta * b;
         }
       }
+      if (ne > 0) F.col(cur) += acc;
       break;
-    case ModelKind::kNavierCorotational:
-      update_rotations(m, s);
+    }
+    case ModelKind::kNavierCorotational: {
+      // warm-started: a few iterations per step track the motion; a cold query converges
+      update_rotations(m, s, flags.rotation_iterations, flags.rotation_tolerance_rad);
+      int cur = ne > 0 ? m.edges(0, 0) : 0;
+      Vec3 acc = Vec3::Zero();
       for (int e = 0; e < ne; ++e) {
         const int i = m.edges(0, e), j = m.edges(1, e);
+        if (i != cur) {
+          F.col(cur) += acc;
+          acc.setZero();
+          cur = i;
+        }
         const Mat3 r = 0.5 * (s.rotation[static_cast<std::size_t>(i)] +
                               s.rotation[static_cast<std::size_t>(j)]);
         const Vec3 u0 = m.rest_dir.col(e);
-        const Vec3 strain = r.transpose() * (x.col(j) - x.col(i)) - (X.col(j) - X.col(i));
-        const Vec3 rate = r.transpose() * (v.col(j) - v.col(i));
+        // hand-written 3x3 products (Eigen does not inline these mixed expressions here)
+        const Vec3 q = (x.col(j) - x.col(i)) + beta * (v.col(j) - v.col(i));
+        const Vec3 g =
+            Vec3(r.col(0).dot(q), r.col(1).dot(q), r.col(2).dot(q)) - (X.col(j) - X.col(i));
         const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
-        const Vec3 local = a * (strain + beta * rate) + (b * (strain + beta * rate).dot(u0)) * u0;
-        const Vec3 f = r * local;
-        F.col(i) += f;
+        const Vec3 loc = a * g + (b * g.dot(u0)) * u0;
+        const Vec3 f = r.col(0) * loc.x() + r.col(1) * loc.y() + r.col(2) * loc.z();
+        acc += f;
         F.col(j) -= f;
         if (flags.jacobian) {
           s.edge_dir.col(e) = (r * u0).normalized();
           s.edge_coef.col(e) << a, b, beta * a, beta * b;
         }
       }
+      if (ne > 0) F.col(cur) += acc;
       break;
+    }
   }
 
   // radial springs to the centre node
   if (m.has_centre) {
     Vec3 fc = Vec3::Zero();
+    Eigen::VectorXd& inv_len = s.node_scratch;
+    for (int i = 0; i < n; ++i) inv_len(i) = (x.col(i) - s.centre_x).squaredNorm();
+    inv_len = inv_len.array().max(1e-24).sqrt().inverse();
     for (int i = 0; i < n; ++i) {
       const Vec3 d = x.col(i) - s.centre_x;
-      const double l = d.norm();
-      if (!(l > 1e-12)) continue;
-      const Vec3 u = d / l;
+      const double inv_l = inv_len(i);
+      const Vec3 u = d * inv_l;
+      const double l = d.squaredNorm() * inv_l;
       const double k = m.radial_k(i);
-      const double c = beta * k;
+      const double c = p.radial_damping_s * k;
       const double fs = -k * (l - m.radial_rest_m(i)) - c * (v.col(i) - s.centre_v).dot(u);
       F.col(i) += fs * u;
       fc -= fs * u;
       if (flags.jacobian) {
-        const double kt = k * std::max(0.0, 1.0 - m.radial_rest_m(i) / l);
+        const double kt = k * std::max(0.0, 1.0 - m.radial_rest_m(i) * inv_l);
         s.radial_dir.col(i) = u;
         s.radial_coef.col(i) << kt, k - kt, 0.0, c;
       }
@@ -173,8 +229,11 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
     F.col(n) += fc;
   }
 
-  // node-plane penalty contact with Coulomb friction (regularised so that friction never
-  // reverses the sliding velocity within one step)
+  // node-plane penalty contact. Implicit Euler: spring, damping and (rate-limited) Coulomb
+  // friction as forces here, damping also in its matrix. Explicit/symplectic Euler: only the
+  // spring here; damping and friction are applied implicitly per node in apply_contact_impulses()
+  // (an explicit damper on a light node next to the stability limit of the membrane would not be
+  // stable).
   s.contact_count = 0;
   s.plane_force_n.setZero();
   if (flags.contact && m.plane_count > 0) {
@@ -184,9 +243,19 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
         const Plane& pl = m.planes[static_cast<std::size_t>(k)];
         const double dist = pl.normal.dot(x.col(i)) - pl.offset_m;
         if (dist >= 0.0) continue;
+        const double spring = -m.contact_k(i) * dist;
+        s.contact_node[static_cast<std::size_t>(nc)] = i;
+        s.contact_normal.col(nc) = pl.normal;
+        s.contact_coef.col(nc) << m.contact_k(i), m.contact_c(i), spring,
+            p.friction ? pl.friction : 0.0;
+        ++nc;
+        if (!flags.jacobian) {
+          F.col(i) += spring * pl.normal;
+          continue;
+        }
         const Vec3 vi = v.col(i);
         const double vn = pl.normal.dot(vi);
-        double fn = -m.contact_k(i) * dist - m.contact_c(i) * vn;
+        double fn = spring - m.contact_c(i) * vn;
         if (fn < 0.0) fn = 0.0;  // a wall pushes, never pulls
         Vec3 f = fn * pl.normal;
         if (p.friction && pl.friction > 0.0) {
@@ -199,15 +268,42 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
         }
         F.col(i) += f;
         s.plane_force_n += f;
-        if (flags.jacobian) {
-          s.contact_node[static_cast<std::size_t>(nc)] = i;
-          s.contact_normal.col(nc) = pl.normal;
-          s.contact_coef.col(nc) << m.contact_k(i), m.contact_c(i);
-        }
-        ++nc;
       }
     }
     s.contact_count = nc;
+  }
+}
+
+// Explicit and symplectic Euler: contact damping and Coulomb friction as velocity impulses,
+// after the velocity update (implicit in the damping, so stable for any damping ratio):
+//   v_n <- v_n / (1 + h c / m), never pulling (total normal impulse >= 0);
+//   tangential impulse <= mu * normal impulse, and never more than stops the sliding.
+void apply_contact_impulses(const DeformableModel& m, DeformableState& s, double h) {
+  for (int c = 0; c < s.contact_count; ++c) {
+    const int i = s.contact_node[static_cast<std::size_t>(c)];
+    if (s.pinned_count > 0 && s.pinned[static_cast<std::size_t>(i)]) continue;
+    const Vec3 nrm = s.contact_normal.col(c);
+    const double mass = m.mass_kg(i);
+    const double spring_impulse = h * s.contact_coef(2, c);
+    Vec3 vi = s.v.col(i);
+    const double vn = nrm.dot(vi);
+    double dvn = vn / (1.0 + h * s.contact_coef(1, c) / mass) - vn;
+    dvn = std::max(dvn, -spring_impulse / mass);
+    vi += dvn * nrm;
+    const double jn = spring_impulse + mass * dvn;  // >= 0
+    Vec3 impulse = jn * nrm;
+    const double mu = s.contact_coef(3, c);
+    if (mu > 0.0) {
+      const Vec3 vt = vi - nrm.dot(vi) * nrm;
+      const double st = vt.norm();
+      if (st > 1e-12) {
+        const double jt = std::min(mu * jn, mass * st);
+        vi -= (jt / (mass * st)) * vt;
+        impulse -= (jt / st) * vt;
+      }
+    }
+    s.v.col(i) = vi;
+    s.plane_force_n += impulse / h;
   }
 }
 
@@ -250,12 +346,14 @@ void apply_system(const DeformableModel& m, const DeformableState& s, const Eige
     const double sc = cc * s.contact_coef(1, c) + kc * s.contact_coef(0, c);
     out.col(i) += (sc * nrm.dot(pv.col(i))) * nrm;
   }
-  for (int i = 0; i < n; ++i) {
-    if (s.pinned[static_cast<std::size_t>(i)]) out.col(i).setZero();
+  if (s.pinned_count > 0) {
+    for (int i = 0; i < n; ++i) {
+      if (s.pinned[static_cast<std::size_t>(i)]) out.col(i).setZero();
+    }
   }
 }
 
-// Jacobi preconditioner: the diagonal of M + h C + h^2 K.
+// Jacobi preconditioner: the inverse of the diagonal of M + h C + h^2 K, into s.work_diag.
 void system_diagonal(const DeformableModel& m, DeformableState& s, double h) {
   const int n = m.node_count;
   Eigen::Matrix3Xd& dg = s.work_diag;
@@ -287,6 +385,7 @@ void system_diagonal(const DeformableModel& m, DeformableState& s, double h) {
         (h * s.contact_coef(1, c) + h2 * s.contact_coef(0, c)) * nrm.cwiseProduct(nrm);
   }
   if (!m.has_centre) dg.col(n).setOnes();  // unused column: keep it well defined
+  dg = dg.cwiseInverse();                  // stored inverted: CG multiplies
 }
 
 // Integration of positions and velocities by the chosen scheme; s.work_f holds the forces.
@@ -299,6 +398,7 @@ void integrate(const DeformableModel& m, DeformableState& s, double h) {
       if (!s.pinned[static_cast<std::size_t>(i)])
         s.v.col(i) += (h * m.inv_mass(i)) * s.work_f.col(i);
     }
+    apply_contact_impulses(m, s, h);
     if (m.has_centre) {
       s.centre_x += h * s.centre_v;
       s.centre_v += (h / m.centre_mass_kg) * s.work_f.col(n);
@@ -309,8 +409,9 @@ void integrate(const DeformableModel& m, DeformableState& s, double h) {
     for (int i = 0; i < n; ++i) {
       if (!s.pinned[static_cast<std::size_t>(i)])
         s.v.col(i) += (h * m.inv_mass(i)) * s.work_f.col(i);
-      s.x.col(i) += h * s.v.col(i);
     }
+    apply_contact_impulses(m, s, h);
+    for (int i = 0; i < n; ++i) s.x.col(i) += h * s.v.col(i);
     if (m.has_centre) {
       s.centre_v += (h / m.centre_mass_kg) * s.work_f.col(n);
       s.centre_x += h * s.centre_v;
@@ -336,7 +437,7 @@ void integrate(const DeformableModel& m, DeformableState& s, double h) {
   Eigen::Matrix3Xd& ap = s.work_ap;
   dv.setZero();
   r = b;
-  z = r.cwiseQuotient(s.work_diag);
+  z = r.cwiseProduct(s.work_diag);
   pp = z;
   double rz = (r.array() * z.array()).sum();
   const double rz0 = rz;
@@ -350,7 +451,7 @@ void integrate(const DeformableModel& m, DeformableState& s, double h) {
     const double alpha = rz / pap;
     dv += alpha * pp;
     r -= alpha * ap;
-    z = r.cwiseQuotient(s.work_diag);
+    z = r.cwiseProduct(s.work_diag);
     const double rz_new = (r.array() * z.array()).sum();
     pp = z + (rz_new / rz) * pp;
     rz = rz_new;
@@ -402,6 +503,8 @@ void internal_forces(const DeformableModel& m, DeformableState& s, Eigen::Matrix
   ForceFlags flags;
   flags.external = false;
   flags.contact = false;
+  flags.rotation_iterations = 200;
+  flags.rotation_tolerance_rad = 1e-13;
   compute_forces(m, s, 1.0, flags);
   if (out.cols() != m.node_count) out.resize(3, m.node_count);
   out = s.work_f.leftCols(m.node_count);
@@ -430,8 +533,10 @@ StepStatus step(const DeformableModel& m, DeformableState& s, double h,
 
   // held nodes: the velocity that takes them to their target in this step
   bool pin_moving = false;
+  s.pinned_count = 0;
   for (int i = 0; i < n; ++i) {
     if (!s.pinned[static_cast<std::size_t>(i)]) continue;
+    ++s.pinned_count;
     if (!s.pin_target.col(i).allFinite()) {
       s.pinned[static_cast<std::size_t>(i)] = 0;  // a bad target releases the node
       continue;
@@ -445,28 +550,38 @@ StepStatus step(const DeformableModel& m, DeformableState& s, double h,
   compute_forces(m, s, h, flags);
   s.force = s.work_f.leftCols(n);
   integrate(m, s, h);
-  for (int i = 0; i < n; ++i) {
-    if (s.pinned[static_cast<std::size_t>(i)]) s.x.col(i) = s.pin_target.col(i);
-  }
   s.sim_time_s += h;
   ++s.steps;
 
-  // fault detection: non-finite values or a node faster than max_speed_mps
+  // one pass: held nodes onto their targets, fastest node, finiteness, centroid
   const double vmax2 = m.params.max_speed_mps * m.params.max_speed_mps;
-  double fastest2 = 0.0;
-  int fastest = -1;
-  bool finite = s.centre_x.allFinite() && s.centre_v.allFinite();
+  double fastest2 = 0.0, sum_x = 0.0, sum_v = 0.0;
+  Vec3 mx = m.centre_mass_kg * s.centre_x;
   for (int i = 0; i < n; ++i) {
-    const double sp2 = s.v.col(i).squaredNorm();
-    if (!(sp2 <= fastest2)) {  // also catches NaN
-      fastest2 = sp2;
-      fastest = i;
+    if (s.pinned_count > 0 && s.pinned[static_cast<std::size_t>(i)]) {
+      s.x.col(i) = s.pin_target.col(i);
     }
-    finite = finite && std::isfinite(s.x(0, i) + s.x(1, i) + s.x(2, i));
+    const double sp2 = s.v.col(i).squaredNorm();
+    fastest2 = sp2 > fastest2 ? sp2 : fastest2;
+    sum_x += s.x.col(i).sum();
+    sum_v += sp2;  // NaN and infinity propagate into the sums
+    mx += m.mass_kg(i) * s.x.col(i);
   }
+  const bool finite = std::isfinite(sum_x) && std::isfinite(sum_v) && s.centre_x.allFinite() &&
+                      s.centre_v.allFinite();
   if (!finite || !(fastest2 <= vmax2) || !(s.centre_v.squaredNorm() <= vmax2)) {
     ++s.fault_count;
     if (events) {
+      int fastest = 0;
+      for (int i = 0; i < n; ++i) {
+        const double sp2 = s.v.col(i).squaredNorm();
+        if (!std::isfinite(sp2) || !s.x.col(i).allFinite()) {
+          fastest = i;
+          fastest2 = sp2;
+          break;
+        }
+        if (sp2 >= fastest2) fastest = i;
+      }
       char msg[128];
       std::snprintf(msg, sizeof(msg),
                     "deformable: blow-up (node %d speed %.3g m/s%s); reset to rest shape", fastest,
@@ -476,7 +591,7 @@ StepStatus step(const DeformableModel& m, DeformableState& s, double h,
     reset_to_rest(m, s);
     return StepStatus::kFaultReset;
   }
-  s.last_good_centroid = centroid(m, s);
+  s.last_good_centroid = mx / m.total_mass_kg;
 
   // sleeping: still, unloaded and no held node moving for sleep_time_s
   const double sleep2 = m.params.sleep_speed_mps * m.params.sleep_speed_mps;

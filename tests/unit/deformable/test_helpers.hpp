@@ -20,6 +20,13 @@ inline DeformableParams small_params(ModelKind model, IntegratorKind integrator,
   return p;
 }
 
+/// Switches every damper off (springs, radial springs, drag).
+inline void make_undamped(DeformableParams& p) {
+  p.stiffness_damping_s = 0.0;
+  p.radial_damping_s = 0.0;
+  p.mass_damping_per_s = 0.0;
+}
+
 inline DeformableModel build(const DeformableParams& p, const std::vector<Plane>& planes = {}) {
   return make_model(make_mesh_for(p), p, planes);
 }

@@ -1,0 +1,57 @@
+// Google Benchmark: one step of the deformable sphere per level, model and integrator.
+//   teleop_microbench --benchmark_filter=Deformable
+// The body is kept awake and disturbed (a node 5 mm out, released) so every step does work.
+#include <benchmark/benchmark.h>
+
+#include "server/deformable/deformable.hpp"
+
+namespace {
+
+using namespace teleop::sim::deformable;
+
+void run_step(benchmark::State& bs, ModelKind model, IntegratorKind integ) {
+  DeformableParams p;
+  p.model = model;
+  p.integrator = integ;
+  p.level = static_cast<int>(bs.range(0));
+  p.gravity_mps2.setZero();
+  p.sleep_time_s = 1e9;
+  if (model != ModelKind::kMassSpring) p.radial_stiffness_n_per_m3 = 0.0;
+  // a stable step for every level: the limit halves with each level (w_max ~ 1 / edge length)
+  const double dt = (integ == IntegratorKind::kExplicitEuler ? 0.1e-3 : 1e-3) /
+                    static_cast<double>(1 << std::max(0, p.level - 4));
+  const DeformableModel m = make_model(make_mesh_for(p), p, {});
+  DeformableState s = make_state(m);
+  s.x.col(0) += 0.005 * (s.x.col(0) - m.rest_centre_m).normalized();
+  for (auto _ : bs) {
+    step(m, s, dt, nullptr);
+    benchmark::DoNotOptimize(s.x.data());
+  }
+  bs.counters["nodes"] = m.node_count;
+  bs.counters["faults"] = static_cast<double>(s.fault_count);
+  if (integ == IntegratorKind::kImplicitEuler) bs.counters["cg_iters"] = s.cg_iterations;
+}
+
+void BM_Deformable_MassSpring_Symplectic(benchmark::State& bs) {
+  run_step(bs, ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler);
+}
+void BM_Deformable_MassSpring_Implicit(benchmark::State& bs) {
+  run_step(bs, ModelKind::kMassSpring, IntegratorKind::kImplicitEuler);
+}
+void BM_Deformable_NavierLinear_Symplectic(benchmark::State& bs) {
+  run_step(bs, ModelKind::kNavierLinear, IntegratorKind::kSymplecticEuler);
+}
+void BM_Deformable_NavierCorot_Symplectic(benchmark::State& bs) {
+  run_step(bs, ModelKind::kNavierCorotational, IntegratorKind::kSymplecticEuler);
+}
+void BM_Deformable_NavierCorot_Implicit(benchmark::State& bs) {
+  run_step(bs, ModelKind::kNavierCorotational, IntegratorKind::kImplicitEuler);
+}
+
+BENCHMARK(BM_Deformable_MassSpring_Symplectic)->DenseRange(1, 6)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Deformable_MassSpring_Implicit)->DenseRange(1, 5)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Deformable_NavierLinear_Symplectic)->DenseRange(1, 6)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Deformable_NavierCorot_Symplectic)->DenseRange(1, 5)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Deformable_NavierCorot_Implicit)->DenseRange(1, 4)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
