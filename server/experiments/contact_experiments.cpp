@@ -74,7 +74,8 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
 
   for (const double speed : speeds) {
     df::DeformableParams params;  // the deform module's defaults: the paper's sphere
-    params.integrator = df::parse_integrator_kind(args.option("--integrator", "implicit_euler"));
+    const std::string integrator = args.option("--integrator", "");
+    if (!integrator.empty()) params.integrator = df::parse_integrator_kind(integrator);
     teleop::sim::Plane floor;
     floor.id = 0;
     floor.name = "floor";
