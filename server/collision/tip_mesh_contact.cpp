@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 namespace teleop::sim::collision {
@@ -378,6 +379,25 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
   res.tangential_force_n = (f - f.dot(n) * n).norm();
   res.triangle = tri_;
   return res;
+}
+
+void push_contact_events(const TipContactResult& result, int object_id, double sim_time_s,
+                         EventQueue& events) {
+  char msg[96];
+  if (result.fault) {
+    std::snprintf(msg, sizeof(msg), "tip contact with object %d: non-finite data, contact dropped",
+                  object_id);
+    events.push(EventKind::kFault, Severity::kWarning, sim_time_s, object_id, msg);
+  }
+  if (result.began) {
+    std::snprintf(msg, sizeof(msg), "tip touches object %d (triangle %d)", object_id,
+                  result.triangle);
+    events.push(EventKind::kContactBegin, Severity::kInfo, sim_time_s, result.normal_force_n, msg);
+  }
+  if (result.ended) {
+    std::snprintf(msg, sizeof(msg), "tip leaves object %d", object_id);
+    events.push(EventKind::kContactEnd, Severity::kInfo, sim_time_s, 0.0, msg);
+  }
 }
 
 }  // namespace teleop::sim::collision

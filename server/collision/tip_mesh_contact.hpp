@@ -39,6 +39,7 @@
 
 #include "server/collision/aabb_tree.hpp"
 #include "server/collision/surface_topology.hpp"
+#include "server/world/events.hpp"
 
 namespace teleop::sim::collision {
 
@@ -166,5 +167,10 @@ class TipMeshContact {
   bool anchor_velocity_valid_ = false;
   std::uint64_t faults_ = 0;
 };
+
+/// Pushes kContactBegin / kContactEnd (value: normal force [N] / 0) and, for a fault, a
+/// kFault warning for `object_id` onto `events`. Allocates nothing.
+void push_contact_events(const TipContactResult& result, int object_id, double sim_time_s,
+                         EventQueue& events);
 
 }  // namespace teleop::sim::collision

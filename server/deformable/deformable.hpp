@@ -150,6 +150,10 @@ struct DeformableModel {
   /// Navier: coefficient b of ((d_j - d_i).u) u [N/m]; mass-spring: unused (0).
   Eigen::VectorXd edge_k_dir;
 
+  /// CSR: the edges incident to node i: node_edges[node_edge_offsets[i] .. [i+1]), each the
+  /// edge index e when i is its first node, ~e (bitwise not) when i is its second node.
+  std::vector<int> node_edge_offsets, node_edges;
+
   // radial springs (node i to the centre node)
   Eigen::VectorXd radial_k;       ///< [N/m]
   Eigen::VectorXd radial_rest_m;  ///< rest distance to the centre [m]
@@ -204,8 +208,11 @@ struct DeformableState {
   // scratch (sized by make_state; never resized by step)
   Eigen::Matrix3Xd work_f;  ///< forces, 3 x (N + 1): last column is the centre node
   Eigen::Matrix3Xd work_dv, work_r, work_z, work_p, work_ap, work_diag, work_b;
-  Eigen::Matrix3Xd edge_dir;   ///< per edge direction w of the Jacobian block
-  Eigen::Matrix4Xd edge_coef;  ///< per edge (k_iso, k_dir, c_iso, c_dir) of the Jacobian
+  Eigen::VectorXd edge_scratch;  ///< per edge scalar (1 / length)
+  Eigen::Matrix3Xd edge_force;   ///< per edge force on its first node [N]
+  Eigen::VectorXd node_scratch;  ///< per node scalar (1 / distance to the centre)
+  Eigen::Matrix3Xd edge_dir;     ///< per edge direction w of the Jacobian block
+  Eigen::Matrix4Xd edge_coef;    ///< per edge (k_iso, k_dir, c_iso, c_dir) of the Jacobian
   Eigen::Matrix3Xd radial_dir;
   Eigen::Matrix4Xd radial_coef;
   std::vector<int> contact_node;  ///< implicit Euler: contact list (capacity N * planes)

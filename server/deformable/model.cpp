@@ -102,6 +102,27 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
     m.rest_length_m(e) = d.norm();
     m.rest_dir.col(e) = d / m.rest_length_m(e);
   }
+  // incident edges of every node (for the gather of edge forces)
+  m.node_edge_offsets.assign(static_cast<std::size_t>(n) + 1, 0);
+  for (int e = 0; e < ne; ++e) {
+    ++m.node_edge_offsets[static_cast<std::size_t>(m.edges(0, e)) + 1];
+    ++m.node_edge_offsets[static_cast<std::size_t>(m.edges(1, e)) + 1];
+  }
+  for (int i = 0; i < n; ++i) {
+    m.node_edge_offsets[static_cast<std::size_t>(i) + 1] +=
+        m.node_edge_offsets[static_cast<std::size_t>(i)];
+  }
+  m.node_edges.assign(static_cast<std::size_t>(2 * ne), 0);
+  {
+    std::vector<int> fill(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) {
+      fill[static_cast<std::size_t>(i)] = m.node_edge_offsets[static_cast<std::size_t>(i)];
+    }
+    for (int e = 0; e < ne; ++e) {
+      m.node_edges[static_cast<std::size_t>(fill[static_cast<std::size_t>(m.edges(0, e))]++)] = e;
+      m.node_edges[static_cast<std::size_t>(fill[static_cast<std::size_t>(m.edges(1, e))]++)] = ~e;
+    }
+  }
   m.edge_k_iso.resize(ne);
   m.edge_k_dir.resize(ne);
   if (params.model == ModelKind::kMassSpring) {
@@ -167,6 +188,9 @@ DeformableState make_state(const DeformableModel& m) {
                               &s.work_diag, &s.work_b}) {
     *w = Eigen::Matrix3Xd::Zero(3, n + 1);
   }
+  s.edge_scratch = Eigen::VectorXd::Zero(ne);
+  s.edge_force = Eigen::Matrix3Xd::Zero(3, ne);
+  s.node_scratch = Eigen::VectorXd::Zero(n);
   s.edge_dir = Eigen::Matrix3Xd::Zero(3, ne);
   s.edge_coef = Eigen::Matrix4Xd::Zero(4, ne);
   s.radial_dir = Eigen::Matrix3Xd::Zero(3, n);

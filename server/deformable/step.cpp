@@ -104,31 +104,31 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
     if (m.has_centre) F.col(n) = m.centre_mass_kg * (p.gravity_mps2 - alpha * (s.centre_v - vcm));
   }
 
-  // edges
+  // edges, in two passes: the force of each edge (on its first node; the second node gets
+  // the opposite), then a gather per node over its incident edges. Independent iterations
+  // instead of a scatter whose read-modify-write chains serialise the loop.
   const int ne = static_cast<int>(m.edges.cols());
+  Eigen::Matrix3Xd& Fe = s.edge_force;
   switch (p.model) {
     case ModelKind::kMassSpring: {
-      // edges are sorted by their first node: accumulate its force in a register
-      int cur = ne > 0 ? m.edges(0, 0) : 0;
-      Vec3 acc = Vec3::Zero();
+      // 1 / length of every edge first, in a separate pass the compiler vectorises (sqrt and
+      // division two at a time, off the critical path of the force loop)
+      Eigen::VectorXd& inv_len = s.edge_scratch;
+      for (int e = 0; e < ne; ++e) {
+        inv_len(e) = (x.col(m.edges(1, e)) - x.col(m.edges(0, e))).squaredNorm();
+      }
+      inv_len = inv_len.array().max(1e-24).sqrt().inverse();
       for (int e = 0; e < ne; ++e) {
         const int i = m.edges(0, e), j = m.edges(1, e);
-        if (i != cur) {
-          F.col(cur) += acc;
-          acc.setZero();
-          cur = i;
-        }
         const Vec3 d = x.col(j) - x.col(i);
-        const double l2 = d.squaredNorm();
-        if (!(l2 > 1e-24)) continue;
-        const double inv_l = 1.0 / std::sqrt(l2);
+        const double inv_l = inv_len(e);
         const Vec3 u = d * inv_l;
         const double k = m.edge_k_iso(e);
         const double c = beta * k;
-        const double fs = k * (l2 * inv_l - m.rest_length_m(e)) + c * (v.col(j) - v.col(i)).dot(u);
+        const double fs =
+            k * (d.squaredNorm() * inv_l - m.rest_length_m(e)) + c * (v.col(j) - v.col(i)).dot(u);
         const Vec3 f = fs * u;
-        acc += f;
-        F.col(j) -= f;
+        Fe.col(e) = f;
         if (flags.jacobian) {
           // clamped spring Jacobian: the transverse term only when stretched (keeps it SPD)
           const double kt = k * std::max(0.0, 1.0 - m.rest_length_m(e) * inv_l);
@@ -136,46 +136,29 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
           s.edge_coef.col(e) << kt, k - kt, 0.0, c;
         }
       }
-      if (ne > 0) F.col(cur) += acc;
       break;
     }
     case ModelKind::kNavierLinear: {
-      int cur = ne > 0 ? m.edges(0, 0) : 0;
-      Vec3 acc = Vec3::Zero();
       for (int e = 0; e < ne; ++e) {
         const int i = m.edges(0, e), j = m.edges(1, e);
-        if (i != cur) {
-          F.col(cur) += acc;
-          acc.setZero();
-          cur = i;
-        }
         const Vec3 u0 = m.rest_dir.col(e);
         const Vec3 strain = (x.col(j) - x.col(i)) - (X.col(j) - X.col(i));
         const Vec3 g = strain + beta * (v.col(j) - v.col(i));
         const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
         const Vec3 f = a * g + (b * g.dot(u0)) * u0;
-        acc += f;
-        F.col(j) -= f;
+        Fe.col(e) = f;
         if (flags.jacobian) {
           s.edge_dir.col(e) = u0;
           s.edge_coef.col(e) << a, b, beta * a, beta * b;
         }
       }
-      if (ne > 0) F.col(cur) += acc;
       break;
     }
     case ModelKind::kNavierCorotational: {
       // warm-started: a few iterations per step track the motion; a cold query converges
       update_rotations(m, s, flags.rotation_iterations, flags.rotation_tolerance_rad);
-      int cur = ne > 0 ? m.edges(0, 0) : 0;
-      Vec3 acc = Vec3::Zero();
       for (int e = 0; e < ne; ++e) {
         const int i = m.edges(0, e), j = m.edges(1, e);
-        if (i != cur) {
-          F.col(cur) += acc;
-          acc.setZero();
-          cur = i;
-        }
         const Mat3 r = 0.5 * (s.rotation[static_cast<std::size_t>(i)] +
                               s.rotation[static_cast<std::size_t>(j)]);
         const Vec3 u0 = m.rest_dir.col(e);
@@ -186,35 +169,52 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
         const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
         const Vec3 loc = a * g + (b * g.dot(u0)) * u0;
         const Vec3 f = r.col(0) * loc.x() + r.col(1) * loc.y() + r.col(2) * loc.z();
-        acc += f;
-        F.col(j) -= f;
+        Fe.col(e) = f;
         if (flags.jacobian) {
           s.edge_dir.col(e) = (r * u0).normalized();
           s.edge_coef.col(e) << a, b, beta * a, beta * b;
         }
       }
-      if (ne > 0) F.col(cur) += acc;
       break;
+    }
+  }
+
+  {
+    const auto& off = m.node_edge_offsets;
+    const auto& inc = m.node_edges;
+    for (int i = 0; i < n; ++i) {
+      Vec3 sum = Vec3::Zero();
+      for (int k = off[static_cast<std::size_t>(i)]; k < off[static_cast<std::size_t>(i) + 1];
+           ++k) {
+        const int code = inc[static_cast<std::size_t>(k)];  // e (first node) or ~e (second)
+        if (code >= 0) {
+          sum += Fe.col(code);
+        } else {
+          sum -= Fe.col(~code);
+        }
+      }
+      F.col(i) += sum;
     }
   }
 
   // radial springs to the centre node
   if (m.has_centre) {
     Vec3 fc = Vec3::Zero();
+    Eigen::VectorXd& inv_len = s.node_scratch;
+    for (int i = 0; i < n; ++i) inv_len(i) = (x.col(i) - s.centre_x).squaredNorm();
+    inv_len = inv_len.array().max(1e-24).sqrt().inverse();
     for (int i = 0; i < n; ++i) {
       const Vec3 d = x.col(i) - s.centre_x;
-      const double l2 = d.squaredNorm();
-      if (!(l2 > 1e-24)) continue;
-      const double inv_l = 1.0 / std::sqrt(l2);
+      const double inv_l = inv_len(i);
       const Vec3 u = d * inv_l;
-      const double l = l2 * inv_l;
+      const double l = d.squaredNorm() * inv_l;
       const double k = m.radial_k(i);
       const double c = p.radial_damping_s * k;
       const double fs = -k * (l - m.radial_rest_m(i)) - c * (v.col(i) - s.centre_v).dot(u);
       F.col(i) += fs * u;
       fc -= fs * u;
       if (flags.jacobian) {
-        const double kt = k * std::max(0.0, 1.0 - m.radial_rest_m(i) / l);
+        const double kt = k * std::max(0.0, 1.0 - m.radial_rest_m(i) * inv_l);
         s.radial_dir.col(i) = u;
         s.radial_coef.col(i) << kt, k - kt, 0.0, c;
       }
@@ -378,7 +378,7 @@ void system_diagonal(const DeformableModel& m, DeformableState& s, double h) {
         (h * s.contact_coef(1, c) + h2 * s.contact_coef(0, c)) * nrm.cwiseProduct(nrm);
   }
   if (!m.has_centre) dg.col(n).setOnes();  // unused column: keep it well defined
-  dg = dg.cwiseInverse();                   // stored inverted: CG multiplies
+  dg = dg.cwiseInverse();                  // stored inverted: CG multiplies
 }
 
 // Integration of positions and velocities by the chosen scheme; s.work_f holds the forces.

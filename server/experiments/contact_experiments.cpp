@@ -62,6 +62,14 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
   cp.damping_ns_per_m = std::stod(args.option("--damping", "1"));
   cp.friction_static = std::stod(args.option("--mu", "0.5"));
   cp.friction_kinetic = 0.8 * cp.friction_static;
+  if (!(cp.stiffness_n_per_m > 0.0 && cp.stiffness_n_per_m <= 1e6) ||
+      !(cp.damping_ns_per_m >= 0.0 && cp.damping_ns_per_m <= 1e4) ||
+      !(cp.friction_static >= 0.0 && cp.friction_static <= 10.0)) {
+    std::cerr << "contact-force-curve: --stiffness must be in (0, 1e6] N/m (got "
+              << cp.stiffness_n_per_m << "), --damping in [0, 1e4] N s/m (got "
+              << cp.damping_ns_per_m << "), --mu in [0, 10] (got " << cp.friction_static << ")\n";
+    return 2;
+  }
 
   teleop::CsvWriter csv(
       (args.out_dir / "contact_force_curve.csv").string(),
@@ -74,7 +82,8 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
 
   for (const double speed : speeds) {
     df::DeformableParams params;  // the deform module's defaults: the paper's sphere
-    params.integrator = df::parse_integrator_kind(args.option("--integrator", "implicit_euler"));
+    const std::string integrator = args.option("--integrator", "");
+    if (!integrator.empty()) params.integrator = df::parse_integrator_kind(integrator);
     teleop::sim::Plane floor;
     floor.id = 0;
     floor.name = "floor";

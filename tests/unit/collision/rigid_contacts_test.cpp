@@ -167,3 +167,26 @@ TEST(BroadPhase, PairsMatchBruteForce) {
     }
   }
 }
+
+TEST(RigidContacts, BoxAgainstBox) {
+  tc::RigidContacts rc;
+  rc.add_box(5, Vector3d(0.1, 0.1, 0.1), Eigen::Isometry3d::Identity());
+  std::vector<tc::RigidContact> out;
+  for (const double gap : {-0.02, -0.005, 0.01}) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.translation() = Vector3d(0.1 + 0.05 + gap, 0.02, -0.01);  // query half extent 0.05
+    rc.query_box(Vector3d(0.05, 0.05, 0.05), pose, out);
+    if (gap < 0.0) {
+      ASSERT_FALSE(out.empty()) << gap;
+      double deepest = 0.0;
+      for (const auto& c : out) {
+        deepest = std::max(deepest, c.depth_m);
+        EXPECT_EQ(c.object_id, 5);
+        EXPECT_GT(c.normal.x(), 0.99);  // pushed out along +x
+      }
+      EXPECT_NEAR(deepest, -gap, 1e-6);
+    } else {
+      EXPECT_TRUE(out.empty());
+    }
+  }
+}

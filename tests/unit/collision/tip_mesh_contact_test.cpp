@@ -331,6 +331,8 @@ TEST(TipMeshContact, UpdateAllocatesNothing) {
   contact.reset(m.x, m.tris);
   Eigen::Matrix3Xd fn = Eigen::Matrix3Xd::Zero(3, m.x.cols());
   Vector3d prev(0.0, 0.0, 0.35);
+  Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Zero(3, m.x.cols());
+  teleop::sim::EventQueue events;
   teleop::test::NoAllocScope scope;
   int contacts = 0;
   for (int i = 0; i < 600; ++i) {
@@ -340,8 +342,25 @@ TEST(TipMeshContact, UpdateAllocatesNothing) {
     contacts += res.in_contact ? 1 : 0;
     prev = now;
   }
+  // the overload with node velocities, and the event helper: press and leave once
+  contact.release();
+  prev = Vector3d(0.0, 0.0, 0.31);
+  for (int i = 0; i < 200; ++i) {
+    const Vector3d now = prev + Vector3d(0.0, 0.0, i < 100 ? -0.0002 : 0.0004);
+    const auto res = contact.update(m.x, &v, prev, now, 0.05, (now - prev) / kDt, kDt, fn);
+    tc::push_contact_events(res, 3, i * kDt, events);
+    prev = now;
+  }
   EXPECT_EQ(scope.allocations(), 0u);
   EXPECT_GT(contacts, 100);
+  teleop::sim::SimEvent e;
+  int begins = 0, ends = 0;
+  while (events.pop(e)) {
+    begins += e.kind == teleop::sim::EventKind::kContactBegin;
+    ends += e.kind == teleop::sim::EventKind::kContactEnd;
+  }
+  EXPECT_EQ(begins, 1);
+  EXPECT_EQ(ends, 1);
 }
 
 TEST(TipMeshContact, NonFiniteInputIsAFaultNotACrash) {
