@@ -425,3 +425,60 @@ TEST(Scenes, SphereScenesLoad) {
 }
 
 }  // namespace
+
+namespace {
+
+using namespace teleop::sim::deformable;
+using namespace teleop::sim::deformable::testing;
+
+// Mean horizontal velocity of the body (nodes and centre node) [m/s].
+double mean_vx(const DeformableModel& m, const DeformableState& s) {
+  return (s.v.row(0).dot(m.mass_kg) + m.centre_mass_kg * s.centre_v.x()) / m.total_mass_kg;
+}
+
+// A sphere resting on the floor and set sliding: without friction nothing acts horizontally
+// and it keeps its speed; with Coulomb friction the floor slows the sliding down.
+TEST(Contact, FrictionSlowsASlidingSphere) {
+  double final_vx[2];
+  for (int with_friction = 0; with_friction < 2; ++with_friction) {
+    DeformableParams p = small_params(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, 2);
+    p.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
+    p.centre_m = Eigen::Vector3d(0, 0, 0.245);
+    p.friction = with_friction == 1;
+    teleop::sim::Plane floor;
+    floor.friction = 0.5;
+    const DeformableModel m = build(p, {floor});
+    DeformableState s = make_state(m);
+    for (int k = 0; k < 1000; ++k) step(m, s, 1e-3, nullptr);  // settle on the floor
+    s.v.row(0).array() += 0.5;
+    s.centre_v.x() += 0.5;
+    for (int k = 0; k < 500; ++k) step(m, s, 1e-3, nullptr);
+    final_vx[with_friction] = mean_vx(m, s);
+    EXPECT_EQ(s.fault_count, 0u);
+  }
+  EXPECT_NEAR(final_vx[0], 0.5, 1e-6);  // frictionless: momentum kept
+  EXPECT_LT(final_vx[1], 0.45);         // friction: slowed (towards rolling)
+  EXPECT_GT(final_vx[1], 0.0);
+}
+
+// Thrown at a wall, the sphere is stopped and pushed back; no node ends beyond the wall.
+TEST(Contact, WallStopsAndReturnsTheSphere) {
+  DeformableParams p = small_params(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, 2);
+  teleop::sim::Plane wall;
+  wall.normal = Eigen::Vector3d(-1, 0, 0);
+  wall.offset_m = -0.3;  // free space: x <= 0.3
+  const DeformableModel m = build(p, {wall});
+  DeformableState s = make_state(m);
+  s.v.row(0).setConstant(1.0);
+  s.centre_v.x() = 1.0;
+  double max_x = 0.0;
+  for (int k = 0; k < 600; ++k) {
+    step(m, s, 1e-3, nullptr);
+    max_x = std::max(max_x, s.x.row(0).maxCoeff());
+  }
+  EXPECT_LT(mean_vx(m, s), 0.0);  // bounced back
+  EXPECT_LT(max_x, 0.3 + 0.02);   // penetration of the wall stays below 2 cm
+  EXPECT_EQ(s.fault_count, 0u);
+}
+
+}  // namespace
