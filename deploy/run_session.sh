@@ -2,10 +2,11 @@
 # The main job: set up, build, run a teleoperation session on the default scene with
 # teleop_server and teleop_master as separate processes on loopback, print a summary and
 # write charts.
-#   deploy/run_session.sh [--duration S] [--out DIR] [extra teleop_master flags...]
+#   deploy/run_session.sh [--duration S] [--out DIR] [extra teleop_master flags, e.g.
+#                         --scheme force-position --delay 20ms --jitter 2ms --loss 1%]
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-duration=10
+duration=0   # 0: the operator script's length (about 9 s)
 out="$root/out/session"
 extra=()
 while [ $# -gt 0 ]; do
@@ -20,18 +21,19 @@ build_dir="${BUILD_DIR:-$root/build}"
 mkdir -p "$out"
 domain="${TELEOP_DOMAIN:-7}"
 
-echo "== teleop session: default scene, ${duration} s, loopback, domain ${domain} =="
+echo "== teleop session (experiment 3): default scene, loopback, domain ${domain} =="
 "$build_dir/server/teleop_server" --domain "$domain" --quiet \
   --summary-json "$out/server.json" &
 server_pid=$!
 trap 'kill $server_pid 2>/dev/null || true' EXIT
 "$build_dir/client/teleop_master" --domain "$domain" --duration "$duration" \
-  --motion press --log "$out/master.csv" --summary-json "$out/master.json" "${extra[@]}"
+  --log "$out/master.csv" --summary-json "$out/master.json" "${extra[@]}"
 kill -TERM "$server_pid"
 wait "$server_pid" || true
 trap - EXIT
 
-/usr/bin/python3 "$root/tests/charts/session.py" "$out/master.csv" "$out/session.png" \
-  && echo "chart: $out/session.png"
+/usr/bin/python3 "$root/tests/charts/session.py" "$out/master.csv" "$out" \
+  "experiment 3: $(grep -o '"scheme": "[^"]*"' "$out/master.json" | cut -d'"' -f4), default scene" \
+  && echo "charts: $out/session.png $out/force_deformation.png"
 echo "server summary: $out/server.json"
 echo "master summary: $out/master.json"

@@ -44,6 +44,7 @@ struct SlaveSample {
   Eigen::Vector3d contact_force_n = Eigen::Vector3d::Zero();  ///< environment force on tip [N]
   Eigen::Vector3d wave_v = Eigen::Vector3d::Zero();           ///< backward wave variable
   double penetration_m = 0.0;                                 ///< deepest penetration [m]
+  double deformation_m = 0.0;  ///< indentation of a deformable body since contact began [m]
   bool in_contact = false;                                    ///< tip touches something
   bool valid = false;                                         ///< false: no sample received yet
 };

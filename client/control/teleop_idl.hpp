@@ -69,9 +69,11 @@ inline SlaveSample from_idl(const teleop::SlaveState& m) {
   s.contact_force_n = detail::get3(m.contact_force_n());
   s.wave_v = detail::get3(m.wave_v());
   s.penetration_m = m.penetration_m();
+  s.deformation_m = m.deformation_m();
   s.in_contact = m.in_contact();
   s.valid = s.position_m.allFinite() && s.velocity_mps.allFinite() &&
-            s.contact_force_n.allFinite() && std::isfinite(s.penetration_m);
+            s.contact_force_n.allFinite() && std::isfinite(s.penetration_m) &&
+            std::isfinite(s.deformation_m);
   return s;
 }
 

@@ -1,6 +1,7 @@
 #include "client/node/master_node.hpp"
 
 #include <Eigen/Core>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -48,7 +49,13 @@ double min_jerk(double t, double T) {
   return u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
 }
 
-constexpr std::size_t kCsvColumns = 24;
+constexpr std::size_t kCsvColumns = 25;
+/// A log row; the count must match the header exactly (checked at compile time).
+template <class... T>
+std::array<double, kCsvColumns> csv_row(T... v) {
+  static_assert(sizeof...(T) == kCsvColumns, "log row and header differ in length");
+  return {static_cast<double>(v)...};
+}
 /// Commands whose entry time is remembered for the loop-delay measurement.
 constexpr std::uint64_t kEntryRing = 1 << 16;
 
@@ -202,19 +209,32 @@ struct MasterNode::Impl {
 
     std::unique_ptr<CsvWriter> log;
     if (!options.log_csv.empty()) {
-      log = std::make_unique<CsvWriter>(
-          options.log_csv, std::vector<std::string>{"t_s",           "phase",
-                                                    "seq",           "xm_x",
-                                                    "xm_y",          "xm_z",
-                                                    "xs_x",          "xs_y",
-                                                    "xs_z",          "fe_x",
-                                                    "fe_y",          "fe_z",
-                                                    "fm_x",          "fm_y",
-                                                    "fm_z",          "rtt_ms",
-                                                    "link_ok",       "in_contact",
-                                                    "penetration_m", "energy_j",
-                                                    "safety_scale",  "position_error_m",
-                                                    "loop_delay_ms", "delay_injected_ms"});
+      log = std::make_unique<CsvWriter>(options.log_csv,
+                                        std::vector<std::string>{"t_s",
+                                                                 "phase",
+                                                                 "seq",
+                                                                 "xm_x",
+                                                                 "xm_y",
+                                                                 "xm_z",
+                                                                 "xs_x",
+                                                                 "xs_y",
+                                                                 "xs_z",
+                                                                 "fe_x",
+                                                                 "fe_y",
+                                                                 "fe_z",
+                                                                 "fm_x",
+                                                                 "fm_y",
+                                                                 "fm_z",
+                                                                 "rtt_ms",
+                                                                 "link_ok",
+                                                                 "in_contact",
+                                                                 "penetration_m",
+                                                                 "energy_j",
+                                                                 "safety_scale",
+                                                                 "position_error_m",
+                                                                 "deformation_m",
+                                                                 "loop_delay_ms",
+                                                                 "delay_injected_ms"});
     }
     std::vector<double> row(kCsvColumns, 0.0);
     row.reserve(kCsvColumns);
@@ -383,31 +403,13 @@ struct MasterNode::Impl {
         const double t = seconds_between(t0, now);
         const Eigen::Vector3d& xm = m.master_position_m;
         const Eigen::Vector3d& fe = newest.contact_force_n;
-        const double vals[kCsvColumns] = {
-            t,
-            homing_now ? 0.0 : 1.0,
-            static_cast<double>(seq),
-            xm.x(),
-            xm.y(),
-            xm.z(),
-            newest.position_m.x(),
-            newest.position_m.y(),
-            newest.position_m.z(),
-            fe.x(),
-            fe.y(),
-            fe.z(),
-            f.x(),
-            f.y(),
-            f.z(),
-            last_rtt,
-            safety.link_lost() ? 0.0 : 1.0,
-            newest.in_contact ? 1.0 : 0.0,
-            newest.penetration_m,
-            metrics.energy_j(),
-            safety.scale(),
-            (xm - newest.position_m).norm(),
-            last_loop_delay_ms,
-            (options.forward.delay_s + options.backward.delay_s) * 1e3};
+        const auto vals =
+            csv_row(t, homing_now ? 0.0 : 1.0, static_cast<double>(seq), xm.x(), xm.y(), xm.z(),
+                    newest.position_m.x(), newest.position_m.y(), newest.position_m.z(), fe.x(),
+                    fe.y(), fe.z(), f.x(), f.y(), f.z(), last_rtt, safety.link_lost() ? 0.0 : 1.0,
+                    newest.in_contact ? 1.0 : 0.0, newest.penetration_m, metrics.energy_j(),
+                    safety.scale(), (xm - newest.position_m).norm(), newest.deformation_m,
+                    last_loop_delay_ms, (options.forward.delay_s + options.backward.delay_s) * 1e3);
         for (std::size_t i = 0; i < kCsvColumns; ++i) row[i] = vals[i];
         log->row(row);
       }

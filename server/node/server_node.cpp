@@ -377,6 +377,7 @@ struct ServerNode::Impl {
       copy3(state.contact_force_n(), out.contact_force_n);
       copy3(state.contact_torque_nm(), out.contact_torque_nm);
       state.penetration_m(out.penetration_m);
+      state.deformation_m(out.deformation_m);
       state.in_contact(out.in_contact);
       state.contact_object(out.contact_object);
       state.holding(applied.hold);

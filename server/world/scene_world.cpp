@@ -9,7 +9,7 @@ collision::TipContactParams load_tip_contact_params(const config::Node& node) {
   if (!node.defined()) return p;
   node.reject_unknown_keys({"stiffness_n_per_m", "damping_ns_per_m", "damping_ramp_m",
                             "friction_static", "friction_kinetic", "max_force_n", "patch_radius_m",
-                            "patch_blend"});
+                            "patch_blend", "node_stiffness_n_per_m", "node_damping_ns_per_m"});
   p.stiffness_n_per_m = node.number_or("stiffness_n_per_m", p.stiffness_n_per_m, 1.0, 1e7);
   p.damping_ns_per_m = node.number_or("damping_ns_per_m", p.damping_ns_per_m, 0.0, 1e5);
   p.damping_ramp_m = node.number_or("damping_ramp_m", p.damping_ramp_m, 0.0, 0.1);
@@ -22,6 +22,10 @@ collision::TipContactParams load_tip_contact_params(const config::Node& node) {
   p.max_force_n = node.number_or("max_force_n", p.max_force_n, 0.0, 1e5);
   p.patch_radius_m = node.number_or("patch_radius_m", p.patch_radius_m, 0.0, 1.0);
   p.patch_blend = node.number_or("patch_blend", p.patch_blend, 0.0, 1.0);
+  p.node_stiffness_n_per_m =
+      node.number_or("node_stiffness_n_per_m", p.node_stiffness_n_per_m, 0.0, 1e6);
+  p.node_damping_ns_per_m =
+      node.number_or("node_damping_ns_per_m", p.node_damping_ns_per_m, 0.0, 1e4);
   return p;
 }
 
@@ -71,6 +75,7 @@ void SceneWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) 
   deformable_force_.setZero();
   double deepest = 0.0;
   int deepest_id = -1;
+  double deformation = 0.0;
   for (auto& bp : bodies_) {
     DeformableEntry& b = *bp;
     b.state.f_ext.setZero();
@@ -83,6 +88,10 @@ void SceneWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) 
     }
     if (b.last.in_contact) {
       deformable_force_ += b.last.force_on_tip_n;
+      // the paper's x = |P(w) - P0|: how far the tip has gone in since it touched, along the
+      // surface normal at the entry point
+      const Eigen::Vector3d touch_centre = b.last.entry_point_m + tip_radius_m_ * b.last.normal;
+      deformation = std::max(deformation, (touch_centre - tip_now).dot(b.last.normal));
       if (b.last.penetration_m > deepest) {
         deepest = b.last.penetration_m;
         deepest_id = b.object_id;
@@ -138,6 +147,7 @@ void SceneWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) 
     out_.contact_object = deepest_id;
   }
   out_.in_contact = out_.in_contact || deepest_id >= 0;
+  out_.deformation_m = deformation;
   was_in_contact_ = out_.in_contact;
 }
 

@@ -32,7 +32,8 @@ struct WorldOutput {
   Eigen::Vector3d tip_angular_velocity_radps = Eigen::Vector3d::Zero();
   Eigen::Vector3d contact_force_n = Eigen::Vector3d::Zero();  ///< environment force on the tip
   Eigen::Vector3d contact_torque_nm = Eigen::Vector3d::Zero();
-  double penetration_m = 0.0;
+  double penetration_m = 0.0;  ///< contact spring compression x of F = k x [m]
+  double deformation_m = 0.0;  ///< indentation of a deformable body since contact began [m]
   bool in_contact = false;
   int contact_object = -1;
   int joint_count = 0;
