@@ -80,8 +80,23 @@ void SceneWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) 
     DeformableEntry& b = *bp;
     b.state.f_ext.setZero();
     const bool was = b.last.in_contact;
-    b.last = b.contact.update(b.state.x, &b.state.v, tip_prev_, tip_now, tip_radius_m_, tip_vel,
-                              dt_s, b.state.f_ext);
+    // broad phase: out of contact and the tip's swept sphere clear of the body's box (plus a
+    // centimetre), the tree refit and the query are skipped (about 20 us at level 4)
+    bool near = b.contact.in_contact();
+    if (!near) {
+      const Eigen::Vector3d lo = b.state.x.rowwise().minCoeff();
+      const Eigen::Vector3d hi = b.state.x.rowwise().maxCoeff();
+      const double margin = tip_radius_m_ + 0.01;
+      const Eigen::Vector3d tlo = tip_prev_.cwiseMin(tip_now).array() - margin;
+      const Eigen::Vector3d thi = tip_prev_.cwiseMax(tip_now).array() + margin;
+      near = (tlo.array() <= hi.array()).all() && (thi.array() >= lo.array()).all();
+    }
+    if (near) {
+      b.last = b.contact.update(b.state.x, &b.state.v, tip_prev_, tip_now, tip_radius_m_, tip_vel,
+                                dt_s, b.state.f_ext);
+    } else {
+      b.last = collision::TipContactResult{};
+    }
     if (b.last.fault) {
       events.push(EventKind::kFault, Severity::kWarning, out_.sim_time_s, b.object_id,
                   "tip-mesh contact saw non-finite data: contact dropped, force zero");

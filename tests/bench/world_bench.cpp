@@ -1,0 +1,93 @@
+// teleop_bench world --out DIR: wall time of one physics step of the assembled default scene
+// (PUMA 560 in ODE, level-4 elastic sphere, tip-mesh contact, planes) in the phases of a
+// session: the sphere settling under gravity, resting untouched (asleep), free motion of the
+// robot above it, and the tip pressing into it. Writes DIR/world.csv (median, p90, p99, max)
+// and DIR/world.png. --scene FILE benchmarks another scene; --dt S another step.
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "common/util/clock.hpp"
+#include "common/util/csv.hpp"
+#include "common/util/registry.hpp"
+#include "common/util/stats.hpp"
+#include "server/world/scene.hpp"
+#include "server/world/scene_world.hpp"
+
+namespace teleop::bench {
+namespace {
+
+int world(const CommandArgs& args) {
+  const std::string scene_file =
+      args.option("--scene", std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
+  const double dt = std::stod(args.option("--dt", "0.001"));
+  const int n = args.quick ? 300 : 3000;
+  const sim::SceneConfig scene = sim::load_scene(scene_file);
+  sim::SceneWorld w(scene);
+  sim::EventQueue events;
+  sim::SimEvent e;
+  CsvWriter csv((args.out_dir / "world.csv").string(),
+                {"phase", "dt_s", "steps", "step_us_median", "step_us_p90", "step_us_p99",
+                 "step_us_max", "in_contact_fraction", "sleeping_fraction"});
+  const Eigen::Vector3d start = w.output().tip_position_m;
+  Eigen::Vector3d top(0.6, 0.0, 0.5);
+  if (w.deformable_count() > 0) {
+    const auto& x = w.body(0).state.x;
+    Eigen::Index i = 0;
+    x.row(2).maxCoeff(&i);
+    top = x.col(i);
+  }
+  auto run = [&](const char* phase, int steps, auto target) {
+    std::vector<double> us;
+    us.reserve(static_cast<std::size_t>(steps));
+    int contact = 0, sleeping = 0;
+    for (int k = 0; k < steps; ++k) {
+      sim::WorldCommand c;
+      c.position_m = target(k);
+      const auto t0 = now_ns();
+      w.step(c, dt, events);
+      us.push_back(static_cast<double>(now_ns() - t0) * 1e-3);
+      contact += w.output().in_contact;
+      if (w.deformable_count() > 0) sleeping += w.body(0).state.sleeping;
+      while (events.pop(e)) {
+      }
+    }
+    const Summary s = summarize(us);
+    csv.row_text({phase, format_number(dt), std::to_string(steps), format_number(s.p50),
+                  format_number(s.p90), format_number(s.p99), format_number(s.max),
+                  format_number(static_cast<double>(contact) / steps),
+                  format_number(static_cast<double>(sleeping) / steps)});
+    std::printf(
+        "%-10s dt %.4f s  step p50 %7.1f us  p90 %7.1f us  p99 %7.1f us  max %7.1f us  "
+        "contact %3.0f%%  asleep %3.0f%%\n",
+        phase, dt, s.p50, s.p90, s.p99, s.max, 100.0 * contact / steps, 100.0 * sleeping / steps);
+  };
+  const Eigen::Vector3d above = top + Eigen::Vector3d(0, 0, 0.1);
+  run("settling", n, [&](int) { return start; });
+  run("resting", n, [&](int) { return start; });
+  run("free", n, [&](int k) {
+    const double a = 2 * M_PI * k * dt;
+    return Eigen::Vector3d(above + 0.08 * Eigen::Vector3d(std::cos(a), std::sin(a), 0));
+  });
+  run("approach", n / 2, [&](int k) {
+    return Eigen::Vector3d(above + (top + Eigen::Vector3d(0, 0, 0.05) - above) *
+                                       std::min(1.0, 2.0 * k / n));
+  });
+  run("pressing", n, [&](int k) {
+    const double depth = 0.02 * std::min(1.0, 1.0 * k / (n / 3));
+    return Eigen::Vector3d(top + Eigen::Vector3d(0, 0, 0.05 - depth));
+  });
+  csv.flush();
+  if (!args.no_chart) {
+    run_chart_script("world_bench.py", {(args.out_dir / "world.csv").string(),
+                                        (args.out_dir / "world.png").string()});
+  }
+  return 0;
+}
+
+TELEOP_REGISTER_COMMAND(bench, "world", "physics step of the assembled default scene, by phase",
+                        world);
+
+}  // namespace
+}  // namespace teleop::bench
