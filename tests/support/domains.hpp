@@ -11,5 +11,6 @@ inline constexpr int kDdsHelpers = 46;
 inline constexpr int kExperiment3 = 47;
 inline constexpr int kMeshTopics = 48;
 inline constexpr int kMonitor = 49;
+// kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
