@@ -169,7 +169,7 @@ TEST(ExternalDevice, ADriverProcessTakesPartThroughTheDeviceTopics) {
     }
   });
   Process master(kMaster,
-                 {"--domain", d, "--device", "external", "--summary-json", mj, "--duration", "5",
+                 {"--domain", d, "--device", "external", "--summary-json", mj, "--duration", "6",
                   "--homing", "1"},
                  "ext_master");
   const int rc = master.wait_for(120.0);
