@@ -6,6 +6,12 @@
 
 #include "server/deformable/deformable.hpp"
 
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
+#define TELEOP_HOT_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define TELEOP_HOT_CLONES
+#endif
+
 namespace teleop::sim::deformable {
 
 namespace {
@@ -81,6 +87,9 @@ void update_rotations(const DeformableModel& m, DeformableState& s, int max_iter
 }
 
 // Total force on every node (and the centre node, column N) into s.work_f at (s.x, s.v).
+// Compiled twice, for x86-64-v3 (AVX2, FMA) and for the baseline; the loader picks the one the
+// CPU supports (GCC function multi-versioning), so the binary still runs on any x86-64.
+TELEOP_HOT_CLONES
 void compute_forces(const DeformableModel& m, DeformableState& s, double h, ForceFlags flags) {
   const int n = m.node_count;
   const DeformableParams& p = m.params;
@@ -118,6 +127,32 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
         inv_len(e) = (x.col(m.edges(1, e)) - x.col(m.edges(0, e))).squaredNorm();
       }
       inv_len = inv_len.array().max(1e-24).sqrt().inverse();
+      if (!flags.jacobian) {
+        // the explicit/symplectic hot path in plain scalar arithmetic on the raw 3 x N arrays:
+        // Eigen's 2+1-lane handling of 3-vectors (shuffles for every dot product) cost more
+        // than it saved here
+        const double* xp = x.data();
+        const double* vp = v.data();
+        const int* ep = m.edges.data();
+        const double* kp = m.edge_k_iso.data();
+        const double* l0 = m.rest_length_m.data();
+        const double* il = inv_len.data();
+        double* fp = Fe.data();
+        for (int e = 0; e < ne; ++e) {
+          const int i = 3 * ep[2 * e], j = 3 * ep[2 * e + 1];
+          const double dx = xp[j] - xp[i], dy = xp[j + 1] - xp[i + 1], dz = xp[j + 2] - xp[i + 2];
+          const double inv_l = il[e];
+          const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+          const double rate =
+              (vp[j] - vp[i]) * ux + (vp[j + 1] - vp[i + 1]) * uy + (vp[j + 2] - vp[i + 2]) * uz;
+          const double k = kp[e];
+          const double fs = k * ((dx * dx + dy * dy + dz * dz) * inv_l - l0[e]) + beta * k * rate;
+          fp[3 * e] = fs * ux;
+          fp[3 * e + 1] = fs * uy;
+          fp[3 * e + 2] = fs * uz;
+        }
+        break;
+      }
       for (int e = 0; e < ne; ++e) {
         const int i = m.edges(0, e), j = m.edges(1, e);
         const Vec3 d = x.col(j) - x.col(i);
@@ -182,18 +217,22 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
   {
     const auto& off = m.node_edge_offsets;
     const auto& inc = m.node_edges;
+    const double* fe = Fe.data();
+    double* fp = F.data();
     for (int i = 0; i < n; ++i) {
-      Vec3 sum = Vec3::Zero();
+      double sx = 0.0, sy = 0.0, sz = 0.0;
       for (int k = off[static_cast<std::size_t>(i)]; k < off[static_cast<std::size_t>(i) + 1];
            ++k) {
         const int code = inc[static_cast<std::size_t>(k)];  // e (first node) or ~e (second)
-        if (code >= 0) {
-          sum += Fe.col(code);
-        } else {
-          sum -= Fe.col(~code);
-        }
+        const int c = 3 * (code >= 0 ? code : ~code);
+        const double sign = code >= 0 ? 1.0 : -1.0;
+        sx += sign * fe[c];
+        sy += sign * fe[c + 1];
+        sz += sign * fe[c + 2];
       }
-      F.col(i) += sum;
+      fp[3 * i] += sx;
+      fp[3 * i + 1] += sy;
+      fp[3 * i + 2] += sz;
     }
   }
 
@@ -203,23 +242,53 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
     Eigen::VectorXd& inv_len = s.node_scratch;
     for (int i = 0; i < n; ++i) inv_len(i) = (x.col(i) - s.centre_x).squaredNorm();
     inv_len = inv_len.array().max(1e-24).sqrt().inverse();
-    for (int i = 0; i < n; ++i) {
-      const Vec3 d = x.col(i) - s.centre_x;
-      const double inv_l = inv_len(i);
-      const Vec3 u = d * inv_l;
-      const double l = d.squaredNorm() * inv_l;
-      const double k = m.radial_k(i);
-      const double c = p.radial_damping_s * k;
-      const double fs = -k * (l - m.radial_rest_m(i)) - c * (v.col(i) - s.centre_v).dot(u);
-      F.col(i) += fs * u;
-      fc -= fs * u;
-      if (flags.jacobian) {
-        const double kt = k * std::max(0.0, 1.0 - m.radial_rest_m(i) * inv_l);
-        s.radial_dir.col(i) = u;
-        s.radial_coef.col(i) << kt, k - kt, 0.0, c;
+    if (!flags.jacobian) {
+      const double* xp = x.data();
+      const double* vp = v.data();
+      double* fp = F.data();
+      const double cx = s.centre_x.x(), cy = s.centre_x.y(), cz = s.centre_x.z();
+      const double cvx = s.centre_v.x(), cvy = s.centre_v.y(), cvz = s.centre_v.z();
+      const double* kr = m.radial_k.data();
+      const double* r0 = m.radial_rest_m.data();
+      const double* il = inv_len.data();
+      const double rd = p.radial_damping_s;
+      double fcx = 0.0, fcy = 0.0, fcz = 0.0;
+      for (int i = 0; i < n; ++i) {
+        const int a = 3 * i;
+        const double dx = xp[a] - cx, dy = xp[a + 1] - cy, dz = xp[a + 2] - cz;
+        const double inv_l = il[i];
+        const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+        const double l = (dx * dx + dy * dy + dz * dz) * inv_l;
+        const double rate = (vp[a] - cvx) * ux + (vp[a + 1] - cvy) * uy + (vp[a + 2] - cvz) * uz;
+        const double k = kr[i];
+        const double fs = -k * (l - r0[i]) - rd * k * rate;
+        fp[a] += fs * ux;
+        fp[a + 1] += fs * uy;
+        fp[a + 2] += fs * uz;
+        fcx -= fs * ux;
+        fcy -= fs * uy;
+        fcz -= fs * uz;
       }
+      F.col(n) += Vec3(fcx, fcy, fcz);
+    } else {
+      for (int i = 0; i < n; ++i) {
+        const Vec3 d = x.col(i) - s.centre_x;
+        const double inv_l = inv_len(i);
+        const Vec3 u = d * inv_l;
+        const double l = d.squaredNorm() * inv_l;
+        const double k = m.radial_k(i);
+        const double c = p.radial_damping_s * k;
+        const double fs = -k * (l - m.radial_rest_m(i)) - c * (v.col(i) - s.centre_v).dot(u);
+        F.col(i) += fs * u;
+        fc -= fs * u;
+        if (flags.jacobian) {
+          const double kt = k * std::max(0.0, 1.0 - m.radial_rest_m(i) * inv_l);
+          s.radial_dir.col(i) = u;
+          s.radial_coef.col(i) << kt, k - kt, 0.0, c;
+        }
+      }
+      F.col(n) += fc;
     }
-    F.col(n) += fc;
   }
 
   // node-plane penalty contact. Implicit Euler: spring, damping and (rate-limited) Coulomb
@@ -271,6 +340,7 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
 // after the velocity update (implicit in the damping, so stable for any damping ratio):
 //   v_n <- v_n / (1 + h c / m), never pulling (total normal impulse >= 0);
 //   tangential impulse <= mu * normal impulse, and never more than stops the sliding.
+TELEOP_HOT_CLONES
 void apply_contact_impulses(const DeformableModel& m, DeformableState& s, double h) {
   for (int c = 0; c < s.contact_count; ++c) {
     const int i = s.contact_node[static_cast<std::size_t>(c)];
@@ -382,6 +452,7 @@ void system_diagonal(const DeformableModel& m, DeformableState& s, double h) {
 }
 
 // Integration of positions and velocities by the chosen scheme; s.work_f holds the forces.
+TELEOP_HOT_CLONES
 void integrate(const DeformableModel& m, DeformableState& s, double h) {
   const int n = m.node_count;
   const auto kind = m.params.integrator;
@@ -503,6 +574,7 @@ void internal_forces(const DeformableModel& m, DeformableState& s, Eigen::Matrix
   out = s.work_f.leftCols(m.node_count);
 }
 
+TELEOP_HOT_CLONES
 StepStatus step(const DeformableModel& m, DeformableState& s, double h,
                 teleop::sim::EventQueue* events) {
   const int n = m.node_count;
