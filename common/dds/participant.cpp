@@ -177,6 +177,9 @@ DataWriterQos writer_qos(Publisher* pub, TopicQos qos) {
     q.reliable_writer_qos().times.heartbeatPeriod.seconds = 0;
     q.reliable_writer_qos().times.heartbeatPeriod.nanosec = 100'000'000;
   }
+  // no data sharing: it maps the writer's history into other processes (boost interprocess),
+  // the same machinery that aborts a survivor when a peer dies holding its mutex
+  q.data_sharing().off();
   q.representation().m_value.clear();
   q.representation().m_value.push_back(XCDR_DATA_REPRESENTATION);
   return q;
@@ -185,6 +188,7 @@ DataWriterQos writer_qos(Publisher* pub, TopicQos qos) {
 DataReaderQos reader_qos(Subscriber* sub, TopicQos qos) {
   DataReaderQos q = sub->get_default_datareader_qos();
   apply(q, qos);
+  q.data_sharing().off();
   if (qos == TopicQos::kStream) {
     // the writer keeps only the newest sample; the reader holds a few so that a burst arriving
     // between two takes (e.g. from a jittered channel) is counted, not silently overwritten

@@ -136,23 +136,9 @@ void SceneWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) 
     in.external_force_n = deformable_force_;
     robot_->step(in, dt_s, &events);
   } else {
-    ToolInput in;
-    in.target_position_m = cmd.position_m;
-    in.target_orientation = cmd.orientation;
-    in.target_velocity_mps = cmd.velocity_mps;
-    in.target_angular_velocity_radps = cmd.angular_velocity_radps;
-    in.kp_override_n_per_m = cmd.kp_override_n_per_m;
-    in.hold = cmd.hold;
+    ToolInput in = to_tool_input(cmd);
     in.external_force_n = deformable_force_;
-    const ToolState before = tool_state_;
-    tool_step(tool_model_, tool_state_, in, dt_s);
-    if (!tool_state_.position_m.allFinite() || !tool_state_.velocity_mps.allFinite()) {
-      tool_state_ = before;
-      tool_state_.velocity_mps.setZero();
-      tool_state_.angular_velocity_radps.setZero();
-      events.push(EventKind::kFault, Severity::kError, out_.sim_time_s, 0.0,
-                  "tool step produced a non-finite state; restored the previous state");
-    }
+    tool_step_checked(tool_model_, tool_state_, in, dt_s, events);
   }
   read_outputs();
   // 4. the deformable contact adds to the planes' force on the tip

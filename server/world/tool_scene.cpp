@@ -72,6 +72,23 @@ void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input,
   state.sim_time_s += dt;
 }
 
+bool tool_step_checked(const ToolModel& model, ToolState& state, const ToolInput& input, double dt,
+                       EventQueue& events) {
+  const ToolState before = state;
+  tool_step(model, state, input, dt);
+  if (state.position_m.allFinite() && state.velocity_mps.allFinite() &&
+      state.orientation.coeffs().allFinite() && state.angular_velocity_radps.allFinite()) {
+    return true;
+  }
+  state = before;
+  state.velocity_mps.setZero();
+  state.angular_velocity_radps.setZero();
+  state.contact_force_n.setZero();
+  events.push(EventKind::kFault, Severity::kError, state.sim_time_s, 0.0,
+              "tool step produced a non-finite state; restored the previous state");
+  return false;
+}
+
 double tool_kinetic_energy(const ToolModel& model, const ToolState& state) {
   return 0.5 * model.mass_kg * state.velocity_mps.squaredNorm() +
          0.5 * model.inertia_kgm2() * state.angular_velocity_radps.squaredNorm();

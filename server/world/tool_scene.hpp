@@ -10,6 +10,7 @@
 #include <array>
 #include <string>
 
+#include "server/world/events.hpp"
 #include "server/world/plane.hpp"
 
 namespace teleop::sim {
@@ -62,6 +63,11 @@ struct ToolState {
 
 /// Advances the tool by dt [s] (semi-implicit Euler). No allocation.
 void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input, double dt);
+
+/// tool_step() that checks the result: on a non-finite state it restores the state from
+/// before the step with zero velocity and pushes a kFault event. Returns false on a fault.
+bool tool_step_checked(const ToolModel& model, ToolState& state, const ToolInput& input, double dt,
+                       EventQueue& events);
 
 /// Kinetic energy of the tool [J].
 double tool_kinetic_energy(const ToolModel& model, const ToolState& state);

@@ -12,7 +12,7 @@ ToolWorld::ToolWorld(const SceneConfig& scene) : model_(scene.tool) {
   out_.tip_position_m = state_.position_m;
 }
 
-void ToolWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) {
+ToolInput to_tool_input(const WorldCommand& cmd) {
   ToolInput in;
   in.target_position_m = cmd.position_m;
   in.target_orientation = cmd.orientation;
@@ -20,19 +20,11 @@ void ToolWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) {
   in.target_angular_velocity_radps = cmd.angular_velocity_radps;
   in.kp_override_n_per_m = cmd.kp_override_n_per_m;
   in.hold = cmd.hold;
-  const ToolState before = state_;
-  tool_step(model_, state_, in, dt_s);
+  return in;
+}
 
-  // numerical fault: restore the last good state, zero its velocity, report
-  if (!state_.position_m.allFinite() || !state_.velocity_mps.allFinite() ||
-      !state_.orientation.coeffs().allFinite()) {
-    state_ = before;
-    state_.velocity_mps.setZero();
-    state_.angular_velocity_radps.setZero();
-    state_.contact_force_n.setZero();
-    events.push(EventKind::kFault, Severity::kError, state_.sim_time_s, 0.0,
-                "tool step produced a non-finite state; restored the previous state");
-  }
+void ToolWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) {
+  tool_step_checked(model_, state_, to_tool_input(cmd), dt_s, events);
 
   out_.tip_position_m = state_.position_m;
   out_.tip_orientation = state_.orientation;

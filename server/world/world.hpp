@@ -59,6 +59,9 @@ class World {
   virtual DeformableView deformable(int /*index*/) const { return {}; }
 };
 
+/// The tool scene's input for a world command.
+ToolInput to_tool_input(const WorldCommand& cmd);
+
 /// Builds the world for a scene. @throws config::ConfigError for an invalid scene.
 std::unique_ptr<World> make_world(const SceneConfig& scene);
 

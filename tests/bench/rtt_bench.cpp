@@ -1,7 +1,7 @@
 // teleop_bench rtt --out DIR: DDS round trip between two processes on loopback, for a
 // 200-byte sample (a command) and a 60 KB sample (a level-4 mesh frame in doubles), paced at
-// 1 kHz and as fast as possible, over shared memory + UDP (profile loopback) and UDP only
-// (profile loopback_udp). Writes DIR/rtt.csv and DIR/rtt.png.
+// 1 kHz and as fast as possible, over UDP on 127.0.0.1 (profile loopback, the default) and
+// shared memory + UDP (profile loopback_shm). Writes DIR/rtt.csv and DIR/rtt.png.
 //
 // The echo side is this same executable, started as `teleop_bench rtt-echo`.
 #include <unistd.h>
@@ -95,7 +95,7 @@ int rtt(const CommandArgs& args) {
   const std::string csv_path = (args.out_dir / "rtt.csv").string();
   CsvWriter csv(csv_path, {"profile", "payload_bytes", "mode", "samples", "lost", "rtt_us_p50",
                            "rtt_us_p90", "rtt_us_p99", "rtt_us_p999", "rtt_us_max"});
-  for (const std::string profile : {"loopback", "loopback_udp"}) {
+  for (const std::string profile : {"loopback", "loopback_shm"}) {
     // the echo side: this executable in another process
     char self[4096];
     const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);

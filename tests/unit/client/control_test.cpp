@@ -1,6 +1,8 @@
 // Bilateral control, metrics, verdict and safety, checked on the in-process loop.
 #include <gtest/gtest.h>
 
+#include "tests/support/config_error.hpp"
+
 #include <cmath>
 #include <functional>
 
@@ -20,14 +22,7 @@ using teleop::config::ConfigError;
 
 namespace {
 
-std::string error_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string error_of(const std::function<void()>& fn) { return teleop::test::config_error_of(fn); }
 
 /// A press scenario whose operator steps down into the object and holds (steady contact).
 struct SteadyContact {

@@ -2,6 +2,8 @@
 // FIFO without reordering; allocation-free; bad flags and YAML rejected with clear errors.
 #include <gtest/gtest.h>
 
+#include "tests/support/config_error.hpp"
+
 #include <cmath>
 #include <functional>
 #include <vector>
@@ -15,14 +17,7 @@ using teleop::config::ConfigError;
 
 namespace {
 
-std::string error_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string error_of(const std::function<void()>& fn) { return teleop::test::config_error_of(fn); }
 
 struct Delivery {
   int value;

@@ -1,6 +1,8 @@
 // Haptic device layer: simulated device with operator model, replay, external adapter.
 #include <gtest/gtest.h>
 
+#include "tests/support/config_error.hpp"
+
 #include <cmath>
 #include <functional>
 #include <vector>
@@ -17,14 +19,7 @@ using teleop::config::ConfigError;
 
 namespace {
 
-std::string error_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string error_of(const std::function<void()>& fn) { return teleop::test::config_error_of(fn); }
 
 SimulatedDeviceParams step_params() {
   SimulatedDeviceParams p;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/config_error.hpp"
+
 #include <functional>
 
 using teleop::config::ConfigError;
@@ -9,14 +11,7 @@ using teleop::config::Node;
 
 namespace {
 
-std::string error_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string error_of(const std::function<void()>& fn) { return teleop::test::config_error_of(fn); }
 
 TEST(Config, NumberInRangeIsReturned) {
   const Node n = Node::parse("sphere: {radius_m: 0.25}", "scene.yaml");
