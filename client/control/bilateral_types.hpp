@@ -45,8 +45,8 @@ struct SlaveSample {
   Eigen::Vector3d wave_v = Eigen::Vector3d::Zero();           ///< backward wave variable
   double penetration_m = 0.0;                                 ///< deepest penetration [m]
   double deformation_m = 0.0;  ///< indentation of a deformable body since contact began [m]
-  bool in_contact = false;                                    ///< tip touches something
-  bool valid = false;                                         ///< false: no sample received yet
+  bool in_contact = false;     ///< tip touches something
+  bool valid = false;          ///< false: no sample received yet
 };
 
 /// Master (device) frame <-> slave (world) frame. x_s = offset + s R x_m; f_m = k_f R^T f_s.

@@ -58,8 +58,7 @@ void PointSlave::step(const SlaveCommand& cmd, double dt) {
     const double vn = n.dot(s.velocity_mps);
     // same law as the server's tool scene: damping ramps in over the first millimetre
     const double ramp = std::min(1.0, depth / teleop::sim::kPlaneDampingRampM);
-    const double mag =
-        std::max(0.0, o.stiffness_n_per_m * depth - ramp * o.damping_ns_per_m * vn);
+    const double mag = std::max(0.0, o.stiffness_n_per_m * depth - ramp * o.damping_ns_per_m * vn);
     f_env += mag * n;
     if (depth > deepest) {
       deepest = depth;

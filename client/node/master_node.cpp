@@ -236,8 +236,6 @@ struct MasterNode::Impl {
                                                                  "loop_delay_ms",
                                                                  "delay_injected_ms"});
     }
-    std::vector<double> row(kCsvColumns, 0.0);
-    row.reserve(kCsvColumns);
 
     if (!options.quiet) {
       std::fprintf(stderr,
@@ -410,8 +408,7 @@ struct MasterNode::Impl {
                     newest.in_contact ? 1.0 : 0.0, newest.penetration_m, metrics.energy_j(),
                     safety.scale(), (xm - newest.position_m).norm(), newest.deformation_m,
                     last_loop_delay_ms, (options.forward.delay_s + options.backward.delay_s) * 1e3);
-        for (std::size_t i = 0; i < kCsvColumns; ++i) row[i] = vals[i];
-        log->row(row);
+        log->row(vals.data(), vals.size());
       }
       loop.wait();
     }

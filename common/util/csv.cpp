@@ -31,6 +31,20 @@ void CsvWriter::row(const std::vector<double>& values) {
   out_ << '\n';
 }
 
+void CsvWriter::row(const double* values, std::size_t count) {
+  if (count != columns_) {
+    throw std::logic_error("CsvWriter: row of " + std::to_string(count) + " values for " +
+                           std::to_string(columns_) + " columns in " + path_);
+  }
+  char buf[32];
+  for (std::size_t i = 0; i < count; ++i) {
+    if (i) out_.put(',');
+    const auto res = std::to_chars(buf, buf + sizeof(buf), values[i]);
+    out_.write(buf, res.ptr - buf);
+  }
+  out_.put('\n');
+}
+
 void CsvWriter::row_text(const std::vector<std::string>& fields) {
   if (fields.size() != columns_) {
     throw std::logic_error("CsvWriter: row of " + std::to_string(fields.size()) + " fields for " +

@@ -14,6 +14,9 @@ class CsvWriter {
   /// Writes one row of numbers; the count must match the header.
   void row(std::initializer_list<double> values);
   void row(const std::vector<double>& values);
+  /// Writes one row of `count` numbers without allocating (stack buffer, buffered stream):
+  /// for rows written from real-time loops.
+  void row(const double* values, std::size_t count);
   /// Writes one row of pre-formatted fields.
   void row_text(const std::vector<std::string>& fields);
   void flush() { out_.flush(); }

@@ -6,7 +6,8 @@
 
 #include "server/deformable/deformable.hpp"
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
+    !defined(__SANITIZE_ADDRESS__)
 #define TELEOP_HOT_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define TELEOP_HOT_CLONES

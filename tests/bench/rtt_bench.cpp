@@ -74,8 +74,8 @@ Result measure(dds::Writer<MeshFramePubSubType>& ping, std::mutex& m, std::condi
     const auto t_send = now_ns();
     ping.write(f);
     std::unique_lock<std::mutex> lock(m);
-    const bool ok = cv.wait_for(lock, std::chrono::milliseconds(100),
-                                [&] { return last_pong >= id; });
+    const bool ok =
+        cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return last_pong >= id; });
     const auto t_recv = now_ns();
     lock.unlock();
     if (ok) {
@@ -101,8 +101,9 @@ int rtt(const CommandArgs& args) {
     const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
     if (n <= 0) throw std::runtime_error("cannot find /proc/self/exe");
     self[n] = '\0';
-    teleop::test::Process echo(self, {"rtt-echo", "--out", args.out_dir.string(), "--domain",
-                                      std::to_string(domain), "--profile", profile},
+    teleop::test::Process echo(self,
+                               {"rtt-echo", "--out", args.out_dir.string(), "--domain",
+                                std::to_string(domain), "--profile", profile},
                                "rtt_echo");
     dds::Participant p(dds::ParticipantOptions{profile, domain, "rtt-ping"});
     dds::Writer<MeshFramePubSubType> ping(p, kPing, dds::TopicQos::kStream);
@@ -131,10 +132,9 @@ int rtt(const CommandArgs& args) {
         const Result r = measure(ping, m, cv, last_pong, floats, samples, paced);
         const std::size_t bytes = 24 + 4 * floats;
         csv.row_text({profile, std::to_string(bytes), paced ? "paced_1kHz" : "max_rate",
-                      std::to_string(samples), std::to_string(r.lost),
-                      format_number(r.rtt_us.p50), format_number(r.rtt_us.p90),
-                      format_number(r.rtt_us.p99), format_number(r.rtt_us.p999),
-                      format_number(r.rtt_us.max)});
+                      std::to_string(samples), std::to_string(r.lost), format_number(r.rtt_us.p50),
+                      format_number(r.rtt_us.p90), format_number(r.rtt_us.p99),
+                      format_number(r.rtt_us.p999), format_number(r.rtt_us.max)});
         std::printf("%-13s %6zu B %-10s p50 %7.1f us  p99 %7.1f us  p99.9 %7.1f us  lost %llu\n",
                     profile.c_str(), bytes, paced ? "1 kHz" : "max", r.rtt_us.p50, r.rtt_us.p99,
                     r.rtt_us.p999, static_cast<unsigned long long>(r.lost));

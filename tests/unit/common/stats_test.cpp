@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cmath>
+#include <cstdio>
 
 #include "common/util/rate_loop.hpp"
 #include "tests/support/alloc_counter.hpp"
@@ -59,6 +61,41 @@ TEST(RateLoop, HoldsRateAndCountsOverruns) {
 TEST(RateLoop, RejectsNonPositiveRate) {
   EXPECT_THROW(teleop::RateLoop(0.0), std::invalid_argument);
   EXPECT_THROW(teleop::RateLoop(-5.0), std::invalid_argument);
+}
+
+}  // namespace
+
+#include <fstream>
+#include <sstream>
+
+#include "common/util/csv.hpp"
+
+namespace {
+
+TEST(CsvWriter, RealTimeRowsDoNotAllocateAndRoundTrip) {
+  const std::string path = "/tmp/teleop_csv_test_" + std::to_string(getpid()) + ".csv";
+  {
+    teleop::CsvWriter csv(path, {"a", "b", "c"});
+    const double row[3] = {0.1234567890123456789, -2.5e-300, 42.0};
+    csv.row(row, 3);  // first write may size the stream buffer
+    teleop::test::NoAllocScope scope;
+    for (int i = 0; i < 100; ++i) csv.row(row, 3);
+    EXPECT_EQ(scope.allocations(), 0u);
+    EXPECT_THROW(csv.row(row, 2), std::logic_error);
+  }
+  std::ifstream in(path);
+  std::string header, line;
+  std::getline(in, header);
+  std::getline(in, line);
+  EXPECT_EQ(header, "a,b,c");
+  std::istringstream ss(line);
+  double a, b, c;
+  char k1, k2;
+  ss >> a >> k1 >> b >> k2 >> c;
+  EXPECT_EQ(a, 0.1234567890123456789);  // shortest round-trip form
+  EXPECT_EQ(b, -2.5e-300);
+  EXPECT_EQ(c, 42.0);
+  std::remove(path.c_str());
 }
 
 }  // namespace
