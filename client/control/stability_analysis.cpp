@@ -23,16 +23,21 @@ std::complex<double> loop_gain(const LoopModel& m, double w) {
   return m.force_gain * (m.env_stiffness_n_per_m + m.env_damping_ns_per_m * s) * gm * gs;
 }
 
-DelayMargin delay_margin(const LoopModel& m, double w_min, double w_max) {
-  DelayMargin out;
-  out.dc_gain = std::abs(loop_gain(m, 0.0));
-  const int n = 4000;
+namespace {
+
+/// Scans log-spaced frequencies in [w_min, w_max] for the gain crossings |L(jw)| = 1, refines
+/// each by bisection and calls on_crossing(wc, phase margin in [0, 2 pi), destabilizing), where
+/// destabilizing means |L| falls through 1 with rising w. Stops early when it returns false.
+/// Returns whether |L| - 1 was still positive at w_max.
+template <class OnCrossing>
+bool scan_unit_crossings(const LoopModel& m, double w_min, double w_max, OnCrossing&& on_crossing) {
+  constexpr int kSamples = 4000;
   const double lr = std::log(w_max / w_min);
   auto mag1 = [&](double w) { return std::abs(loop_gain(m, w)) - 1.0; };
   double w_prev = w_min;
   double f_prev = mag1(w_prev);
-  for (int i = 1; i <= n; ++i) {
-    const double w = w_min * std::exp(lr * i / n);
+  for (int i = 1; i <= kSamples; ++i) {
+    const double w = w_min * std::exp(lr * i / kSamples);
     const double f = mag1(w);
     if ((f_prev > 0.0) != (f > 0.0)) {
       // bisect the crossing |L| = 1
@@ -50,18 +55,30 @@ DelayMargin delay_margin(const LoopModel& m, double w_min, double w_max) {
       const double wc = 0.5 * (a + b);
       double pm = kPi + std::arg(loop_gain(m, wc));  // in [0, 2 pi]
       pm = std::fmod(pm + 4.0 * kPi, 2.0 * kPi);
-      const double tau = pm / wc;
-      if (tau / 2.0 < out.one_way_s) {
-        out.one_way_s = tau / 2.0;
-        out.crossover_radps = wc;
-        out.phase_margin_rad = pm;
-      }
+      if (!on_crossing(wc, pm, f_prev > 0.0)) return f > 0.0;
     }
     w_prev = w;
     f_prev = f;
   }
+  return f_prev > 0.0;
+}
+
+}  // namespace
+
+DelayMargin delay_margin(const LoopModel& m, double w_min, double w_max) {
+  DelayMargin out;
+  out.dc_gain = std::abs(loop_gain(m, 0.0));
+  const bool above_at_end = scan_unit_crossings(m, w_min, w_max, [&](double wc, double pm, bool) {
+    const double tau = pm / wc;
+    if (tau / 2.0 < out.one_way_s) {
+      out.one_way_s = tau / 2.0;
+      out.crossover_radps = wc;
+      out.phase_margin_rad = pm;
+    }
+    return true;
+  });
   // |L| > 1 already at the lowest frequency with the wrong sign: unstable at any delay
-  if (f_prev > 0.0 && out.crossover_radps == 0.0 && out.dc_gain > 1.0) {
+  if (above_at_end && out.crossover_radps == 0.0 && out.dc_gain > 1.0) {
     out.one_way_s = 0.0;
   }
   return out;
@@ -78,37 +95,13 @@ DelayMargin task_delay_margin(const LoopModel& m) {
 
 DelayCrossings delay_crossings(const LoopModel& m, double w_min, double w_max) {
   DelayCrossings out;
-  const int n = 4000;
-  const double lr = std::log(w_max / w_min);
-  auto mag1 = [&](double w) { return std::abs(loop_gain(m, w)) - 1.0; };
-  double w_prev = w_min;
-  double f_prev = mag1(w_prev);
-  for (int i = 1; i <= n && out.count < DelayCrossings::kMax; ++i) {
-    const double w = w_min * std::exp(lr * i / n);
-    const double f = mag1(w);
-    if ((f_prev > 0.0) != (f > 0.0)) {
-      double a = w_prev, b = w, fa = f_prev;
-      for (int k = 0; k < 60; ++k) {
-        const double c = 0.5 * (a + b);
-        const double fc = mag1(c);
-        if ((fa > 0.0) == (fc > 0.0)) {
-          a = c;
-          fa = fc;
-        } else {
-          b = c;
-        }
-      }
-      const double wc = 0.5 * (a + b);
-      double pm = kPi + std::arg(loop_gain(m, wc));
-      pm = std::fmod(pm + 4.0 * kPi, 2.0 * kPi);
-      DelayCrossing& c = out.items[out.count++];
-      c.w_radps = wc;
-      c.first_round_trip_s = pm / wc;
-      c.destabilizing = f_prev > 0.0;  // |L| falls through 1
-    }
-    w_prev = w;
-    f_prev = f;
-  }
+  scan_unit_crossings(m, w_min, w_max, [&](double wc, double pm, bool destabilizing) {
+    DelayCrossing& c = out.items[out.count++];
+    c.w_radps = wc;
+    c.first_round_trip_s = pm / wc;
+    c.destabilizing = destabilizing;  // |L| falls through 1
+    return out.count < DelayCrossings::kMax;
+  });
   return out;
 }
 
