@@ -1,11 +1,11 @@
 #!/usr/bin/python3
 """Paper Figs. 4-5: a vertex of the Navier sphere pushed in and released; phase graph.
 usage: deformable_navier_free.py navier_free_vertex.csv out.png"""
-import csv
 import sys
-from collections import defaultdict
 
 import matplotlib
+
+from chartlib import load_columns_by
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -13,13 +13,7 @@ import matplotlib.pyplot as plt
 
 def main():
     src, out = sys.argv[1], sys.argv[2]
-    data = defaultdict(lambda: defaultdict(list))
-    with open(src) as f:
-        for row in csv.DictReader(f):
-            d = data[row["variant"]]
-            for k, v in row.items():
-                if k != "variant":
-                    d[k].append(float(v))
+    data = load_columns_by(src, "variant")
     fig, ax = plt.subplots(1, 2, figsize=(12, 5))
     for name, d in data.items():
         ax[0].plot([1e3 * x for x in d["displacement_m"]], d["velocity_mps"], lw=0.7, label=name)

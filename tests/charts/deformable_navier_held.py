@@ -1,11 +1,11 @@
 #!/usr/bin/python3
 """Paper Figs. 6-7: a vertex held 5 mm in; distance and force of a neighbour.
 usage: deformable_navier_held.py navier_held_vertex.csv out.png"""
-import csv
 import sys
-from collections import defaultdict
 
 import matplotlib
+
+from chartlib import load_columns_by
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -13,13 +13,7 @@ import matplotlib.pyplot as plt
 
 def main():
     src, out = sys.argv[1], sys.argv[2]
-    data = defaultdict(lambda: defaultdict(list))
-    with open(src) as f:
-        for row in csv.DictReader(f):
-            d = data[row["model"]]
-            for k, v in row.items():
-                if k != "model":
-                    d[k].append(float(v))
+    data = load_columns_by(src, "model")
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
     for name, d in data.items():
         ax[0].plot(d["t_s"], [1e3 * x for x in d["neighbour_displacement_m"]], lw=0.8, label=name)

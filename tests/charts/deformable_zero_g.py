@@ -1,11 +1,11 @@
 #!/usr/bin/python3
 """Experiment 1 (paper Figs. 14-16): radius and force of a released surface point, zero g.
 usage: deformable_zero_g.py sphere_zero_g.csv out.png"""
-import csv
 import sys
-from collections import defaultdict
 
 import matplotlib
+
+from chartlib import load_columns_by
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -13,13 +13,7 @@ import matplotlib.pyplot as plt
 
 def main():
     src, out = sys.argv[1], sys.argv[2]
-    data = defaultdict(lambda: defaultdict(list))
-    with open(src) as f:
-        for row in csv.DictReader(f):
-            d = data[row["model"]]
-            for k, v in row.items():
-                if k != "model":
-                    d[k].append(float(v))
+    data = load_columns_by(src, "model")
     fig, ax = plt.subplots(2, 2, figsize=(12, 8))
     for model, d in data.items():
         t = d["t_s"]

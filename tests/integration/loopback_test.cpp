@@ -148,6 +148,13 @@ class CommandInjector {
   dds::Reader<SlaveStatePubSubType> reader_;
 };
 
+/// Arguments of a tool-scene server on `domain` with a summary file and a watchdog timeout [s].
+std::vector<std::string> tool_server_args(int domain, const std::string& summary_json,
+                                          const std::string& command_timeout_s) {
+  return {"--domain",   std::to_string(domain), "--duration",      "60",      "--summary-json",
+          summary_json, "--command-timeout",    command_timeout_s, "--scene", kToolScene};
+}
+
 MasterCommand command(std::uint64_t seq, double x) {
   MasterCommand c;
   c.seq(seq);
@@ -160,10 +167,7 @@ MasterCommand command(std::uint64_t seq, double x) {
 TEST(Loopback, InvalidCommandsAreRejectedCountedAndNeverReachThePhysics) {
   const int domain = domains::kBadCommands;
   const std::string server_json = tmp("bad_cmd_server.json");
-  Process server(kServer,
-                 {"--domain", std::to_string(domain), "--duration", "60", "--summary-json",
-                  server_json, "--command-timeout", "5"},
-                 "bad_cmd_server");
+  Process server(kServer, tool_server_args(domain, server_json, "5"), "bad_cmd_server");
   CommandInjector inj(domain);
   ASSERT_TRUE(inj.wait_matched(20.0));
   std::uint64_t seq = 0;
@@ -194,10 +198,7 @@ TEST(Loopback, InvalidCommandsAreRejectedCountedAndNeverReachThePhysics) {
 TEST(Loopback, ServerHoldsTheSlaveWhenCommandsStop) {
   const int domain = domains::kWatchdog;
   const std::string server_json = tmp("wd_server.json");
-  Process server(kServer,
-                 {"--domain", std::to_string(domain), "--duration", "60", "--summary-json",
-                  server_json, "--command-timeout", "0.05"},
-                 "wd_server");
+  Process server(kServer, tool_server_args(domain, server_json, "0.05"), "wd_server");
   CommandInjector inj(domain);
   ASSERT_TRUE(inj.wait_matched(20.0));
   std::uint64_t seq = 0;
