@@ -142,7 +142,7 @@ struct DeformableModel {
   Eigen::Vector3d rest_centre_m;  ///< rest position of the centre node / centroid [m]
 
   // one entry per mesh edge (i < j)
-  Eigen::Matrix2Xi edges;         ///< node pairs
+  Eigen::Matrix2Xi edges;         ///< node pairs, sorted (see first_edge_offsets)
   Eigen::VectorXd rest_length_m;  ///< |X_j - X_i| [m]
   Eigen::Matrix3Xd rest_dir;      ///< (X_j - X_i) / |X_j - X_i|
   /// Mass-spring: edge spring k [N/m]. Navier: coefficient a of (d_j - d_i) [N/m].
@@ -153,6 +153,10 @@ struct DeformableModel {
   /// CSR: the edges incident to node i: node_edges[node_edge_offsets[i] .. [i+1]), each the
   /// edge index e when i is its first node, ~e (bitwise not) when i is its second node.
   std::vector<int> node_edge_offsets, node_edges;
+  /// The edges are sorted by first node, then second (first < second); the edges whose first
+  /// node is i are [first_edge_offsets[i], first_edge_offsets[i + 1]).
+  std::vector<int> first_edge_offsets;
+  std::vector<int> second_node3;  ///< 3 * edges(1, e): where the second node's coordinates start
 
   // radial springs (node i to the centre node)
   Eigen::VectorXd radial_k;       ///< [N/m]
@@ -209,6 +213,8 @@ struct DeformableState {
   Eigen::Matrix3Xd work_f;  ///< forces, 3 x (N + 1): last column is the centre node
   Eigen::Matrix3Xd work_dv, work_r, work_z, work_p, work_ap, work_diag, work_b;
   Eigen::VectorXd edge_scratch;  ///< per edge scalar (1 / length)
+  Eigen::VectorXd edge_length2;  ///< per edge squared length [m^2]
+  Eigen::VectorXd node_length2;  ///< per node squared distance to the centre [m^2]
   Eigen::Matrix3Xd edge_force;   ///< per edge force on its first node [N]
   Eigen::VectorXd node_scratch;  ///< per node scalar (1 / distance to the centre)
   Eigen::Matrix3Xd edge_dir;     ///< per edge direction w of the Jacobian block
@@ -231,6 +237,13 @@ DeformableState make_state(const DeformableModel& model);
 /// node is away from its target or wake_request is set.
 StepStatus step(const DeformableModel& model, DeformableState& state, double dt_s,
                 teleop::sim::EventQueue* events);
+
+namespace detail {
+/// step() without the fused kernel that mass-spring bodies with symplectic Euler normally take:
+/// the general force and integration passes. The reference that kernel is tested against.
+StepStatus step_general(const DeformableModel& model, DeformableState& state, double dt_s,
+                        teleop::sim::EventQueue* events);
+}  // namespace detail
 
 /// Internal forces (elastic + damping, no gravity, contact or f_ext) on each node at the
 /// current state [N], into `out` (3 x N, resized only if its size differs). Also refreshes the

@@ -1,4 +1,5 @@
 // Building the deformable model (masses, springs, Navier coefficients) and its state.
+#include <algorithm>
 #include <cmath>
 
 #include "server/deformable/deformable.hpp"
@@ -92,9 +93,30 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
   m.lame_lambda_pa = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
   m.lame_mu_pa = E / (2.0 * (1.0 + nu));
 
-  // edges
-  m.edges = mesh.edges;
+  // edges, sorted by (first node, second node) with first < second: the fused step visits the
+  // nodes in order and needs the edges of each node as one range
   const int ne = mesh.edge_count();
+  {
+    std::vector<std::pair<int, int>> sorted(static_cast<std::size_t>(ne));
+    for (int e = 0; e < ne; ++e) {
+      const int a = mesh.edges(0, e), b = mesh.edges(1, e);
+      sorted[static_cast<std::size_t>(e)] = {std::min(a, b), std::max(a, b)};
+    }
+    std::sort(sorted.begin(), sorted.end());
+    m.edges.resize(2, ne);
+    for (int e = 0; e < ne; ++e) {
+      m.edges(0, e) = sorted[static_cast<std::size_t>(e)].first;
+      m.edges(1, e) = sorted[static_cast<std::size_t>(e)].second;
+    }
+  }
+  m.first_edge_offsets.assign(static_cast<std::size_t>(n) + 1, 0);
+  for (int e = 0; e < ne; ++e) ++m.first_edge_offsets[static_cast<std::size_t>(m.edges(0, e)) + 1];
+  m.second_node3.resize(static_cast<std::size_t>(ne));
+  for (int e = 0; e < ne; ++e) m.second_node3[static_cast<std::size_t>(e)] = 3 * m.edges(1, e);
+  for (int i = 0; i < n; ++i) {
+    m.first_edge_offsets[static_cast<std::size_t>(i) + 1] +=
+        m.first_edge_offsets[static_cast<std::size_t>(i)];
+  }
   m.rest_length_m.resize(ne);
   m.rest_dir.resize(3, ne);
   for (int e = 0; e < ne; ++e) {
@@ -189,6 +211,8 @@ DeformableState make_state(const DeformableModel& m) {
     *w = Eigen::Matrix3Xd::Zero(3, n + 1);
   }
   s.edge_scratch = Eigen::VectorXd::Zero(ne);
+  s.edge_length2 = Eigen::VectorXd::Zero(ne);
+  s.node_length2 = Eigen::VectorXd::Zero(n);
   s.edge_force = Eigen::Matrix3Xd::Zero(3, ne);
   s.node_scratch = Eigen::VectorXd::Zero(n);
   s.edge_dir = Eigen::Matrix3Xd::Zero(3, ne);

@@ -2,7 +2,9 @@
 // allocates: every buffer lives in DeformableState and was sized by make_state().
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 
 #include "server/deformable/deformable.hpp"
 
@@ -28,6 +30,15 @@ struct ForceFlags {
   int rotation_iterations = 8;  ///< co-rotational: polar-decomposition iterations per node (max)
   double rotation_tolerance_rad = 1e-7;  ///< co-rotational: stop when the increment is smaller
 };
+
+// out = 1 / sqrt(in) for squared lengths, a loop the compiler vectorises (-fno-math-errno; a
+// max() would stop it). The 1e-30 is below the rounding of any real length but keeps a zero
+// length finite (1e15 m^-1, multiplied by a zero vector).
+TELEOP_HOT_CLONES __attribute__((optimize("O3"))) void inverse_sqrt(const double* __restrict in,
+                                                                    double* __restrict out,
+                                                                    int count) {
+  for (int k = 0; k < count; ++k) out[k] = 1.0 / std::sqrt(in[k] + 1e-30);
+}
 
 // Rotational part of A (polar decomposition), warm-started from q: Mueller et al. 2016,
 // "A robust method to extract the rotational part of deformations".
@@ -125,9 +136,9 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
       // division two at a time, off the critical path of the force loop)
       Eigen::VectorXd& inv_len = s.edge_scratch;
       for (int e = 0; e < ne; ++e) {
-        inv_len(e) = (x.col(m.edges(1, e)) - x.col(m.edges(0, e))).squaredNorm();
+        s.edge_length2(e) = (x.col(m.edges(1, e)) - x.col(m.edges(0, e))).squaredNorm();
       }
-      inv_len = inv_len.array().max(1e-24).sqrt().inverse();
+      inverse_sqrt(s.edge_length2.data(), inv_len.data(), ne);
       if (!flags.jacobian) {
         // the explicit/symplectic hot path in plain scalar arithmetic on the raw 3 x N arrays:
         // Eigen's 2+1-lane handling of 3-vectors (shuffles for every dot product) cost more
@@ -241,8 +252,8 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
   if (m.has_centre) {
     Vec3 fc = Vec3::Zero();
     Eigen::VectorXd& inv_len = s.node_scratch;
-    for (int i = 0; i < n; ++i) inv_len(i) = (x.col(i) - s.centre_x).squaredNorm();
-    inv_len = inv_len.array().max(1e-24).sqrt().inverse();
+    for (int i = 0; i < n; ++i) s.node_length2(i) = (x.col(i) - s.centre_x).squaredNorm();
+    inverse_sqrt(s.node_length2.data(), inv_len.data(), n);
     if (!flags.jacobian) {
       const double* xp = x.data();
       const double* vp = v.data();
@@ -341,39 +352,248 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
 // after the velocity update (implicit in the damping, so stable for any damping ratio):
 //   v_n <- v_n / (1 + h c / m), never pulling (total normal impulse >= 0);
 //   tangential impulse <= mu * normal impulse, and never more than stops the sliding.
+// One contact of a node of mass `mass` with plane normal `nrm`, damper `damping`, the spring's
+// impulse h * k * depth and friction `mu`: returns the new velocity, adds the force to `total`.
+inline Vec3 contact_impulse(const Vec3& nrm, double mass, double damping, double spring_impulse,
+                            double mu, double h, Vec3 vi, Vec3& total) {
+  const double vn = nrm.dot(vi);
+  double dvn = vn / (1.0 + h * damping / mass) - vn;
+  dvn = std::max(dvn, -spring_impulse / mass);
+  vi += dvn * nrm;
+  const double jn = spring_impulse + mass * dvn;  // >= 0
+  Vec3 impulse = jn * nrm;
+  if (mu > 0.0) {
+    const Vec3 vt = vi - nrm.dot(vi) * nrm;
+    const double st = vt.norm();
+    if (st > 1e-12) {
+      const double jt = std::min(mu * jn, mass * st);
+      vi -= (jt / (mass * st)) * vt;
+      impulse -= (jt / st) * vt;
+    }
+  }
+  total += impulse / h;
+  return vi;
+}
+
 TELEOP_HOT_CLONES
 void apply_contact_impulses(const DeformableModel& m, DeformableState& s, double h) {
   for (int c = 0; c < s.contact_count; ++c) {
     const int i = s.contact_node[static_cast<std::size_t>(c)];
     if (s.pinned_count > 0 && s.pinned[static_cast<std::size_t>(i)]) continue;
-    const Vec3 nrm = s.contact_normal.col(c);
-    const double mass = m.mass_kg(i);
-    const double spring_impulse = h * s.contact_coef(2, c);
-    Vec3 vi = s.v.col(i);
-    const double vn = nrm.dot(vi);
-    double dvn = vn / (1.0 + h * s.contact_coef(1, c) / mass) - vn;
-    dvn = std::max(dvn, -spring_impulse / mass);
-    vi += dvn * nrm;
-    const double jn = spring_impulse + mass * dvn;  // >= 0
-    Vec3 impulse = jn * nrm;
-    const double mu = s.contact_coef(3, c);
-    if (mu > 0.0) {
-      const Vec3 vt = vi - nrm.dot(vi) * nrm;
-      const double st = vt.norm();
-      if (st > 1e-12) {
-        const double jt = std::min(mu * jn, mass * st);
-        vi -= (jt / (mass * st)) * vt;
-        impulse -= (jt / st) * vt;
-      }
-    }
-    s.v.col(i) = vi;
-    s.plane_force_n += impulse / h;
+    s.v.col(i) = contact_impulse(s.contact_normal.col(c), m.mass_kg(i), s.contact_coef(1, c),
+                                 h * s.contact_coef(2, c), s.contact_coef(3, c), h, s.v.col(i),
+                                 s.plane_force_n);
   }
+}
+
+// Nodes per block of the fused mass-spring step (about 100 edges: their data stays in L1).
+constexpr int kFusedNodeBlock = 32;
+
+// What the post-step checks need, gathered while the nodes are visited.
+struct NodeSums {
+  double fastest2 = 0.0;   ///< largest squared node speed
+  double sum_x = 0.0;      ///< sum of all coordinates (NaN and infinity propagate)
+  double sum_v = 0.0;      ///< sum of squared speeds (NaN and infinity propagate)
+  Vec3 mx = Vec3::Zero();  ///< sum of m_i x_i over the surface nodes
+};
+
+// The hot path of the default body: mass-spring with symplectic Euler in one pass over the
+// nodes. Equivalent to compute_forces() + integrate(): the same forces, and per node the same
+// velocity update, contact impulses and position update. It relies on the edges being sorted by
+// first node (i < j): node i's own edges (i, j) are one range, visited with node i; their
+// reactions are added to the later nodes j, whose edges to earlier nodes are then complete. So
+// when node i is reached its force is complete, and no later edge reads x_i or v_i: node i can
+// be advanced at once. 1 / length of the edges of a block of nodes is computed first, in a
+// vectorised loop, while those positions are still the old ones.
+TELEOP_HOT_CLONES
+void step_mass_spring_symplectic(const DeformableModel& m, DeformableState& s, double h,
+                                 NodeSums& sums) {
+  const int n = m.node_count;
+  const DeformableParams& p = m.params;
+  const double beta = p.stiffness_damping_s;
+  double* __restrict x = s.x.data();
+  double* __restrict v = s.v.data();
+  double* __restrict f = s.force.data();  // edge reactions from earlier nodes, then the total
+  const int* __restrict j3 = m.second_node3.data();
+  const int* __restrict first = m.first_edge_offsets.data();
+  const double* __restrict kp = m.edge_k_iso.data();
+  const double* __restrict l0 = m.rest_length_m.data();
+  const double* __restrict mp = m.mass_kg.data();
+  const double* __restrict imp = m.inv_mass.data();
+  const double* __restrict kr = m.radial_k.data();
+  const double* __restrict r0 = m.radial_rest_m.data();
+  const double* __restrict ck = m.contact_k.data();
+  const double* __restrict cc = m.contact_c.data();
+  const double* __restrict fext = s.f_ext.data();
+  const double* __restrict tgt = s.pin_target.data();
+  const std::uint8_t* __restrict pin = s.pinned.data();
+  std::fill(f, f + 3 * n, 0.0);
+
+  // mean velocity for the drag (relative to it: damps deformation, keeps momentum)
+  const double alpha = p.mass_damping_per_s;
+  const double cx = s.centre_x.x(), cy = s.centre_x.y(), cz = s.centre_x.z();
+  const double cvx = s.centre_v.x(), cvy = s.centre_v.y(), cvz = s.centre_v.z();
+  double vmx = 0.0, vmy = 0.0, vmz = 0.0;
+  if (alpha > 0.0) {
+    for (int i = 0; i < n; ++i) {
+      vmx += mp[i] * v[3 * i];
+      vmy += mp[i] * v[3 * i + 1];
+      vmz += mp[i] * v[3 * i + 2];
+    }
+    const double inv_total = 1.0 / m.total_mass_kg;
+    vmx = (vmx + m.centre_mass_kg * cvx) * inv_total;
+    vmy = (vmy + m.centre_mass_kg * cvy) * inv_total;
+    vmz = (vmz + m.centre_mass_kg * cvz) * inv_total;
+  }
+
+  const double gx = p.gravity_mps2.x(), gy = p.gravity_mps2.y(), gz = p.gravity_mps2.z();
+  const double rd = p.radial_damping_s;
+  const bool centre = m.has_centre;
+  const bool any_pinned = s.pinned_count > 0;
+  const int planes = m.plane_count;
+  double fcx = 0.0, fcy = 0.0, fcz = 0.0;
+  double spring_of[8] = {};  // spring force of each plane; valid where `touched` has its bit
+  int nc = 0;
+  Vec3 plane_force = Vec3::Zero();
+  double fastest2 = 0.0, sum_x = 0.0, sum_v = 0.0, mxx = 0.0, mxy = 0.0, mxz = 0.0;
+
+  double* __restrict l2 = s.edge_length2.data();
+  double* __restrict il = s.edge_scratch.data();
+  double* __restrict rl2 = s.node_length2.data();
+  double* __restrict rl = s.node_scratch.data();
+  for (int b0 = 0; b0 < n; b0 += kFusedNodeBlock) {
+    // a block of nodes: squared lengths of their edges and radial springs, 1 / length of all
+    // (vectorised), while the positions are still the old ones
+    const int b1 = std::min(n, b0 + kFusedNodeBlock);
+    for (int i = b0; i < b1; ++i) {
+      const double xx = x[3 * i], xy = x[3 * i + 1], xz = x[3 * i + 2];
+      for (int e = first[i]; e < first[i + 1]; ++e) {
+        const int j = j3[e];
+        const double dx = x[j] - xx, dy = x[j + 1] - xy, dz = x[j + 2] - xz;
+        l2[e] = dx * dx + dy * dy + dz * dz;
+      }
+      const double dx = xx - cx, dy = xy - cy, dz = xz - cz;
+      rl2[i] = dx * dx + dy * dy + dz * dz;
+    }
+    inverse_sqrt(l2 + first[b0], il + first[b0], first[b1] - first[b0]);
+    if (centre) inverse_sqrt(rl2 + b0, rl + b0, b1 - b0);
+
+    for (int i = b0; i < b1; ++i) {
+      const int a = 3 * i;
+      const double mi = mp[i];
+      const double xx = x[a], xy = x[a + 1], xz = x[a + 2];
+      double vx = v[a], vy = v[a + 1], vz = v[a + 2];
+      // edge springs (i, j), j > i: the force on i here, the reaction onto j
+      double fx = 0.0, fy = 0.0, fz = 0.0;
+      for (int e = first[i]; e < first[i + 1]; ++e) {
+        const int j = j3[e];
+        const double dx = x[j] - xx, dy = x[j + 1] - xy, dz = x[j + 2] - xz;
+        const double inv_l = il[e];
+        const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+        const double rate = (v[j] - vx) * ux + (v[j + 1] - vy) * uy + (v[j + 2] - vz) * uz;
+        const double k = kp[e];
+        const double fs = k * (l2[e] * inv_l - l0[e]) + beta * k * rate;
+        const double ex = fs * ux, ey = fs * uy, ez = fs * uz;
+        fx += ex;
+        fy += ey;
+        fz += ez;
+        f[j] -= ex;
+        f[j + 1] -= ey;
+        f[j + 2] -= ez;
+      }
+      // gravity, drag and the caller's load
+      fx += f[a] + mi * (gx - alpha * (vx - vmx)) + fext[a];
+      fy += f[a + 1] + mi * (gy - alpha * (vy - vmy)) + fext[a + 1];
+      fz += f[a + 2] + mi * (gz - alpha * (vz - vmz)) + fext[a + 2];
+      // radial spring to the centre node
+      if (centre) {
+        const double dx = xx - cx, dy = xy - cy, dz = xz - cz;
+        const double inv_l = rl[i];
+        const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+        const double rate = (vx - cvx) * ux + (vy - cvy) * uy + (vz - cvz) * uz;
+        const double fs = -kr[i] * (rl2[i] * inv_l - r0[i]) - rd * kr[i] * rate;
+        fx += fs * ux;
+        fy += fs * uy;
+        fz += fs * uz;
+        fcx -= fs * ux;
+        fcy -= fs * uy;
+        fcz -= fs * uz;
+      }
+      // plane penalty springs (damping and friction below, as impulses)
+      unsigned touched = 0;  // bit k: the node is inside plane k
+      for (int k = 0; k < planes; ++k) {
+        const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+        const double dist =
+            pl.normal.x() * xx + pl.normal.y() * xy + pl.normal.z() * xz - pl.offset_m;
+        if (dist >= 0.0) continue;
+        spring_of[k] = -ck[i] * dist;
+        fx += spring_of[k] * pl.normal.x();
+        fy += spring_of[k] * pl.normal.y();
+        fz += spring_of[k] * pl.normal.z();
+        touched |= 1u << k;
+        ++nc;
+      }
+      f[a] = fx;
+      f[a + 1] = fy;
+      f[a + 2] = fz;
+      // symplectic Euler: velocity (held nodes keep theirs), contact impulses, position
+      const bool held = any_pinned && pin[i] != 0;
+      if (!held) {
+        const double hm = h * imp[i];
+        vx += hm * fx;
+        vy += hm * fy;
+        vz += hm * fz;
+        for (int k = 0; touched != 0 && k < planes; ++k) {
+          if ((touched & (1u << k)) == 0) continue;
+          const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+          const Vec3 vi =
+              contact_impulse(pl.normal, mi, cc[i], h * spring_of[k],
+                              p.friction ? pl.friction : 0.0, h, Vec3(vx, vy, vz), plane_force);
+          vx = vi.x();
+          vy = vi.y();
+          vz = vi.z();
+        }
+      }
+      double px = xx + h * vx, py = xy + h * vy, pz = xz + h * vz;
+      if (held) {
+        px = tgt[a];
+        py = tgt[a + 1];
+        pz = tgt[a + 2];
+      }
+      v[a] = vx;
+      v[a + 1] = vy;
+      v[a + 2] = vz;
+      x[a] = px;
+      x[a + 1] = py;
+      x[a + 2] = pz;
+      const double sp2 = vx * vx + vy * vy + vz * vz;
+      fastest2 = sp2 > fastest2 ? sp2 : fastest2;
+      sum_x += px + py + pz;
+      sum_v += sp2;  // NaN and infinity propagate into the sums
+      mxx += mi * px;
+      mxy += mi * py;
+      mxz += mi * pz;
+    }
+  }
+  s.contact_count = nc;
+  s.plane_force_n = plane_force;
+  if (centre) {
+    const double hm = h / m.centre_mass_kg, mc = m.centre_mass_kg;
+    s.centre_v.x() += hm * (mc * (gx - alpha * (cvx - vmx)) + fcx);
+    s.centre_v.y() += hm * (mc * (gy - alpha * (cvy - vmy)) + fcy);
+    s.centre_v.z() += hm * (mc * (gz - alpha * (cvz - vmz)) + fcz);
+    s.centre_x += h * s.centre_v;
+  }
+  sums.fastest2 = fastest2;
+  sums.sum_x = sum_x;
+  sums.sum_v = sum_v;
+  sums.mx = Vec3(mxx, mxy, mxz);
 }
 
 // out = mc * M p + cc * C p + kc * K p, where K and C are the (positive semi-definite)
 // stiffness and damping blocks stored by compute_forces(jacobian = true). Column N is the
 // centre node. Pinned nodes are held: their rows and columns are dropped.
+TELEOP_HOT_CLONES
 void apply_system(const DeformableModel& m, const DeformableState& s, const Eigen::Matrix3Xd& pv,
                   Eigen::Matrix3Xd& out, double mc, double cc, double kc) {
   const int n = m.node_count;
@@ -418,6 +638,7 @@ void apply_system(const DeformableModel& m, const DeformableState& s, const Eige
 }
 
 // Jacobi preconditioner: the inverse of the diagonal of M + h C + h^2 K, into s.work_diag.
+TELEOP_HOT_CLONES
 void system_diagonal(const DeformableModel& m, DeformableState& s, double h) {
   const int n = m.node_count;
   Eigen::Matrix3Xd& dg = s.work_diag;
@@ -534,9 +755,28 @@ void integrate(const DeformableModel& m, DeformableState& s, double h) {
   }
 }
 
-bool loaded(const DeformableModel& m, const DeformableState& s) {
+// One pass over the caller's loads, on their bits (vectorised): all finite? all zero (+-0)?
+struct LoadScan {
+  bool finite = true;
+  bool zero = true;
+};
+TELEOP_HOT_CLONES __attribute__((optimize("O3"))) LoadScan scan_loads(const Eigen::Matrix3Xd& f) {
+  constexpr std::uint64_t kExponent = 0x7ff0000000000000ull;
+  const double* d = f.data();
+  const Eigen::Index count = f.size();
+  std::uint64_t non_finite = 0, bits = 0;
+  for (Eigen::Index k = 0; k < count; ++k) {
+    std::uint64_t b;
+    std::memcpy(&b, d + k, sizeof b);
+    non_finite |= static_cast<std::uint64_t>((b & kExponent) == kExponent);
+    bits |= b << 1;  // drops the sign: -0 counts as zero
+  }
+  return {non_finite == 0, bits == 0};
+}
+
+bool loaded(const DeformableModel& m, const DeformableState& s, bool loads_zero) {
   if (s.wake_request) return true;
-  if (!(s.f_ext.array() == 0.0).all()) return true;
+  if (!loads_zero) return true;
   for (int i = 0; i < m.node_count; ++i) {
     if (s.pinned[static_cast<std::size_t>(i)] && s.pin_target.col(i) != s.x.col(i)) return true;
   }
@@ -575,11 +815,14 @@ void internal_forces(const DeformableModel& m, DeformableState& s, Eigen::Matrix
   out = s.work_f.leftCols(m.node_count);
 }
 
+namespace {
+
 TELEOP_HOT_CLONES
-StepStatus step(const DeformableModel& m, DeformableState& s, double h,
-                teleop::sim::EventQueue* events) {
+StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
+                     teleop::sim::EventQueue* events, bool allow_fused) {
   const int n = m.node_count;
-  if (!(h > 0.0) || !std::isfinite(h) || !s.f_ext.allFinite()) {
+  const LoadScan loads = scan_loads(s.f_ext);
+  if (!(h > 0.0) || !std::isfinite(h) || !loads.finite) {
     if (events) {
       events->push(EventKind::kFault, Severity::kWarning, s.sim_time_s, h,
                    "deformable: step refused (dt <= 0 or non-finite, or non-finite f_ext)");
@@ -587,7 +830,7 @@ StepStatus step(const DeformableModel& m, DeformableState& s, double h,
     return StepStatus::kBadInput;
   }
   if (s.sleeping) {
-    if (!loaded(m, s)) {
+    if (!loaded(m, s, loads.zero)) {
       s.sim_time_s += h;
       ++s.sleeping_steps;
       return StepStatus::kSleeping;
@@ -611,28 +854,34 @@ StepStatus step(const DeformableModel& m, DeformableState& s, double h,
     pin_moving = pin_moving || s.pin_target.col(i) != s.x.col(i);
   }
 
-  ForceFlags flags;
-  flags.jacobian = m.params.integrator == IntegratorKind::kImplicitEuler;
-  compute_forces(m, s, h, flags);
-  s.force = s.work_f.leftCols(n);
-  integrate(m, s, h);
+  NodeSums sums;
+  if (allow_fused && m.params.model == ModelKind::kMassSpring &&
+      m.params.integrator == IntegratorKind::kSymplecticEuler) {
+    step_mass_spring_symplectic(m, s, h, sums);
+  } else {
+    ForceFlags flags;
+    flags.jacobian = m.params.integrator == IntegratorKind::kImplicitEuler;
+    compute_forces(m, s, h, flags);
+    s.force = s.work_f.leftCols(n);
+    integrate(m, s, h);
+    // one pass: held nodes onto their targets, fastest node, finiteness, centroid
+    for (int i = 0; i < n; ++i) {
+      if (s.pinned_count > 0 && s.pinned[static_cast<std::size_t>(i)]) {
+        s.x.col(i) = s.pin_target.col(i);
+      }
+      const double sp2 = s.v.col(i).squaredNorm();
+      sums.fastest2 = sp2 > sums.fastest2 ? sp2 : sums.fastest2;
+      sums.sum_x += s.x.col(i).sum();
+      sums.sum_v += sp2;  // NaN and infinity propagate into the sums
+      sums.mx += m.mass_kg(i) * s.x.col(i);
+    }
+  }
   s.sim_time_s += h;
   ++s.steps;
-
-  // one pass: held nodes onto their targets, fastest node, finiteness, centroid
   const double vmax2 = m.params.max_speed_mps * m.params.max_speed_mps;
-  double fastest2 = 0.0, sum_x = 0.0, sum_v = 0.0;
-  Vec3 mx = m.centre_mass_kg * s.centre_x;
-  for (int i = 0; i < n; ++i) {
-    if (s.pinned_count > 0 && s.pinned[static_cast<std::size_t>(i)]) {
-      s.x.col(i) = s.pin_target.col(i);
-    }
-    const double sp2 = s.v.col(i).squaredNorm();
-    fastest2 = sp2 > fastest2 ? sp2 : fastest2;
-    sum_x += s.x.col(i).sum();
-    sum_v += sp2;  // NaN and infinity propagate into the sums
-    mx += m.mass_kg(i) * s.x.col(i);
-  }
+  double fastest2 = sums.fastest2;
+  const double sum_x = sums.sum_x, sum_v = sums.sum_v;
+  const Vec3 mx = sums.mx + m.centre_mass_kg * s.centre_x;
   const bool finite = std::isfinite(sum_x) && std::isfinite(sum_v) && s.centre_x.allFinite() &&
                       s.centre_v.allFinite();
   if (!finite || !(fastest2 <= vmax2) || !(s.centre_v.squaredNorm() <= vmax2)) {
@@ -661,8 +910,7 @@ StepStatus step(const DeformableModel& m, DeformableState& s, double h,
 
   // sleeping: still, unloaded and no held node moving for sleep_time_s
   const double sleep2 = m.params.sleep_speed_mps * m.params.sleep_speed_mps;
-  if (fastest2 < sleep2 && s.centre_v.squaredNorm() < sleep2 && !pin_moving &&
-      (s.f_ext.array() == 0.0).all()) {
+  if (fastest2 < sleep2 && s.centre_v.squaredNorm() < sleep2 && !pin_moving && loads.zero) {
     s.still_time_s += h;
     if (s.still_time_s >= m.params.sleep_time_s) {
       s.sleeping = true;
@@ -673,6 +921,18 @@ StepStatus step(const DeformableModel& m, DeformableState& s, double h,
     s.still_time_s = 0.0;
   }
   return StepStatus::kOk;
+}
+
+}  // namespace
+
+StepStatus step(const DeformableModel& m, DeformableState& s, double h,
+                teleop::sim::EventQueue* events) {
+  return step_impl(m, s, h, events, true);
+}
+
+StepStatus detail::step_general(const DeformableModel& m, DeformableState& s, double h,
+                                teleop::sim::EventQueue* events) {
+  return step_impl(m, s, h, events, false);
 }
 
 }  // namespace teleop::sim::deformable
