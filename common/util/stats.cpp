@@ -24,10 +24,14 @@ double percentile(std::vector<double> values, double p) {
 }
 
 Summary summarize(const std::vector<double>& values) {
-  Summary s;
-  s.count = values.size();
-  if (values.empty()) return s;
   std::vector<double> v = values;
+  return summarize_in_place(v);
+}
+
+Summary summarize_in_place(std::vector<double>& v) {
+  Summary s;
+  s.count = v.size();
+  if (v.empty()) return s;
   std::sort(v.begin(), v.end());
   s.min = v.front();
   s.max = v.back();

@@ -15,7 +15,10 @@ struct Summary {
   std::size_t count = 0;
   double min = 0, p50 = 0, p90 = 0, p99 = 0, p999 = 0, max = 0, mean = 0, stddev = 0;
 };
+/// Summary of a copy of `values` (allocates: not for hot loops).
 Summary summarize(const std::vector<double>& values);
+/// Summary of `values`, sorting them in place: allocates nothing (for real-time threads).
+Summary summarize_in_place(std::vector<double>& values);
 
 /// Fixed-capacity sample recorder for real-time loops: record() never allocates; when full
 /// it keeps the newest `capacity` samples (a ring). snapshot() copies out for reporting.

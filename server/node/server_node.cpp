@@ -266,8 +266,8 @@ struct ServerNode::Impl {
     st.sim_time_s(world->output().sim_time_s);
     st.steps(steps);
     st.loop_rate_hz(window_s > 0 ? static_cast<double>(window_steps) / window_s : 0.0);
-    step_us.snapshot_into(scratch);
-    const Summary s = summarize(scratch);
+    step_us.snapshot_into(scratch);  // capacity reserved: no allocation
+    const Summary s = summarize_in_place(scratch);
     st.step_us_p50(s.p50);
     st.step_us_p99(s.p99);
     st.step_us_max(s.max);

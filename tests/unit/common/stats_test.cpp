@@ -23,6 +23,26 @@ TEST(Stats, PercentilesInterpolate) {
   EXPECT_DOUBLE_EQ(s.mean, 51);
 }
 
+// What the server's 1 Hz statistics use on the physics thread: a window copied into reserved
+// scratch and summarised in place, without allocating.
+TEST(Stats, SnapshotAndSummaryInPlaceDoNotAllocate) {
+  teleop::SampleWindow w(1000);
+  for (int i = 0; i < 1500; ++i) w.record(static_cast<double>((i * 7919) % 1000));
+  std::vector<double> scratch;
+  scratch.reserve(w.capacity());
+  teleop::Summary s;
+  {
+    teleop::test::NoAllocScope scope;
+    w.snapshot_into(scratch);
+    s = teleop::summarize_in_place(scratch);
+    EXPECT_EQ(scope.allocations(), 0u);
+  }
+  EXPECT_EQ(s.count, 1000u);
+  EXPECT_DOUBLE_EQ(s.min, 0.0);
+  EXPECT_DOUBLE_EQ(s.max, 999.0);
+  EXPECT_EQ(s.p50, teleop::summarize(w.snapshot()).p50);
+}
+
 TEST(Stats, EmptyPercentileIsNan) { EXPECT_TRUE(std::isnan(teleop::percentile({}, 50))); }
 
 TEST(Stats, SampleWindowKeepsNewestAndDoesNotAllocate) {
