@@ -8,8 +8,10 @@
 
 #include "server/deformable/deformable.hpp"
 
+// Not under the sanitizers: their instrumentation of the ifunc resolvers runs before the
+// sanitizer runtime is initialised and crashes the program at load time.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
-    !defined(__SANITIZE_ADDRESS__)
+    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
 #define TELEOP_HOT_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #else
 #define TELEOP_HOT_CLONES
