@@ -18,7 +18,9 @@
 //
 // Exit status: 0 done, 1 runtime failure (no display, OpenGL, DDS, file), 2 bad command line,
 // 3 snapshot: the data never became complete within --timeout.
+#include <sys/resource.h>
 #include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <cfloat>
 #include <chrono>
@@ -76,6 +78,7 @@ struct Options {
   std::optional<int> msaa;  ///< default: 4, or 0 in a window on a software renderer
   double force_scale_m_per_n = 0.1;
   double displacement_scale_m = 0.02;
+  int nice = 19;  ///< scheduling priority of every viewer thread (0 normal, 19 lowest)
   bool hide_panel = false;
   bool wireframe = false;
   bool displacement = false;
@@ -92,6 +95,7 @@ void validate(const Options& o) {
   check_flag("--history", o.history_s, 1.0, 600.0);
   check_flag("--duration", o.duration_s, 0.0, 1e7);
   if (o.msaa) check_flag("--msaa", *o.msaa, 0, 16);
+  check_flag("--nice", o.nice, 0, 19);
   check_flag("--force-scale", o.force_scale_m_per_n, 1e-4, 10.0);
   check_flag("--displacement-scale", o.displacement_scale_m, 1e-5, 1.0);
   if (!o.snapshot.empty()) {
@@ -173,10 +177,10 @@ class ViewerApp {
     gl_version_ = reinterpret_cast<const char*>(glGetString(GL_VERSION));
     // multisampling costs a software renderer several times the frame time: a window there
     // goes without unless asked; a snapshot is one frame and gets it
-    const bool software = renderer_name_.find("llvmpipe") != std::string::npos ||
-                          renderer_name_.find("softpipe") != std::string::npos ||
-                          renderer_name_.find("swrast") != std::string::npos;
-    msaa_ = options_.msaa.value_or(headless_ || !software ? 4 : 0);
+    software_ = renderer_name_.find("llvmpipe") != std::string::npos ||
+                renderer_name_.find("softpipe") != std::string::npos ||
+                renderer_name_.find("swrast") != std::string::npos;
+    msaa_ = options_.msaa.value_or(headless_ || !software_ ? 4 : 0);
 
     IMGUI_CHECKVERSION();
     ImGui::CreateContext();
@@ -230,8 +234,13 @@ class ViewerApp {
 
   /// The render loop. Returns the exit status.
   int run() {
-    // no vsync under Xvfb or some remote displays: then fall back to pacing at 60 fps
-    double period_s = options_.fps > 0.0 ? 1.0 / options_.fps : (headless_ ? 1.0 / 30.0 : 0.0);
+    // --fps, else the display's vsync. A software renderer spends about a core's worth of
+    // 30 ms per frame at 1280x720: 15 fps leaves the CPU to the control loops (docs/viewer.md,
+    // "Measured"). Headless runs only lay out the UI until the snapshot: 30 fps.
+    double period_s = options_.fps > 0.0 ? 1.0 / options_.fps
+                      : headless_        ? 1.0 / 30.0
+                      : software_        ? 1.0 / 15.0
+                                         : 0.0;
     std::int64_t next_frame_ns = now_ns();
     std::int64_t ready_ns = 0;
     int frames_since_ready = 0;
@@ -303,11 +312,18 @@ class ViewerApp {
     std::vector<double> ms = frame_ms_.snapshot();
     const Summary s = summarize(ms);
     const double span_s = seconds_between(t0_ns_, now_ns());
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    const double cpu_s =
+        static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+        1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
     std::printf(
         "teleop_viewer: %llu frames in %.1f s (%.1f fps); frame time (update + draw + swap) "
-        "p50 %.2f ms, p99 %.2f ms, max %.2f ms; %dx%d, %s\n",
+        "p50 %.2f ms, p99 %.2f ms, max %.2f ms; CPU %.1f ms per frame (all threads, %.0f%% of a "
+        "core); %dx%d, %dx MSAA, %s\n",
         static_cast<unsigned long long>(frames_), span_s, static_cast<double>(frames_) / span_s,
-        s.p50, s.p99, s.max, target_.width(), target_.height(), renderer_name_.c_str());
+        s.p50, s.p99, s.max, 1e3 * cpu_s / static_cast<double>(frames_), 100.0 * cpu_s / span_s,
+        target_.width(), target_.height(), msaa_, renderer_name_.c_str());
     std::fflush(stdout);
   }
 
@@ -344,6 +360,11 @@ class ViewerApp {
     panel_info_.wireframe = render_options_.wireframe;
     panel_info_.displacement_colors = render_options_.displacement_colors;
     panel_info_.robot_status = robot_status();
+    panel_info_.max_displacement_m = renderer_.max_displacement_m();
+    panel_info_.headless = headless_;
+    panel_info_.width = fb_w;
+    panel_info_.height = fb_h;
+    panel_info_.msaa = msaa_;
     viewer::draw_panel(view_, panel_info_, layout);
     viewer::draw_overlay(view_, panel_info_);
     ImGui::Render();
@@ -518,6 +539,7 @@ class ViewerApp {
   viewer::SceneRenderer renderer_;
   viewer::OffscreenTarget target_;
   int msaa_ = 4;
+  bool software_ = false;  ///< drawn by a software rasteriser (llvmpipe, softpipe, swrast)
   viewer::OrbitCamera camera_;
   viewer::RenderOptions render_options_;
   viewer::PanelInfo panel_info_;
@@ -552,7 +574,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--height", o.height, "window or snapshot height [px], 240-4320")
       ->capture_default_str();
-  app.add_option("--fps", o.fps, "frame rate cap [Hz], 0-1000; 0 = the display rate (vsync)")
+  app.add_option("--fps", o.fps,
+                 "frame rate cap [Hz], 0-1000; 0 = the display rate (vsync), or 15 on a "
+                 "software renderer (llvmpipe)")
       ->capture_default_str();
   app.add_option("--history", o.history_s, "plot window [s], 1-600")->capture_default_str();
   app.add_option("--duration", o.duration_s, "close after this long [s]; 0 = until closed");
@@ -564,6 +588,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--displacement-scale", o.displacement_scale_m,
                  "displacement shown fully red with --displacement [m], 0.00001-1")
+      ->capture_default_str();
+  app.add_option("--nice", o.nice,
+                 "scheduling niceness of the viewer, 0-19: it yields the CPU to the server and "
+                 "master on the same machine")
       ->capture_default_str();
   app.add_flag("--hide-panel", o.hide_panel, "start without the plot panel (key H)");
   app.add_flag("--wireframe", o.wireframe, "start with wireframe meshes (key W)");
@@ -579,6 +607,16 @@ int main(int argc, char** argv) {
   }
   try {
     validate(o);
+    // An observer must not take the CPU from the control loops on the same machine. Lower the
+    // priority before any thread starts (the renderer's, DDS's), so they all inherit it; and
+    // keep Mesa's software rasteriser (llvmpipe) on the render thread instead of one thread per
+    // core: measured on 2 cores, its helper threads raised the master's loop jitter p99 from
+    // ~0.3 ms to ~2 ms at 15 fps, while one thread kept it at ~0.3 ms (docs/viewer.md). A value
+    // the user set wins; other drivers ignore the variable.
+    if (o.nice > 0 && setpriority(PRIO_PROCESS, 0, o.nice) != 0) {
+      std::cerr << "teleop_viewer: warning: cannot lower the priority (--nice " << o.nice << ")\n";
+    }
+    setenv("LP_NUM_THREADS", "0", 0);
     const auto dds_options =
         teleop::dds::resolve_participant_options(o.profile, o.domain, "teleop_viewer");
     teleop::dds::profile_file(dds_options.profile);  // fail early with the list of profiles

@@ -283,7 +283,8 @@ void check_frame_and_tip(const viewer::Image& img, const Eigen::Vector3f& tip, f
   const int all_tip = count_pixels(img, layout.view_width, is_tip);  // the 3-D view only
   EXPECT_GT(core, 0.6) << "tip colour at (" << px.x() << ", " << px.y() << "), r " << r_px
                        << " px: " << core;
-  EXPECT_GT(near_tip, 0.35 * M_PI * static_cast<double>(r_px * r_px)) << "the tip is hidden or too small";
+  EXPECT_GT(near_tip, 0.35 * M_PI * static_cast<double>(r_px * r_px))
+      << "the tip is hidden or too small";
   EXPECT_GT(near_tip, 0.9 * all_tip)
       << "tip-coloured pixels far from where the tip is: " << all_tip - near_tip;
 }

@@ -68,6 +68,20 @@ out vec4 frag_color;
 void main() { frag_color = v_color; }
 )";
 
+// planes: one colour per plane, lit on the CPU (a directional light shades a plane evenly), so
+// the largest surfaces on screen cost a software rasteriser no per-pixel lighting
+const char* const kFlatVertex = R"(#version 330 core
+layout(location = 0) in vec3 a_position;
+uniform mat4 u_view_projection;
+void main() { gl_Position = u_view_projection * vec4(a_position, 1.0); }
+)";
+
+const char* const kFlatFragment = R"(#version 330 core
+uniform vec4 u_color;
+out vec4 frag_color;
+void main() { frag_color = u_color; }
+)";
+
 GLuint compile(GLenum type, const char* source, std::string& error) {
   const GLuint s = glCreateShader(type);
   glShaderSource(s, 1, &source, nullptr);
@@ -135,6 +149,8 @@ bool SceneRenderer::init(std::string& error) {
   if (!lit_program_) return false;
   line_program_ = link(kLineVertex, kLineFragment, error);
   if (!line_program_) return false;
+  flat_program_ = link(kFlatVertex, kFlatFragment, error);
+  if (!flat_program_) return false;
   u_model_ = glGetUniformLocation(lit_program_, "u_model");
   u_normal_matrix_ = glGetUniformLocation(lit_program_, "u_normal_matrix");
   u_view_projection_ = glGetUniformLocation(lit_program_, "u_view_projection");
@@ -143,6 +159,8 @@ bool SceneRenderer::init(std::string& error) {
   u_eye_ = glGetUniformLocation(lit_program_, "u_eye");
   u_light_dir_ = glGetUniformLocation(lit_program_, "u_light_dir");
   u_line_view_projection_ = glGetUniformLocation(line_program_, "u_view_projection");
+  u_flat_view_projection_ = glGetUniformLocation(flat_program_, "u_view_projection");
+  u_flat_color_ = glGetUniformLocation(flat_program_, "u_color");
 
   sphere_ = upload(make_sphere(3));
   cylinder_ = upload(make_cylinder(24));
@@ -242,6 +260,10 @@ void SceneRenderer::sync_scene(const ViewerView& view) {
   grid_lines_.clear();
   patch_of_line_.clear();
   have_floor_ = false;
+  mesh_ids_.clear();
+  for (const auto& o : scene.objects()) {
+    if (o.kind() == OBJECT_DEFORMABLE_MESH) mesh_ids_.push_back(o.id());
+  }
   std::vector<float> vertices;
   for (std::size_t i = 0; i < planes.size(); ++i) {
     PlanePatch patch = make_plane_patch(planes, i, b, 0.1f);
@@ -289,7 +311,10 @@ void SceneRenderer::upload_deformables(const ViewerView& view, const RenderOptio
   for (int i = 0; i < view.mesh_count; ++i) {
     const MeshSlot& m = view.meshes[static_cast<std::size_t>(i)];
     DeformableGpu& g = deformables_[static_cast<std::size_t>(i)];
-    if (!m.drawable()) {
+    // only the bodies of the current scene (a restarted server may have dropped one)
+    const bool in_scene =
+        std::find(mesh_ids_.begin(), mesh_ids_.end(), m.object_id) != mesh_ids_.end();
+    if (!m.drawable() || !in_scene) {
       g.count = 0;
       continue;
     }
@@ -338,11 +363,14 @@ void SceneRenderer::upload_deformables(const ViewerView& view, const RenderOptio
     glBindBuffer(GL_ARRAY_BUFFER, g.normals);
     glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, g.normal_scratch.data());
     if (options.displacement_colors) {
+      if (i == 0) max_displacement_m_ = 0.0f;
       for (std::size_t v = 0; v < m.vertex_count; ++v) {
         const Eigen::Map<const Eigen::Vector3f> p(m.positions.data() + 3 * v),
             p0(m.reference.data() + 3 * v);
+        const float d = (p - p0).norm();
+        max_displacement_m_ = std::max(max_displacement_m_, d);
         Eigen::Map<Eigen::Vector3f>(g.color_scratch.data() + 3 * v) =
-            displacement_color((p - p0).norm(), options.displacement_scale_m);
+            displacement_color(d, options.displacement_scale_m);
       }
       glBindBuffer(GL_ARRAY_BUFFER, g.colors);
       glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, g.color_scratch.data());
@@ -406,26 +434,26 @@ void SceneRenderer::draw_lines(const std::vector<Line>& lines) {
 
 void SceneRenderer::draw_planes(const Eigen::Vector3f& eye, bool walls) {
   frame_lines_.clear();
+  glUseProgram(flat_program_);
+  glUniformMatrix4fv(u_flat_view_projection_, 1, GL_FALSE, view_projection_.data());
   glBindVertexArray(plane_vao_);
-  const Eigen::Matrix4f identity = Eigen::Matrix4f::Identity();
-  const Eigen::Matrix3f identity3 = Eigen::Matrix3f::Identity();
-  glUniformMatrix4fv(u_model_, 1, GL_FALSE, identity.data());
-  glUniformMatrix3fv(u_normal_matrix_, 1, GL_FALSE, identity3.data());
-  glUniform1i(u_vertex_color_, 0);
   for (std::size_t i = 0; i < patches_.size(); ++i) {
     const Plane& pl = patches_[i].plane;
     const bool is_floor = pl.normal.z() > 0.7f;
     if (is_floor == walls || patch_count_[i] < 3) continue;
     // seen from behind (outside the box): leave it out so the camera looks through it
     if (pl.normal.dot(eye) < pl.offset_m) continue;
-    const Eigen::Vector3f& c = is_floor ? colors::kFloor : colors::kWall;
-    glUniform4f(u_color_, c.x(), c.y(), c.z(), is_floor ? 1.0f : 0.18f);
+    // the lit shader's ambient, key and sky terms, without the highlight
+    const float shade = 0.22f + 0.62f * std::max(pl.normal.dot(light_), 0.0f) +
+                        0.22f * (0.5f + 0.5f * pl.normal.z());
+    const Eigen::Vector3f c = (is_floor ? colors::kFloor : colors::kWall) * shade;
+    glUniform4f(u_flat_color_, c.x(), c.y(), c.z(), is_floor ? 1.0f : 0.18f);
     glDrawArrays(GL_TRIANGLE_FAN, patch_first_[i], patch_count_[i]);
     for (std::size_t k = 0; k < grid_lines_.size(); ++k) {
       if (patch_of_line_[k] == i) frame_lines_.push_back(grid_lines_[k]);
     }
   }
-  draw_lines(frame_lines_);
+  draw_lines(frame_lines_);  // leaves the lit program bound
 }
 
 void SceneRenderer::draw_robot(const ViewerView& view, const Eigen::Vector3f& tip) {
@@ -473,6 +501,7 @@ void SceneRenderer::draw(const ViewerView& view, const OrbitCamera& camera,
   const Eigen::Vector3f left = Eigen::Vector3f::UnitZ().cross(to_eye).normalized();
   const Eigen::Vector3f light =
       (to_eye + 1.2f * Eigen::Vector3f::UnitZ() + 0.4f * left).normalized();
+  light_ = light;
 
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LEQUAL);
@@ -586,7 +615,8 @@ void SceneRenderer::release() {
   }
   if (lit_program_) glDeleteProgram(lit_program_);
   if (line_program_) glDeleteProgram(line_program_);
-  lit_program_ = line_program_ = 0;
+  if (flat_program_) glDeleteProgram(flat_program_);
+  lit_program_ = line_program_ = flat_program_ = 0;
 }
 
 }  // namespace teleop::viewer

@@ -56,6 +56,9 @@ class SceneRenderer {
   void release();
 
   const RobotSkeleton& skeleton() const { return skeleton_; }
+  /// Largest vertex displacement from the first frame over all meshes at the last upload [m]
+  /// (computed while displacement colours are on).
+  float max_displacement_m() const { return max_displacement_m_; }
 
  private:
   struct GpuMesh {  // a static indexed mesh: position + normal, interleaved
@@ -91,11 +94,12 @@ class SceneRenderer {
   void draw_planes(const Eigen::Vector3f& eye, bool walls);
   void draw_robot(const ViewerView& view, const Eigen::Vector3f& tip);
 
-  GLuint lit_program_ = 0, line_program_ = 0;
+  GLuint lit_program_ = 0, line_program_ = 0, flat_program_ = 0;
   // lit program uniforms
   GLint u_model_ = -1, u_normal_matrix_ = -1, u_view_projection_ = -1, u_color_ = -1,
         u_vertex_color_ = -1, u_eye_ = -1, u_light_dir_ = -1;
   GLint u_line_view_projection_ = -1;
+  GLint u_flat_view_projection_ = -1, u_flat_color_ = -1;
 
   GpuMesh sphere_, cylinder_, cone_;
   GLuint plane_vao_ = 0, plane_vbo_ = 0;
@@ -109,14 +113,17 @@ class SceneRenderer {
   std::vector<GLsizei> patch_count_;
   std::vector<Line> grid_lines_;  // all planes, with their plane index in patch_of_line_
   std::vector<std::size_t> patch_of_line_;
-  std::vector<Line> frame_lines_;  // rebuilt every frame (capacity kept)
+  std::vector<Line> frame_lines_;       // rebuilt every frame (capacity kept)
+  std::vector<std::int32_t> mesh_ids_;  // deformable objects of the current scene
   float floor_z_ = 0.0f;
   bool have_floor_ = false;
   float tip_radius_m_ = 0.05f;
+  float max_displacement_m_ = 0.0f;
   RobotSkeleton skeleton_;
   std::array<Eigen::Isometry3d, kMaxSkeletonJoints + 1> frames_{};
   std::array<DeformableGpu, kMaxMeshes> deformables_{};
   Eigen::Matrix4f view_projection_ = Eigen::Matrix4f::Identity();
+  Eigen::Vector3f light_ = Eigen::Vector3f::UnitZ();  ///< towards the key light, this frame
 };
 
 }  // namespace teleop::viewer

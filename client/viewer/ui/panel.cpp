@@ -112,27 +112,48 @@ void plot(const char* title, const char* unit, const PlotLine* lines, int line_c
   };
 
   // horizontal grid lines with their values: three, or two on a short plot
-  const int grid_lines = height >= 3.5f * ImGui::GetFontSize() ? 3 : 2;
+  const int grid_lines = height >= 4.5f * ImGui::GetFontSize() ? 3 : 2;
   for (int g = 0; g < grid_lines; ++g) {
-    const double v = lo + (hi - lo) * (0.1 + 0.8 * g / (grid_lines - 1));
+    const double v = lo + (hi - lo) * (0.25 + 0.5 * g / (grid_lines - 1));
     const float y = y_of(v);
     dl->AddLine(ImVec2(p0.x, y), ImVec2(p1.x, y), kPlotGrid);
     char text[32];
     std::snprintf(text, sizeof(text), "%.3g", v);
-    dl->AddText(ImVec2(p0.x + 3.0f, y - ImGui::GetFontSize()), kAxisText, text);
+    dl->AddText(ImVec2(p0.x + 3.0f, y - 0.5f * ImGui::GetFontSize()), kAxisText, text);
   }
   dl->PushClipRect(p0, p1, true);
   for (int i = 0; i < line_count; ++i) {
     const TimeSeries& s = *lines[i].series;
     points.clear();
     const ImU32 spike = (lines[i].color & 0x00ffffffu) | 0x70000000u;
+    // one point per pixel column (its last value) and, where the column's values span more
+    // than a pixel, a vertical stroke from its minimum to its maximum: a one-sample spike shows
+    int column = -1;
+    float col_x = 0.0f, col_min = 0.0f, col_max = 0.0f, col_last = 0.0f;
+    const auto flush = [&] {
+      if (column < 0) return;
+      const float y_min = y_of(col_min), y_max = y_of(col_max);
+      if (y_min - y_max > 1.0f) dl->AddLine(ImVec2(col_x, y_min), ImVec2(col_x, y_max), spike);
+      points.push_back(ImVec2(col_x, y_of(col_last)));
+    };
     for (std::size_t k = 0; k < s.size(); ++k) {
       const auto& b = s[k];
       if (b.t_s + s.bucket_s() < t_begin) continue;
       const float x = x_of(b.t_s);
-      if (b.max > b.min) dl->AddLine(ImVec2(x, y_of(b.min)), ImVec2(x, y_of(b.max)), spike);
-      points.push_back(ImVec2(x, y_of(b.last)));
+      const int c = static_cast<int>(std::floor(x));
+      if (c != column) {
+        flush();
+        column = c;
+        col_x = x;
+        col_min = b.min;
+        col_max = b.max;
+      } else {
+        col_min = std::min(col_min, b.min);
+        col_max = std::max(col_max, b.max);
+      }
+      col_last = b.last;
     }
+    flush();
     if (points.size() >= 2) {
       dl->AddPolyline(points.data(), static_cast<int>(points.size()), lines[i].color, 0, 1.5f);
     }
@@ -169,8 +190,12 @@ void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& lay
   }
   ImGui::Text("slave_state %.0f Hz   mesh_frame %.0f Hz", info.slave_hz, info.mesh_hz);
   ImGui::Text("master_state %.0f Hz   server_stats %.1f Hz", info.master_hz, info.stats_hz);
-  ImGui::Text("render %.0f fps  frame %.1f ms (p99 %.1f)", info.fps, info.frame_ms_p50,
-              info.frame_ms_p99);
+  if (info.headless) {
+    ImGui::Text("snapshot %dx%d, %dx MSAA", info.width, info.height, info.msaa);
+  } else {
+    ImGui::Text("render %.0f fps  frame %.1f ms (p99 %.1f)", info.fps, info.frame_ms_p50,
+                info.frame_ms_p99);
+  }
   ImGui::TextDisabled("%s", info.robot_status.c_str());
   ImGui::TextDisabled("plots: the last %.0f s", info.history_s);
   if (info.paused) {
@@ -223,10 +248,9 @@ void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& lay
   }
   ImGui::EndChild();
   ImGui::Separator();
-  ImGui::TextDisabled("drag orbit, right-drag pan, wheel zoom   R reset  W wire %s",
-                      info.wireframe ? "on" : "off");
-  ImGui::TextDisabled("C colours %s  F force  H panel  P/space pause  S save  Q quit",
-                      info.displacement_colors ? "by displacement" : "plain");
+  ImGui::TextDisabled("drag: orbit  right-drag: pan  wheel: zoom  R: reset view");
+  ImGui::TextDisabled("W wire%s  C colour%s  F force  H panel  P pause  S save  Q quit",
+                      info.wireframe ? "*" : "", info.displacement_colors ? "*" : "");
   ImGui::End();
 }
 
@@ -262,6 +286,10 @@ void draw_overlay(const ViewerView& view, const PanelInfo& info) {
   if (view.have_master) {
     ImGui::Text("master: rtt %.2f ms  energy %.3g J  link %s", view.master.rtt_ms(),
                 view.master.passivity_energy_j(), view.master.link_ok() ? "ok" : "LOST");
+  }
+  if (info.displacement_colors) {
+    ImGui::Text("colours: displacement from the first frame, max %.1f mm",
+                info.max_displacement_m * 1e3);
   }
   if (info.paused) ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.35f, 1.0f), "PAUSED (P to resume)");
   if (!info.note.empty()) ImGui::TextDisabled("%s", info.note.c_str());

@@ -20,11 +20,14 @@ struct PanelInfo {
   // rendering
   double fps = 0.0;
   double frame_ms_p50 = 0.0, frame_ms_p99 = 0.0;
+  bool headless = false;  ///< a snapshot: no frame rate to show
+  int width = 0, height = 0, msaa = 0;
   bool paused = false;
   bool wireframe = false;
   bool displacement_colors = false;
-  std::string robot_status;  ///< how the robot is drawn
-  std::string note;          ///< one-line message (e.g. "saved snapshot.png")
+  double max_displacement_m = 0.0;  ///< largest displacement from the first frame [m]
+  std::string robot_status;         ///< how the robot is drawn
+  std::string note;                 ///< one-line message (e.g. "saved snapshot.png")
 };
 
 /// Draws the panel into the column [layout.view_width, width) x [0, height).
