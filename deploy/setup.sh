@@ -15,7 +15,7 @@ packages=(
   clang-format
 )
 if [ "${TELEOP_SETUP_VIEWER:-1}" = "1" ]; then
-  packages+=(libglfw3-dev libgl-dev libimgui-dev xvfb xauth)
+  packages+=(libglfw3-dev libgl-dev libimgui-dev zlib1g-dev xvfb xauth)
 fi
 
 sudo_cmd=()

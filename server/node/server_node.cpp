@@ -14,6 +14,8 @@
 #include "common/util/signals.hpp"
 #include "common/util/stats.hpp"
 #include "server/node/command_validation.hpp"
+#include "server/node/scene_objects.hpp"
+#include "server/world/scene_world.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
 
 namespace teleop::server {
@@ -203,6 +205,11 @@ struct ServerNode::Impl {
           idx.push_back(static_cast<std::uint32_t>((*view.triangles)(r, c)));
       }
       topology_writer.write(t);
+    }
+    // the robot's frames at q = 0, so observers can draw the arm from the joint positions
+    if (const auto* sw = dynamic_cast<const sim::SceneWorld*>(world.get());
+        sw != nullptr && sw->has_robot()) {
+      append_robot_frames(sw->robot()->model(), d);
     }
     scene_writer.write(d);
   }

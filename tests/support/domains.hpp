@@ -11,6 +11,9 @@ inline constexpr int kDdsHelpers = 46;
 inline constexpr int kExperiment3 = 47;
 inline constexpr int kMeshTopics = 48;
 inline constexpr int kMonitor = 49;
+inline constexpr int kViewerToolScene = 80;     // teleop_viewer snapshot of the tool-only scene
+inline constexpr int kViewerDefaultScene = 81;  // teleop_viewer snapshot of the default scene
+inline constexpr int kViewerNoData = 82;        // teleop_viewer with no server: times out
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains

@@ -1,0 +1,299 @@
+#include "client/viewer/ui/panel.hpp"
+
+#include <imgui.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+namespace teleop::viewer {
+namespace {
+
+const ImU32 kPlotBackground = IM_COL32(28, 30, 36, 255);
+const ImU32 kPlotBorder = IM_COL32(70, 74, 84, 255);
+const ImU32 kPlotGrid = IM_COL32(55, 58, 66, 255);
+const ImU32 kAxisText = IM_COL32(150, 154, 164, 255);
+
+const ImU32 kOrange = IM_COL32(250, 130, 40, 255);
+const ImU32 kBlue = IM_COL32(90, 170, 250, 255);
+const ImU32 kGreen = IM_COL32(110, 210, 120, 255);
+const ImU32 kRed = IM_COL32(240, 90, 90, 255);
+const ImU32 kViolet = IM_COL32(190, 140, 250, 255);
+
+struct PlotLine {
+  const TimeSeries* series;
+  ImU32 color;
+  const char* label;
+};
+
+const char* event_kind(std::uint8_t k) {
+  switch (k) {
+    case EVENT_CONTACT_BEGIN:
+      return "contact-begin";
+    case EVENT_CONTACT_END:
+      return "contact-end";
+    case EVENT_WATCHDOG:
+      return "watchdog";
+    case EVENT_FAULT:
+      return "FAULT";
+    case EVENT_MODE_CHANGE:
+      return "mode";
+    case EVENT_COMMAND_REJECTED:
+      return "rejected";
+    case EVENT_LIMIT:
+      return "limit";
+    case EVENT_SAFETY:
+      return "safety";
+    default:
+      return "info";
+  }
+}
+
+/// Title row with the newest value of each line, then a plot of the last history_s seconds.
+void plot(const char* title, const char* unit, const PlotLine* lines, int line_count,
+          const PanelInfo& info, float height, bool from_zero) {
+  static std::vector<ImVec2> points;  // render thread only; keeps its capacity
+  ImGui::TextUnformatted(title);
+  for (int i = 0; i < line_count; ++i) {
+    const TimeSeries& s = *lines[i].series;
+    char text[96];
+    if (s.empty()) {
+      std::snprintf(text, sizeof(text), "%s --", lines[i].label);
+    } else {
+      std::snprintf(text, sizeof(text), "%s %.3g %s", lines[i].label,
+                    static_cast<double>(s.newest().last), unit);
+    }
+    ImGui::SameLine();
+    ImGui::TextColored(ImGui::ColorConvertU32ToFloat4(lines[i].color), "%s", text);
+  }
+
+  const ImVec2 p0 = ImGui::GetCursorScreenPos();
+  const float width = ImGui::GetContentRegionAvail().x;
+  const ImVec2 p1(p0.x + width, p0.y + height);
+  ImGui::Dummy(ImVec2(width, height));
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  dl->AddRectFilled(p0, p1, kPlotBackground);
+
+  // vertical range over the visible buckets
+  const double t_begin = info.now_s - info.history_s;
+  double lo = 1e300, hi = -1e300;
+  for (int i = 0; i < line_count; ++i) {
+    const TimeSeries& s = *lines[i].series;
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      if (s[k].t_s < t_begin) continue;
+      lo = std::min(lo, static_cast<double>(s[k].min));
+      hi = std::max(hi, static_cast<double>(s[k].max));
+    }
+  }
+  const bool have_data = lo <= hi;
+  if (!have_data) {
+    lo = 0.0;
+    hi = 1.0;
+  }
+  if (from_zero) {
+    lo = std::min(lo, 0.0);
+    hi = std::max(hi, 0.0);
+  }
+  if (hi - lo < 1e-9) {  // flat: a unit range around the value (from zero: above it)
+    const double pad = std::max(std::abs(hi) * 0.1, 1.0);
+    if (!(from_zero && lo == 0.0)) lo -= pad;
+    hi += pad;
+  } else {
+    const double pad = 0.08 * (hi - lo);
+    if (!(from_zero && lo == 0.0)) lo -= pad;
+    hi += pad;
+  }
+  const auto y_of = [&](double v) {
+    return p1.y - static_cast<float>((v - lo) / (hi - lo)) * (height - 2.0f) - 1.0f;
+  };
+  const auto x_of = [&](double t) {
+    return p0.x + static_cast<float>((t - t_begin) / info.history_s) * width;
+  };
+
+  // horizontal grid lines with their values: three, or two on a short plot
+  const int grid_lines = height >= 4.5f * ImGui::GetFontSize() ? 3 : 2;
+  for (int g = 0; g < grid_lines; ++g) {
+    const double v = lo + (hi - lo) * (0.25 + 0.5 * g / (grid_lines - 1));
+    const float y = y_of(v);
+    dl->AddLine(ImVec2(p0.x, y), ImVec2(p1.x, y), kPlotGrid);
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.3g", v);
+    dl->AddText(ImVec2(p0.x + 3.0f, y - 0.5f * ImGui::GetFontSize()), kAxisText, text);
+  }
+  dl->PushClipRect(p0, p1, true);
+  for (int i = 0; i < line_count; ++i) {
+    const TimeSeries& s = *lines[i].series;
+    points.clear();
+    const ImU32 spike = (lines[i].color & 0x00ffffffu) | 0x70000000u;
+    // one point per pixel column (its last value) and, where the column's values span more
+    // than a pixel, a vertical stroke from its minimum to its maximum: a one-sample spike shows
+    int column = -1;
+    float col_x = 0.0f, col_min = 0.0f, col_max = 0.0f, col_last = 0.0f;
+    const auto flush = [&] {
+      if (column < 0) return;
+      const float y_min = y_of(col_min), y_max = y_of(col_max);
+      if (y_min - y_max > 1.0f) dl->AddLine(ImVec2(col_x, y_min), ImVec2(col_x, y_max), spike);
+      points.push_back(ImVec2(col_x, y_of(col_last)));
+    };
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      const auto& b = s[k];
+      if (b.t_s + s.bucket_s() < t_begin) continue;
+      const float x = x_of(b.t_s);
+      const int c = static_cast<int>(std::floor(x));
+      if (c != column) {
+        flush();
+        column = c;
+        col_x = x;
+        col_min = b.min;
+        col_max = b.max;
+      } else {
+        col_min = std::min(col_min, b.min);
+        col_max = std::max(col_max, b.max);
+      }
+      col_last = b.last;
+    }
+    flush();
+    if (points.size() >= 2) {
+      dl->AddPolyline(points.data(), static_cast<int>(points.size()), lines[i].color, 0, 1.5f);
+    }
+  }
+  dl->PopClipRect();
+  dl->AddRect(p0, p1, kPlotBorder);
+  if (!have_data) {
+    const char* empty = "no data";
+    const ImVec2 sz = ImGui::CalcTextSize(empty);
+    dl->AddText(ImVec2(0.5f * (p0.x + p1.x - sz.x), 0.5f * (p0.y + p1.y - sz.y)), kAxisText, empty);
+  }
+  ImGui::Spacing();
+}
+
+}  // namespace
+
+void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& layout) {
+  if (layout.panel_width <= 0) return;
+  ImGui::SetNextWindowPos(ImVec2(static_cast<float>(layout.view_width), 0.0f), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(
+      ImVec2(static_cast<float>(layout.panel_width), static_cast<float>(layout.view_height)),
+      ImGuiCond_Always);
+  const ImGuiWindowFlags flags = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
+                                 ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar |
+                                 ImGuiWindowFlags_NoSavedSettings;
+  ImGui::Begin("teleop_viewer##panel", nullptr, flags);
+
+  ImGui::Text("teleop_viewer   domain %d   %s", info.domain, info.profile.c_str());
+  if (view.have_scene()) {
+    ImGui::Text("scene '%s'  %u joints  %lu objects", view.scene.name().c_str(),
+                view.scene.joint_count(), static_cast<unsigned long>(view.scene.objects().size()));
+  } else {
+    ImGui::TextColored(ImVec4(1.0f, 0.8f, 0.3f, 1.0f), "waiting for teleop/scene ...");
+  }
+  ImGui::Text("slave_state %.0f Hz   mesh_frame %.0f Hz", info.slave_hz, info.mesh_hz);
+  ImGui::Text("master_state %.0f Hz   server_stats %.1f Hz", info.master_hz, info.stats_hz);
+  if (info.headless) {
+    ImGui::Text("snapshot %dx%d, %dx MSAA", info.width, info.height, info.msaa);
+  } else {
+    ImGui::Text("render %.0f fps  frame %.1f ms (p99 %.1f)", info.fps, info.frame_ms_p50,
+                info.frame_ms_p99);
+  }
+  ImGui::TextDisabled("%s", info.robot_status.c_str());
+  ImGui::TextDisabled("plots: the last %.0f s", info.history_s);
+  if (info.paused) {
+    ImGui::SameLine();
+    ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.35f, 1.0f), "  PAUSED");
+  }
+  ImGui::Separator();
+
+  const float h =
+      std::clamp((static_cast<float>(layout.view_height) - 440.0f) / 6.0f, 32.0f, 110.0f);
+  {
+    const PlotLine l[] = {{&view.series[kForceN], kOrange, "|F|"}};
+    plot("contact force", "N", l, 1, info, h, true);
+  }
+  {
+    const PlotLine l[] = {{&view.series[kPenetrationMm], kBlue, "penetration"},
+                          {&view.series[kDeformationMm], kGreen, "deformation"}};
+    plot("tip", "mm", l, 2, info, h, true);
+  }
+  {
+    const PlotLine l[] = {{&view.series[kStepP50Us], kGreen, "p50"},
+                          {&view.series[kStepP99Us], kRed, "p99"}};
+    plot("step time", "us", l, 2, info, h, true);
+  }
+  {
+    const PlotLine l[] = {{&view.series[kLoopRateHz], kBlue, "rate"}};
+    plot("physics loop", "Hz", l, 1, info, h, false);
+  }
+  {
+    const PlotLine l[] = {{&view.series[kRoundTripMs], kViolet, "rtt"}};
+    plot("master round trip", "ms", l, 1, info, h, true);
+  }
+  {
+    const PlotLine l[] = {{&view.series[kEnergyJ], kOrange, "E"}};
+    plot("master port energy", "J", l, 1, info, h, true);
+  }
+
+  ImGui::Separator();
+  ImGui::Text("events (%llu)", static_cast<unsigned long long>(view.counters.events));
+  const float help_h = 2.0f * ImGui::GetTextLineHeightWithSpacing() + 6.0f;
+  ImGui::BeginChild("events", ImVec2(0.0f, -help_h), false);
+  for (int i = 0; i < view.event_count; ++i) {
+    const EventEntry& e = view.events[static_cast<std::size_t>(i)];
+    const ImVec4 color = e.severity >= 2   ? ImVec4(1.0f, 0.4f, 0.4f, 1.0f)
+                         : e.severity == 1 ? ImVec4(1.0f, 0.85f, 0.35f, 1.0f)
+                                           : ImVec4(0.8f, 0.82f, 0.86f, 1.0f);
+    ImGui::PushStyleColor(ImGuiCol_Text, color);
+    ImGui::TextWrapped("%6.1f s %s %s: %s", e.t_s, e.source, event_kind(e.kind), e.message);
+    ImGui::PopStyleColor();
+  }
+  ImGui::EndChild();
+  ImGui::Separator();
+  ImGui::TextDisabled("drag: orbit  right-drag: pan  wheel: zoom  R: reset view");
+  ImGui::TextDisabled("W wire%s  C colour%s  F force  H panel  P pause  S save  Q quit",
+                      info.wireframe ? "*" : "", info.displacement_colors ? "*" : "");
+  ImGui::End();
+}
+
+void draw_overlay(const ViewerView& view, const PanelInfo& info) {
+  ImGui::SetNextWindowPos(ImVec2(10.0f, 10.0f), ImGuiCond_Always);
+  ImGui::SetNextWindowBgAlpha(0.45f);
+  const ImGuiWindowFlags flags = ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs |
+                                 ImGuiWindowFlags_AlwaysAutoResize |
+                                 ImGuiWindowFlags_NoSavedSettings |
+                                 ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoNav;
+  ImGui::Begin("##overlay", nullptr, flags);
+  if (!view.complete()) {
+    ImGui::TextColored(ImVec4(1.0f, 0.8f, 0.3f, 1.0f), "waiting for %s on domain %d",
+                       view.missing().c_str(), info.domain);
+  }
+  if (view.have_slave) {
+    const auto& s = view.slave;
+    const auto& x = s.tip_position_m();
+    const auto& f = s.contact_force_n();
+    const double fn = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+    ImGui::Text("t = %.2f s   tip (%.3f, %.3f, %.3f) m", s.sim_time_s(), x[0], x[1], x[2]);
+    ImGui::Text("|F| %.2f N   penetration %.1f mm   deformation %.1f mm", fn,
+                s.penetration_m() * 1e3, s.deformation_m() * 1e3);
+    if (s.in_contact()) {
+      ImGui::SameLine();
+      ImGui::TextColored(ImVec4(1.0f, 0.75f, 0.3f, 1.0f), "  CONTACT");
+    }
+    if (s.holding()) {
+      ImGui::SameLine();
+      ImGui::TextColored(ImVec4(1.0f, 0.85f, 0.35f, 1.0f), "  HOLDING");
+    }
+  }
+  if (view.have_master) {
+    ImGui::Text("master: rtt %.2f ms  energy %.3g J  link %s", view.master.rtt_ms(),
+                view.master.passivity_energy_j(), view.master.link_ok() ? "ok" : "LOST");
+  }
+  if (info.displacement_colors) {
+    ImGui::Text("colours: displacement from the first frame, max %.1f mm",
+                info.max_displacement_m * 1e3);
+  }
+  if (info.paused) ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.35f, 1.0f), "PAUSED (P to resume)");
+  if (!info.note.empty()) ImGui::TextDisabled("%s", info.note.c_str());
+  ImGui::End();
+}
+
+}  // namespace teleop::viewer
