@@ -11,6 +11,9 @@ inline constexpr int kDdsHelpers = 46;
 inline constexpr int kExperiment3 = 47;
 inline constexpr int kMeshTopics = 48;
 inline constexpr int kMonitor = 49;
+inline constexpr int kWaveSession = 60;      // passivity_test: wave-variables over DDS
+inline constexpr int kTdpaSession = 61;      // passivity_test: tdpa over DDS
+inline constexpr int kBadWaveCommands = 62;  // passivity_test: hostile wave commands
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
