@@ -1,8 +1,10 @@
 // teleop_master: the master-side client: a haptic device (simulated by default), a bilateral
-// controller (position-position or force-position), an injected delay channel in both
-// directions, metrics, a safety layer, over DDS.
+// controller (position-position, force-position, wave-variables or tdpa), an injected delay
+// channel in both directions, metrics, a safety layer, over DDS.
 //
-//   teleop_master [--scheme position-position|force-position] [--script press-slip]
+//   teleop_master [--scheme position-position|force-position|wave-variables|tdpa]
+//                 [--wave-impedance B --wave-unmatched] [--tdpa-base position-position|...]
+//                 [--script press-slip]
 //                 [--delay 50ms --jitter 5ms --jitter-dist uniform|normal --reorder
 //                  --loss 1% --burst-loss P_GB,P_BG --seed N] [--config master.yaml]
 //                 [--duration S] [--samples N] [--domain D] [--profile P]
@@ -55,8 +57,17 @@ int main(int argc, char** argv) {
   app.add_option("--config", config_file,
                  "YAML with `controller:`, `delay:` (both directions) mappings; flags win");
   app.add_option("--scheme", o.controller.scheme, "bilateral control scheme")
-      ->check(CLI::IsMember({"position-position", "force-position"}))
+      ->check(CLI::IsMember(teleop::master::controller_names()))
       ->capture_default_str();
+  std::optional<double> wave_b;
+  std::optional<std::string> tdpa_base;
+  bool wave_unmatched = false;
+  app.add_option("--wave-impedance", wave_b,
+                 "wave-variables: wave impedance b [N s/m], 0-1e4 (0 = K_ps * 0.025 s)");
+  app.add_flag("--wave-unmatched", wave_unmatched,
+               "wave-variables: no matching damper at the slave (waves reflect)");
+  app.add_option("--tdpa-base", tdpa_base, "tdpa: base law")
+      ->check(CLI::IsMember({"position-position", "force-position"}));
   app.add_option("--device", o.device, "haptic device")
       ->check(CLI::IsMember({"simulated", "replay", "external"}))
       ->capture_default_str();
@@ -142,6 +153,10 @@ int main(int argc, char** argv) {
     if (alpha) o.controller.workspace.position_scale = *alpha;
     if (beta) o.controller.workspace.force_scale = *beta;
     if (max_force) o.controller.max_force_n = *max_force;
+    if (wave_b)
+      o.controller.wave_impedance_ns_per_m = check_flag("--wave-impedance", *wave_b, 0.0, 1e4);
+    if (wave_unmatched) o.controller.wave_matched = false;
+    if (tdpa_base) o.controller.tdpa_base = *tdpa_base;
     o.controller.validate();
     std::vector<std::string> dflags;
     auto add = [&](const char* f, const std::optional<std::string>& v) {

@@ -1,26 +1,73 @@
 #include "client/control/bilateral_controller.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <sstream>
+
+#include "common/control/slave_port.hpp"
 
 namespace teleop::master {
 
 using config::ConfigError;
 
 namespace {
+std::string number_text(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
 void check(const char* field, double v, double lo, double hi) {
   if (!(v >= lo && v <= hi)) {
-    throw ConfigError(std::string("controller: ") + field + " = " + std::to_string(v) +
+    throw ConfigError(std::string("controller: ") + field + " = " + number_text(v) +
                       " is out of the allowed range " + config::range_text(lo, hi));
   }
 }
+
+const std::vector<std::string>& scheme_names() {
+  static const std::vector<std::string> names = {"position-position", "force-position",
+                                                 "wave-variables", "tdpa"};
+  return names;
+}
+
+std::string joined_names() {
+  std::string s;
+  for (const auto& n : scheme_names()) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+/// Position-position: F_m = K_pm (x_s' - x_m) - B_m v_m (damping only before a slave sample).
+Eigen::Vector3d position_position_force(const WorkspaceMap& w, double k_pm, double b_m,
+                                        const DeviceReading& master, const SlaveSample& slave) {
+  Eigen::Vector3d f = -b_m * master.linear_velocity_mps;
+  if (slave.valid) f += k_pm * (w.to_master_position(slave.position_m) - master.position_m);
+  return f;
+}
+
+/// Force-position: F_m = K_f beta R^T f_e - B_m v_m.
+Eigen::Vector3d force_position_force(const WorkspaceMap& w, double k_f, double b_m,
+                                     const DeviceReading& master, const SlaveSample& slave) {
+  Eigen::Vector3d f = -b_m * master.linear_velocity_mps;
+  if (slave.valid) f += k_f * w.to_master_force(slave.contact_force_n);
+  return f;
+}
+
+std::atomic<std::uint32_t> g_session_counter{0};
 }  // namespace
 
 void ControllerParams::validate() const {
-  if (scheme != "position-position" && scheme != "force-position") {
-    throw ConfigError("controller: scheme '" + scheme +
+  if (std::find(scheme_names().begin(), scheme_names().end(), scheme) == scheme_names().end()) {
+    throw ConfigError("controller: scheme '" + scheme + "' is unknown (allowed: " + joined_names() +
+                      ")");
+  }
+  if (tdpa_base != "position-position" && tdpa_base != "force-position") {
+    throw ConfigError("controller: tdpa_base '" + tdpa_base +
                       "' is unknown (allowed: position-position, force-position)");
   }
+  check("wave_impedance_ns_per_m", wave_impedance_ns_per_m, 0.0, passivity::kMaxWaveImpedance);
+  check("wave_time_constant_s", wave_time_constant_s, 1e-4, 1.0);
+  check("wave_filter_hz", wave_filter_hz, 0.0, 1000.0);
   check("slave_stiffness_n_per_m", slave_stiffness_n_per_m, 0.0, 1e6);
   check("master_stiffness_n_per_m", master_stiffness_n_per_m, 0.0, 1e6);
   check("master_damping_ns_per_m", master_damping_ns_per_m, 0.0, 1e4);
@@ -37,8 +84,9 @@ ControllerParams controller_params_from_yaml(const config::Node& node) {
   if (!node.defined()) return p;
   node.reject_unknown_keys({"scheme", "workspace", "slave_stiffness_n_per_m",
                             "master_stiffness_n_per_m", "master_damping_ns_per_m", "force_gain",
-                            "max_force_n", "send_velocity"});
-  p.scheme = node.choice_or("scheme", p.scheme, {"position-position", "force-position"});
+                            "max_force_n", "send_velocity", "wave_impedance_ns_per_m",
+                            "wave_time_constant_s", "wave_matched", "wave_filter_hz", "tdpa_base"});
+  p.scheme = node.choice_or("scheme", p.scheme, scheme_names());
   p.slave_stiffness_n_per_m =
       node.number_or("slave_stiffness_n_per_m", p.slave_stiffness_n_per_m, 0.0, 1e6);
   p.master_stiffness_n_per_m =
@@ -48,6 +96,13 @@ ControllerParams controller_params_from_yaml(const config::Node& node) {
   p.force_gain = node.number_or("force_gain", p.force_gain, 0.0, 100.0);
   p.max_force_n = node.number_or("max_force_n", p.max_force_n, 0.0, 1e4);
   p.send_velocity = node.boolean_or("send_velocity", p.send_velocity);
+  p.wave_impedance_ns_per_m = node.number_or("wave_impedance_ns_per_m", p.wave_impedance_ns_per_m,
+                                             0.0, passivity::kMaxWaveImpedance);
+  p.wave_time_constant_s =
+      node.number_or("wave_time_constant_s", p.wave_time_constant_s, 1e-4, 1.0);
+  p.wave_matched = node.boolean_or("wave_matched", p.wave_matched);
+  p.wave_filter_hz = node.number_or("wave_filter_hz", p.wave_filter_hz, 0.0, 1000.0);
+  p.tdpa_base = node.choice_or("tdpa_base", p.tdpa_base, {"position-position", "force-position"});
   if (node.has("workspace")) {
     const config::Node w = node.at("workspace");
     w.reject_unknown_keys({"offset_m", "position_scale", "force_scale"});
@@ -74,11 +129,16 @@ void BilateralController::configure(const ControllerParams& params, const Device
   f_max_ =
       params.max_force_n > 0.0 ? std::min(params.max_force_n, spec.max_force_n) : spec.max_force_n;
   active_ = false;
+  on_configure();
 }
 
-void BilateralController::activate(const DeviceReading& /*master*/) {
+void BilateralController::activate(const DeviceReading& master) {
   seq_ = 0;
+  session_ = next_session_ != 0 ? next_session_ : ++g_session_counter;
+  if (session_ == 0) session_ = ++g_session_counter;  // 0 means "none" on the wire
+  next_session_ = 0;
   active_ = true;
+  on_activate(master);
 }
 
 void BilateralController::deactivate() { active_ = false; }
@@ -112,38 +172,127 @@ ControlOutput BilateralController::update(const DeviceReading& master, const Sla
     out.saturated = true;
   }
   out.torque_nm = saturate_norm(out.torque_nm, spec_.max_torque_nm);
+  finish(master, slave, dt_s, out);
   c.master_force_n = w.to_slave_force(out.force_n);
   return out;
 }
 
 void PositionPositionController::compute(const DeviceReading& master, const SlaveSample& slave,
                                          double /*dt_s*/, ControlOutput& out) {
-  // F_m = K_pm (x_s' - x_m) - B_m v_m; with no slave sample yet, damping only
-  Eigen::Vector3d f = -b_m_ * master.linear_velocity_mps;
-  if (slave.valid) {
-    const Eigen::Vector3d xs_master = params_.workspace.to_master_position(slave.position_m);
-    f += k_pm_ * (xs_master - master.position_m);
-  }
-  out.force_n = f;
+  out.force_n = position_position_force(params_.workspace, k_pm_, b_m_, master, slave);
 }
 
 void ForcePositionController::compute(const DeviceReading& master, const SlaveSample& slave,
                                       double /*dt_s*/, ControlOutput& out) {
-  // F_m = K_f beta R^T f_e - B_m v_m
-  Eigen::Vector3d f = -b_m_ * master.linear_velocity_mps;
-  if (slave.valid) {
-    f += params_.force_gain * params_.workspace.to_master_force(slave.contact_force_n);
+  out.force_n = force_position_force(params_.workspace, params_.force_gain, b_m_, master, slave);
+}
+
+// --- wave variables -------------------------------------------------------------------------
+
+void WaveVariablesController::on_configure() {
+  const WorkspaceMap& w = params_.workspace;
+  const double derived = params_.slave_stiffness_n_per_m * params_.wave_time_constant_s;
+  const double wanted =
+      params_.wave_impedance_ns_per_m > 0.0 ? params_.wave_impedance_ns_per_m : derived;
+  // the device renders the damping alpha beta b in free motion: keep it within the spec
+  const double b_max = spec_.max_damping_ns_per_m / (w.position_scale * w.force_scale);
+  b_ = std::min(wanted, b_max);
+  if (!(b_ >= passivity::kMinWaveImpedance)) {
+    throw ConfigError(
+        "controller: wave impedance b = " + number_text(b_) +
+        " N s/m (from wave_impedance_ns_per_m = " + number_text(params_.wave_impedance_ns_per_m) +
+        ", slave_stiffness_n_per_m = " + number_text(params_.slave_stiffness_n_per_m) +
+        ") is out of the allowed range " + config::range_text(passivity::kMinWaveImpedance, b_max));
   }
-  out.force_n = f;
+  port_.configure(
+      b_, passivity::wave_limit(b_, passivity::kWaveLimitSpeedMps, passivity::kWaveLimitForceN),
+      params_.wave_filter_hz);
+}
+
+void WaveVariablesController::on_activate(const DeviceReading& master) {
+  port_.reset(params_.workspace.to_slave_position(master.position_m));
+  v_energy_rx_.setZero();
+}
+
+void WaveVariablesController::compute(const DeviceReading& master, const SlaveSample& slave,
+                                      double dt_s, ControlOutput& out) {
+  const WorkspaceMap& w = params_.workspace;
+  SlaveCommand& c = out.command;
+  // the channel works in the slave frame: x and xdot of the master mapped there
+  const Eigen::Vector3d xdot = w.to_slave_velocity(master.linear_velocity_mps);
+  const bool have = slave.valid && slave.passivity_session == session_;
+  if (have) v_energy_rx_ = slave.wave_v_energy_j;
+  port_.update(c.position_m, xdot, slave.wave_v_integral, slave.wave_v_energy_j, have, dt_s);
+  // the operator pushes F_m into the channel; the device renders -F_m (+ local damping)
+  out.force_n = -w.to_master_force(port_.force_n()) - b_m_ * master.linear_velocity_mps;
+  c.passivity_session = session_;
+  c.wave_impedance_ns_per_m = b_;
+  c.wave_matched = params_.wave_matched;
+  c.wave_u = port_.u();
+  c.wave_u_integral = port_.sent().integral;
+  c.wave_u_energy_j = port_.sent().energy_j;
+}
+
+BilateralController::PassivityStatus WaveVariablesController::passivity_status() const {
+  PassivityStatus s;
+  // backward energy received but not (yet) used: what the receiver holds back, >= 0
+  s.observer_j = (v_energy_rx_ - port_.received().used_energy_j()).sum();
+  return s;
+}
+
+// --- time-domain passivity ------------------------------------------------------------------
+
+void TimeDomainPassivityController::on_configure() {
+  force_position_ = params_.tdpa_base == "force-position";
+}
+
+void TimeDomainPassivityController::on_activate(const DeviceReading& /*master*/) {
+  pc_.reset();
+  wanted_n_.setZero();
+  remote_in_j_ = remote_out_j_ = 0.0;
+}
+
+void TimeDomainPassivityController::compute(const DeviceReading& master, const SlaveSample& slave,
+                                            double dt_s, ControlOutput& out) {
+  const WorkspaceMap& w = params_.workspace;
+  wanted_n_ = force_position_ ? force_position_force(w, params_.force_gain, b_m_, master, slave)
+                              : position_position_force(w, k_pm_, b_m_, master, slave);
+  // energies travel in the slave frame: P_slave = (alpha / beta) P_master
+  const double to_master = w.force_scale / w.position_scale;
+  if (slave.valid && slave.passivity_session == session_) {
+    remote_in_j_ = slave.tdpa_energy_in_j * to_master;
+    remote_out_j_ = slave.tdpa_energy_out_j * to_master;
+  }
+  out.force_n = pc_.filter(wanted_n_, master.linear_velocity_mps, remote_in_j_, dt_s);
+}
+
+void TimeDomainPassivityController::finish(const DeviceReading& master,
+                                           const SlaveSample& /*slave*/, double dt_s,
+                                           ControlOutput& out) {
+  // record what is finally applied (after saturation)
+  pc_.commit(out.force_n, wanted_n_, master.linear_velocity_mps, dt_s);
+  const WorkspaceMap& w = params_.workspace;
+  out.command.passivity_session = session_;
+  out.command.tdpa_energy_in_j = pc_.energy().in_j * (w.position_scale / w.force_scale);
+}
+
+BilateralController::PassivityStatus TimeDomainPassivityController::passivity_status() const {
+  PassivityStatus s;
+  s.observer_j = remote_in_j_ - pc_.energy().out_j;
+  s.dissipated_j = pc_.energy().dissipated_j;
+  s.alpha_ns_per_m = pc_.last_alpha();
+  return s;
 }
 
 std::unique_ptr<BilateralController> make_controller(const std::string& scheme) {
   if (scheme == "position-position") return std::make_unique<PositionPositionController>();
   if (scheme == "force-position") return std::make_unique<ForcePositionController>();
-  throw ConfigError("controller: scheme '" + scheme +
-                    "' is unknown (allowed: position-position, force-position)");
+  if (scheme == "wave-variables") return std::make_unique<WaveVariablesController>();
+  if (scheme == "tdpa") return std::make_unique<TimeDomainPassivityController>();
+  throw ConfigError("controller: scheme '" + scheme + "' is unknown (allowed: " + joined_names() +
+                    ")");
 }
 
-std::vector<std::string> controller_names() { return {"position-position", "force-position"}; }
+std::vector<std::string> controller_names() { return scheme_names(); }
 
 }  // namespace teleop::master

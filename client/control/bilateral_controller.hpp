@@ -14,10 +14,20 @@
 // update() is real-time safe (no allocation) and returns the device force (saturated to the
 // spec's peak force) and the command for the slave.
 //
-// Extension (wave variables, time-domain passivity): a scheme overrides compute(); the base
-// pre-fills the command with the mapped pose, so a wave scheme writes command.wave_u and
-// reads slave.wave_v, and a passivity controller post-processes out.force_n with its energy
-// observer before the base saturates it. SlaveCommand/SlaveSample already carry wave_u/v.
+// wave-variables (Niemeyer & Slotine; Anderson & Spong 1989): the master port of a wave
+//   channel of impedance b (common/control/wave_variables.hpp). The device renders
+//   -beta R^T F_m - B_m v_m with F_m = b xdot_m - sqrt(2b) v_m in the slave frame; the
+//   command carries the forward wave u, its integral and its energy; the slave decodes them
+//   with its contact force (common/control/slave_port.hpp) and returns the backward wave.
+// tdpa (Hannaford & Ryu 2002; Ryu, Artigas & Preusche 2010): position-position or
+//   force-position (tdpa_base) with the master's passivity observer and controller
+//   (common/control/time_domain_passivity.hpp): the force is modified by the adaptive damping
+//   that keeps the master port's output energy within the slave port's input energy
+//   received; the command carries the master port's input energy for the slave's PC.
+//
+// Extension: a scheme overrides compute() (and on_configure(), on_activate(), finish() if it
+// keeps state); the base pre-fills the command with the mapped pose and saturates the force
+// between compute() and finish().
 #include <memory>
 #include <string>
 #include <vector>
@@ -25,14 +35,17 @@
 #include "client/control/bilateral_types.hpp"
 #include "client/device/haptic_device.hpp"
 #include "common/config/config.hpp"
+#include "common/control/time_domain_passivity.hpp"
+#include "common/control/wave_variables.hpp"
 
 namespace teleop::master {
 
 /// Parameters of a bilateral controller. Defaults with units; 0 means "derive" where noted.
 struct ControllerParams {
-  std::string scheme = "position-position";  ///< "position-position" | "force-position"
-  WorkspaceMap workspace;                    ///< master -> slave map and force scaling
-  double slave_stiffness_n_per_m = 400.0;    ///< K_ps requested from the slave [N/m]
+  /// "position-position" | "force-position" | "wave-variables" | "tdpa"
+  std::string scheme = "position-position";
+  WorkspaceMap workspace;                  ///< master -> slave map and force scaling
+  double slave_stiffness_n_per_m = 400.0;  ///< K_ps requested from the slave [N/m]
   /// K_pm [N/m]; 0 = transparent choice alpha * beta * K_ps (felt force = beta * contact force
   /// in steady contact). Clamped to the spec's max stiffness.
   double master_stiffness_n_per_m = 0.0;
@@ -40,6 +53,18 @@ struct ControllerParams {
   double force_gain = 1.0;               ///< K_f of force-position [-] (soft/hard contact feel)
   double max_force_n = 0.0;              ///< output saturation [N]; 0 = spec.max_force_n
   bool send_velocity = true;             ///< command the mapped master velocity too
+  /// Wave impedance b [N s/m] of wave-variables; 0 = derive K_ps * wave_time_constant_s.
+  /// Clamped so that the damping the device renders, alpha beta b, stays within the spec's
+  /// max damping.
+  double wave_impedance_ns_per_m = 0.0;
+  double wave_time_constant_s = 0.025;  ///< tau_b of the derived b = K_ps tau_b [s]
+  bool wave_matched = true;  ///< the slave terminates the channel with a damper b (no echo)
+  /// Cutoff of the first-order low-pass on the backward wave at the master [Hz] (0: off).
+  /// Passive (it never puts out more wave energy than it receives); it removes the echo a
+  /// stiff contact sends back and forth between the device and the slave.
+  double wave_filter_hz = 10.0;
+  /// Base law of tdpa: "position-position" | "force-position".
+  std::string tdpa_base = "position-position";
 
   /// Throws ConfigError naming the field if a value is out of range.
   void validate() const;
@@ -89,8 +114,32 @@ class BilateralController {
   double force_limit_n() const { return f_max_; }
   /// True between activate() and deactivate().
   bool active() const { return active_; }
+  /// The next activate() uses this session id (0: the next of a process-wide counter). The
+  /// slave restarts its passivity state when the id changes; the master uses the slave's
+  /// passivity fields only when they carry its own id.
+  void set_session_id(std::uint32_t id) { next_session_ = id; }
+  /// Session id of the running session.
+  std::uint32_t session_id() const { return session_; }
+  /// K_f of the environment force the scheme renders (1 unless force reflection is scaled).
+  virtual double environment_force_gain() const { return 1.0; }
+
+  /// Passivity bookkeeping of the master side (zero for the schemes without).
+  struct PassivityStatus {
+    double observer_j = 0.0;      ///< master-side observer: energy budget left [J] (>= 0)
+    double dissipated_j = 0.0;    ///< energy removed by the master-side PC [J]
+    double alpha_ns_per_m = 0.0;  ///< damping the PC added this cycle [N s/m]
+  };
+  virtual PassivityStatus passivity_status() const { return {}; }
 
  protected:
+  /// Called at the end of configure() (params_, spec_, gains set). @throws ConfigError.
+  virtual void on_configure() {}
+  /// Called at the end of activate().
+  virtual void on_activate(const DeviceReading& /*master*/) {}
+  /// Called after saturation with the final force in `out` (record energies here).
+  virtual void finish(const DeviceReading& /*master*/, const SlaveSample& /*slave*/,
+                      double /*dt_s*/, ControlOutput& /*out*/) {}
+
   /// Scheme-specific part: fill out.force_n (master frame, unsaturated) and adjust
   /// out.command if needed. out.command is pre-filled with the mapped master pose.
   virtual void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
@@ -101,10 +150,12 @@ class BilateralController {
   double k_pm_ = 0.0;
   double b_m_ = 0.0;
   double f_max_ = 0.0;
+  std::uint32_t session_ = 0;
 
  private:
   bool active_ = false;
   std::uint64_t seq_ = 0;
+  std::uint32_t next_session_ = 0;
 };
 
 /// Fig. 10: position-position.
@@ -123,10 +174,65 @@ class ForcePositionController final : public BilateralController {
  public:
   const char* name() const override { return "force-position"; }
   SchemeId scheme() const override { return SchemeId::kForcePosition; }
+  double environment_force_gain() const override { return params_.force_gain; }
 
  protected:
   void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
                ControlOutput& out) override;
+};
+
+/// Wave variables, master side (see the file comment).
+class WaveVariablesController final : public BilateralController {
+ public:
+  const char* name() const override { return "wave-variables"; }
+  SchemeId scheme() const override { return SchemeId::kWaveVariables; }
+  /// Effective wave impedance b after derivation and clamping [N s/m].
+  double wave_impedance_ns_per_m() const { return b_; }
+  /// The master port (waves, integrals, energies).
+  const passivity::WaveMasterPort& port() const { return port_; }
+  PassivityStatus passivity_status() const override;
+
+ protected:
+  void on_configure() override;
+  void on_activate(const DeviceReading& master) override;
+  void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
+               ControlOutput& out) override;
+
+ private:
+  double b_ = 0.0;
+  passivity::WaveMasterPort port_;
+  Eigen::Vector3d v_energy_rx_ = Eigen::Vector3d::Zero();
+};
+
+/// Time-domain passivity on top of position-position or force-position (see the file comment).
+class TimeDomainPassivityController final : public BilateralController {
+ public:
+  const char* name() const override { return "tdpa"; }
+  SchemeId scheme() const override { return SchemeId::kTimeDomainPassivity; }
+  double environment_force_gain() const override {
+    return force_position_ ? params_.force_gain : 1.0;
+  }
+  PassivityStatus passivity_status() const override;
+  /// The master's observer/controller (master-frame energies).
+  const passivity::ImpedancePassivityController& pc() const { return pc_; }
+  /// Slave port energies received, converted to the master frame [J].
+  double remote_in_j() const { return remote_in_j_; }
+  double remote_out_j() const { return remote_out_j_; }
+
+ protected:
+  void on_configure() override;
+  void on_activate(const DeviceReading& master) override;
+  void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
+               ControlOutput& out) override;
+  void finish(const DeviceReading& master, const SlaveSample& slave, double dt_s,
+              ControlOutput& out) override;
+
+ private:
+  bool force_position_ = false;
+  passivity::ImpedancePassivityController pc_;
+  Eigen::Vector3d wanted_n_ = Eigen::Vector3d::Zero();
+  double remote_in_j_ = 0.0;
+  double remote_out_j_ = 0.0;
 };
 
 /// Creates a controller by scheme name. @throws ConfigError naming the allowed names.

@@ -26,10 +26,17 @@ struct SlaveCommand {
   Eigen::Vector3d angular_velocity_radps = Eigen::Vector3d::Zero();  ///< [rad/s]
   Eigen::Vector3d master_force_n = Eigen::Vector3d::Zero();  ///< force rendered at the master,
                                                              ///< slave frame [N]
-  Eigen::Vector3d wave_u = Eigen::Vector3d::Zero();  ///< forward wave variable [sqrt(N m/s)]
+  Eigen::Vector3d wave_u = Eigen::Vector3d::Zero();          ///< forward wave this cycle [sqrt(W)]
   double position_gain_n_per_m = 0.0;  ///< K_ps requested from the slave (0 = its default)
   SchemeId scheme = SchemeId::kPositionPosition;
   bool enabled = true;  ///< false: the slave holds its pose
+  // passivity schemes (see common/control/slave_port.hpp)
+  std::uint32_t passivity_session = 0;   ///< session id of a wave / TDPA run (0: none)
+  double wave_impedance_ns_per_m = 0.0;  ///< b [N s/m] (wave variables)
+  bool wave_matched = true;              ///< the slave terminates the channel with a damper b
+  Eigen::Vector3d wave_u_integral = Eigen::Vector3d::Zero();  ///< sum dt u [sqrt(W) s]
+  Eigen::Vector3d wave_u_energy_j = Eigen::Vector3d::Zero();  ///< sum dt u^2/2 per axis [J]
+  double tdpa_energy_in_j = 0.0;  ///< energy into the network at the master port [J]
 };
 
 /// Slave -> master, slave frame. Mirrors teleop::SlaveState (the parts the master uses).
@@ -47,6 +54,13 @@ struct SlaveSample {
   double deformation_m = 0.0;  ///< indentation of a deformable body since contact began [m]
   bool in_contact = false;     ///< tip touches something
   bool valid = false;          ///< false: no sample received yet
+  // passivity schemes (see common/control/slave_port.hpp)
+  std::uint32_t passivity_session = 0;  ///< session the fields below belong to (0: none)
+  Eigen::Vector3d wave_v_integral = Eigen::Vector3d::Zero();  ///< sum dt v [sqrt(W) s]
+  Eigen::Vector3d wave_v_energy_j = Eigen::Vector3d::Zero();  ///< sum dt v^2/2 per axis [J]
+  double tdpa_energy_in_j = 0.0;        ///< energy into the network at the slave port [J]
+  double tdpa_energy_out_j = 0.0;       ///< energy out of the network into the slave [J]
+  double passivity_dissipated_j = 0.0;  ///< removed at the slave side [J]
 };
 
 /// Master (device) frame <-> slave (world) frame. x_s = offset + s R x_m; f_m = k_f R^T f_s.

@@ -69,11 +69,9 @@ bool LoopbackSession::step() {
   last_.slave_position_m = truth.position_m;
   last_.master_velocity_mps = r.linear_velocity_mps;
   last_.device_force_n = f;
-  // the force the scheme means to render: beta R^T f_e (times K_f for force-position)
-  last_.environment_force_n = w.to_master_force(truth.contact_force_n);
-  if (controller_->scheme() == SchemeId::kForcePosition) {
-    last_.environment_force_n *= cfg_.controller.force_gain;
-  }
+  // the force the scheme means to render: beta R^T f_e (times K_f for force reflection)
+  last_.environment_force_n =
+      controller_->environment_force_gain() * w.to_master_force(truth.contact_force_n);
   last_.force_limit_n = controller_->force_limit_n();
   last_.in_contact = truth.in_contact;
   last_.have_slave = true;

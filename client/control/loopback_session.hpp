@@ -57,6 +57,8 @@ class LoopbackSession {
   const Eigen::Vector3d& device_force_n() const { return last_.device_force_n; }
   /// Newest slave sample the master has.
   const SlaveSample& slave_at_master() const { return slave_rx_; }
+  /// Newest command the slave has (what it stepped with this cycle).
+  const SlaveCommand& slave_command() const { return slave_cmd_; }
   /// Force the controller asked for before the safety layer this cycle [N].
   const Eigen::Vector3d& controller_force_n() const { return controller_force_n_; }
   /// Fault injection: while true, every slave sample is lost on the way back (a dead link).

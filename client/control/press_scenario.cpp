@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace teleop::master {
 
@@ -43,8 +44,11 @@ PressSetup build_press_setup(const PressScenario& s) {
   // loop
   LoopbackConfig& c = out.loop;
   c.controller.scheme = s.scheme;
+  c.controller.tdpa_base = s.tdpa_base;
+  c.controller.wave_impedance_ns_per_m = s.wave_impedance_ns_per_m;
+  c.controller.wave_matched = s.wave_matched;
   c.controller.workspace.offset_m = Eigen::Vector3d(0.0, 0.0, 2.0 * kSphereRadius + kToolRadius);
-  if (s.scheme == "position-position") {
+  if (press_position_like(s)) {
     const double k = s.gain > 0.0 ? s.gain : 400.0;
     c.controller.slave_stiffness_n_per_m = k;
     c.controller.master_stiffness_n_per_m = k;
@@ -62,9 +66,14 @@ PressSetup build_press_setup(const PressScenario& s) {
   return out;
 }
 
+bool press_position_like(const PressScenario& s) {
+  return s.scheme == "position-position" || s.scheme == "wave-variables" ||
+         (s.scheme == "tdpa" && s.tdpa_base == "position-position");
+}
+
 LoopModel press_loop_model(const PressScenario& s, const PressSetup& setup) {
   LoopModel m;
-  m.position_position = s.scheme == "position-position";
+  m.position_position = press_position_like(s);
   const DeviceSpec& spec = setup.device.spec;
   const ControllerParams& cp = setup.loop.controller;
   m.master_mass_kg = setup.device.device_mass_kg + setup.device.hand.mass_kg;
@@ -87,6 +96,18 @@ LoopModel press_loop_model(const PressScenario& s, const PressSetup& setup) {
   return m;
 }
 
+void fill_analytic(const PressScenario& s, const PressSetup& setup, PressResult& r) {
+  r.passive_scheme = s.scheme == "wave-variables" || s.scheme == "tdpa";
+  if (s.scheme == "wave-variables") {
+    r.analytic_margin_s = std::numeric_limits<double>::infinity();
+    r.analytic_stable = true;
+    return;
+  }
+  const LoopModel m = press_loop_model(s, setup);
+  r.analytic_margin_s = task_delay_margin(m).one_way_s;
+  r.analytic_stable = task_stable_at(m, s.one_way_delay_s);
+}
+
 PressResult run_press(const PressScenario& s) {
   const PressSetup setup = build_press_setup(s);
   SimulatedDevice device(setup.device);
@@ -94,8 +115,10 @@ PressResult run_press(const PressScenario& s) {
   LoopbackSession session(setup.loop, device, slave);
   session.start();
   double max_ctrl = 0.0;
+  double min_observer = 0.0;
   while (session.step()) {
     max_ctrl = std::max(max_ctrl, session.controller_force_n().norm());
+    min_observer = std::min(min_observer, session.controller().passivity_status().observer_j);
   }
   const SessionMetrics& m = session.metrics();
   PressResult r;
@@ -108,8 +131,10 @@ PressResult run_press(const PressScenario& s) {
   r.energy_min_j = m.energy_min_j();
   r.contact_time_s = m.contact_time_s();
   r.safety_cut = session.safety().cut();
-  r.analytic_margin_s = task_delay_margin(press_loop_model(s, setup)).one_way_s;
-  r.analytic_stable = task_stable_at(press_loop_model(s, setup), s.one_way_delay_s);
+  fill_analytic(s, setup, r);
+  r.passivity_dissipated_j =
+      session.controller().passivity_status().dissipated_j + slave.sample().passivity_dissipated_j;
+  r.min_observer_j = min_observer;
   return r;
 }
 

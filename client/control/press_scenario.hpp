@@ -17,14 +17,19 @@ enum class Environment { kSphere, kWall };
 
 /// Knobs of the scenario.
 struct PressScenario {
-  std::string scheme = "position-position";  ///< controller scheme
+  std::string scheme = "position-position";     ///< controller scheme
+  std::string tdpa_base = "position-position";  ///< base law of "tdpa"
   Environment environment = Environment::kSphere;
   double env_stiffness_n_per_m = 2000.0;  ///< k of the object [N/m]
   double env_damping_ns_per_m = 5.0;      ///< b of the object [N s/m]
-  double gain = 0.0;                      ///< PP: K_pm = K_ps [N/m] (0: 400); FP: K_f (0: 1)
-  double one_way_delay_s = 0.0;           ///< delay each way [s]
-  double jitter_s = 0.0;                  ///< jitter each way [s]
-  double press_depth_m = 0.02;            ///< intended depth below the surface [m]
+  /// PP and tdpa on PP: K_pm = K_ps [N/m] (0: 400); FP and tdpa on FP: K_f (0: 1) with
+  /// K_ps = 400 N/m; wave-variables: K_ps [N/m] (0: 400), b derived from it (or as below).
+  double gain = 0.0;
+  double wave_impedance_ns_per_m = 0.0;  ///< b of wave-variables [N s/m] (0: derived)
+  bool wave_matched = true;              ///< matched slave termination
+  double one_way_delay_s = 0.0;          ///< delay each way [s]
+  double jitter_s = 0.0;                 ///< jitter each way [s]
+  double press_depth_m = 0.02;           ///< intended depth below the surface [m]
   double duration_s = 0.0;  ///< 0: one pass of the script plus 3 s (free motion after departing)
   std::uint64_t seed = 1;   ///< channel seeds (forward = seed, backward = seed + 1)
   bool safety = true;       ///< safety layer on
@@ -43,7 +48,11 @@ struct PressSetup {
 /// the master origin maps to the tool centre touching its top (0, 0, 0.55) m.
 PressSetup build_press_setup(const PressScenario& s);
 
-/// The linear model of the same setup in steady contact (for the analytic boundary).
+/// True if the scenario's base law is position-position (PP, tdpa on PP, wave-variables).
+bool press_position_like(const PressScenario& s);
+
+/// The linear model of the same setup in steady contact (for the analytic boundary). For tdpa
+/// it is the base law without the passivity controller; wave-variables has no such model.
 LoopModel press_loop_model(const PressScenario& s, const PressSetup& setup);
 
 /// Result of one run.
@@ -57,9 +66,16 @@ struct PressResult {
   double energy_min_j = 0.0;
   double contact_time_s = 0.0;
   bool safety_cut = false;
-  double analytic_margin_s = 0.0;  ///< one-way delay margin of the linear model [s]
-  bool analytic_stable = true;     ///< the linear model is stable at this delay (exact count)
+  double analytic_margin_s = 0.0;       ///< one-way delay margin of the linear model [s]
+                                        ///< (tdpa: of the base law; wave-variables: infinite)
+  bool analytic_stable = true;          ///< the linear model is stable at this delay (exact count)
+  bool passive_scheme = false;          ///< wave-variables or tdpa: passive for any delay by design
+  double passivity_dissipated_j = 0.0;  ///< master + slave passivity controllers [J]
+  double min_observer_j = 0.0;          ///< lowest master-side observer value seen [J]
 };
+
+/// Sets analytic_margin_s, analytic_stable and passive_scheme of `r` for `s`.
+void fill_analytic(const PressScenario& s, const PressSetup& setup, PressResult& r);
 
 /// Builds and runs one scenario. Allocates (setup); the loop itself does not.
 PressResult run_press(const PressScenario& s);

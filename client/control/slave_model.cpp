@@ -13,29 +13,64 @@ bool PointSlaveParams::add(const SlaveObstacle& o) {
   return true;
 }
 
+passivity::SlavePortCommand port_command(const SlaveCommand& c) {
+  passivity::SlavePortCommand p;
+  p.scheme = static_cast<std::uint8_t>(c.scheme);
+  p.session = c.passivity_session;
+  p.enabled = c.enabled;
+  p.position_m = c.position_m;
+  p.velocity_mps = c.velocity_mps;
+  p.wave_impedance_ns_per_m = c.wave_impedance_ns_per_m;
+  p.wave_matched = c.wave_matched;
+  p.wave_u_integral = c.wave_u_integral;
+  p.wave_u_energy_j = c.wave_u_energy_j;
+  p.tdpa_energy_in_j = c.tdpa_energy_in_j;
+  return p;
+}
+
+void apply_port_report(const passivity::SlavePortReport& r, SlaveSample& s) {
+  s.passivity_session = r.session;
+  s.wave_v = r.wave_v;
+  s.wave_v_integral = r.wave_v_integral;
+  s.wave_v_energy_j = r.wave_v_energy_j;
+  s.tdpa_energy_in_j = r.tdpa_energy_in_j;
+  s.tdpa_energy_out_j = r.tdpa_energy_out_j;
+  s.passivity_dissipated_j = r.dissipated_j;
+}
+
 void PointSlave::reset(const Eigen::Vector3d& position_m) {
   sample_ = SlaveSample{};
   sample_.position_m = position_m;
   sample_.valid = true;
   hold_m_ = position_m;
   holding_ = false;
+  port_.reset();
+  f_ctrl_.setZero();
 }
 
 void PointSlave::step(const SlaveCommand& cmd, double dt) {
   const PointSlaveParams& p = params_;
   SlaveSample& s = sample_;
-  // hold the pose latched when the command is disabled (clutch open / no command yet)
-  if (!cmd.enabled && !holding_) hold_m_ = s.position_m;
-  holding_ = !cmd.enabled;
-  const Eigen::Vector3d target = holding_ ? hold_m_ : cmd.position_m;
-  const Eigen::Vector3d target_v = holding_ ? Eigen::Vector3d::Zero() : cmd.velocity_mps;
   const double kp = cmd.position_gain_n_per_m > 0.0 ? cmd.position_gain_n_per_m : p.kp_n_per_m;
+  // the passivity schemes' slave side (other schemes pass through unchanged)
+  passivity::SlavePortState ps;
+  ps.position_m = s.position_m;
+  ps.velocity_mps = s.velocity_mps;
+  ps.contact_force_n = s.contact_force_n;
+  const passivity::SlavePortTarget pt =
+      port_.before_step(port_command(cmd), ps, passivity::TrackingGains{kp, p.kd_ns_per_m}, dt);
+  // hold the pose latched when the command is disabled (clutch open / no command yet)
+  if (pt.hold && !holding_) hold_m_ = s.position_m;
+  holding_ = pt.hold;
+  const Eigen::Vector3d target = holding_ ? hold_m_ : pt.position_m;
+  const Eigen::Vector3d target_v = holding_ ? Eigen::Vector3d::Zero() : pt.velocity_mps;
 
   // PD tracking with saturation
   Eigen::Vector3d f_ctrl =
       kp * (target - s.position_m) + p.kd_ns_per_m * (target_v - s.velocity_mps);
   const double fn = f_ctrl.norm();
   if (fn > p.max_force_n) f_ctrl *= p.max_force_n / fn;
+  f_ctrl_ = f_ctrl;
 
   // penalty contact, compression only
   Eigen::Vector3d f_env = Eigen::Vector3d::Zero();
@@ -78,6 +113,8 @@ void PointSlave::step(const SlaveCommand& cmd, double dt) {
   s.command_seq = cmd.seq;
   s.command_send_time_s = cmd.send_time_s;
   s.valid = true;
+  port_.after_step(f_ctrl, dt);
+  apply_port_report(port_.report(), s);
 }
 
 }  // namespace teleop::master

@@ -7,9 +7,14 @@
 //     with n the outward normal at the contact and d = R + r_tool - |x - c|.
 // It is the same law as the server's tool-only scene (server/world/tool_scene.hpp), with
 // spheres added; a test checks the two agree on a plane. step() allocates nothing.
+//
+// The passivity schemes (wave variables, TDPA) run their slave side through the same
+// teleop::passivity::SlavePassivityPort the server uses (common/control/slave_port.hpp):
+// the command goes through the port before the step, the PD force is recorded after it.
 #include <array>
 
 #include "client/control/bilateral_types.hpp"
+#include "common/control/slave_port.hpp"
 
 namespace teleop::master {
 
@@ -41,6 +46,11 @@ struct PointSlaveParams {
   bool add(const SlaveObstacle& o);
 };
 
+/// The passivity fields of a command as the slave port reads them.
+passivity::SlavePortCommand port_command(const SlaveCommand& c);
+/// Copies the slave port's report into the sample's passivity fields.
+void apply_port_report(const passivity::SlavePortReport& r, SlaveSample& s);
+
 /// A slave simulated in-process (interface so other slave models can be plugged in).
 class SlaveSimulator {
  public:
@@ -64,11 +74,17 @@ class PointSlave final : public SlaveSimulator {
   const PointSlaveParams& params() const { return params_; }
   /// Mutable parameters (between runs).
   PointSlaveParams& params() { return params_; }
+  /// The slave side of the passivity schemes.
+  const passivity::SlavePassivityPort& port() const { return port_; }
+  /// PD tracking force of the last step [N].
+  const Eigen::Vector3d& tracking_force_n() const { return f_ctrl_; }
 
  private:
   PointSlaveParams params_;
   SlaveSample sample_;
+  passivity::SlavePassivityPort port_;
   Eigen::Vector3d hold_m_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d f_ctrl_ = Eigen::Vector3d::Zero();
   bool holding_ = false;
 };
 

@@ -53,6 +53,12 @@ inline void to_idl(const SlaveCommand& c, std::int64_t send_time_ns, teleop::Mas
   detail::put3(m.wave_u(), c.wave_u);
   m.position_gain_n_per_m(c.position_gain_n_per_m);
   m.enabled(c.enabled);
+  m.passivity_session(c.passivity_session);
+  m.wave_impedance_ns_per_m(c.wave_impedance_ns_per_m);
+  m.wave_matched(c.wave_matched);
+  detail::put3(m.wave_u_integral(), c.wave_u_integral);
+  detail::put3(m.wave_u_energy_j(), c.wave_u_energy_j);
+  m.tdpa_energy_in_j(c.tdpa_energy_in_j);
 }
 
 /// teleop::SlaveState -> SlaveSample (valid = true). Non-finite fields make it invalid: the
@@ -71,9 +77,18 @@ inline SlaveSample from_idl(const teleop::SlaveState& m) {
   s.penetration_m = m.penetration_m();
   s.deformation_m = m.deformation_m();
   s.in_contact = m.in_contact();
+  s.passivity_session = m.passivity_session();
+  s.wave_v_integral = detail::get3(m.wave_v_integral());
+  s.wave_v_energy_j = detail::get3(m.wave_v_energy_j());
+  s.tdpa_energy_in_j = m.tdpa_energy_in_j();
+  s.tdpa_energy_out_j = m.tdpa_energy_out_j();
+  s.passivity_dissipated_j = m.passivity_dissipated_j();
   s.valid = s.position_m.allFinite() && s.velocity_mps.allFinite() &&
             s.contact_force_n.allFinite() && std::isfinite(s.penetration_m) &&
-            std::isfinite(s.deformation_m);
+            std::isfinite(s.deformation_m) && s.wave_v.allFinite() &&
+            s.wave_v_integral.allFinite() && s.wave_v_energy_j.allFinite() &&
+            std::isfinite(s.tdpa_energy_in_j) && std::isfinite(s.tdpa_energy_out_j) &&
+            std::isfinite(s.passivity_dissipated_j);
   return s;
 }
 

@@ -49,7 +49,7 @@ double min_jerk(double t, double T) {
   return u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
 }
 
-constexpr std::size_t kCsvColumns = 25;
+constexpr std::size_t kCsvColumns = 27;
 /// A log row; the count must match the header exactly (checked at compile time).
 template <class... T>
 std::array<double, kCsvColumns> csv_row(T... v) {
@@ -199,6 +199,9 @@ struct MasterNode::Impl {
     device->activate();
     std::unique_ptr<BilateralController> controller = make_controller(cp.scheme);
     controller->configure(cp, device->spec());
+    // a session id the server has not seen from an earlier master (it restarts its wave /
+    // TDPA state when the id changes)
+    controller->set_session_id(static_cast<std::uint32_t>(now_ns() / 1000) | 1u);
     DelayChannel<SlaveCommand> to_slave(options.forward);
     DelayChannel<SlaveSample> to_master(options.backward);
     SafetyLayer safety;
@@ -234,7 +237,9 @@ struct MasterNode::Impl {
                                                                  "position_error_m",
                                                                  "deformation_m",
                                                                  "loop_delay_ms",
-                                                                 "delay_injected_ms"});
+                                                                 "delay_injected_ms",
+                                                                 "passivity_observer_j",
+                                                                 "passivity_dissipated_j"});
     }
 
     if (!options.quiet) {
@@ -364,7 +369,8 @@ struct MasterNode::Impl {
       m.have_slave = newest.valid;
       m.master_velocity_mps = reading.linear_velocity_mps;
       m.device_force_n = f;
-      m.environment_force_n = cp.workspace.to_master_force(newest.contact_force_n);
+      m.environment_force_n = controller->environment_force_gain() *
+                              cp.workspace.to_master_force(newest.contact_force_n);
       m.in_contact = newest.in_contact;
       m.force_limit_n = controller->force_limit_n();
       m.link_ok = !safety.link_lost();
@@ -392,13 +398,16 @@ struct MasterNode::Impl {
         ms.position_error_m((m.master_position_m - newest.position_m).norm());
         ms.passivity_energy_j(metrics.energy_j());
         ms.rtt_ms(last_rtt);
-        ms.mode(static_cast<std::uint8_t>(
-            cp.scheme == "force-position" ? SCHEME_FORCE_POSITION : SCHEME_POSITION_POSITION));
+        ms.mode(static_cast<std::uint8_t>(controller->scheme()));
         ms.link_ok(!safety.link_lost());
+        const BilateralController::PassivityStatus ps = controller->passivity_status();
+        ms.passivity_observer_j(ps.observer_j);
+        ms.passivity_dissipated_j(ps.dissipated_j);
         state_writer.write(ms);
       }
       if (log) {
         const double t = seconds_between(t0, now);
+        const BilateralController::PassivityStatus ps = controller->passivity_status();
         const Eigen::Vector3d& xm = m.master_position_m;
         const Eigen::Vector3d& fe = newest.contact_force_n;
         const auto vals =
@@ -407,7 +416,8 @@ struct MasterNode::Impl {
                     fe.y(), fe.z(), f.x(), f.y(), f.z(), last_rtt, safety.link_lost() ? 0.0 : 1.0,
                     newest.in_contact ? 1.0 : 0.0, newest.penetration_m, metrics.energy_j(),
                     safety.scale(), (xm - newest.position_m).norm(), newest.deformation_m,
-                    last_loop_delay_ms, (options.forward.delay_s + options.backward.delay_s) * 1e3);
+                    last_loop_delay_ms, (options.forward.delay_s + options.backward.delay_s) * 1e3,
+                    ps.observer_j, ps.dissipated_j);
         log->row(vals.data(), vals.size());
       }
       loop.wait();

@@ -18,6 +18,8 @@ const char* to_string(CommandVerdict v) {
       return "position gain out of range";
     case CommandVerdict::kStale:
       return "stale sequence number";
+    case CommandVerdict::kBadPassivity:
+      return "wave / passivity fields out of range";
   }
   return "?";
 }
@@ -38,7 +40,9 @@ CommandVerdict validate_command(const MasterCommand& cmd, const Eigen::Vector3d&
   if (!finite(cmd.position_m()) || !finite(cmd.orientation_wxyz()) ||
       !finite(cmd.linear_velocity_mps()) || !finite(cmd.angular_velocity_radps()) ||
       !finite(cmd.master_force_n()) || !finite(cmd.wave_u()) ||
-      !std::isfinite(cmd.position_gain_n_per_m())) {
+      !std::isfinite(cmd.position_gain_n_per_m()) || !finite(cmd.wave_u_integral()) ||
+      !finite(cmd.wave_u_energy_j()) || !std::isfinite(cmd.wave_impedance_ns_per_m()) ||
+      !std::isfinite(cmd.tdpa_energy_in_j())) {
     return CommandVerdict::kNonFinite;
   }
   const auto& q = cmd.orientation_wxyz();
@@ -52,6 +56,49 @@ CommandVerdict validate_command(const MasterCommand& cmd, const Eigen::Vector3d&
     return CommandVerdict::kBadGain;
   }
   if (have_last && cmd.seq() <= last_seq) return CommandVerdict::kStale;
+  return CommandVerdict::kAccepted;
+}
+
+passivity::SlavePortCommand to_port_command(const MasterCommand& cmd) {
+  passivity::SlavePortCommand p;
+  const auto& pos = cmd.position_m();
+  const auto& v = cmd.linear_velocity_mps();
+  const auto& ui = cmd.wave_u_integral();
+  const auto& ue = cmd.wave_u_energy_j();
+  p.scheme = cmd.scheme();
+  p.session = cmd.passivity_session();
+  p.enabled = cmd.enabled();
+  p.position_m = {pos[0], pos[1], pos[2]};
+  p.velocity_mps = {v[0], v[1], v[2]};
+  p.wave_impedance_ns_per_m = cmd.wave_impedance_ns_per_m();
+  p.wave_matched = cmd.wave_matched();
+  p.wave_u_integral = {ui[0], ui[1], ui[2]};
+  p.wave_u_energy_j = {ue[0], ue[1], ue[2]};
+  p.tdpa_energy_in_j = cmd.tdpa_energy_in_j();
+  return p;
+}
+
+CommandVerdict validate_passivity(const MasterCommand& cmd, PassivityHistory& history) {
+  if (!passivity::SlavePassivityPort::handles(cmd.scheme())) return CommandVerdict::kAccepted;
+  const passivity::SlavePortCommand p = to_port_command(cmd);
+  switch (passivity::check_port_command(p)) {
+    case passivity::PortCommandCheck::kOk:
+      break;
+    case passivity::PortCommandCheck::kNonFinite:
+      return CommandVerdict::kNonFinite;
+    default:
+      return CommandVerdict::kBadPassivity;
+  }
+  // cumulative energies never decrease within a session: an older value is stale or corrupt
+  if (history.have && history.session == p.session &&
+      ((p.wave_u_energy_j.array() < history.wave_u_energy_j.array()).any() ||
+       p.tdpa_energy_in_j < history.tdpa_energy_in_j)) {
+    return CommandVerdict::kBadPassivity;
+  }
+  history.have = true;
+  history.session = p.session;
+  history.wave_u_energy_j = p.wave_u_energy_j;
+  history.tdpa_energy_in_j = p.tdpa_energy_in_j;
   return CommandVerdict::kAccepted;
 }
 

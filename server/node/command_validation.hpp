@@ -1,10 +1,12 @@
 #pragma once
 // Validation of MasterCommand samples at the network edge: a command with NaN/Inf, a bad
-// quaternion, a position outside the workspace, or an old sequence number is rejected and
-// counted; it never reaches the physics.
+// quaternion, a position outside the workspace, an old sequence number, or unusable passivity
+// fields (wave impedance out of range, a negative energy, a cumulative energy that went down
+// within a session) is rejected and counted; it never reaches the physics.
 #include <Eigen/Core>
 #include <cstdint>
 
+#include "common/control/slave_port.hpp"
 #include "server/world/world.hpp"
 #include "teleop/idl/Teleop.h"
 
@@ -17,6 +19,7 @@ enum class CommandVerdict {
   kOutsideWorkspace,  ///< position outside the scene's command workspace
   kBadGain,           ///< negative or absurd position gain override
   kStale,             ///< sequence number not newer than the last accepted one
+  kBadPassivity,      ///< wave / TDPA fields out of range (b, negative or decreasing energy)
 };
 
 const char* to_string(CommandVerdict v);
@@ -26,7 +29,22 @@ CommandVerdict validate_command(const MasterCommand& cmd, const Eigen::Vector3d&
                                 const Eigen::Vector3d& workspace_max_m, std::uint64_t last_seq,
                                 bool have_last);
 
+/// Newest accepted passivity fields of one writer, to catch energies that go backwards.
+struct PassivityHistory {
+  bool have = false;
+  std::uint32_t session = 0;
+  Eigen::Vector3d wave_u_energy_j = Eigen::Vector3d::Zero();
+  double tdpa_energy_in_j = 0.0;
+};
+
+/// Checks the passivity fields of `cmd` (after validate_command() accepted the rest) against
+/// the writer's history; on kAccepted updates `history`.
+CommandVerdict validate_passivity(const MasterCommand& cmd, PassivityHistory& history);
+
 /// Converts an accepted command to the world's input (normalises the quaternion).
 sim::WorldCommand to_world_command(const MasterCommand& cmd);
+
+/// The passivity fields of a command as the slave port reads them.
+passivity::SlavePortCommand to_port_command(const MasterCommand& cmd);
 
 }  // namespace teleop::server

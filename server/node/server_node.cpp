@@ -61,6 +61,7 @@ struct ServerNode::Impl {
   eprosima::fastrtps::rtps::InstanceHandle_t current_writer;
   bool have_last = false;
   std::uint64_t last_seq = 0;
+  PassivityHistory passivity_history;
   std::unique_ptr<dds::Reader<MasterCommandPubSubType>> command_reader;
 
   // loop state
@@ -118,10 +119,12 @@ struct ServerNode::Impl {
         // switching writers: accept the new one's numbering
         have_last = false;
       }
+      passivity_history = PassivityHistory{};
       current_writer = info.publication_handle;
     }
-    const CommandVerdict v =
+    CommandVerdict v =
         validate_command(c, scene.workspace_min_m, scene.workspace_max_m, last_seq, have_last);
+    if (v == CommandVerdict::kAccepted) v = validate_passivity(c, passivity_history);
     switch (v) {
       case CommandVerdict::kAccepted:
         break;
@@ -130,6 +133,9 @@ struct ServerNode::Impl {
         return;
       case CommandVerdict::kStale:
         counters.rejected_stale.fetch_add(1);
+        return;
+      case CommandVerdict::kBadPassivity:
+        counters.rejected_passivity.fetch_add(1);
         return;
       default:
         counters.rejected_nan.fetch_add(1);
@@ -288,6 +294,7 @@ struct ServerNode::Impl {
     st.faults(faults);
     st.matched_state_readers(state_writer.matched());
     st.matched_command_writers(command_reader->matched());
+    st.commands_rejected_passivity(counters.rejected_passivity.load());
     stats_writer.write(st);
   }
 
@@ -316,6 +323,9 @@ struct ServerNode::Impl {
     sim::WorldCommand wc;
     wc.position_m = scene.tool_start_m;
     wc.hold = true;
+    // the slave side of the passivity schemes (the same code as the in-process slaves)
+    passivity::SlavePassivityPort port;
+    passivity::SlavePortCommand port_cmd;
     std::uint64_t steps = 0;
     std::int64_t last_stats_ns = t_start;
     std::uint64_t last_stats_steps = 0;
@@ -332,6 +342,7 @@ struct ServerNode::Impl {
       // newest valid command
       if (mailbox.take_if_newer(rc, seen)) {
         wc = to_world_command(rc.cmd);
+        port_cmd = to_port_command(rc.cmd);
         state.command_seq(rc.cmd.seq());
         state.command_send_time_ns(rc.cmd.send_time_ns());
         have_command = true;
@@ -355,9 +366,33 @@ struct ServerNode::Impl {
       sim::WorldCommand applied = wc;
       applied.hold = wc.hold || holding;
 
+      // wave variables / TDPA: the port turns the command into the tool's target, using the
+      // state and contact force of the last step
+      const bool port_active = passivity::SlavePassivityPort::handles(port_cmd.scheme);
+      if (port_active) {
+        const sim::WorldOutput& before = world->output();
+        passivity::SlavePortCommand pc = port_cmd;
+        pc.enabled = !applied.hold;
+        passivity::SlavePortState ps;
+        ps.position_m = before.tip_position_m;
+        ps.velocity_mps = before.tip_velocity_mps;
+        ps.contact_force_n = before.contact_force_n;
+        const passivity::TrackingGains gains{applied.kp_override_n_per_m > 0.0
+                                                 ? applied.kp_override_n_per_m
+                                                 : before.tracking_kp_n_per_m,
+                                             before.tracking_kd_ns_per_m};
+        const passivity::SlavePortTarget t = port.before_step(pc, ps, gains, dt);
+        applied.position_m = t.position_m;
+        applied.velocity_mps = t.velocity_mps;
+        applied.hold = t.hold;
+      } else if (port.scheme() != 0xff) {
+        port.reset();  // left the passivity scheme: the next session starts afresh
+      }
+
       const std::int64_t ts = now_ns();
       world->step(applied, dt, events);
       const double step_time_us = static_cast<double>(now_ns() - ts) * 1e-3;
+      if (port_active) port.after_step(world->output().tracking_force_n, dt);
       step_us.record(step_time_us);
       step_us_all.record(step_time_us);
       ++steps;
@@ -390,22 +425,33 @@ struct ServerNode::Impl {
       state.holding(applied.hold);
       state.step_time_us(static_cast<float>(step_time_us));
       state.commands_received(counters.received.load());
+      {
+        const passivity::SlavePortReport& pr = port.report();
+        state.passivity_session(port_active ? pr.session : 0);
+        copy3(state.wave_v(), pr.wave_v);
+        copy3(state.wave_v_integral(), pr.wave_v_integral);
+        copy3(state.wave_v_energy_j(), pr.wave_v_energy_j);
+        state.tdpa_energy_in_j(pr.tdpa_energy_in_j);
+        state.tdpa_energy_out_j(pr.tdpa_energy_out_j);
+        state.passivity_dissipated_j(pr.dissipated_j);
+      }
       state_writer.write(state);
 
       if (steps % visual_every == 0) offer_mesh_frame(out.sim_time_s);
 
       // rejected commands: one event per second at most, with the count
-      const std::uint64_t rejected = counters.rejected_nan.load() +
-                                     counters.rejected_workspace.load() +
-                                     counters.rejected_stale.load();
+      const std::uint64_t rejected =
+          counters.rejected_nan.load() + counters.rejected_workspace.load() +
+          counters.rejected_stale.load() + counters.rejected_passivity.load();
       if (rejected != last_rejected && t0 - last_reject_event_ns > 1'000'000'000LL) {
-        char msg[128];
+        char msg[sizeof(sim::SimEvent::message)];
         std::snprintf(msg, sizeof(msg),
                       "rejected commands so far: %llu non-finite, %llu outside workspace, "
-                      "%llu stale",
+                      "%llu stale, %llu bad passivity",
                       static_cast<unsigned long long>(counters.rejected_nan.load()),
                       static_cast<unsigned long long>(counters.rejected_workspace.load()),
-                      static_cast<unsigned long long>(counters.rejected_stale.load()));
+                      static_cast<unsigned long long>(counters.rejected_stale.load()),
+                      static_cast<unsigned long long>(counters.rejected_passivity.load()));
         events.push(sim::EventKind::kCommandRejected, sim::Severity::kWarning, out.sim_time_s,
                     static_cast<double>(rejected), msg);
         last_rejected = rejected;
@@ -433,9 +479,9 @@ struct ServerNode::Impl {
                    static_cast<unsigned long long>(steps), seconds_between(t_start, now_ns()),
                    s.p50, s.p99, static_cast<unsigned long long>(loop.overruns()),
                    static_cast<unsigned long long>(counters.received.load()),
-                   static_cast<unsigned long long>(counters.rejected_nan.load() +
-                                                   counters.rejected_workspace.load() +
-                                                   counters.rejected_stale.load()),
+                   static_cast<unsigned long long>(
+                       counters.rejected_nan.load() + counters.rejected_workspace.load() +
+                       counters.rejected_stale.load() + counters.rejected_passivity.load()),
                    static_cast<unsigned long long>(watchdog_trips));
     }
     return 0;
@@ -461,6 +507,7 @@ struct ServerNode::Impl {
       << "  \"commands_rejected_nan\": " << counters.rejected_nan.load() << ",\n"
       << "  \"commands_rejected_workspace\": " << counters.rejected_workspace.load() << ",\n"
       << "  \"commands_rejected_stale\": " << counters.rejected_stale.load() << ",\n"
+      << "  \"commands_rejected_passivity\": " << counters.rejected_passivity.load() << ",\n"
       << "  \"watchdog_trips\": " << watchdog_trips << ",\n"
       << "  \"faults\": " << faults << "\n"
       << "}\n";

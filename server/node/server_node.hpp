@@ -30,6 +30,7 @@ struct CommandCounters {
   std::atomic<std::uint64_t> rejected_nan{0};
   std::atomic<std::uint64_t> rejected_workspace{0};
   std::atomic<std::uint64_t> rejected_stale{0};
+  std::atomic<std::uint64_t> rejected_passivity{0};  ///< wave / TDPA fields unusable
 };
 
 class ServerNode {

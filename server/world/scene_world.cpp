@@ -44,6 +44,8 @@ SceneWorld::SceneWorld(const SceneConfig& scene) : scene_(scene) {
     tip_radius_m_ = tool_model_.radius_m;
     tip_prev_ = tool_state_.position_m;
   }
+  out_.tracking_kp_n_per_m = scene.tool.kp_n_per_m;
+  out_.tracking_kd_ns_per_m = scene.tool.kd_ns_per_m;
   int next_id = 10;
   for (const config::Node& n : scene.deformable_nodes) {
     n.reject_unknown_keys({"id", "body", "contact"});
@@ -149,6 +151,9 @@ void SceneWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) 
   }
   out_.in_contact = out_.in_contact || deepest_id >= 0;
   out_.deformation_m = deformation;
+  // the robot's joint-space PD has no Cartesian force to report: quasi-static estimate
+  out_.tracking_force_n =
+      robot_ ? Eigen::Vector3d(-out_.contact_force_n) : tool_state_.tracking_force_n;
   was_in_contact_ = out_.in_contact;
 }
 

@@ -18,6 +18,7 @@ void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input,
       kp * (target_p - state.position_m) + model.kd_ns_per_m * (target_v - state.velocity_mps);
   const double fn = f_ctrl.norm();
   if (fn > model.max_force_n) f_ctrl *= model.max_force_n / fn;
+  state.tracking_force_n = f_ctrl;
   if (model.gravity_compensation) f_ctrl -= model.mass_kg * model.gravity_mps2;
   state.control_force_n = f_ctrl;
 

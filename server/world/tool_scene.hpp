@@ -56,8 +56,11 @@ struct ToolState {
   // outputs of the last step
   Eigen::Vector3d contact_force_n = Eigen::Vector3d::Zero();  ///< environment force on tool [N]
   Eigen::Vector3d control_force_n = Eigen::Vector3d::Zero();  ///< PD force applied [N]
-  double penetration_m = 0.0;                                 ///< deepest plane penetration [m]
-  int contact_object = -1;                                    ///< plane id touched, -1 none
+  /// The PD part of control_force_n (saturated, without gravity compensation) [N]: the force
+  /// of the tracking spring-damper between the command and the tool.
+  Eigen::Vector3d tracking_force_n = Eigen::Vector3d::Zero();
+  double penetration_m = 0.0;  ///< deepest plane penetration [m]
+  int contact_object = -1;     ///< plane id touched, -1 none
   double sim_time_s = 0.0;
 };
 

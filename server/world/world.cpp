@@ -10,6 +10,8 @@ ToolWorld::ToolWorld(const SceneConfig& scene) : model_(scene.tool) {
   state_.position_m = scene.tool_start_m;
   state_.hold_position_m = scene.tool_start_m;
   out_.tip_position_m = state_.position_m;
+  out_.tracking_kp_n_per_m = model_.kp_n_per_m;
+  out_.tracking_kd_ns_per_m = model_.kd_ns_per_m;
 }
 
 ToolInput to_tool_input(const WorldCommand& cmd) {
@@ -31,6 +33,7 @@ void ToolWorld::step(const WorldCommand& cmd, double dt_s, EventQueue& events) {
   out_.tip_velocity_mps = state_.velocity_mps;
   out_.tip_angular_velocity_radps = state_.angular_velocity_radps;
   out_.contact_force_n = state_.contact_force_n;
+  out_.tracking_force_n = state_.tracking_force_n;
   out_.penetration_m = state_.penetration_m;
   out_.contact_object = state_.contact_object;
   out_.in_contact = state_.contact_object >= 0;

@@ -36,6 +36,11 @@ struct WorldOutput {
   double deformation_m = 0.0;  ///< indentation of a deformable body since contact began [m]
   bool in_contact = false;
   int contact_object = -1;
+  /// Force of the slave's tracking controller on the tip this step [N] (tool: its PD, without
+  /// gravity compensation; robot: estimated as -contact_force_n, the quasi-static balance).
+  Eigen::Vector3d tracking_force_n = Eigen::Vector3d::Zero();
+  double tracking_kp_n_per_m = 400.0;  ///< the tracking law's default stiffness [N/m]
+  double tracking_kd_ns_per_m = 12.0;  ///< its damping [N s/m]
   int joint_count = 0;
   std::array<double, kMaxJoints> q_rad{}, qd_radps{}, tau_nm{};
   double sim_time_s = 0.0;

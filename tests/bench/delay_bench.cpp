@@ -7,6 +7,11 @@
 // stiffness sweep (sphere k 500 - 2e4 N/m). Each run's verdict is compared with the analytic
 // delay margin of the linearised loop (client/control/stability_analysis.hpp).
 //
+// The passivity-based schemes run the same grid: wave-variables (gain = K_ps; b = K_ps 25 ms,
+// at most 20 N s/m), tdpa (on position-position, gain = K_pm = K_ps) and tdpa-fp (tdpa on
+// force-position, gain = K_f). Their "theory" is passivity: stable at every delay
+// (theory_stable = 1); for tdpa the analytic margin column holds the base law's margin.
+//
 // The wall cases also run with the server's own tool-only scene (teleop::sim::tool_step) as
 // the slave, to show the in-process point slave gives the same verdicts.
 //
@@ -55,14 +60,23 @@ class ToolSceneSlave final : public SlaveSimulator {
     state_ = teleop::sim::ToolState{};
     state_.position_m = x;
     seq_ = 0;
+    port_.reset();
   }
   void step(const SlaveCommand& c, double dt) override {
+    // the passivity schemes' slave side, exactly as the server runs it
+    const double kp = c.position_gain_n_per_m > 0.0 ? c.position_gain_n_per_m : model_.kp_n_per_m;
+    const teleop::passivity::SlavePortTarget t =
+        port_.before_step(port_command(c),
+                          teleop::passivity::SlavePortState{state_.position_m, state_.velocity_mps,
+                                                            state_.contact_force_n},
+                          teleop::passivity::TrackingGains{kp, model_.kd_ns_per_m}, dt);
     teleop::sim::ToolInput in;
-    in.target_position_m = c.position_m;
-    in.target_velocity_mps = c.velocity_mps;
+    in.target_position_m = t.position_m;
+    in.target_velocity_mps = t.velocity_mps;
     in.kp_override_n_per_m = c.position_gain_n_per_m;
-    in.hold = !c.enabled;
+    in.hold = t.hold;
     teleop::sim::tool_step(model_, state_, in, dt);
+    port_.after_step(state_.tracking_force_n, dt);
     ++seq_;
     cmd_seq_ = c.seq;
     cmd_time_ = c.send_time_s;
@@ -80,12 +94,14 @@ class ToolSceneSlave final : public SlaveSimulator {
     s.penetration_m = state_.penetration_m;
     s.in_contact = state_.contact_object >= 0;
     s.valid = true;
+    apply_port_report(port_.report(), s);
     return s;
   }
 
  private:
   teleop::sim::ToolModel model_;
   teleop::sim::ToolState state_;
+  teleop::passivity::SlavePassivityPort port_;
   std::uint64_t seq_ = 0, cmd_seq_ = 0;
   double cmd_time_ = 0.0;
 };
@@ -112,10 +128,24 @@ PressResult run_with(const PressScenario& s, bool tool_scene) {
   r.energy_min_j = session.metrics().energy_min_j();
   r.contact_time_s = session.metrics().contact_time_s();
   r.safety_cut = session.safety().cut();
-  r.analytic_margin_s = task_delay_margin(press_loop_model(s, setup)).one_way_s;
-  r.analytic_stable = task_stable_at(press_loop_model(s, setup), s.one_way_delay_s);
+  fill_analytic(s, setup, r);
   return r;
 }
+
+/// A sweep scheme: its label in the CSV and how to set up the scenario.
+struct SweepScheme {
+  const char* label;   ///< scheme column
+  const char* scheme;  ///< controller scheme
+  const char* base;    ///< tdpa base law ("" otherwise)
+  bool force_gain;     ///< gain axis is K_f (else a stiffness in N/m)
+};
+constexpr SweepScheme kSchemes[] = {
+    {"position-position", "position-position", "", false},
+    {"force-position", "force-position", "", true},
+    {"wave-variables", "wave-variables", "", false},
+    {"tdpa", "tdpa", "position-position", false},
+    {"tdpa-fp", "tdpa", "force-position", true},
+};
 
 int run_delay_bench(const teleop::CommandArgs& args) {
   const bool quick = args.quick;
@@ -132,10 +162,11 @@ int run_delay_bench(const teleop::CommandArgs& args) {
 
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<RunRow> rows;
-  auto add = [&](const std::string& sweep, const std::string& scheme, Environment env, double k,
+  auto add = [&](const std::string& sweep, const SweepScheme& scheme, Environment env, double k,
                  double gain, double d_ms, bool tool_scene) {
     PressScenario s;
-    s.scheme = scheme;
+    s.scheme = scheme.scheme;
+    if (*scheme.base) s.tdpa_base = scheme.base;
     s.environment = env;
     s.env_stiffness_n_per_m = k;
     s.env_damping_ns_per_m = env == Environment::kWall ? 50.0 : 5.0;
@@ -143,7 +174,7 @@ int run_delay_bench(const teleop::CommandArgs& args) {
     s.one_way_delay_s = d_ms * 1e-3;
     RunRow row;
     row.sweep = sweep;
-    row.scheme = scheme;
+    row.scheme = scheme.label;
     row.environment = env == Environment::kWall ? "wall" : "sphere";
     row.slave = tool_scene ? "tool_scene" : "point";
     row.k = k;
@@ -152,9 +183,9 @@ int run_delay_bench(const teleop::CommandArgs& args) {
     row.r = run_with(s, tool_scene);
     rows.push_back(row);
   };
-  for (const std::string scheme : {"position-position", "force-position"}) {
-    const auto& gains = scheme == "position-position" ? pp_gains : fp_gains;
-    const double default_gain = scheme == "position-position" ? 400.0 : 1.0;
+  for (const SweepScheme& scheme : kSchemes) {
+    const auto& gains = scheme.force_gain ? fp_gains : pp_gains;
+    const double default_gain = scheme.force_gain ? 1.0 : 400.0;
     for (double g : gains) {
       for (double d : delays_ms) {
         add("gain", scheme, Environment::kSphere, 2000.0, g, d, false);
@@ -177,13 +208,42 @@ int run_delay_bench(const teleop::CommandArgs& args) {
                          "analytic_margin_ms", "position_error_rms_mm", "force_error_rms_n",
                          "max_device_force_n", "energy_min_j", "contact_time_s", "safety_cut"});
   int agree = 0, judged = 0, tool_agree = 0, tool_pairs = 0;
+  // per scheme: point-slave runs, stable ones, agreement with its theory, verdict reasons
+  struct SchemeStats {
+    int runs = 0, stable = 0, agree = 0, base_unstable = 0, base_unstable_stable = 0;
+    int saturation = 0;  // unstable / oscillating because the force sat at the limit
+    int other = 0;       // unstable / oscillating for another reason
+  };
+  std::vector<SchemeStats> stats(std::size(kSchemes));
+  const auto scheme_index = [](const std::string& label) {
+    for (std::size_t i = 0; i < std::size(kSchemes); ++i) {
+      if (label == kSchemes[i].label) return i;
+    }
+    return std::size_t{0};
+  };
   for (const RunRow& row : rows) {
     const double margin_ms = row.r.analytic_margin_s * 1e3;
-    const bool theory_stable = row.r.analytic_stable;
+    // passivity-based schemes: stable at every delay by design
+    const bool theory_stable = row.r.passive_scheme || row.r.analytic_stable;
     const bool sim_stable = row.r.verdict == Verdict::kStable;
     if (row.slave == "point") {
-      ++judged;
-      agree += theory_stable == sim_stable;
+      if (!row.r.passive_scheme) {
+        ++judged;
+        agree += theory_stable == sim_stable;
+      }
+      SchemeStats& st = stats[scheme_index(row.scheme)];
+      ++st.runs;
+      st.stable += sim_stable;
+      st.agree += theory_stable == sim_stable;
+      if (!row.r.analytic_stable) {
+        ++st.base_unstable;
+        st.base_unstable_stable += sim_stable;
+      }
+      if (!sim_stable) {
+        const bool sat = row.r.reason.find("saturation") != std::string::npos ||
+                         row.r.reason.find("limit") != std::string::npos;
+        (sat ? st.saturation : st.other) += 1;
+      }
     }
     std::string reason = row.r.reason;
     std::replace(reason.begin(), reason.end(), ',', ';');
@@ -294,39 +354,71 @@ int run_delay_bench(const teleop::CommandArgs& args) {
   grid.flush();
 
   // cost of one haptic cycle of the whole in-process loop (timed here, not in tests)
-  PressScenario ts;
-  ts.one_way_delay_s = 0.05;
-  ts.jitter_s = 0.002;
-  const PressSetup setup = build_press_setup(ts);
-  SimulatedDevice dev(setup.device);
-  PointSlave slave(setup.slave);
-  LoopbackSession session(setup.loop, dev, slave);
-  session.start();
-  std::vector<double> step_us;
-  step_us.reserve(10000);
-  while (true) {
-    const auto a = std::chrono::steady_clock::now();
-    if (!session.step()) break;
-    step_us.push_back(
-        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count());
-  }
-  const teleop::Summary st = teleop::summarize(step_us);
+  const auto loop_cost = [](const char* scheme) {
+    PressScenario ts;
+    ts.scheme = scheme;
+    ts.one_way_delay_s = 0.05;
+    ts.jitter_s = 0.002;
+    const PressSetup setup = build_press_setup(ts);
+    SimulatedDevice dev(setup.device);
+    PointSlave slave(setup.slave);
+    LoopbackSession session(setup.loop, dev, slave);
+    session.start();
+    std::vector<double> step_us;
+    step_us.reserve(10000);
+    while (true) {
+      const auto a = std::chrono::steady_clock::now();
+      if (!session.step()) break;
+      step_us.push_back(
+          std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - a).count());
+    }
+    return teleop::summarize(step_us);
+  };
+  const teleop::Summary st = loop_cost("position-position");
+  const teleop::Summary st_wave = loop_cost("wave-variables");
+  const teleop::Summary st_tdpa = loop_cost("tdpa");
 
-  char json[1024];
-  std::snprintf(json, sizeof(json),
-                "{\"runs\":%zu,\"sweep_wall_s\":%.3f,\"theory_agreement\":%.4f,"
-                "\"theory_judged_runs\":%d,\"tool_scene_vs_point_agreement\":%.4f,"
-                "\"tool_scene_pairs\":%d,\"loop_step_us_p50\":%.3f,\"loop_step_us_p99\":%.3f,"
-                "\"loop_step_us_max\":%.3f}\n",
-                rows.size(), sweep_s, judged ? static_cast<double>(agree) / judged : 0.0, judged,
-                tool_pairs ? static_cast<double>(tool_agree) / tool_pairs : 0.0, tool_pairs, st.p50,
-                st.p99, st.max);
+  std::string json;
+  {
+    char buf[1024];
+    std::snprintf(buf, sizeof(buf),
+                  "{\"runs\":%zu,\"sweep_wall_s\":%.3f,\"theory_agreement\":%.4f,"
+                  "\"theory_judged_runs\":%d,\"tool_scene_vs_point_agreement\":%.4f,"
+                  "\"tool_scene_pairs\":%d,\"loop_step_us_p50\":%.3f,\"loop_step_us_p99\":%.3f,"
+                  "\"loop_step_us_max\":%.3f,\"loop_step_us_p50_wave\":%.3f,"
+                  "\"loop_step_us_p99_wave\":%.3f,\"loop_step_us_p50_tdpa\":%.3f,"
+                  "\"loop_step_us_p99_tdpa\":%.3f,\"schemes\":{",
+                  rows.size(), sweep_s, judged ? static_cast<double>(agree) / judged : 0.0, judged,
+                  tool_pairs ? static_cast<double>(tool_agree) / tool_pairs : 0.0, tool_pairs,
+                  st.p50, st.p99, st.max, st_wave.p50, st_wave.p99, st_tdpa.p50, st_tdpa.p99);
+    json = buf;
+    for (std::size_t i = 0; i < std::size(kSchemes); ++i) {
+      const SchemeStats& c = stats[i];
+      std::snprintf(buf, sizeof(buf),
+                    "%s\"%s\":{\"runs\":%d,\"stable\":%d,\"theory_agreement\":%d,"
+                    "\"base_theory_unstable\":%d,\"stable_where_base_theory_unstable\":%d,"
+                    "\"not_stable_saturation\":%d,\"not_stable_other\":%d}",
+                    i ? "," : "", kSchemes[i].label, c.runs, c.stable, c.agree, c.base_unstable,
+                    c.base_unstable_stable, c.saturation, c.other);
+      json += buf;
+    }
+    json += "}}\n";
+  }
   std::ofstream((args.out_dir / "delay_summary.json").string()) << json;
   std::printf(
       "delay sweep: %zu runs in %.2f s; simulation agrees with the analytic margin in "
-      "%d/%d runs; tool scene = point slave in %d/%d wall runs; loop step p50 %.2f us, "
-      "p99 %.2f us\n",
-      rows.size(), sweep_s, agree, judged, tool_agree, tool_pairs, st.p50, st.p99);
+      "%d/%d runs (position-position, force-position); tool scene = point slave in %d/%d wall "
+      "runs; loop step p50 %.2f us, p99 %.2f us (wave %.2f / %.2f, tdpa %.2f / %.2f)\n",
+      rows.size(), sweep_s, agree, judged, tool_agree, tool_pairs, st.p50, st.p99, st_wave.p50,
+      st_wave.p99, st_tdpa.p50, st_tdpa.p99);
+  for (std::size_t i = 0; i < std::size(kSchemes); ++i) {
+    const SchemeStats& c = stats[i];
+    std::printf(
+        "  %-18s %4d runs, %4d stable; %4d where the base law's theory is unstable, "
+        "%4d of them stable; not stable: %d at the force limit, %d other\n",
+        kSchemes[i].label, c.runs, c.stable, c.base_unstable, c.base_unstable_stable, c.saturation,
+        c.other);
+  }
 
   if (!args.no_chart) {
     teleop::run_chart_script(

@@ -70,6 +70,65 @@ TEST(CommandValidation, ConvertsToAWorldCommand) {
   EXPECT_EQ(w.position_m, Eigen::Vector3d(0.1, 0.2, 0.3));
 }
 
+MasterCommand wave(std::uint64_t seq, double energy_j) {
+  auto c = valid(seq);
+  c.scheme(SCHEME_WAVE_VARIABLES);
+  c.passivity_session(5);
+  c.wave_impedance_ns_per_m(10.0);
+  c.wave_u_integral() = {0.0, 0.0, -0.01 * static_cast<double>(seq)};
+  c.wave_u_energy_j() = {0.0, 0.0, energy_j};
+  return c;
+}
+
+TEST(CommandValidation, RejectsUnusableWaveAndPassivityFields) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  PassivityHistory h;
+  EXPECT_EQ(validate_passivity(wave(1, 0.1), h), CommandVerdict::kAccepted);
+  EXPECT_EQ(validate_passivity(wave(2, 0.2), h), CommandVerdict::kAccepted);
+  // a non-finite wave is non-finite, wherever it is
+  auto c = wave(3, 0.3);
+  c.wave_u_integral()[0] = nan;
+  EXPECT_EQ(validate_command(c, kMin, kMax, 2, true), CommandVerdict::kNonFinite);
+  c = wave(3, 0.3);
+  c.tdpa_energy_in_j(std::numeric_limits<double>::infinity());
+  EXPECT_EQ(validate_command(c, kMin, kMax, 2, true), CommandVerdict::kNonFinite);
+  // b out of range, a negative energy, an energy that went back within the session
+  c = wave(3, 0.3);
+  c.wave_impedance_ns_per_m(0.0);
+  EXPECT_EQ(validate_passivity(c, h), CommandVerdict::kBadPassivity);
+  c = wave(3, 0.3);
+  c.wave_impedance_ns_per_m(1e9);
+  EXPECT_EQ(validate_passivity(c, h), CommandVerdict::kBadPassivity);
+  c = wave(3, -0.3);
+  EXPECT_EQ(validate_passivity(c, h), CommandVerdict::kBadPassivity);
+  EXPECT_EQ(validate_passivity(wave(3, 0.15), h), CommandVerdict::kBadPassivity);  // stale
+  auto tdpa = valid(4);
+  tdpa.scheme(SCHEME_TIME_DOMAIN_PASSIVITY);
+  tdpa.passivity_session(5);
+  tdpa.tdpa_energy_in_j(-1.0);
+  EXPECT_EQ(validate_passivity(tdpa, h), CommandVerdict::kBadPassivity);
+  // a new session starts its energies from zero
+  auto next = wave(4, 0.01);
+  next.passivity_session(6);
+  EXPECT_EQ(validate_passivity(next, h), CommandVerdict::kAccepted);
+  // the other schemes do not use the fields
+  auto pp = valid(5);
+  pp.wave_impedance_ns_per_m(-4.0);
+  EXPECT_EQ(validate_passivity(pp, h), CommandVerdict::kAccepted);
+  EXPECT_STREQ(to_string(CommandVerdict::kBadPassivity), "wave / passivity fields out of range");
+}
+
+TEST(CommandValidation, ConvertsThePassivityFields) {
+  const passivity::SlavePortCommand p = to_port_command(wave(3, 0.5));
+  EXPECT_EQ(p.scheme, SCHEME_WAVE_VARIABLES);
+  EXPECT_EQ(p.session, 5u);
+  EXPECT_TRUE(p.enabled);
+  EXPECT_EQ(p.wave_impedance_ns_per_m, 10.0);
+  EXPECT_DOUBLE_EQ(p.wave_u_integral.z(), -0.03);
+  EXPECT_EQ(p.wave_u_energy_j.z(), 0.5);
+  EXPECT_EQ(p.position_m, Eigen::Vector3d(0.1, 0.2, 0.3));
+}
+
 TEST(RttTracker, CountsEachCommandOnceAndIgnoresForeignEchoes) {
   teleop::master::RttTracker t(16);
   EXPECT_LT(t.on_echo(0, 0, 5'000'000, 10), 0.0);  // nothing applied yet

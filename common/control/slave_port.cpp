@@ -1,0 +1,133 @@
+#include "common/control/slave_port.hpp"
+
+#include <cmath>
+
+namespace teleop::passivity {
+
+const char* to_string(PortCommandCheck c) {
+  switch (c) {
+    case PortCommandCheck::kOk:
+      return "ok";
+    case PortCommandCheck::kNonFinite:
+      return "non-finite wave or energy field";
+    case PortCommandCheck::kBadImpedance:
+      return "wave impedance out of range";
+    case PortCommandCheck::kNegativeEnergy:
+      return "negative energy";
+    case PortCommandCheck::kEnergyDecreased:
+      return "cumulative energy decreased (stale or corrupt)";
+  }
+  return "?";
+}
+
+PortCommandCheck check_port_command(const SlavePortCommand& c) {
+  if (!c.wave_u_integral.allFinite() || !c.wave_u_energy_j.allFinite() ||
+      !std::isfinite(c.tdpa_energy_in_j) || !std::isfinite(c.wave_impedance_ns_per_m) ||
+      !c.position_m.allFinite() || !c.velocity_mps.allFinite()) {
+    return PortCommandCheck::kNonFinite;
+  }
+  if (c.scheme == kSchemeWaveVariables && !(c.wave_impedance_ns_per_m >= kMinWaveImpedance &&
+                                            c.wave_impedance_ns_per_m <= kMaxWaveImpedance)) {
+    return PortCommandCheck::kBadImpedance;
+  }
+  if ((c.wave_u_energy_j.array() < 0.0).any() || c.tdpa_energy_in_j < 0.0) {
+    return PortCommandCheck::kNegativeEnergy;
+  }
+  return PortCommandCheck::kOk;
+}
+
+void SlavePassivityPort::reset() {
+  wave_.reset();
+  tdpa_.reset();
+  report_ = SlavePortReport{};
+  scheme_ = 0xff;
+  session_ = 0;
+  active_ = false;
+  stepped_tdpa_ = false;
+  last_energy_.setZero();
+  last_tdpa_in_j_ = 0.0;
+}
+
+void SlavePassivityPort::start(const SlavePortCommand& cmd) {
+  scheme_ = cmd.scheme;
+  session_ = cmd.session;
+  active_ = true;
+  const double b = cmd.wave_impedance_ns_per_m > 0.0 ? cmd.wave_impedance_ns_per_m : 1.0;
+  wave_.configure(b, cmd.wave_matched, wave_limit(b, kWaveLimitSpeedMps, kWaveLimitForceN));
+  wave_.reset();
+  tdpa_.configure(params_.drift_time_constant_s);
+  tdpa_.reset();
+  report_ = SlavePortReport{};
+  report_.session = cmd.session;
+  last_energy_.setZero();
+  last_tdpa_in_j_ = 0.0;
+}
+
+SlavePortTarget SlavePassivityPort::before_step(const SlavePortCommand& cmd,
+                                                const SlavePortState& state,
+                                                const TrackingGains& gains, double dt_s) {
+  stepped_tdpa_ = false;
+  SlavePortTarget t;
+  if (!handles(cmd.scheme)) {
+    // another scheme: pass the command through; a later passivity session starts afresh
+    active_ = false;
+    report_ = SlavePortReport{};
+    t.position_m = cmd.position_m;
+    t.velocity_mps = cmd.velocity_mps;
+    t.hold = !cmd.enabled;
+    return t;
+  }
+  t.hold = true;  // until proven usable
+  if (check_port_command(cmd) != PortCommandCheck::kOk) {
+    ++rejected_;
+    report_.wave_v.setZero();
+    return t;
+  }
+  if (!active_ || cmd.session != session_ || cmd.scheme != scheme_) start(cmd);
+  // cumulative energies never decrease within a session: an older one is stale or corrupt
+  constexpr double kTol = 1e-12;
+  if ((cmd.wave_u_energy_j.array() < last_energy_.array() - kTol).any() ||
+      cmd.tdpa_energy_in_j < last_tdpa_in_j_ - kTol) {
+    ++rejected_;
+    report_.wave_v.setZero();
+    return t;
+  }
+  last_energy_ = cmd.wave_u_energy_j;
+  last_tdpa_in_j_ = cmd.tdpa_energy_in_j;
+  if (!cmd.enabled) {
+    // clutch open: the slave holds; waves are not consumed (the receiver catches up later)
+    report_.wave_v.setZero();
+    if (scheme_ == kSchemeTimeDomainPassivity && tdpa_.started()) {
+      Vec3 x, v;
+      tdpa_.hold(x, v);
+    }
+    return t;
+  }
+  t.hold = false;
+  if (scheme_ == kSchemeWaveVariables) {
+    wave_.update(cmd.wave_u_integral, cmd.wave_u_energy_j, cmd.position_m, state.contact_force_n,
+                 dt_s);
+    t.position_m = wave_.position_m();
+    t.velocity_mps = wave_.velocity_mps();
+    report_.wave_v = wave_.v();
+    report_.wave_v_integral = wave_.sent().integral;
+    report_.wave_v_energy_j = wave_.sent().energy_j;
+    report_.dissipated_j = wave_.dissipated_j();
+  } else {
+    tdpa_.filter(cmd.position_m, cmd.tdpa_energy_in_j, state.position_m, state.velocity_mps,
+                 gains.kp_n_per_m, gains.kd_ns_per_m, dt_s, t.position_m, t.velocity_mps);
+    stepped_tdpa_ = true;
+  }
+  return t;
+}
+
+void SlavePassivityPort::after_step(const Vec3& tracking_force_n, double dt_s) {
+  if (!stepped_tdpa_) return;
+  tdpa_.commit(tracking_force_n, dt_s);
+  report_.tdpa_energy_in_j = tdpa_.energy().in_j;
+  report_.tdpa_energy_out_j = tdpa_.energy().out_j;
+  report_.dissipated_j = tdpa_.energy().dissipated_j;
+  stepped_tdpa_ = false;
+}
+
+}  // namespace teleop::passivity

@@ -1,0 +1,147 @@
+#pragma once
+// The slave side of the passivity-based schemes, in one place for every slave: the server's
+// worlds (networked sessions), the in-process PointSlave (LoopbackSession, `teleop_bench
+// delay`) and the bench's tool-scene slave. No DDS here: the callers convert their command and
+// state types to the plain structs below.
+//
+//   wave variables (SCHEME_WAVE_VARIABLES): the forward wave integral/energy -> WaveSlavePort
+//     (common/control/wave_variables.hpp) with the contact force measured at the last step ->
+//     desired tool position/velocity; the backward wave integral/energy go back.
+//   time-domain passivity (SCHEME_TIME_DOMAIN_PASSIVITY): the master's command position and
+//     input energy -> AdmittancePassivityController (common/control/time_domain_passivity.hpp)
+//     -> modified command position/velocity; after the step the tracking force is recorded;
+//     the slave port's input and output energies go back.
+//   other schemes: the command passes unchanged.
+//
+// Per step:  target = port.before_step(cmd, state, gains, dt);  <step the slave to target>;
+//            port.after_step(tracking_force, dt);  report() -> the state message.
+// A new session id (or a new scheme) restarts the port's state. Allocation-free.
+#include <Eigen/Core>
+#include <cstdint>
+
+#include "common/control/time_domain_passivity.hpp"
+#include "common/control/wave_variables.hpp"
+
+namespace teleop::passivity {
+
+/// Scheme ids, equal to the SCHEME_* constants of idl/Teleop.idl.
+inline constexpr std::uint8_t kSchemePositionPosition = 0;
+inline constexpr std::uint8_t kSchemeForcePosition = 1;
+inline constexpr std::uint8_t kSchemeWaveVariables = 2;
+inline constexpr std::uint8_t kSchemeTimeDomainPassivity = 3;
+
+/// Allowed range of the wave impedance b [N s/m] on the wire (the master clamps tighter).
+inline constexpr double kMinWaveImpedance = 0.01;
+inline constexpr double kMaxWaveImpedance = 1.0e4;
+/// A reconstructed wave is limited to the wave of a port moving at this speed [m/s] ...
+inline constexpr double kWaveLimitSpeedMps = 2.0;
+/// ... while pushing with this force [N] (only reached when a receiver catches up a gap).
+inline constexpr double kWaveLimitForceN = 200.0;
+
+/// The passivity fields of a command as the slave received it (slave frame, SI).
+struct SlavePortCommand {
+  std::uint8_t scheme = 0;               ///< SCHEME_* constant
+  std::uint32_t session = 0;             ///< master's session id (0: none)
+  bool enabled = false;                  ///< false: the slave holds
+  Vec3 position_m = Vec3::Zero();        ///< master's mapped position [m]
+  Vec3 velocity_mps = Vec3::Zero();      ///< master's mapped velocity [m/s]
+  double wave_impedance_ns_per_m = 0.0;  ///< b [N s/m]
+  bool wave_matched = true;              ///< matched slave termination
+  Vec3 wave_u_integral = Vec3::Zero();   ///< forward wave integral [sqrt(W) s]
+  Vec3 wave_u_energy_j = Vec3::Zero();   ///< forward wave energy per axis [J]
+  double tdpa_energy_in_j = 0.0;         ///< master port input energy [J]
+};
+
+/// Why a command's passivity fields are unusable (the server counts these as rejections).
+enum class PortCommandCheck : std::uint8_t {
+  kOk = 0,
+  kNonFinite,        ///< NaN or Inf in a wave or energy field
+  kBadImpedance,     ///< wave scheme with b outside [kMinWaveImpedance, kMaxWaveImpedance]
+  kNegativeEnergy,   ///< an energy below zero
+  kEnergyDecreased,  ///< a cumulative energy went down within a session (stale or corrupt)
+};
+const char* to_string(PortCommandCheck c);
+
+/// Checks the fields of `c` alone (finite, ranges); the port also checks monotonicity.
+PortCommandCheck check_port_command(const SlavePortCommand& c);
+
+/// The slave's state before a step (slave frame).
+struct SlavePortState {
+  Vec3 position_m = Vec3::Zero();       ///< tool position [m]
+  Vec3 velocity_mps = Vec3::Zero();     ///< tool velocity [m/s]
+  Vec3 contact_force_n = Vec3::Zero();  ///< environment force on the tool, last step [N]
+};
+
+/// The slave's tracking law f = kp (x_cmd - x) + kd (v_cmd - v) (the PD the command drives).
+struct TrackingGains {
+  double kp_n_per_m = 400.0;  ///< [N/m]
+  double kd_ns_per_m = 12.0;  ///< [N s/m]
+};
+
+/// What the slave's tracking controller gets this step.
+struct SlavePortTarget {
+  Vec3 position_m = Vec3::Zero();    ///< [m]
+  Vec3 velocity_mps = Vec3::Zero();  ///< feed-forward [m/s]
+  bool hold = false;                 ///< hold the current pose instead
+};
+
+/// What goes back to the master (the passivity fields of the state message).
+struct SlavePortReport {
+  std::uint32_t session = 0;            ///< session these fields belong to (0: none)
+  Vec3 wave_v = Vec3::Zero();           ///< backward wave this step [sqrt(W)]
+  Vec3 wave_v_integral = Vec3::Zero();  ///< [sqrt(W) s]
+  Vec3 wave_v_energy_j = Vec3::Zero();  ///< per axis [J]
+  double tdpa_energy_in_j = 0.0;        ///< slave port input energy [J]
+  double tdpa_energy_out_j = 0.0;       ///< slave port output energy [J]
+  double dissipated_j = 0.0;            ///< slave-side PC / matching damper [J]
+};
+
+/// Parameters of the slave port.
+struct SlavePortParams {
+  double drift_time_constant_s = 0.5;  ///< TDPA: decay time of the PC's command offset [s]
+};
+
+/// The slave side of wave variables and TDPA. See the file comment.
+class SlavePassivityPort {
+ public:
+  explicit SlavePassivityPort(const SlavePortParams& params = {}) : params_(params) {}
+
+  /// Forgets the session.
+  void reset();
+  /// True if `scheme` is one this port transforms.
+  static bool handles(std::uint8_t scheme) {
+    return scheme == kSchemeWaveVariables || scheme == kSchemeTimeDomainPassivity;
+  }
+  /// Before the slave steps: the target for its tracking controller. A command the port
+  /// cannot use (check_port_command() fails, or an energy went down) holds the slave and
+  /// counts a rejection; the caller that validated at the edge never sees one.
+  SlavePortTarget before_step(const SlavePortCommand& cmd, const SlavePortState& state,
+                              const TrackingGains& gains, double dt_s);
+  /// After the step: the tracking force the controller applied to the tool [N].
+  void after_step(const Vec3& tracking_force_n, double dt_s);
+
+  const SlavePortReport& report() const { return report_; }
+  /// Scheme of the running session (0xff: none).
+  std::uint8_t scheme() const { return scheme_; }
+  /// Commands refused by before_step() so far.
+  std::uint64_t rejected() const { return rejected_; }
+  const WaveSlavePort& wave() const { return wave_; }
+  const AdmittancePassivityController& tdpa() const { return tdpa_; }
+
+ private:
+  void start(const SlavePortCommand& cmd);
+
+  SlavePortParams params_;
+  WaveSlavePort wave_;
+  AdmittancePassivityController tdpa_;
+  SlavePortReport report_;
+  std::uint8_t scheme_ = 0xff;
+  std::uint32_t session_ = 0;
+  bool active_ = false;
+  bool stepped_tdpa_ = false;
+  Vec3 last_energy_ = Vec3::Zero();
+  double last_tdpa_in_j_ = 0.0;
+  std::uint64_t rejected_ = 0;
+};
+
+}  // namespace teleop::passivity
