@@ -12,48 +12,21 @@
 #include <vector>
 
 #include "tests/support/domains.hpp"
+#include "tests/support/integration.hpp"
 #include "tests/support/process.hpp"
 
 namespace teleop::test {
 namespace {
 
-const std::string kServer = std::string(TELEOP_BINARY_DIR) + "/server/teleop_server";
-const std::string kMaster = std::string(TELEOP_BINARY_DIR) + "/client/teleop_master";
-
-std::string tmp(const std::string& name) {
-  return (std::filesystem::temp_directory_path() /
-          ("teleop_e3_" + std::to_string(getpid()) + "_" + name))
-      .string();
-}
+std::string tmp(const std::string& name) { return temp_path("e3", name); }
 
 /// Largest value of a CSV column over rows whose `filter` column equals 1 (all rows if empty).
 double column_max(const std::string& csv, const std::string& column, const std::string& filter) {
-  std::istringstream in(csv);
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::string> names;
-  for (std::size_t p = 0; p <= line.size();) {
-    const auto c = line.find(',', p);
-    names.push_back(line.substr(p, c == std::string::npos ? std::string::npos : c - p));
-    if (c == std::string::npos) break;
-    p = c + 1;
-  }
-  const auto idx = [&](const std::string& n) {
-    return static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin());
-  };
-  const std::size_t ci = idx(column), fi = filter.empty() ? names.size() : idx(filter);
+  const auto cols = csv_columns(csv, {column, filter});
   double best = -INFINITY;
-  while (std::getline(in, line)) {
-    std::vector<double> v;
-    for (std::size_t p = 0; p <= line.size();) {
-      v.push_back(std::atof(line.c_str() + p));
-      const auto c = line.find(',', p);
-      if (c == std::string::npos) break;
-      p = c + 1;
-    }
-    if (ci >= v.size()) continue;
-    if (fi < v.size() && v[fi] != 1.0) continue;
-    best = std::max(best, v[ci]);
+  for (std::size_t r = 0; r < cols[0].size(); ++r) {
+    if (!filter.empty() && (r >= cols[1].size() || cols[1][r] != 1.0)) continue;
+    best = std::max(best, cols[0][r]);
   }
   return best;
 }
@@ -61,8 +34,9 @@ double column_max(const std::string& csv, const std::string& column, const std::
 TEST(Experiment3, OperatorPressesTheElasticSphereThroughTheNetworkedLoop) {
   const std::string d = std::to_string(domains::kExperiment3);
   const std::string mj = tmp("master.json"), sj = tmp("server.json"), log = tmp("master.csv");
-  Process server(kServer, {"--domain", d, "--duration", "120", "--summary-json", sj}, "e3_server");
-  Process master(kMaster,
+  Process server(kServerBinary, {"--domain", d, "--duration", "120", "--summary-json", sj},
+                 "e3_server");
+  Process master(kMasterBinary,
                  {"--domain", d, "--log", log, "--summary-json", mj, "--delay", "5ms", "--jitter",
                   "1ms", "--seed", "7"},
                  "e3_master");
@@ -97,11 +71,10 @@ TEST(Experiment3, TheoreticallyUnstableLoopIsReportedUnstableAndKeptWithinTheSpe
   // margin is about 7 ms (docs/control.md), so this loop must be unstable
   const std::string d = std::to_string(domains::kExperiment3 + 20);
   const std::string mj = tmp("unstable.json");
-  Process server(kServer,
-                 {"--domain", d, "--duration", "120", "--scene",
-                  std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/tool_only.yaml"},
+  Process server(kServerBinary,
+                 {"--domain", d, "--duration", "120", "--scene", scene_file("tool_only.yaml")},
                  "e3u_server");
-  Process master(kMaster,
+  Process master(kMasterBinary,
                  {"--domain", d, "--summary-json", mj, "--scheme", "position-position", "--kps",
                   "3000", "--kpm", "3000", "--delay", "100ms", "--duration", "8", "--homing", "1"},
                  "e3u_master");
@@ -134,9 +107,8 @@ TEST(ExternalDevice, ADriverProcessTakesPartThroughTheDeviceTopics) {
   const int domain = domains::kExperiment3 + 21;
   const std::string d = std::to_string(domain);
   const std::string mj = tmp("external.json");
-  Process server(kServer,
-                 {"--domain", d, "--duration", "120", "--scene",
-                  std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/tool_only.yaml"},
+  Process server(kServerBinary,
+                 {"--domain", d, "--duration", "120", "--scene", scene_file("tool_only.yaml")},
                  "ext_server");
   dds::Participant p(dds::ParticipantOptions{"loopback", domain, "fake-driver"});
   dds::Writer<DeviceStatePubSubType> states(p, "teleop/device_state", dds::TopicQos::kStream);
@@ -168,7 +140,7 @@ TEST(ExternalDevice, ADriverProcessTakesPartThroughTheDeviceTopics) {
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
   });
-  Process master(kMaster,
+  Process master(kMasterBinary,
                  {"--domain", d, "--device", "external", "--summary-json", mj, "--duration", "6",
                   "--homing", "1"},
                  "ext_master");

@@ -13,31 +13,26 @@
 #include "common/util/clock.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
 #include "tests/support/domains.hpp"
+#include "tests/support/integration.hpp"
 #include "tests/support/process.hpp"
 
 namespace teleop::test {
 namespace {
 
-const std::string kServer = std::string(TELEOP_BINARY_DIR) + "/server/teleop_server";
-const std::string kMaster = std::string(TELEOP_BINARY_DIR) + "/client/teleop_master";
 // the network tests use the light tool-only scene; experiment 3 uses the default scene
-const std::string kToolScene = std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/tool_only.yaml";
+const std::string kToolScene = scene_file("tool_only.yaml");
 
-std::string tmp(const std::string& name) {
-  return (std::filesystem::temp_directory_path() /
-          ("teleop_it_" + std::to_string(getpid()) + "_" + name))
-      .string();
-}
+std::string tmp(const std::string& name) { return temp_path("it", name); }
 
 TEST(Loopback, ServerAndMasterRoundTrip2000CommandsAt1kHz) {
   const std::string d = std::to_string(domains::kRoundTrip);
   const std::string master_json = tmp("master.json"), server_json = tmp("server.json");
   const std::string log = tmp("master.csv");
   Process server(
-      kServer,
+      kServerBinary,
       {"--domain", d, "--duration", "60", "--summary-json", server_json, "--scene", kToolScene},
       "rt_server");
-  Process master(kMaster,
+  Process master(kMasterBinary,
                  {"--domain", d, "--samples", "4500", "--homing", "1", "--summary-json",
                   master_json, "--log", log, "--script", "press-slip"},
                  "rt_master");
@@ -77,14 +72,14 @@ TEST(Loopback, ServerAndMasterRoundTrip2000CommandsAt1kHz) {
 }
 
 TEST(Loopback, UnknownFlagsPrintUsageAndExit2) {
-  Process s(kServer, {"--no-such-flag"}, "flag_server");
+  Process s(kServerBinary, {"--no-such-flag"}, "flag_server");
   EXPECT_EQ(s.wait_for(10.0), 2);
   EXPECT_NE(s.err().find("Usage"), std::string::npos) << s.err();
-  Process m(kMaster, {"--samples", "ten"}, "flag_master");
+  Process m(kMasterBinary, {"--samples", "ten"}, "flag_master");
   EXPECT_EQ(m.wait_for(10.0), 2);
-  Process m2(kMaster, {"--script", "teleport"}, "flag_master2");
+  Process m2(kMasterBinary, {"--script", "teleport"}, "flag_master2");
   EXPECT_EQ(m2.wait_for(10.0), 2);
-  Process m3(kMaster, {"--rate", "0"}, "flag_master3");
+  Process m3(kMasterBinary, {"--rate", "0"}, "flag_master3");
   EXPECT_EQ(m3.wait_for(10.0), 2);
   EXPECT_NE(m3.err().find("--rate"), std::string::npos) << m3.err();
 }
@@ -92,7 +87,7 @@ TEST(Loopback, UnknownFlagsPrintUsageAndExit2) {
 TEST(Loopback, BadSceneNamesFileFieldValueAndRangeAndExits2) {
   const std::string scene = tmp("bad_scene.yaml");
   std::ofstream(scene) << "name: bad\nphysics:\n  rate_hz: -5\n";
-  Process s(kServer, {"--scene", scene, "--domain", "200"}, "bad_scene");
+  Process s(kServerBinary, {"--scene", scene, "--domain", "200"}, "bad_scene");
   EXPECT_EQ(s.wait_for(10.0), 2);
   const std::string err = s.err();
   EXPECT_NE(err.find(scene), std::string::npos) << err;
@@ -102,10 +97,10 @@ TEST(Loopback, BadSceneNamesFileFieldValueAndRangeAndExits2) {
 }
 
 TEST(Loopback, BadProfileOrDomainExits2) {
-  Process s(kServer, {"--profile", "no_such_profile"}, "bad_profile");
+  Process s(kServerBinary, {"--profile", "no_such_profile"}, "bad_profile");
   EXPECT_EQ(s.wait_for(10.0), 2);
   EXPECT_NE(s.err().find("loopback"), std::string::npos) << s.err();  // lists what exists
-  Process m(kMaster, {"--domain", "999"}, "bad_domain");
+  Process m(kMasterBinary, {"--domain", "999"}, "bad_domain");
   EXPECT_EQ(m.wait_for(10.0), 2);
   EXPECT_NE(m.err().find("[0, 232]"), std::string::npos) << m.err();
 }
@@ -167,7 +162,7 @@ MasterCommand command(std::uint64_t seq, double x) {
 TEST(Loopback, InvalidCommandsAreRejectedCountedAndNeverReachThePhysics) {
   const int domain = domains::kBadCommands;
   const std::string server_json = tmp("bad_cmd_server.json");
-  Process server(kServer, tool_server_args(domain, server_json, "5"), "bad_cmd_server");
+  Process server(kServerBinary, tool_server_args(domain, server_json, "5"), "bad_cmd_server");
   CommandInjector inj(domain);
   ASSERT_TRUE(inj.wait_matched(20.0));
   std::uint64_t seq = 0;
@@ -198,7 +193,7 @@ TEST(Loopback, InvalidCommandsAreRejectedCountedAndNeverReachThePhysics) {
 TEST(Loopback, ServerHoldsTheSlaveWhenCommandsStop) {
   const int domain = domains::kWatchdog;
   const std::string server_json = tmp("wd_server.json");
-  Process server(kServer, tool_server_args(domain, server_json, "0.05"), "wd_server");
+  Process server(kServerBinary, tool_server_args(domain, server_json, "0.05"), "wd_server");
   CommandInjector inj(domain);
   ASSERT_TRUE(inj.wait_matched(20.0));
   std::uint64_t seq = 0;
@@ -216,8 +211,9 @@ TEST(Loopback, ServerHoldsTheSlaveWhenCommandsStop) {
 TEST(Loopback, MasterFadesForceToZeroWhenTheServerDisappears) {
   const std::string d = std::to_string(domains::kLinkLoss);
   const std::string master_json = tmp("ll_master.json"), log = tmp("ll_master.csv");
-  Process server(kServer, {"--domain", d, "--duration", "60", "--scene", kToolScene}, "ll_server");
-  Process master(kMaster,
+  Process server(kServerBinary, {"--domain", d, "--duration", "60", "--scene", kToolScene},
+                 "ll_server");
+  Process master(kMasterBinary,
                  {"--domain", d, "--duration", "4", "--summary-json", master_json, "--log", log,
                   "--script", "press-slip", "--link-timeout", "0.05"},
                  "ll_master");
@@ -267,8 +263,9 @@ TEST(Loopback, ObserversJoinAndLeaveWithoutDisturbingTheLoop) {
   const std::string master_json = tmp("obs_master.json");
   const std::string monitor = std::string(TELEOP_BINARY_DIR) + "/client/teleop_monitor";
   // server and master start together; observers join later and leave before the end
-  Process server(kServer, {"--domain", d, "--duration", "60", "--scene", kToolScene}, "obs_server");
-  Process master(kMaster, {"--domain", d, "--samples", "4000", "--summary-json", master_json},
+  Process server(kServerBinary, {"--domain", d, "--duration", "60", "--scene", kToolScene},
+                 "obs_server");
+  Process master(kMasterBinary, {"--domain", d, "--samples", "4000", "--summary-json", master_json},
                  "obs_master");
   std::this_thread::sleep_for(std::chrono::milliseconds(700));
   Process mon1(monitor, {"--domain", d, "--duration", "2", "--period", "0.5"}, "obs_mon1");

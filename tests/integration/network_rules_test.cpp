@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "tests/support/domains.hpp"
+#include "tests/support/integration.hpp"
 #include "tests/support/process.hpp"
 
 namespace teleop::test {
@@ -51,9 +52,9 @@ std::vector<std::string> local_addresses(const std::string& table,
 }
 
 TEST(NetworkRules, DefaultProfileBindsOnlyToLoopback) {
-  Process server(std::string(TELEOP_BINARY_DIR) + "/server/teleop_server",
+  Process server(kServerBinary,
                  {"--domain", std::to_string(domains::kObservers), "--duration", "10", "--scene",
-                  std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/tool_only.yaml"},
+                  scene_file("tool_only.yaml")},
                  "netrules_server");
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   ASSERT_TRUE(server.running());

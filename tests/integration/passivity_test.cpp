@@ -16,64 +16,25 @@
 #include "common/util/clock.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
 #include "tests/support/domains.hpp"
+#include "tests/support/integration.hpp"
 #include "tests/support/process.hpp"
 
 namespace teleop::test {
 namespace {
 
-const std::string kServer = std::string(TELEOP_BINARY_DIR) + "/server/teleop_server";
-const std::string kMaster = std::string(TELEOP_BINARY_DIR) + "/client/teleop_master";
-const std::string kToolScene = std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/tool_only.yaml";
+const std::string kToolScene = scene_file("tool_only.yaml");
 
-std::string tmp(const std::string& name) {
-  return (std::filesystem::temp_directory_path() /
-          ("teleop_pv_" + std::to_string(getpid()) + "_" + name))
-      .string();
-}
-
-/// Columns of a CSV text by name: {name: values}.
-std::vector<std::vector<double>> csv_columns(const std::string& csv,
-                                             const std::vector<std::string>& names) {
-  std::istringstream in(csv);
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::string> header;
-  for (std::size_t p = 0; p <= line.size();) {
-    const auto c = line.find(',', p);
-    header.push_back(line.substr(p, c == std::string::npos ? std::string::npos : c - p));
-    if (c == std::string::npos) break;
-    p = c + 1;
-  }
-  std::vector<std::size_t> idx;
-  for (const auto& n : names) {
-    idx.push_back(
-        static_cast<std::size_t>(std::find(header.begin(), header.end(), n) - header.begin()));
-  }
-  std::vector<std::vector<double>> out(names.size());
-  while (std::getline(in, line)) {
-    std::vector<double> v;
-    for (std::size_t p = 0; p <= line.size();) {
-      v.push_back(std::atof(line.c_str() + p));
-      const auto c = line.find(',', p);
-      if (c == std::string::npos) break;
-      p = c + 1;
-    }
-    for (std::size_t i = 0; i < idx.size(); ++i) {
-      if (idx[i] < v.size()) out[i].push_back(v[idx[i]]);
-    }
-  }
-  return out;
-}
+std::string tmp(const std::string& name) { return temp_path("pv", name); }
 
 void run_session(const std::string& scheme, int domain, const std::string& tag) {
   const std::string d = std::to_string(domain);
   const std::string mj = tmp(tag + "_master.json"), sj = tmp(tag + "_server.json");
   const std::string log = tmp(tag + "_master.csv");
-  Process server(kServer,
+  Process server(kServerBinary,
                  {"--domain", d, "--duration", "60", "--summary-json", sj, "--scene", kToolScene},
                  tag + "_server");
   Process master(
-      kMaster,
+      kMasterBinary,
       {"--domain", d, "--scheme", scheme, "--delay", "50ms", "--jitter", "2ms", "--seed", "3",
        "--homing", "1", "--script", "press-slip", "--summary-json", mj, "--log", log},
       tag + "_master");
@@ -121,7 +82,7 @@ TEST(Passivity, TdpaSessionOverDdsFollowsAndIsStable) {
 TEST(Passivity, ServerRejectsUnusableWaveCommandsAndCountsThem) {
   const int domain = domains::kBadWaveCommands;
   const std::string sj = tmp("badwave_server.json");
-  Process server(kServer,
+  Process server(kServerBinary,
                  {"--domain", std::to_string(domain), "--duration", "60", "--summary-json", sj,
                   "--command-timeout", "5", "--scene", kToolScene},
                  "badwave_server");

@@ -19,6 +19,7 @@
 #include "common/util/clock.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
 #include "tests/support/domains.hpp"
+#include "tests/support/integration.hpp"
 #include "tests/support/process.hpp"
 #ifdef TELEOP_HAVE_VIEWER
 #include "client/viewer/camera.hpp"
@@ -28,15 +29,7 @@
 namespace teleop::test {
 namespace {
 
-const std::string kServer = std::string(TELEOP_BINARY_DIR) + "/server/teleop_server";
-const std::string kViewer = std::string(TELEOP_BINARY_DIR) + "/client/teleop_viewer";
-const std::string kScenes = std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/";
-
-std::string tmp(const std::string& name) {
-  return (std::filesystem::temp_directory_path() /
-          ("teleop_viewer_it_" + std::to_string(getpid()) + "_" + name))
-      .string();
-}
+std::string tmp(const std::string& name) { return temp_path("viewer_it", name); }
 
 #ifdef TELEOP_HAVE_VIEWER
 #define SKIP_UNLESS_VIEWER_BUILT() (void)0
@@ -48,22 +41,22 @@ std::string tmp(const std::string& name) {
 TEST(Viewer, CommandLineMistakesExit2NamingFlagValueAndRange) {
   SKIP_UNLESS_VIEWER_BUILT();
   // checked before any window opens: no display needed
-  Process w(kViewer, {"--width", "100000"}, "viewer_flag_w");
+  Process w(kViewerBinary, {"--width", "100000"}, "viewer_flag_w");
   EXPECT_EQ(w.wait_for(10.0), 2);
   EXPECT_NE(w.err().find("--width 100000 is out of the allowed range [320, 7680]"),
             std::string::npos)
       << w.err();
-  Process a(kViewer, {"--after", "-1"}, "viewer_flag_a");
+  Process a(kViewerBinary, {"--after", "-1"}, "viewer_flag_a");
   EXPECT_EQ(a.wait_for(10.0), 2);
   EXPECT_NE(a.err().find("--after -1 is out of the allowed range [0, 3600]"), std::string::npos)
       << a.err();
-  Process s(kViewer, {"--snapshot", "/no/such/dir/x.png"}, "viewer_flag_s");
+  Process s(kViewerBinary, {"--snapshot", "/no/such/dir/x.png"}, "viewer_flag_s");
   EXPECT_EQ(s.wait_for(10.0), 2);
   EXPECT_NE(s.err().find("/no/such/dir"), std::string::npos) << s.err();
-  Process j(kViewer, {"--snapshot", tmp("x.jpg")}, "viewer_flag_j");
+  Process j(kViewerBinary, {"--snapshot", tmp("x.jpg")}, "viewer_flag_j");
   EXPECT_EQ(j.wait_for(10.0), 2);
   EXPECT_NE(j.err().find(".png"), std::string::npos) << j.err();
-  Process f(kViewer, {"--fps", "fast"}, "viewer_flag_f");
+  Process f(kViewerBinary, {"--fps", "fast"}, "viewer_flag_f");
   EXPECT_EQ(f.wait_for(10.0), 2);
   EXPECT_NE(f.err().find("--fps"), std::string::npos) << f.err();
 }
@@ -93,7 +86,7 @@ std::string find_on_path(const std::string& name) {
 /// parallel tests do not race for the same one.
 std::vector<std::string> xvfb_args(int domain, const std::vector<std::string>& viewer_args) {
   std::vector<std::string> a = {
-      "-a", "-n", std::to_string(100 + domain), "-s", "-screen 0 1280x720x24", kViewer};
+      "-a", "-n", std::to_string(100 + domain), "-s", "-screen 0 1280x720x24", kViewerBinary};
   a.insert(a.end(), viewer_args.begin(), viewer_args.end());
   return a;
 }
@@ -205,7 +198,7 @@ void snapshot_of(const std::string& scene_file, int domain, const std::string& t
                  std::unique_ptr<SceneObserver>& observer, viewer::Image& image,
                  const std::string& xvfb, std::string& path) {
   const std::string d = std::to_string(domain);
-  Process server(kServer, {"--domain", d, "--duration", "90", "--scene", scene_file},
+  Process server(kServerBinary, {"--domain", d, "--duration", "90", "--scene", scene_file},
                  tag + "_server");
   observer = std::make_unique<SceneObserver>(domain);
   ASSERT_TRUE(observer->wait(30.0)) << "no scene or slave state from the server\n" << server.err();
@@ -295,7 +288,7 @@ TEST(Viewer, SnapshotOfTheToolOnlySceneShowsTheToolWhereTheCameraPutsIt) {
   std::unique_ptr<SceneObserver> observer;
   viewer::Image img;
   std::string png;
-  snapshot_of(kScenes + "tool_only.yaml", domains::kViewerToolScene, "tool", observer, img, xvfb,
+  snapshot_of(scene_file("tool_only.yaml"), domains::kViewerToolScene, "tool", observer, img, xvfb,
               png);
   if (HasFatalFailure()) return;
   const SceneDescription scene = observer->scene();
@@ -310,7 +303,7 @@ TEST(Viewer, SnapshotOfTheDefaultSceneShowsTipElasticSphereAndRobot) {
   std::unique_ptr<SceneObserver> observer;
   viewer::Image img;
   std::string png;
-  snapshot_of(kScenes + "default.yaml", domains::kViewerDefaultScene, "default", observer, img,
+  snapshot_of(scene_file("default.yaml"), domains::kViewerDefaultScene, "default", observer, img,
               xvfb, png);
   if (HasFatalFailure()) return;
   const SceneDescription scene = observer->scene();

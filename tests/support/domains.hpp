@@ -14,9 +14,9 @@ inline constexpr int kMonitor = 49;
 inline constexpr int kViewerToolScene = 80;     // teleop_viewer snapshot of the tool-only scene
 inline constexpr int kViewerDefaultScene = 81;  // teleop_viewer snapshot of the default scene
 inline constexpr int kViewerNoData = 82;        // teleop_viewer with no server: times out
-inline constexpr int kWaveSession = 60;      // passivity_test: wave-variables over DDS
-inline constexpr int kTdpaSession = 61;      // passivity_test: tdpa over DDS
-inline constexpr int kBadWaveCommands = 62;  // passivity_test: hostile wave commands
+inline constexpr int kWaveSession = 60;         // passivity_test: wave-variables over DDS
+inline constexpr int kTdpaSession = 61;         // passivity_test: tdpa over DDS
+inline constexpr int kBadWaveCommands = 62;     // passivity_test: hostile wave commands
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
