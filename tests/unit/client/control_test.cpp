@@ -16,6 +16,7 @@
 #include "client/metrics/safety.hpp"
 #include "server/world/tool_scene.hpp"
 #include "tests/support/alloc_counter.hpp"
+#include "tests/unit/client/wall_on_both_slaves.hpp"
 
 using namespace teleop::master;
 using teleop::config::ConfigError;
@@ -454,18 +455,9 @@ TEST(Safety, ThermalLimitClampsToContinuousForceAndNaNIsZeroed) {
 }
 
 TEST(PointSlave, AgreesWithTheServersToolSceneOnAPlane) {
-  PointSlaveParams p;
-  SlaveObstacle wall;
-  wall.kind = SlaveObstacle::Kind::kPlane;
-  wall.offset_m = 0.5;
-  p.add(wall);
-  PointSlave mine(p);
-  teleop::sim::ToolModel tm;
-  tm.plane_count = 1;
-  tm.planes[0].id = 0;
-  tm.planes[0].offset_m = 0.5;
-  tm.planes[0].stiffness_n_per_m = wall.stiffness_n_per_m;
-  tm.planes[0].damping_ns_per_m = wall.damping_ns_per_m;
+  const teleop::test::WallOnBothSlaves wall;
+  PointSlave mine(wall.point);
+  const teleop::sim::ToolModel& tm = wall.tool;
   teleop::sim::ToolState ts;
   ts.position_m = Eigen::Vector3d(0, 0, 0.6);
   mine.reset(ts.position_m);

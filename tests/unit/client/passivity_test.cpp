@@ -19,6 +19,7 @@
 #include "server/world/tool_scene.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/config_error.hpp"
+#include "tests/unit/client/wall_on_both_slaves.hpp"
 
 using namespace teleop::master;
 namespace pv = teleop::passivity;
@@ -362,18 +363,9 @@ TEST(WaveVariables, BadWaveNeverReachesThePhysicsAndIsCounted) {
 
 TEST(WaveVariables, ToolSceneAndPointSlaveRunTheSameSlavePort) {
   // the server's tool step and the in-process point slave, both behind the one slave port
-  PointSlaveParams p;
-  SlaveObstacle wall;
-  wall.kind = SlaveObstacle::Kind::kPlane;
-  wall.offset_m = 0.5;
-  p.add(wall);
-  PointSlave mine(p);
-  teleop::sim::ToolModel tm;
-  tm.plane_count = 1;
-  tm.planes[0].id = 0;
-  tm.planes[0].offset_m = 0.5;
-  tm.planes[0].stiffness_n_per_m = wall.stiffness_n_per_m;
-  tm.planes[0].damping_ns_per_m = wall.damping_ns_per_m;
+  const teleop::test::WallOnBothSlaves wall;
+  PointSlave mine(wall.point);
+  const teleop::sim::ToolModel& tm = wall.tool;
   teleop::sim::ToolState ts;
   ts.position_m = Vector3d(0, 0, 0.56);
   mine.reset(ts.position_m);
