@@ -16,10 +16,11 @@
 #include "client/metrics/safety.hpp"
 #include "server/world/tool_scene.hpp"
 #include "tests/support/alloc_counter.hpp"
-#include "tests/unit/client/wall_on_both_slaves.hpp"
+#include "tests/unit/client/test_helpers.hpp"
 
 using namespace teleop::master;
 using teleop::config::ConfigError;
+using teleop::test::scenario;
 
 namespace {
 
@@ -37,18 +38,6 @@ struct SteadyContact {
     setup.loop.duration_s = 3.0;
   }
 };
-
-PressScenario scenario(const std::string& scheme, Environment env, double k, double gain,
-                       double delay_s) {
-  PressScenario s;
-  s.scheme = scheme;
-  s.environment = env;
-  s.env_stiffness_n_per_m = k;
-  s.env_damping_ns_per_m = env == Environment::kWall ? 50.0 : 5.0;
-  s.gain = gain;
-  s.one_way_delay_s = delay_s;
-  return s;
-}
 
 TEST(PositionPosition, TracksInFreeMotionAtZeroDelay) {
   PressScenario s = scenario("position-position", Environment::kSphere, 2000, 400, 0.0);

@@ -19,25 +19,14 @@
 #include "server/world/tool_scene.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/config_error.hpp"
-#include "tests/unit/client/wall_on_both_slaves.hpp"
+#include "tests/unit/client/test_helpers.hpp"
 
 using namespace teleop::master;
+using teleop::test::scenario;
 namespace pv = teleop::passivity;
 using Eigen::Vector3d;
 
 namespace {
-
-PressScenario scenario(const std::string& scheme, Environment env, double k, double gain,
-                       double delay_s) {
-  PressScenario s;
-  s.scheme = scheme;
-  s.environment = env;
-  s.env_stiffness_n_per_m = k;
-  s.env_damping_ns_per_m = env == Environment::kWall ? 50.0 : 5.0;
-  s.gain = gain;
-  s.one_way_delay_s = delay_s;
-  return s;
-}
 
 /// Operator script: from `start_z` above the touching point to `end_z`, in `move_s`, then
 /// holding still (tremor on) until `duration_s`.

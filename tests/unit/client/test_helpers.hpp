@@ -1,0 +1,49 @@
+#pragma once
+// Shared helpers of the master-side tests (tests/unit/client).
+#include <string>
+
+#include "client/control/press_scenario.hpp"
+#include "client/control/slave_model.hpp"
+#include "server/world/tool_scene.hpp"
+
+namespace teleop::test {
+
+/// A press task: scheme, environment of stiffness k [N/m] (damping 50 N s/m for a wall,
+/// 5 for the sphere), controller gain and one-way delay [s].
+inline teleop::master::PressScenario scenario(const std::string& scheme,
+                                              teleop::master::Environment env, double k,
+                                              double gain, double delay_s) {
+  teleop::master::PressScenario s;
+  s.scheme = scheme;
+  s.environment = env;
+  s.env_stiffness_n_per_m = k;
+  s.env_damping_ns_per_m = env == teleop::master::Environment::kWall ? 50.0 : 5.0;
+  s.gain = gain;
+  s.one_way_delay_s = delay_s;
+  return s;
+}
+
+/// A wall at z = 0.5 m seen by both slaves the master side runs against: the in-process
+/// PointSlave and the server's tool scene, with the same stiffness and damping, so tests can
+/// drive them with the same commands and require the same motion.
+struct WallOnBothSlaves {
+  using PointSlaveParams = teleop::master::PointSlaveParams;
+  using SlaveObstacle = teleop::master::SlaveObstacle;
+
+  PointSlaveParams point;       ///< build a PointSlave from it
+  teleop::sim::ToolModel tool;  ///< the server's tool scene with the same plane
+
+  WallOnBothSlaves() {
+    SlaveObstacle wall;
+    wall.kind = SlaveObstacle::Kind::kPlane;
+    wall.offset_m = 0.5;
+    point.add(wall);
+    tool.plane_count = 1;
+    tool.planes[0].id = 0;
+    tool.planes[0].offset_m = wall.offset_m;
+    tool.planes[0].stiffness_n_per_m = wall.stiffness_n_per_m;
+    tool.planes[0].damping_ns_per_m = wall.damping_ns_per_m;
+  }
+};
+
+}  // namespace teleop::test
