@@ -48,6 +48,15 @@ enum class IntegratorKind : std::uint8_t {
   kImplicitEuler = 2,    ///< (M - hD - h^2 K) dv = h (f + h K v), one Newton step, CG solve
 };
 
+/// Which code computes a mass-spring symplectic-Euler step.
+enum class KernelKind : std::uint8_t {
+  /// One fused scalar pass in double precision (the default; its results are the reference).
+  kScalar = 0,
+  /// Structure-of-arrays copy, edge forces in single precision vectorised over nodes (every node
+  /// gathers its own edges, AVX-512 / AVX2 chosen at run time), integration in double.
+  kSimd = 1,
+};
+
 /// "mass_spring", "navier_linear", "navier_corotational".
 const char* to_string(ModelKind kind);
 /// "explicit_euler", "symplectic_euler", "implicit_euler".
@@ -56,12 +65,16 @@ const char* to_string(IntegratorKind kind);
 ModelKind parse_model_kind(const std::string& name);
 /// Parses the names above. @throws config::ConfigError naming the value and the choices.
 IntegratorKind parse_integrator_kind(const std::string& name);
+/// "scalar", "simd".
+const char* to_string(KernelKind kind);
 
 /// Parameters of one deformable object (the `deformable:` mapping of a scene). Defaults are the
 /// paper's sphere (radius 0.25 m, level 4) made of a soft foam; see docs/deformable.md.
 struct DeformableParams {
   ModelKind model = ModelKind::kMassSpring;
   IntegratorKind integrator = IntegratorKind::kSymplecticEuler;
+  /// kSimd only for model mass_spring with integrator symplectic_euler (docs/deformable.md).
+  KernelKind kernel = KernelKind::kScalar;
 
   // geometry: an icosphere unless mesh_file is set
   int level = 4;                                           ///< icosphere subdivision [0, 6]
@@ -113,6 +126,10 @@ struct DeformableParams {
   double sleep_speed_mps = 2e-4;  ///< a node slower than this is still [m/s]
   double sleep_time_s = 0.2;      ///< still and unloaded this long: sleep [s]
   double max_speed_mps = 50.0;    ///< faster than this is a blow-up [m/s]
+
+  /// Automatic step: at most this many equal sub-steps per step() call (explicit and symplectic
+  /// Euler). Beyond it the body runs at a step longer than its stable step and an event says so.
+  int max_substeps = 64;
 };
 
 /// Reads and validates the `deformable:` YAML mapping. Unknown keys, wrong types and values out
@@ -123,6 +140,25 @@ DeformableParams load_deformable_params(const teleop::config::Node& node);
 /// The mesh the parameters describe: the icosphere (level, radius_m, centre_m) or mesh_file
 /// loaded, scaled and translated by centre_m. @throws mesh::MeshError.
 teleop::mesh::TriMesh make_mesh_for(const DeformableParams& params);
+
+/// Safety factor of the automatic step: the stable step is this times the limit of the
+/// integrator for the highest mode (symplectic Euler: h w = 2 (sqrt(1 + zeta^2) - zeta)). It covers
+/// what the rest-shape estimate leaves out: the stiffening of stretched springs, plane contact and
+/// the tip's node penalty (docs/deformable.md, "Automatic step").
+constexpr double kStableStepSafety = 0.95;
+/// Lanczos iterations of the w_max estimate (capped at the number of degrees of freedom).
+constexpr int kStabilityLanczosIterations = 80;
+
+/// Highest natural frequency of a body and the step its integrator is stable at.
+struct StabilityEstimate {
+  double omega_max_rad_per_s = 0.0;    ///< sqrt(lambda_max(M^-1 K)) at rest, Lanczos (<= true)
+  double omega_bound_rad_per_s = 0.0;  ///< block Gershgorin upper bound of the same [rad/s]
+  double damping_ratio = 0.0;          ///< zeta of the top mode (Rayleigh quotient of C)
+  double radial_share = 0.0;           ///< share of the top mode's stiffness in radial springs
+  double limit_step_s = 0.0;           ///< the integrator's stability limit for that mode [s]
+  double stable_step_s = 0.0;          ///< kStableStepSafety * limit_step_s (inf: implicit) [s]
+  int lanczos_iterations = 0;
+};
 
 /// Immutable description of one body. Built once by make_model().
 struct DeformableModel {
@@ -167,12 +203,42 @@ struct DeformableModel {
   int plane_count = 0;
   Eigen::VectorXd contact_k;  ///< [N/m]
   Eigen::VectorXd contact_c;  ///< [N s/m]
+
+  // kernel simd: the first neighbours of every node, padded to the largest valence (padding:
+  // the node itself with k = 0), slot-major: entry [slot * simd_stride + i]
+  int simd_width = 0;   ///< largest valence
+  int simd_stride = 0;  ///< node count rounded up to 16
+  std::vector<int> simd_neighbour;
+  std::vector<float> simd_k, simd_rest, simd_radial_k, simd_radial_rest;
+
+  // automatic step (estimate_stability(); refreshed by make_model and update_stable_step)
+  double omega_max_rad_per_s = 0.0;    ///< highest natural frequency at rest [rad/s]
+  double omega_bound_rad_per_s = 0.0;  ///< its Gershgorin upper bound [rad/s]
+  double damping_ratio_top = 0.0;      ///< damping ratio of the highest mode [-]
+  /// Largest step step() takes in one go [s]; a longer dt is split into substeps_for(dt) equal
+  /// sub-steps. +inf for implicit Euler (never sub-steps).
+  double stable_step_s = 0.0;
+  /// Sub-steps step() takes for dt: 1 when dt <= stable_step_s, else ceil(dt / stable_step_s),
+  /// at most params.max_substeps; 1 when stable_step_s is 0 (explicit Euler without damping is
+  /// unstable at any step: step() warns once).
+  int substeps_for(double dt_s) const;
+  /// Like substeps_for without the params.max_substeps cap (what stability would need).
+  int substeps_needed(double dt_s) const;
 };
 
 /// Builds the model from a closed mesh (rest shape), parameters and the rigid planes (at most
 /// 8). @throws config::ConfigError for parameters out of range, mesh::MeshError for a bad mesh.
 DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformableParams& params,
                            const std::vector<Plane>& planes = {});
+
+/// Estimates the highest natural frequency of the model at rest and its integrator's stable step
+/// (docs/deformable.md, "Automatic step"). Allocates: for make_model, not the hot loop.
+StabilityEstimate estimate_stability(const DeformableModel& model);
+/// Block Gershgorin upper bound of sqrt(lambda_max(M^-1 K)) at rest [rad/s].
+double gershgorin_omega_bound(const DeformableModel& model);
+/// Recomputes the automatic-step fields of `model` (call after changing its stiffnesses,
+/// masses or damping in place; make_model already does).
+void update_stable_step(DeformableModel& model);
 
 /// Result of one step.
 enum class StepStatus : std::uint8_t {
@@ -226,12 +292,24 @@ struct DeformableState {
   Eigen::Matrix4Xd contact_coef;          ///< (k, c, spring force, friction mu) of each contact
   std::vector<Eigen::Matrix3d> rotation;  ///< co-rotational frame of each node
   std::vector<Eigen::Quaterniond> rotation_q;  ///< warm start of the polar decomposition
+
+  // kernel simd: per node 8 floats (x, y, z relative to the centre node, -, v relative to its
+  // velocity, -), model.simd_stride nodes (the padding at zero)
+  std::vector<float> simd_pack;
+
+  // automatic step
+  int last_substeps = 1;            ///< sub-steps of the last step() call
+  bool substeps_announced = false;  ///< the info event about sub-stepping was pushed
+  Eigen::Matrix3Xd pin_goal;        ///< scratch: the caller's pin targets while sub-stepping
+  Eigen::Matrix3Xd pin_start;       ///< scratch: positions at the start of a sub-stepped step
 };
 
 /// A state at rest in the rest shape, no loads, nothing pinned, scratch allocated.
 DeformableState make_state(const DeformableModel& model);
 
 /// Advances the body by dt_s [s] with the model's integrator. Never allocates, never throws.
+/// When dt_s > model.stable_step_s it takes model.substeps_for(dt_s) equal sub-steps (loads held,
+/// pinned nodes moved linearly to their targets) and pushes one kInfo event the first time.
 /// Faults (NaN, speed above max_speed_mps) reset the body and push a kFault event on `events`
 /// (may be null). Sleeping bodies return kSleeping at once unless f_ext is non-zero, a pinned
 /// node is away from its target or wake_request is set.
@@ -243,6 +321,10 @@ namespace detail {
 /// the general force and integration passes. The reference that kernel is tested against.
 StepStatus step_general(const DeformableModel& model, DeformableState& state, double dt_s,
                         teleop::sim::EventQueue* events);
+/// step() without the automatic step: one step of dt_s whatever the stable step (the code path
+/// step() takes when substeps_for(dt_s) == 1).
+StepStatus step_once(const DeformableModel& model, DeformableState& state, double dt_s,
+                     teleop::sim::EventQueue* events);
 }  // namespace detail
 
 /// Internal forces (elastic + damping, no gravity, contact or f_ext) on each node at the

@@ -1,6 +1,8 @@
 // Building the deformable model (masses, springs, Navier coefficients) and its state.
 #include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "server/deformable/deformable.hpp"
 
@@ -16,6 +18,54 @@ void check_range(const char* name, double v, double lo, double hi) {
   if (!(v >= lo && v <= hi)) {
     bad(std::string(name) + " = " + std::to_string(v) + " is outside " +
         config::range_text(lo, hi));
+  }
+}
+
+// Kernel simd: every node's neighbours (ascending), padded to the largest valence with the node
+// itself at k = 0, slot-major so that a vector of consecutive nodes reads consecutive entries.
+void build_simd_tables(DeformableModel& m) {
+  const int n = m.node_count;
+  const auto& off = m.node_edge_offsets;
+  int width = 0;
+  for (int i = 0; i < n; ++i) {
+    width =
+        std::max(width, off[static_cast<std::size_t>(i) + 1] - off[static_cast<std::size_t>(i)]);
+  }
+  const int stride = (n + 15) / 16 * 16;
+  m.simd_width = width;
+  m.simd_stride = stride;
+  const std::size_t total = static_cast<std::size_t>(width) * static_cast<std::size_t>(stride);
+  m.simd_neighbour.assign(total, 0);
+  m.simd_k.assign(total, 0.0f);
+  m.simd_rest.assign(total, 0.0f);
+  m.simd_radial_k.assign(static_cast<std::size_t>(stride), 0.0f);
+  m.simd_radial_rest.assign(static_cast<std::size_t>(stride), 0.0f);
+  std::vector<std::pair<int, int>> ring;  // (neighbour, edge)
+  for (int i = 0; i < stride; ++i) {
+    ring.clear();
+    if (i < n) {
+      for (int k = off[static_cast<std::size_t>(i)]; k < off[static_cast<std::size_t>(i) + 1];
+           ++k) {
+        const int code = m.node_edges[static_cast<std::size_t>(k)];
+        const int e = code >= 0 ? code : ~code;
+        ring.emplace_back(code >= 0 ? m.edges(1, e) : m.edges(0, e), e);
+      }
+      std::sort(ring.begin(), ring.end());
+      m.simd_radial_k[static_cast<std::size_t>(i)] = static_cast<float>(m.radial_k(i));
+      m.simd_radial_rest[static_cast<std::size_t>(i)] = static_cast<float>(m.radial_rest_m(i));
+    }
+    for (int slot = 0; slot < width; ++slot) {
+      const std::size_t o = static_cast<std::size_t>(slot) * static_cast<std::size_t>(stride) +
+                            static_cast<std::size_t>(i);
+      if (slot < static_cast<int>(ring.size())) {
+        const int e = ring[static_cast<std::size_t>(slot)].second;
+        m.simd_neighbour[o] = ring[static_cast<std::size_t>(slot)].first;
+        m.simd_k[o] = static_cast<float>(m.edge_k_iso(e));
+        m.simd_rest[o] = static_cast<float>(m.rest_length_m(e));
+      } else {
+        m.simd_neighbour[o] = i;  // itself: zero length, k = 0, no force
+      }
+    }
   }
 }
 
@@ -46,7 +96,14 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
   check_range("contact_damping_ratio", params.contact_damping_ratio, 0.0, 100.0);
   check_range("cg_max_iterations", params.cg_max_iterations, 1, 1e5);
   check_range("max_speed_mps", params.max_speed_mps, 1e-6, 1e9);
+  check_range("max_substeps", params.max_substeps, 1, 1e5);
   if (!params.gravity_mps2.allFinite()) bad("gravity_mps2 must be finite");
+  if (params.kernel == KernelKind::kSimd &&
+      (params.model != ModelKind::kMassSpring ||
+       params.integrator != IntegratorKind::kSymplecticEuler)) {
+    bad(std::string("kernel = simd needs model mass_spring and integrator symplectic_euler, got ") +
+        to_string(params.model) + " and " + to_string(params.integrator));
+  }
   if (planes.size() > 8) bad("at most 8 planes, got " + std::to_string(planes.size()));
   if (static_cast<int>(mesh.vertex_face_offsets.size()) != mesh.vertex_count() + 1) {
     throw teleop::mesh::MeshError("make_model: the mesh has no adjacency tables");
@@ -191,6 +248,8 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
   const double w = params.contact_frequency_rad_per_s;
   m.contact_k = m.mass_kg * w * w;
   m.contact_c = m.mass_kg * (2.0 * params.contact_damping_ratio * w);
+  if (params.kernel == KernelKind::kSimd) build_simd_tables(m);
+  update_stable_step(m);
   return m;
 }
 
@@ -225,6 +284,11 @@ DeformableState make_state(const DeformableModel& m) {
   s.contact_coef = Eigen::Matrix4Xd::Zero(4, cap);
   s.rotation.assign(static_cast<std::size_t>(n), Eigen::Matrix3d::Identity());
   s.rotation_q.assign(static_cast<std::size_t>(n), Eigen::Quaterniond::Identity());
+  if (m.params.kernel == KernelKind::kSimd) {
+    s.simd_pack.assign(8 * static_cast<std::size_t>(m.simd_stride), 0.0f);
+  }
+  s.pin_goal = Eigen::Matrix3Xd::Zero(3, n);
+  s.pin_start = Eigen::Matrix3Xd::Zero(3, n);
   s.last_good_centroid = centroid(m, s);
   return s;
 }

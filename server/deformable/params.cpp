@@ -29,6 +29,16 @@ const char* to_string(IntegratorKind kind) {
   return "?";
 }
 
+const char* to_string(KernelKind kind) {
+  switch (kind) {
+    case KernelKind::kScalar:
+      return "scalar";
+    case KernelKind::kSimd:
+      return "simd";
+  }
+  return "?";
+}
+
 ModelKind parse_model_kind(const std::string& name) {
   for (auto k :
        {ModelKind::kMassSpring, ModelKind::kNavierLinear, ModelKind::kNavierCorotational}) {
@@ -56,6 +66,7 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   }
   node.reject_unknown_keys({"model",
                             "integrator",
+                            "kernel",
                             "level",
                             "radius_m",
                             "centre_m",
@@ -79,12 +90,20 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
                             "cg_tolerance",
                             "sleep_speed_mps",
                             "sleep_time_s",
-                            "max_speed_mps"});
+                            "max_speed_mps",
+                            "max_substeps"});
   DeformableParams p;
   p.model = parse_model_kind(node.choice_or(
       "model", "mass_spring", {"mass_spring", "navier_linear", "navier_corotational"}));
   p.integrator = parse_integrator_kind(node.choice_or(
       "integrator", "symplectic_euler", {"explicit_euler", "symplectic_euler", "implicit_euler"}));
+  p.kernel = node.choice_or("kernel", "scalar", {"scalar", "simd"}) == "simd" ? KernelKind::kSimd
+                                                                              : KernelKind::kScalar;
+  if (p.kernel == KernelKind::kSimd &&
+      (p.model != ModelKind::kMassSpring || p.integrator != IntegratorKind::kSymplecticEuler)) {
+    node.fail("kernel",
+              "simd is implemented for model mass_spring with integrator symplectic_euler only");
+  }
   p.level = static_cast<int>(node.integer_or("level", p.level, 0, 6));
   p.radius_m = node.number_or("radius_m", p.radius_m, 1e-3, 100.0);
   const auto c =
@@ -128,6 +147,7 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   p.sleep_speed_mps = node.number_or("sleep_speed_mps", p.sleep_speed_mps, 0.0, 1.0);
   p.sleep_time_s = node.number_or("sleep_time_s", p.sleep_time_s, 0.0, 1e3);
   p.max_speed_mps = node.number_or("max_speed_mps", p.max_speed_mps, 1e-3, 1e6);
+  p.max_substeps = static_cast<int>(node.integer_or("max_substeps", p.max_substeps, 1, 10000));
   if (p.model == ModelKind::kMassSpring && p.edge_stiffness_n_per_m <= 0.0 &&
       p.radial_stiffness_n_per_m3 <= 0.0) {
     node.fail("edge_stiffness_n_per_m",

@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "server/deformable/deformable.hpp"
+#include "server/deformable/kernels.hpp"
 
 // Not under the sanitizers: their instrumentation of the ifunc resolvers runs before the
 // sanitizer runtime is initialised and crashes the program at load time.
@@ -857,8 +858,15 @@ StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
   }
 
   NodeSums sums;
-  if (allow_fused && m.params.model == ModelKind::kMassSpring &&
-      m.params.integrator == IntegratorKind::kSymplecticEuler) {
+  if (allow_fused && m.params.kernel == KernelKind::kSimd) {
+    detail::KernelSums ks;
+    detail::step_mass_spring_simd(m, s, h, ks);
+    sums.fastest2 = ks.fastest2;
+    sums.sum_x = ks.sum_x;
+    sums.sum_v = ks.sum_v;
+    sums.mx = Vec3(ks.mx[0], ks.mx[1], ks.mx[2]);
+  } else if (allow_fused && m.params.model == ModelKind::kMassSpring &&
+             m.params.integrator == IntegratorKind::kSymplecticEuler) {
     step_mass_spring_symplectic(m, s, h, sums);
   } else {
     ForceFlags flags;
@@ -927,14 +935,100 @@ StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
 
 }  // namespace
 
+namespace {
+
+// dt split into n equal sub-steps of step_impl: the caller's loads are held, pinned nodes move
+// linearly from where they are to their targets (each sub-step ends on its share of the way), the
+// first fault or bad input ends the step. Allocation-free: the caller's targets are kept in
+// s.pin_goal while the sub-steps overwrite s.pin_target.
+StepStatus step_substeps(const DeformableModel& m, DeformableState& s, double dt, int n,
+                         teleop::sim::EventQueue* events, bool allow_fused) {
+  const double h = dt / n;
+  if (!s.substeps_announced && events != nullptr && std::isfinite(dt)) {
+    const int needed = m.substeps_needed(dt);
+    char msg[128];
+    if (needed > n) {
+      std::snprintf(msg, sizeof(msg),
+                    "deformable: dt %.3g ms needs %d sub-steps, capped at %d (max_substeps): "
+                    "may blow up",
+                    dt * 1e3, needed, n);
+    } else {
+      std::snprintf(msg, sizeof(msg),
+                    "deformable: dt %.3g ms > stable step %.3g ms (w_max %.0f rad/s): "
+                    "%d sub-steps of %.3g ms",
+                    dt * 1e3, m.stable_step_s * 1e3, m.omega_max_rad_per_s, n, h * 1e3);
+    }
+    events->push(EventKind::kInfo, needed > n ? Severity::kWarning : Severity::kInfo, s.sim_time_s,
+                 static_cast<double>(n), msg);
+    s.substeps_announced = true;
+  }
+  s.last_substeps = n;
+  const int nodes = m.node_count;
+  bool any_pin = false;
+  for (int i = 0; i < nodes && !any_pin; ++i) any_pin = s.pinned[static_cast<std::size_t>(i)] != 0;
+  if (any_pin) {
+    s.pin_goal = s.pin_target;  // same size: no allocation
+    s.pin_start = s.x;          // where the held nodes start (same size: no allocation)
+  }
+  StepStatus result = StepStatus::kOk;
+  for (int k = 1; k <= n; ++k) {
+    if (any_pin) {
+      const double frac = static_cast<double>(k) / n;
+      for (int i = 0; i < nodes; ++i) {
+        if (!s.pinned[static_cast<std::size_t>(i)]) continue;
+        s.pin_target.col(i) =
+            k == n ? Eigen::Vector3d(s.pin_goal.col(i))
+                   : Eigen::Vector3d(s.pin_start.col(i) +
+                                     frac * (s.pin_goal.col(i) - s.pin_start.col(i)));
+      }
+    }
+    const StepStatus st = step_impl(m, s, h, events, allow_fused);
+    if (st == StepStatus::kFaultReset || st == StepStatus::kBadInput) {
+      result = st;
+      break;
+    }
+    if (st == StepStatus::kSleeping) {
+      s.sim_time_s += (n - k) * h;  // asleep for the rest of dt
+      if (k == 1) result = st;
+      break;
+    }
+  }
+  if (any_pin) s.pin_target = s.pin_goal;
+  return result;
+}
+
+}  // namespace
+
 StepStatus step(const DeformableModel& m, DeformableState& s, double h,
                 teleop::sim::EventQueue* events) {
-  return step_impl(m, s, h, events, true);
+  const int n = m.substeps_for(h);
+  if (n <= 1) {
+    s.last_substeps = 1;
+    if (!(m.stable_step_s > 0.0) && !s.substeps_announced && events != nullptr) {
+      events->push(EventKind::kInfo, Severity::kWarning, s.sim_time_s, 0.0,
+                   "deformable: explicit Euler without damping is unstable at any step; use "
+                   "symplectic_euler or implicit_euler");
+      s.substeps_announced = true;
+    }
+    return step_impl(m, s, h, events, true);
+  }
+  return step_substeps(m, s, h, n, events, true);
 }
 
 StepStatus detail::step_general(const DeformableModel& m, DeformableState& s, double h,
                                 teleop::sim::EventQueue* events) {
-  return step_impl(m, s, h, events, false);
+  const int n = m.substeps_for(h);
+  if (n <= 1) {
+    s.last_substeps = 1;
+    return step_impl(m, s, h, events, false);
+  }
+  return step_substeps(m, s, h, n, events, false);
+}
+
+StepStatus detail::step_once(const DeformableModel& m, DeformableState& s, double h,
+                             teleop::sim::EventQueue* events) {
+  s.last_substeps = 1;
+  return step_impl(m, s, h, events, true);
 }
 
 }  // namespace teleop::sim::deformable

@@ -5,8 +5,10 @@
 // Observable: the radial displacement r(t) - r0 of vertex 5, sampled every 1 ms over 0-0.1 s.
 // Reference per model: the finest level (6) with the finest step (62.5 us), symplectic Euler.
 // error = RMS over the samples of (r(t) - r_ref(t)) [m]; "inf" when the run blew up.
-// Writes DIR/deformable.csv (model,integrator,level,dt_s,step_us_median,step_us_p99,error) and
-// DIR/deformable.png (tests/charts/deformable_bench.py).
+// Every run takes single steps of dt (max_substeps 1: the integrator itself, not the automatic
+// step). The mass-spring symplectic rows come twice: kernel scalar (default) and simd.
+// Writes DIR/deformable.csv (model,integrator,level,dt_s,step_us_median,step_us_p99,error,kernel)
+// and DIR/deformable.png (tests/charts/deformable_bench.py).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -31,21 +33,24 @@ struct RunResult {
   bool blew_up = false;
 };
 
-DeformableParams bench_params(ModelKind model, IntegratorKind integ, int level) {
+DeformableParams bench_params(ModelKind model, IntegratorKind integ, int level,
+                              KernelKind kernel = KernelKind::kScalar) {
   DeformableParams p;
   p.model = model;
   p.integrator = integ;
+  p.kernel = kernel;
   p.level = level;
   p.centre_m.setZero();
   p.gravity_mps2.setZero();
   if (model != ModelKind::kMassSpring) p.radial_stiffness_n_per_m3 = 0.0;
   p.sleep_time_s = 1e9;
+  p.max_substeps = 1;  // the integrator at this dt, as measured: no automatic sub-steps
   return p;
 }
 
 RunResult run(ModelKind model, IntegratorKind integ, int level, double dt, double t_end,
-              double sample_dt) {
-  const DeformableParams p = bench_params(model, integ, level);
+              double sample_dt, KernelKind kernel = KernelKind::kScalar) {
+  const DeformableParams p = bench_params(model, integ, level, kernel);
   const DeformableModel m = make_model(make_mesh_for(p), p);
   DeformableState s = make_state(m);
   // the bump
@@ -95,7 +100,7 @@ int bench_deformable(const teleop::CommandArgs& a) {
                                         IntegratorKind::kImplicitEuler};
   teleop::CsvWriter csv(
       (a.out_dir / "deformable.csv").string(),
-      {"model", "integrator", "level", "dt_s", "step_us_median", "step_us_p99", "error"});
+      {"model", "integrator", "level", "dt_s", "step_us_median", "step_us_p99", "error", "kernel"});
   for (ModelKind model : models) {
     const RunResult ref =
         run(model, IntegratorKind::kSymplecticEuler, ref_level, ref_dt, t_end, sample_dt);
@@ -108,26 +113,33 @@ int bench_deformable(const teleop::CommandArgs& a) {
     for (IntegratorKind integ : integrators) {
       for (int level = 1; level <= max_level; ++level) {
         for (double dt : dts) {
-          const RunResult r = run(model, integ, level, dt, t_end, sample_dt);
-          double err = std::numeric_limits<double>::infinity();
-          if (!r.blew_up && r.samples.size() == ref.samples.size()) {
-            double sum = 0.0;
-            for (std::size_t k = 0; k < r.samples.size(); ++k) {
-              const double d = r.samples[k] - ref.samples[k];
-              sum += d * d;
+          // the mass-spring symplectic step also with the simd kernel (params.kernel)
+          const bool simd_too =
+              model == ModelKind::kMassSpring && integ == IntegratorKind::kSymplecticEuler;
+          for (KernelKind kernel : {KernelKind::kScalar, KernelKind::kSimd}) {
+            if (kernel == KernelKind::kSimd && !simd_too) continue;
+            const RunResult r = run(model, integ, level, dt, t_end, sample_dt, kernel);
+            double err = std::numeric_limits<double>::infinity();
+            if (!r.blew_up && r.samples.size() == ref.samples.size()) {
+              double sum = 0.0;
+              for (std::size_t k = 0; k < r.samples.size(); ++k) {
+                const double d = r.samples[k] - ref.samples[k];
+                sum += d * d;
+              }
+              err = std::sqrt(sum / static_cast<double>(r.samples.size()));
             }
-            err = std::sqrt(sum / static_cast<double>(r.samples.size()));
+            const double med = teleop::percentile(r.step_us, 50.0);
+            const double p99 = teleop::percentile(r.step_us, 99.0);
+            csv.row_text(
+                {to_string(model), to_string(integ), std::to_string(level),
+                 teleop::format_number(dt), teleop::format_number(med), teleop::format_number(p99),
+                 std::isfinite(err) ? teleop::format_number(err) : "inf", to_string(kernel)});
+            csv.flush();
+            std::printf(
+                "%-20s %-17s %-6s level %d dt %-7.3g step median %9.1f us p99 %9.1f us  error %.3g "
+                "m\n",
+                to_string(model), to_string(integ), to_string(kernel), level, dt, med, p99, err);
           }
-          const double med = teleop::percentile(r.step_us, 50.0);
-          const double p99 = teleop::percentile(r.step_us, 99.0);
-          csv.row_text({to_string(model), to_string(integ), std::to_string(level),
-                        teleop::format_number(dt), teleop::format_number(med),
-                        teleop::format_number(p99),
-                        std::isfinite(err) ? teleop::format_number(err) : "inf"});
-          csv.flush();
-          std::printf(
-              "%-20s %-17s level %d dt %-7.3g step median %9.1f us p99 %9.1f us  error %.3g m\n",
-              to_string(model), to_string(integ), level, dt, med, p99, err);
         }
       }
     }

@@ -29,8 +29,10 @@ def main():
             err = float(r["error"]) * 1e3
             x = float(r["step_us_median"])
             c = COLOURS[r["integrator"]]
+            simd = r.get("kernel") == "simd"
             if math.isfinite(err):
-                ax.scatter(x, err, color=c, marker=MARKERS[r["model"]], s=40, alpha=0.8)
+                ax.scatter(x, err, color=c, marker="D" if simd else MARKERS[r["model"]], s=40,
+                           alpha=0.8, facecolors="none" if simd else c)
                 ax.annotate(r["level"], (x, err), fontsize=7, xytext=(3, 3), textcoords="offset points")
             else:
                 ax.scatter(x, top, color=c, marker="x", s=30)
@@ -43,6 +45,8 @@ def main():
     axes[0].set_ylabel("RMS error of probe radius vs reference [mm] (x = blew up)")
     handles = [plt.Line2D([], [], color=c, marker="o", ls="", label=k) for k, c in COLOURS.items()]
     handles += [plt.Line2D([], [], color="k", marker=m, ls="", label=k) for k, m in MARKERS.items()]
+    handles.append(plt.Line2D([], [], color="k", marker="D", ls="", fillstyle="none",
+                              label="mass_spring, kernel simd"))
     axes[1].legend(handles=handles, fontsize=8, loc="lower right")
     fig.suptitle("Deformable sphere: step time against error (numbers = icosphere level; "
                  "reference = level 6, dt 62.5 us, symplectic)")

@@ -1,0 +1,229 @@
+// The automatic step: the highest natural frequency of the body, its damping, and from them
+// the largest step the integrator is stable at (see docs/deformable.md, "Automatic step").
+//
+// w_max^2 is the largest eigenvalue of M^-1 K, K the stiffness linearised at the rest shape
+// (edge springs / Navier edges and radial springs, the centre node a free mass; plane contact and
+// the caller's loads excluded). It is estimated by Lanczos iteration (a Krylov refinement of power
+// iteration: the same matrix-vector products, the top Ritz value of the tridiagonal matrix
+// converges in tens of products where plain power iteration needs thousands on this nearly
+// degenerate spectrum) on A = M^-1/2 K M^-1/2, which has the same eigenvalues. A Ritz value never
+// exceeds the true eigenvalue; the block Gershgorin bound is computed as the upper bracket.
+// The co-rotational model uses the linear-strain K: co-rotation removes the stiffness of
+// rotation-like motions, so its true w_max is a little lower (0.1-0.4 % on levels 1-2).
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "server/deformable/deformable.hpp"
+
+namespace teleop::sim::deformable {
+
+namespace {
+
+// (K_e p, K_r p) at rest for p with 3N (+3 centre) dofs: K_e the edges, K_r the radial springs.
+// An edge block is a I + b u u^T (mass-spring: a = 0, b = k; Navier: a = k_iso, b = k_dir).
+void apply_rest_stiffness(const DeformableModel& m, const Eigen::VectorXd& p, Eigen::VectorXd& ke,
+                          Eigen::VectorXd& kr) {
+  const int n = m.node_count;
+  ke.setZero(p.size());
+  kr.setZero(p.size());
+  const bool spring = m.params.model == ModelKind::kMassSpring;
+  for (int e = 0; e < m.edges.cols(); ++e) {
+    const int i = m.edges(0, e), j = m.edges(1, e);
+    const Eigen::Vector3d u = m.rest_dir.col(e);
+    const Eigen::Vector3d d = p.segment<3>(3 * i) - p.segment<3>(3 * j);
+    const double a = spring ? 0.0 : m.edge_k_iso(e);
+    const double b = spring ? m.edge_k_iso(e) : m.edge_k_dir(e);
+    const Eigen::Vector3d y = a * d + (b * u.dot(d)) * u;
+    ke.segment<3>(3 * i) += y;
+    ke.segment<3>(3 * j) -= y;
+  }
+  if (m.has_centre) {
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector3d u = (m.mesh.vertices.col(i) - m.rest_centre_m).normalized();
+      const Eigen::Vector3d d = p.segment<3>(3 * i) - p.segment<3>(3 * n);
+      const Eigen::Vector3d y = (m.radial_k(i) * u.dot(d)) * u;
+      kr.segment<3>(3 * i) += y;
+      kr.segment<3>(3 * n) -= y;
+    }
+  }
+}
+
+// A fixed pseudo-random start vector (splitmix64): the estimate is deterministic.
+double hashed_unit(std::uint64_t k) {
+  std::uint64_t z = k + 0x9e3779b97f4a7c15ull;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+}
+
+}  // namespace
+
+double gershgorin_omega_bound(const DeformableModel& m) {
+  // Block Gershgorin on M^-1 K (3x3 blocks, spectral norms): lambda <= max over block rows of
+  // (||K_ii|| + sum_j ||K_ij||) / m_i. An edge block a I + b u u^T has norm a + b and appears on
+  // the diagonal of both ends and once off it; a radial spring k_r u u^T on node i's diagonal,
+  // the centre's diagonal and off both. So for node i: 2 (k_r,i + sum_j (a_ij + b_ij)) / m_i
+  // (with the radial spring tied to a fixed point instead of a free centre node this is the
+  // textbook (k_r + 2 sum_j k_ij) / m_i), for the centre node 2 sum_i k_r,i / m_c.
+  const int n = m.node_count;
+  Eigen::VectorXd row = Eigen::VectorXd::Zero(n);
+  for (int e = 0; e < m.edges.cols(); ++e) {
+    const double norm = m.edge_k_iso(e) + m.edge_k_dir(e);
+    row(m.edges(0, e)) += norm;
+    row(m.edges(1, e)) += norm;
+  }
+  double lambda = 0.0;
+  double centre_row = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double kr = m.has_centre ? m.radial_k(i) : 0.0;
+    lambda = std::max(lambda, 2.0 * (row(i) + kr) / m.mass_kg(i));
+    centre_row += kr;
+  }
+  if (m.has_centre) lambda = std::max(lambda, 2.0 * centre_row / m.centre_mass_kg);
+  return std::sqrt(lambda);
+}
+
+StabilityEstimate estimate_stability(const DeformableModel& m) {
+  StabilityEstimate out;
+  const int n = m.node_count;
+  const int dofs = 3 * n + (m.has_centre ? 3 : 0);
+  out.omega_bound_rad_per_s = gershgorin_omega_bound(m);
+  Eigen::VectorXd inv_sqrt_m(dofs);
+  for (int i = 0; i < n; ++i)
+    inv_sqrt_m.segment<3>(3 * i).setConstant(1.0 / std::sqrt(m.mass_kg(i)));
+  if (m.has_centre) inv_sqrt_m.tail<3>().setConstant(1.0 / std::sqrt(m.centre_mass_kg));
+
+  // y = A q = M^-1/2 K M^-1/2 q, with the edge and radial parts apart (for the damping ratio)
+  Eigen::VectorXd p(dofs), ke(dofs), kr(dofs);
+  auto apply = [&](const Eigen::VectorXd& q, Eigen::VectorXd& ye, Eigen::VectorXd& yr) {
+    p = inv_sqrt_m.cwiseProduct(q);
+    apply_rest_stiffness(m, p, ke, kr);
+    ye = inv_sqrt_m.cwiseProduct(ke);
+    yr = inv_sqrt_m.cwiseProduct(kr);
+  };
+
+  // Lanczos without reorthogonalisation (its loss of orthogonality only duplicates converged
+  // Ritz values; the largest one is still a lower bound that converges to lambda_max)
+  const int iterations = std::min(dofs, kStabilityLanczosIterations);
+  Eigen::VectorXd alpha(iterations), beta(iterations);
+  Eigen::VectorXd q0(dofs);
+  for (int k = 0; k < dofs; ++k) q0(k) = hashed_unit(static_cast<std::uint64_t>(k));
+  q0.normalize();
+  Eigen::VectorXd q = q0, q_prev = Eigen::VectorXd::Zero(dofs), w(dofs), ye(dofs), yr(dofs);
+  int used = 0;
+  for (int k = 0; k < iterations; ++k) {
+    apply(q, ye, yr);
+    w = ye + yr;
+    alpha(k) = q.dot(w);
+    w -= alpha(k) * q;
+    if (k > 0) w -= beta(k - 1) * q_prev;
+    beta(k) = w.norm();
+    ++used;
+    if (!(beta(k) > 1e-12 * std::abs(alpha(k)))) break;  // invariant subspace: exact
+    q_prev = q;
+    q = w / beta(k);
+  }
+  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(used, used);
+  for (int k = 0; k < used; ++k) {
+    t(k, k) = alpha(k);
+    if (k + 1 < used) t(k, k + 1) = t(k + 1, k) = beta(k);
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(t);
+  const Eigen::Index top = used - 1;  // eigenvalues ascending
+  const double lambda = std::max(es.eigenvalues()(top), 0.0);
+  out.omega_max_rad_per_s = std::sqrt(lambda);
+  out.lanczos_iterations = used;
+
+  // Ritz vector of the top mode (a second pass regenerates the Lanczos vectors) and the share of
+  // its stiffness carried by the edges and by the radial springs: the damping ratio of that mode
+  //   zeta = (beta_e psi^T A_e psi + beta_r psi^T A_r psi + alpha) / (2 w)
+  // (C = beta_e K_e + beta_r K_r + alpha M; the drag is relative to the mean velocity, which the
+  // top mode does not move, so alpha M is its exact contribution there).
+  const Eigen::VectorXd y = es.eigenvectors().col(top);
+  Eigen::VectorXd psi = Eigen::VectorXd::Zero(dofs);
+  q = q0;
+  q_prev.setZero();
+  for (int k = 0; k < used; ++k) {
+    psi += y(k) * q;
+    if (k + 1 == used) break;
+    apply(q, ye, yr);
+    w = ye + yr - alpha(k) * q;
+    if (k > 0) w -= beta(k - 1) * q_prev;
+    q_prev = q;
+    q = w / beta(k);
+  }
+  const double psi_norm = psi.norm();
+  double share_e = 1.0, share_r = 0.0;
+  if (psi_norm > 0.0 && lambda > 0.0) {
+    psi /= psi_norm;
+    apply(psi, ye, yr);
+    const double e = std::max(psi.dot(ye), 0.0), r = std::max(psi.dot(yr), 0.0);
+    if (e + r > 0.0) {
+      share_e = e / (e + r);
+      share_r = r / (e + r);
+    }
+  }
+  const DeformableParams& prm = m.params;
+  const double wmax = out.omega_max_rad_per_s;
+  out.radial_share = share_r;
+  out.damping_ratio = wmax > 0.0
+                          ? (prm.stiffness_damping_s * share_e * lambda +
+                             prm.radial_damping_s * share_r * lambda + prm.mass_damping_per_s) /
+                                (2.0 * wmax)
+                          : 0.0;
+
+  // the largest stable step of the integrator for that mode, times the safety factor
+  const double zeta = out.damping_ratio;
+  const double inf = std::numeric_limits<double>::infinity();
+  switch (prm.integrator) {
+    case IntegratorKind::kSymplecticEuler:
+      // v += h (-w^2 x - 2 zeta w v), x += h v: stable iff h w <= 2 (sqrt(1 + zeta^2) - zeta)
+      out.limit_step_s = wmax > 0.0 ? 2.0 * (std::sqrt(1.0 + zeta * zeta) - zeta) / wmax : inf;
+      break;
+    case IntegratorKind::kExplicitEuler: {
+      // |1 + h s|^2 = 1 - 2 zeta w h + w^2 h^2 <= 1 iff h <= 2 zeta / w, for every mode. With
+      // C = beta_e K_e + beta_r K_r + alpha M, 2 zeta / w = psi^T C psi / psi^T K psi >=
+      // min(beta_e, beta_r) over the spring kinds present: sufficient for all modes at once.
+      double tau = inf;
+      if (m.edge_k_iso.size() > 0 && m.edge_k_iso.maxCoeff() > 0.0) {
+        tau = std::min(tau, prm.stiffness_damping_s);
+      }
+      if (m.has_centre) tau = std::min(tau, prm.radial_damping_s);
+      out.limit_step_s = wmax > 0.0 ? tau : inf;
+      break;
+    }
+    case IntegratorKind::kImplicitEuler:
+      out.limit_step_s = inf;  // unconditionally stable: never sub-steps
+      break;
+  }
+  out.stable_step_s = kStableStepSafety * out.limit_step_s;
+  return out;
+}
+
+void update_stable_step(DeformableModel& m) {
+  const StabilityEstimate est = estimate_stability(m);
+  m.omega_max_rad_per_s = est.omega_max_rad_per_s;
+  m.omega_bound_rad_per_s = est.omega_bound_rad_per_s;
+  m.damping_ratio_top = est.damping_ratio;
+  m.stable_step_s = est.stable_step_s;
+}
+
+int DeformableModel::substeps_for(double dt_s) const {
+  if (!(dt_s > stable_step_s)) return 1;  // also: implicit Euler (stable step = inf), bad dt
+  if (!(stable_step_s > 0.0)) return 1;   // unstable at any step: sub-steps would not help
+  const double n = std::ceil(dt_s / stable_step_s);
+  return n >= static_cast<double>(params.max_substeps) ? params.max_substeps : static_cast<int>(n);
+}
+
+int DeformableModel::substeps_needed(double dt_s) const {
+  if (!(dt_s > stable_step_s)) return 1;
+  if (!(stable_step_s > 0.0)) return std::numeric_limits<int>::max();
+  const double n = std::ceil(dt_s / stable_step_s);
+  return n >= 2e9 ? std::numeric_limits<int>::max() : static_cast<int>(n);
+}
+
+}  // namespace teleop::sim::deformable

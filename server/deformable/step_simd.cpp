@@ -1,0 +1,384 @@
+// Kernel simd of the mass-spring symplectic-Euler step (params.kernel == kSimd).
+//
+// The scalar kernel (step.cpp) visits each edge once and scatters its reaction, which keeps it
+// scalar (~45 instructions per edge). Here every node gathers its own edges instead (each edge is
+// evaluated twice, once from each end, with exactly opposite results: d_ji = -d_ij bit for bit),
+// so neighbouring nodes are independent and 8 of them are computed at once:
+//   1. pack: per node 8 floats (position relative to the centre node, 0, velocity relative to its
+//      velocity, 0), so a node is one 32-byte load (the AoS double state stays the state);
+//   2. internal forces in float: per block of 8 nodes, their packs and, per neighbour slot (the
+//      ELL table of the model, slot-major, padded with the node itself at k = 0), their
+//      neighbours' packs, each 8 x 8 block transposed in registers (AVX2; cheaper than gather
+//      instructions here), radial springs and edges; the centre node's reaction summed in double;
+//   3. integration in double per node: gravity, drag, f_ext, plane contact (springs, then the
+//      damping/friction impulses), held nodes, the post-step sums: as in the scalar kernel.
+// Without AVX2 and FMA (checked once at run time) a portable loop does the same arithmetic.
+// Single precision in the forces: positions relative to the centre (|x| < ~1 m) carry 6e-8 m of
+// rounding, a spring force error of k * 6e-8 m (1e-5 N at k = 150 N/m); the accuracy table of
+// docs/deformable.md shows the effect on the trajectory.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "server/deformable/kernels.hpp"
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
+    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#define TELEOP_SIMD_CLONES \
+  __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define TELEOP_SIMD_CLONES
+#endif
+
+namespace teleop::sim::deformable::detail {
+
+namespace {
+
+// The body's internal forces (edges and radial springs) into s.force (AoS double); returns the
+// radial springs' reaction on the centre node. Padding nodes have k = 0 everywhere.
+struct Internal {
+  double centre[3] = {0.0, 0.0, 0.0};
+};
+
+// Packs node i: (x - c, y - c, z - c, 0, vx - cv, vy - cv, vz - cv, 0) as floats.
+inline void pack_node(const double* x, const double* v, const double* c, const double* cv,
+                      float* out) {
+  out[0] = static_cast<float>(x[0] - c[0]);
+  out[1] = static_cast<float>(x[1] - c[1]);
+  out[2] = static_cast<float>(x[2] - c[2]);
+  out[3] = 0.0f;
+  out[4] = static_cast<float>(v[0] - cv[0]);
+  out[5] = static_cast<float>(v[1] - cv[1]);
+  out[6] = static_cast<float>(v[2] - cv[2]);
+  out[7] = 0.0f;
+}
+
+// Force per unit length of d on a node from a spring to d = (dx, dy, dz) of relative velocity
+// (ex, ey, ez): (k (l - l0) + c dl/dt) / l. One formula for the scalar and vector paths.
+inline float spring_scale(float dx, float dy, float dz, float ex, float ey, float ez, float k,
+                          float l0, float beta) {
+  const float l2 = dx * dx + dy * dy + dz * dz + 1e-30f;
+  const float inv_l = 1.0f / std::sqrt(l2);
+  const float rate = (ex * dx + ey * dy + ez * dz) * inv_l;
+  return (k * (l2 * inv_l - l0) + beta * k * rate) * inv_l;
+}
+
+// Portable path (no AVX2): the same arithmetic one node at a time.
+Internal internal_forces_portable(const DeformableModel& m, DeformableState& s) {
+  const int n = m.node_count, stride = m.simd_stride, width = m.simd_width;
+  const float* pk = s.simd_pack.data();
+  const float beta = static_cast<float>(m.params.stiffness_damping_s);
+  const float rd = static_cast<float>(m.params.radial_damping_s);
+  double* f = s.force.data();
+  Internal out;
+  for (int i = 0; i < n; ++i) {
+    const float* a = pk + 8 * i;
+    // radial spring: the centre is at the origin of the packed frame, at rest in it
+    const float sr = -spring_scale(a[0], a[1], a[2], a[4], a[5], a[6],
+                                   m.simd_radial_k[static_cast<std::size_t>(i)],
+                                   m.simd_radial_rest[static_cast<std::size_t>(i)], rd);
+    float fx = sr * a[0], fy = sr * a[1], fz = sr * a[2];
+    out.centre[0] -= static_cast<double>(fx);
+    out.centre[1] -= static_cast<double>(fy);
+    out.centre[2] -= static_cast<double>(fz);
+    for (int slot = 0; slot < width; ++slot) {
+      const std::size_t o = static_cast<std::size_t>(slot) * static_cast<std::size_t>(stride) +
+                            static_cast<std::size_t>(i);
+      const float* b = pk + 8 * m.simd_neighbour[o];
+      const float dx = b[0] - a[0], dy = b[1] - a[1], dz = b[2] - a[2];
+      const float se = spring_scale(dx, dy, dz, b[4] - a[4], b[5] - a[5], b[6] - a[6], m.simd_k[o],
+                                    m.simd_rest[o], beta);
+      fx += se * dx;
+      fy += se * dy;
+      fz += se * dz;
+    }
+    f[3 * i] = static_cast<double>(fx);
+    f[3 * i + 1] = static_cast<double>(fy);
+    f[3 * i + 2] = static_cast<double>(fz);
+  }
+  return out;
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define TELEOP_HAVE_AVX2_PATH 1
+
+// Rows r[0..7] (8 floats each) to columns: afterwards r[c][l] is the old r[l][c].
+__attribute__((target("avx2,fma"))) inline void transpose8(__m256* r) {
+  const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+  const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+  const __m256 t4 = _mm256_unpacklo_ps(r[4], r[5]), t5 = _mm256_unpackhi_ps(r[4], r[5]);
+  const __m256 t6 = _mm256_unpacklo_ps(r[6], r[7]), t7 = _mm256_unpackhi_ps(r[6], r[7]);
+  const __m256 s0 = _mm256_shuffle_ps(t0, t2, 0x44), s1 = _mm256_shuffle_ps(t0, t2, 0xEE);
+  const __m256 s2 = _mm256_shuffle_ps(t1, t3, 0x44), s3 = _mm256_shuffle_ps(t1, t3, 0xEE);
+  const __m256 s4 = _mm256_shuffle_ps(t4, t6, 0x44), s5 = _mm256_shuffle_ps(t4, t6, 0xEE);
+  const __m256 s6 = _mm256_shuffle_ps(t5, t7, 0x44), s7 = _mm256_shuffle_ps(t5, t7, 0xEE);
+  r[0] = _mm256_permute2f128_ps(s0, s4, 0x20);
+  r[1] = _mm256_permute2f128_ps(s1, s5, 0x20);
+  r[2] = _mm256_permute2f128_ps(s2, s6, 0x20);
+  r[3] = _mm256_permute2f128_ps(s3, s7, 0x20);
+  r[4] = _mm256_permute2f128_ps(s0, s4, 0x31);
+  r[5] = _mm256_permute2f128_ps(s1, s5, 0x31);
+  r[6] = _mm256_permute2f128_ps(s2, s6, 0x31);
+  r[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
+}
+
+// spring_scale for 8 springs at once (the same operations; FMA where the compiler may contract)
+__attribute__((target("avx2,fma"))) inline __m256 spring_scale8(__m256 dx, __m256 dy, __m256 dz,
+                                                                __m256 ex, __m256 ey, __m256 ez,
+                                                                __m256 k, __m256 l0, __m256 beta) {
+  const __m256 l2 = _mm256_fmadd_ps(
+      dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_fmadd_ps(dx, dx, _mm256_set1_ps(1e-30f))));
+  const __m256 inv_l = _mm256_div_ps(_mm256_set1_ps(1.0f), _mm256_sqrt_ps(l2));
+  const __m256 rate =
+      _mm256_mul_ps(_mm256_fmadd_ps(ez, dz, _mm256_fmadd_ps(ey, dy, _mm256_mul_ps(ex, dx))), inv_l);
+  const __m256 stretch = _mm256_fmsub_ps(l2, inv_l, l0);
+  return _mm256_mul_ps(_mm256_mul_ps(k, _mm256_fmadd_ps(beta, rate, stretch)), inv_l);
+}
+
+// AVX2 path: 8 nodes at a time; each node's 8 packed floats (and each neighbour's) are one
+// 32-byte load, the 8 x 8 block transposed to coordinates in registers (cheaper here than
+// gather instructions: measured 16 against 27-40 us for the force pass at level 4).
+__attribute__((target("avx2,fma"))) Internal internal_forces_avx2(const DeformableModel& m,
+                                                                  DeformableState& s) {
+  const int n = m.node_count, stride = m.simd_stride, width = m.simd_width;
+  const float* pk = s.simd_pack.data();
+  const __m256 beta = _mm256_set1_ps(static_cast<float>(m.params.stiffness_damping_s));
+  const __m256 rd = _mm256_set1_ps(static_cast<float>(m.params.radial_damping_s));
+  const int* nb = m.simd_neighbour.data();
+  const float* kk = m.simd_k.data();
+  const float* ll = m.simd_rest.data();
+  double* f = s.force.data();
+  __m256d cx = _mm256_setzero_pd(), cy = cx, cz = cx;  // centre reaction, 4 partial sums each
+  alignas(32) float out[3][8];
+  for (int i = 0; i < stride; i += 8) {
+    __m256 a[8];
+    for (int l = 0; l < 8; ++l) a[l] = _mm256_loadu_ps(pk + 8 * (i + l));
+    transpose8(a);
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 sr = _mm256_sub_ps(
+        zero, spring_scale8(a[0], a[1], a[2], a[4], a[5], a[6],
+                            _mm256_loadu_ps(&m.simd_radial_k[static_cast<std::size_t>(i)]),
+                            _mm256_loadu_ps(&m.simd_radial_rest[static_cast<std::size_t>(i)]), rd));
+    __m256 fx = _mm256_mul_ps(sr, a[0]), fy = _mm256_mul_ps(sr, a[1]), fz = _mm256_mul_ps(sr, a[2]);
+    cx = _mm256_sub_pd(cx, _mm256_add_pd(_mm256_cvtps_pd(_mm256_castps256_ps128(fx)),
+                                         _mm256_cvtps_pd(_mm256_extractf128_ps(fx, 1))));
+    cy = _mm256_sub_pd(cy, _mm256_add_pd(_mm256_cvtps_pd(_mm256_castps256_ps128(fy)),
+                                         _mm256_cvtps_pd(_mm256_extractf128_ps(fy, 1))));
+    cz = _mm256_sub_pd(cz, _mm256_add_pd(_mm256_cvtps_pd(_mm256_castps256_ps128(fz)),
+                                         _mm256_cvtps_pd(_mm256_extractf128_ps(fz, 1))));
+    for (int slot = 0; slot < width; ++slot) {
+      const int o = slot * stride + i;
+      __m256 b[8];
+      for (int l = 0; l < 8; ++l) b[l] = _mm256_loadu_ps(pk + 8 * nb[o + l]);
+      transpose8(b);
+      const __m256 dx = _mm256_sub_ps(b[0], a[0]), dy = _mm256_sub_ps(b[1], a[1]),
+                   dz = _mm256_sub_ps(b[2], a[2]);
+      const __m256 se = spring_scale8(dx, dy, dz, _mm256_sub_ps(b[4], a[4]),
+                                      _mm256_sub_ps(b[5], a[5]), _mm256_sub_ps(b[6], a[6]),
+                                      _mm256_loadu_ps(kk + o), _mm256_loadu_ps(ll + o), beta);
+      fx = _mm256_fmadd_ps(se, dx, fx);
+      fy = _mm256_fmadd_ps(se, dy, fy);
+      fz = _mm256_fmadd_ps(se, dz, fz);
+    }
+    _mm256_store_ps(out[0], fx);
+    _mm256_store_ps(out[1], fy);
+    _mm256_store_ps(out[2], fz);
+    const int lanes = std::min(8, n - i);
+    for (int l = 0; l < lanes; ++l) {
+      f[3 * (i + l)] = static_cast<double>(out[0][l]);
+      f[3 * (i + l) + 1] = static_cast<double>(out[1][l]);
+      f[3 * (i + l) + 2] = static_cast<double>(out[2][l]);
+    }
+  }
+  alignas(32) double sum[3][4];
+  _mm256_store_pd(sum[0], cx);
+  _mm256_store_pd(sum[1], cy);
+  _mm256_store_pd(sum[2], cz);
+  Internal r;
+  for (int c = 0; c < 3; ++c) r.centre[c] = (sum[c][0] + sum[c][1]) + (sum[c][2] + sum[c][3]);
+  return r;
+}
+
+// Chosen once: the AVX2 path where the CPU has AVX2 and FMA.
+bool use_avx2() {
+  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return yes;
+}
+#endif
+
+// Plane contact of one node after its velocity update, as in step.cpp: damping as an implicit
+// impulse v_n /= 1 + h c / m that never pulls, Coulomb friction limited by the normal impulse and
+// never reversing the slip. Adds the plane's force to `total`.
+inline void contact_impulse(const Eigen::Vector3d& nrm, double mass, double damping,
+                            double spring_impulse, double mu, double h, double& vx, double& vy,
+                            double& vz, Eigen::Vector3d& total) {
+  const double vn = nrm.x() * vx + nrm.y() * vy + nrm.z() * vz;
+  double dvn = vn / (1.0 + h * damping / mass) - vn;
+  dvn = std::max(dvn, -spring_impulse / mass);
+  vx += dvn * nrm.x();
+  vy += dvn * nrm.y();
+  vz += dvn * nrm.z();
+  const double jn = spring_impulse + mass * dvn;  // >= 0
+  double ix = jn * nrm.x(), iy = jn * nrm.y(), iz = jn * nrm.z();
+  if (mu > 0.0) {
+    const double vn2 = nrm.x() * vx + nrm.y() * vy + nrm.z() * vz;
+    const double tx = vx - vn2 * nrm.x(), ty = vy - vn2 * nrm.y(), tz = vz - vn2 * nrm.z();
+    const double st = std::sqrt(tx * tx + ty * ty + tz * tz);
+    if (st > 1e-12) {
+      const double jt = std::min(mu * jn, mass * st);
+      const double dv = jt / (mass * st);
+      vx -= dv * tx;
+      vy -= dv * ty;
+      vz -= dv * tz;
+      ix -= (jt / st) * tx;
+      iy -= (jt / st) * ty;
+      iz -= (jt / st) * tz;
+    }
+  }
+  total += Eigen::Vector3d(ix, iy, iz) / h;
+}
+
+// Step 3: per node, in double: the rest of the force, symplectic Euler, contact, held nodes.
+TELEOP_SIMD_CLONES
+void integrate_nodes(const DeformableModel& m, DeformableState& s, double h, double vmx, double vmy,
+                     double vmz, KernelSums& sums) {
+  const int n = m.node_count;
+  const DeformableParams& p = m.params;
+  double* __restrict x = s.x.data();
+  double* __restrict v = s.v.data();
+  double* __restrict f = s.force.data();  // in: the internal forces; out: the total
+  const double* __restrict mp = m.mass_kg.data();
+  const double* __restrict imp = m.inv_mass.data();
+  const double* __restrict ck = m.contact_k.data();
+  const double* __restrict cc = m.contact_c.data();
+  const double* __restrict fext = s.f_ext.data();
+  const double* __restrict tgt = s.pin_target.data();
+  const std::uint8_t* __restrict pin = s.pinned.data();
+  const double gx = p.gravity_mps2.x(), gy = p.gravity_mps2.y(), gz = p.gravity_mps2.z();
+  const double alpha = p.mass_damping_per_s;
+  const bool any_pinned = s.pinned_count > 0;
+  const int planes = m.plane_count;
+  double spring_of[8] = {};
+  int nc = 0;
+  Eigen::Vector3d plane_force = Eigen::Vector3d::Zero();
+  double fastest2 = 0.0, sum_x = 0.0, sum_v = 0.0, mxx = 0.0, mxy = 0.0, mxz = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const int a = 3 * i;
+    const double mi = mp[i];
+    const double xx = x[a], xy = x[a + 1], xz = x[a + 2];
+    double vx = v[a], vy = v[a + 1], vz = v[a + 2];
+    double ax = f[a] + mi * (gx - alpha * (vx - vmx)) + fext[a];
+    double ay = f[a + 1] + mi * (gy - alpha * (vy - vmy)) + fext[a + 1];
+    double az = f[a + 2] + mi * (gz - alpha * (vz - vmz)) + fext[a + 2];
+    unsigned touched = 0;
+    for (int k = 0; k < planes; ++k) {
+      const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+      const double dist =
+          pl.normal.x() * xx + pl.normal.y() * xy + pl.normal.z() * xz - pl.offset_m;
+      if (dist >= 0.0) continue;
+      spring_of[k] = -ck[i] * dist;
+      ax += spring_of[k] * pl.normal.x();
+      ay += spring_of[k] * pl.normal.y();
+      az += spring_of[k] * pl.normal.z();
+      touched |= 1u << k;
+      ++nc;
+    }
+    f[a] = ax;
+    f[a + 1] = ay;
+    f[a + 2] = az;
+    const bool held = any_pinned && pin[i] != 0;
+    double px, py, pz;
+    if (!held) {
+      const double hm = h * imp[i];
+      vx += hm * ax;
+      vy += hm * ay;
+      vz += hm * az;
+      for (int k = 0; touched != 0 && k < planes; ++k) {
+        if ((touched & (1u << k)) == 0) continue;
+        const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+        contact_impulse(pl.normal, mi, cc[i], h * spring_of[k], p.friction ? pl.friction : 0.0, h,
+                        vx, vy, vz, plane_force);
+      }
+      px = xx + h * vx;
+      py = xy + h * vy;
+      pz = xz + h * vz;
+    } else {
+      px = tgt[a];
+      py = tgt[a + 1];
+      pz = tgt[a + 2];
+    }
+    v[a] = vx;
+    v[a + 1] = vy;
+    v[a + 2] = vz;
+    x[a] = px;
+    x[a + 1] = py;
+    x[a + 2] = pz;
+    const double sp2 = vx * vx + vy * vy + vz * vz;
+    fastest2 = sp2 > fastest2 ? sp2 : fastest2;
+    sum_x += px + py + pz;
+    sum_v += sp2;  // NaN and infinity propagate into the sums
+    mxx += mi * px;
+    mxy += mi * py;
+    mxz += mi * pz;
+  }
+  s.contact_count = nc;
+  s.plane_force_n = plane_force;
+  sums.fastest2 = fastest2;
+  sums.sum_x = sum_x;
+  sums.sum_v = sum_v;
+  sums.mx[0] = mxx;
+  sums.mx[1] = mxy;
+  sums.mx[2] = mxz;
+}
+
+}  // namespace
+
+void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double h,
+                           KernelSums& sums) {
+  const int n = m.node_count;
+  const DeformableParams& p = m.params;
+  const double c[3] = {s.centre_x.x(), s.centre_x.y(), s.centre_x.z()};
+  const double cv[3] = {s.centre_v.x(), s.centre_v.y(), s.centre_v.z()};
+
+  // pack, and the mass-weighted velocity sum for the drag (relative to the mean velocity: damps
+  // deformation, keeps momentum)
+  const double* x = s.x.data();
+  const double* v = s.v.data();
+  const double* mp = m.mass_kg.data();
+  float* pk = s.simd_pack.data();
+  double vmx = 0.0, vmy = 0.0, vmz = 0.0;
+  for (int i = 0; i < n; ++i) {
+    pack_node(x + 3 * i, v + 3 * i, c, cv, pk + 8 * i);
+    vmx += mp[i] * v[3 * i];
+    vmy += mp[i] * v[3 * i + 1];
+    vmz += mp[i] * v[3 * i + 2];
+  }
+  const double alpha = p.mass_damping_per_s;
+  const double inv_total = 1.0 / m.total_mass_kg;
+  vmx = (vmx + m.centre_mass_kg * cv[0]) * inv_total;
+  vmy = (vmy + m.centre_mass_kg * cv[1]) * inv_total;
+  vmz = (vmz + m.centre_mass_kg * cv[2]) * inv_total;
+
+#ifdef TELEOP_HAVE_AVX2_PATH
+  const Internal internal =
+      use_avx2() ? internal_forces_avx2(m, s) : internal_forces_portable(m, s);
+#else
+  const Internal internal = internal_forces_portable(m, s);
+#endif
+  integrate_nodes(m, s, h, vmx, vmy, vmz, sums);
+
+  if (m.has_centre) {
+    const double gx = p.gravity_mps2.x(), gy = p.gravity_mps2.y(), gz = p.gravity_mps2.z();
+    const double hm = h / m.centre_mass_kg, mc = m.centre_mass_kg;
+    s.centre_v.x() += hm * (mc * (gx - alpha * (cv[0] - vmx)) + internal.centre[0]);
+    s.centre_v.y() += hm * (mc * (gy - alpha * (cv[1] - vmy)) + internal.centre[1]);
+    s.centre_v.z() += hm * (mc * (gz - alpha * (cv[2] - vmz)) + internal.centre[2]);
+    s.centre_x += h * s.centre_v;
+  }
+}
+
+}  // namespace teleop::sim::deformable::detail
