@@ -1,7 +1,12 @@
 // Google Benchmark: one step of the deformable sphere per level, model and integrator.
 //   teleop_microbench --benchmark_filter=Deformable
 // The body is kept awake and disturbed (a node 5 mm out, released) so every step does work.
+// The steps below level 5 need no sub-steps (counter `substeps` = 1): one step is timed.
+//   --benchmark_repetitions=10 adds median, min and max over the repetitions.
 #include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <vector>
 
 #include "server/deformable/deformable.hpp"
 
@@ -9,10 +14,12 @@ namespace {
 
 using namespace teleop::sim::deformable;
 
-void run_step(benchmark::State& bs, ModelKind model, IntegratorKind integ) {
+void run_step(benchmark::State& bs, ModelKind model, IntegratorKind integ,
+              KernelKind kernel = KernelKind::kScalar) {
   DeformableParams p;
   p.model = model;
   p.integrator = integ;
+  p.kernel = kernel;
   p.level = static_cast<int>(bs.range(0));
   p.gravity_mps2.setZero();
   p.sleep_time_s = 1e9;
@@ -30,12 +37,16 @@ void run_step(benchmark::State& bs, ModelKind model, IntegratorKind integ) {
     benchmark::DoNotOptimize(s.x.data());
   }
   bs.counters["nodes"] = m.node_count;
+  bs.counters["substeps"] = s.last_substeps;
   bs.counters["faults"] = static_cast<double>(s.fault_count);
   if (integ == IntegratorKind::kImplicitEuler) bs.counters["cg_iters"] = s.cg_iterations;
 }
 
 void BM_Deformable_MassSpring_Symplectic(benchmark::State& bs) {
   run_step(bs, ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler);
+}
+void BM_Deformable_MassSpring_Symplectic_Simd(benchmark::State& bs) {
+  run_step(bs, ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, KernelKind::kSimd);
 }
 void BM_Deformable_MassSpring_Implicit(benchmark::State& bs) {
   run_step(bs, ModelKind::kMassSpring, IntegratorKind::kImplicitEuler);
@@ -50,7 +61,19 @@ void BM_Deformable_NavierCorot_Implicit(benchmark::State& bs) {
   run_step(bs, ModelKind::kNavierCorotational, IntegratorKind::kImplicitEuler);
 }
 
-BENCHMARK(BM_Deformable_MassSpring_Symplectic)->DenseRange(1, 6)->Unit(benchmark::kMicrosecond);
+double min_of(const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); }
+double max_of(const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); }
+
+BENCHMARK(BM_Deformable_MassSpring_Symplectic)
+    ->DenseRange(1, 6)
+    ->Unit(benchmark::kMicrosecond)
+    ->ComputeStatistics("min", min_of)
+    ->ComputeStatistics("max", max_of);
+BENCHMARK(BM_Deformable_MassSpring_Symplectic_Simd)
+    ->DenseRange(1, 6)
+    ->Unit(benchmark::kMicrosecond)
+    ->ComputeStatistics("min", min_of)
+    ->ComputeStatistics("max", max_of);
 BENCHMARK(BM_Deformable_MassSpring_Implicit)->DenseRange(1, 5)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Deformable_NavierLinear_Symplectic)->DenseRange(1, 6)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Deformable_NavierCorot_Symplectic)->DenseRange(1, 5)->Unit(benchmark::kMicrosecond);
