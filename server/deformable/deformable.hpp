@@ -210,6 +210,7 @@ struct DeformableModel {
   int simd_stride = 0;  ///< node count rounded up to 16
   std::vector<int> simd_neighbour;
   std::vector<float> simd_k, simd_rest, simd_radial_k, simd_radial_rest;
+  std::vector<double> simd_dof_mass, simd_dof_inv_mass;  ///< m_i and 1 / m_i per coordinate (3N)
 
   // automatic step (estimate_stability(); refreshed by make_model and update_stable_step)
   double omega_max_rad_per_s = 0.0;    ///< highest natural frequency at rest [rad/s]

@@ -40,6 +40,14 @@ void build_simd_tables(DeformableModel& m) {
   m.simd_rest.assign(total, 0.0f);
   m.simd_radial_k.assign(static_cast<std::size_t>(stride), 0.0f);
   m.simd_radial_rest.assign(static_cast<std::size_t>(stride), 0.0f);
+  m.simd_dof_mass.resize(3 * static_cast<std::size_t>(n));
+  m.simd_dof_inv_mass.resize(3 * static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      m.simd_dof_mass[static_cast<std::size_t>(3 * i + c)] = m.mass_kg(i);
+      m.simd_dof_inv_mass[static_cast<std::size_t>(3 * i + c)] = m.inv_mass(i);
+    }
+  }
   std::vector<std::pair<int, int>> ring;  // (neighbour, edge)
   for (int i = 0; i < stride; ++i) {
     ring.clear();

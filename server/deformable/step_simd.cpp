@@ -335,6 +335,149 @@ void integrate_nodes(const DeformableModel& m, DeformableState& s, double h, dou
   sums.mx[2] = mxz;
 }
 
+// Step 3 when no node is held (the usual case), in flat AVX2 passes over the 3N coordinates
+// (blocks of 12 coordinates = 4 nodes = 3 vectors carry the x/y/z pattern):
+//   contacts at the old positions into a list; f = f_int + f_ext + m (g + alpha v_mean - alpha v)
+//   and v += h f / m; the contact springs, then the contact impulses; x += h v with the sums in
+//   per-lane partial sums (a fixed order: deterministic).
+// The same physics as integrate_nodes (the rounding differs: the m g' - alpha m v form).
+#ifdef TELEOP_HAVE_AVX2_PATH
+__attribute__((target("avx2,fma"))) void integrate_flat_avx2(const DeformableModel& m,
+                                                             DeformableState& s, double h,
+                                                             double vmx, double vmy, double vmz,
+                                                             KernelSums& sums) {
+  const int n = m.node_count;
+  const int n3 = 3 * n;
+  const DeformableParams& p = m.params;
+  double* x = s.x.data();
+  double* v = s.v.data();
+  double* f = s.force.data();  // in: the internal forces; out: the total
+  const double* fext = s.f_ext.data();
+  const double* dm = m.simd_dof_mass.data();
+  const double* dim = m.simd_dof_inv_mass.data();
+  const double alpha = p.mass_damping_per_s;
+
+  // contacts at the old positions
+  int nc = 0;
+  const int planes = m.plane_count;
+  for (int i = 0; i < n && planes > 0; ++i) {
+    for (int k = 0; k < planes; ++k) {
+      const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+      const double dist = pl.normal.x() * x[3 * i] + pl.normal.y() * x[3 * i + 1] +
+                          pl.normal.z() * x[3 * i + 2] - pl.offset_m;
+      if (dist >= 0.0) continue;
+      s.contact_node[static_cast<std::size_t>(nc)] = i;
+      s.contact_coef(0, nc) = static_cast<double>(k);
+      s.contact_coef(2, nc) = -m.contact_k(i) * dist;  // spring force
+      ++nc;
+    }
+  }
+
+  // forces and velocities
+  const double gp[3] = {p.gravity_mps2.x() + alpha * vmx, p.gravity_mps2.y() + alpha * vmy,
+                        p.gravity_mps2.z() + alpha * vmz};
+  const __m256d g[3] = {_mm256_setr_pd(gp[0], gp[1], gp[2], gp[0]),
+                        _mm256_setr_pd(gp[1], gp[2], gp[0], gp[1]),
+                        _mm256_setr_pd(gp[2], gp[0], gp[1], gp[2])};
+  const __m256d va = _mm256_set1_pd(alpha), vh = _mm256_set1_pd(h);
+  const int blocks = n3 / 12 * 12;
+  for (int q0 = 0; q0 < blocks; q0 += 12) {
+    for (int t = 0; t < 3; ++t) {
+      const int q = q0 + 4 * t;
+      const __m256d vq = _mm256_loadu_pd(v + q);
+      const __m256d ft =
+          _mm256_add_pd(_mm256_add_pd(_mm256_loadu_pd(f + q), _mm256_loadu_pd(fext + q)),
+                        _mm256_mul_pd(_mm256_loadu_pd(dm + q), _mm256_fnmadd_pd(va, vq, g[t])));
+      _mm256_storeu_pd(f + q, ft);
+      _mm256_storeu_pd(v + q, _mm256_fmadd_pd(_mm256_mul_pd(vh, _mm256_loadu_pd(dim + q)), ft, vq));
+    }
+  }
+  for (int q = blocks; q < n3; ++q) {
+    const double ft = f[q] + fext[q] + dm[q] * (gp[q % 3] - alpha * v[q]);
+    f[q] = ft;
+    v[q] += h * dim[q] * ft;
+  }
+
+  // contacts: every spring first (a node may touch two planes), then the impulses in order
+  Eigen::Vector3d plane_force = Eigen::Vector3d::Zero();
+  for (int c = 0; c < nc; ++c) {
+    const int i = s.contact_node[static_cast<std::size_t>(c)];
+    const Plane& pl = m.planes[static_cast<std::size_t>(s.contact_coef(0, c))];
+    const double spring = s.contact_coef(2, c);
+    const double hm = h * m.inv_mass(i);
+    for (int d = 0; d < 3; ++d) {
+      f[3 * i + d] += spring * pl.normal(d);
+      v[3 * i + d] += hm * spring * pl.normal(d);
+    }
+  }
+  for (int c = 0; c < nc; ++c) {
+    const int i = s.contact_node[static_cast<std::size_t>(c)];
+    const Plane& pl = m.planes[static_cast<std::size_t>(s.contact_coef(0, c))];
+    contact_impulse(pl.normal, m.mass_kg(i), m.contact_c(i), h * s.contact_coef(2, c),
+                    p.friction ? pl.friction : 0.0, h, v[3 * i], v[3 * i + 1], v[3 * i + 2],
+                    plane_force);
+  }
+  s.contact_count = nc;
+  s.plane_force_n = plane_force;
+
+  // positions and the post-step sums
+  __m256d ax[3], av[3], am[3];
+  for (int t = 0; t < 3; ++t) ax[t] = av[t] = am[t] = _mm256_setzero_pd();
+  double top[4] = {0.0, 0.0, 0.0, 0.0};
+  alignas(32) double vv[12];
+  for (int q0 = 0; q0 < blocks; q0 += 12) {
+    for (int t = 0; t < 3; ++t) {
+      const int q = q0 + 4 * t;
+      const __m256d vq = _mm256_loadu_pd(v + q);
+      const __m256d xq = _mm256_fmadd_pd(vh, vq, _mm256_loadu_pd(x + q));
+      _mm256_storeu_pd(x + q, xq);
+      const __m256d v2 = _mm256_mul_pd(vq, vq);
+      _mm256_store_pd(vv + 4 * t, v2);
+      ax[t] = _mm256_add_pd(ax[t], xq);
+      av[t] = _mm256_add_pd(av[t], v2);
+      am[t] = _mm256_fmadd_pd(_mm256_loadu_pd(dm + q), xq, am[t]);
+    }
+    for (int l = 0; l < 4; ++l) {
+      const double sp2 = vv[3 * l] + vv[3 * l + 1] + vv[3 * l + 2];
+      top[l] = sp2 > top[l] ? sp2 : top[l];
+    }
+  }
+  alignas(32) double lane[3][3][4];
+  for (int t = 0; t < 3; ++t) {
+    _mm256_store_pd(lane[0][t], ax[t]);
+    _mm256_store_pd(lane[1][t], av[t]);
+    _mm256_store_pd(lane[2][t], am[t]);
+  }
+  double fastest2 = std::max(std::max(top[0], top[1]), std::max(top[2], top[3]));
+  double sum_x = 0.0, sum_v = 0.0, mx[3] = {0.0, 0.0, 0.0};
+  for (int j = 0; j < 12; ++j) {  // coordinate j of the block is component j % 3
+    sum_x += lane[0][j / 4][j % 4];
+    sum_v += lane[1][j / 4][j % 4];
+    mx[j % 3] += lane[2][j / 4][j % 4];
+  }
+  for (int i = blocks / 3; i < n; ++i) {
+    double sp2 = 0.0;
+    for (int d = 0; d < 3; ++d) {
+      const int q = 3 * i + d;
+      const double xq = x[q] + h * v[q];
+      x[q] = xq;
+      sp2 += v[q] * v[q];
+      sum_x += xq;
+      mx[d] += dm[q] * xq;
+    }
+    sum_v += sp2;
+    fastest2 = sp2 > fastest2 ? sp2 : fastest2;
+  }
+  if (!(sum_v == sum_v)) fastest2 = sum_v;  // a NaN speed fails every comparison above
+  sums.fastest2 = fastest2;
+  sums.sum_x = sum_x;
+  sums.sum_v = sum_v;
+  sums.mx[0] = mx[0];
+  sums.mx[1] = mx[1];
+  sums.mx[2] = mx[2];
+}
+#endif
+
 }  // namespace
 
 void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double h,
@@ -369,7 +512,15 @@ void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double 
 #else
   const Internal internal = internal_forces_portable(m, s);
 #endif
+#ifdef TELEOP_HAVE_AVX2_PATH
+  if (s.pinned_count == 0 && use_avx2()) {
+    integrate_flat_avx2(m, s, h, vmx, vmy, vmz, sums);
+  } else {
+    integrate_nodes(m, s, h, vmx, vmy, vmz, sums);
+  }
+#else
   integrate_nodes(m, s, h, vmx, vmy, vmz, sums);
+#endif
 
   if (m.has_centre) {
     const double gx = p.gravity_mps2.x(), gy = p.gravity_mps2.y(), gz = p.gravity_mps2.z();
