@@ -311,6 +311,20 @@ INSTANTIATE_TEST_SUITE_P(All, StiffSphere,
                                   "_" + probe_name(std::get<1>(param_info.param));
                          });
 
+// The simd kernel sub-steps the same way: x10 under the tip press and the held node (the held
+// node takes its per-node integration path), no fault.
+TEST(StiffSphere, SimdKernelRunsWithoutFaultResets) {
+  DeformableParams p = paper_sphere(10.0);
+  p.kernel = KernelKind::kSimd;
+  const DeformableModel m = build(p, paper_planes());
+  for (Probe probe : {Probe::kTipPress, Probe::kHeldNode}) {
+    const ProbeRun r = run_probe(m, probe);
+    EXPECT_EQ(r.faults, 0u) << probe_name(probe);
+    EXPECT_EQ(r.max_substeps, 6) << probe_name(probe);
+    EXPECT_GT(r.deepest_m, 1e-3) << probe_name(probe);
+  }
+}
+
 // Without the automatic step (max_substeps 1) the x3 sphere blows up at dt = 1 ms under the
 // same probes: what the sub-steps prevent.
 TEST(StiffSphereWithoutSubsteps, BlowsUp) {
