@@ -52,8 +52,9 @@ enum class IntegratorKind : std::uint8_t {
 enum class KernelKind : std::uint8_t {
   /// One fused scalar pass in double precision (the default; its results are the reference).
   kScalar = 0,
-  /// Structure-of-arrays copy, edge forces in single precision vectorised over nodes (every node
-  /// gathers its own edges, AVX-512 / AVX2 chosen at run time), integration in double.
+  /// A packed float copy of the nodes; every node gathers its own edges; edge and radial forces
+  /// in single precision, 8 nodes at a time (AVX2 + FMA when the CPU has them, checked once at
+  /// run time; portable loops otherwise); integration in double. ~2x faster (docs/deformable.md).
   kSimd = 1,
 };
 
