@@ -1,0 +1,157 @@
+// Three hosts for each multi-machine profile: the test builds its own network (network
+// namespaces on a private bridge, tests/support/netns.hpp) and runs teleop_server on host 1,
+// teleop_master on host 2 and two teleop_monitor observers on host 3, with the profiles exactly
+// as docs/networking.md writes them. Nothing is sent outside the namespaces the test creates;
+// they are removed at the end, also on failure. Skipped, with the reason, where namespaces
+// cannot be created (not root, no iproute2, a container without CAP_SYS_ADMIN).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tests/support/domains.hpp"
+#include "tests/support/integration.hpp"
+#include "tests/support/netns.hpp"
+#include "tests/support/process.hpp"
+
+namespace teleop::test {
+namespace {
+
+const std::string kMonitorBinary = std::string(TELEOP_BINARY_DIR) + "/client/teleop_monitor";
+const std::string kDiscoveryScript = std::string(TELEOP_SOURCE_DIR) + "/deploy/teleop_discovery.sh";
+
+/// Largest "<name> <rate> Hz" figure printed by teleop_monitor.
+double max_rate(const std::string& out, const std::string& name) {
+  double best = 0.0;
+  for (std::size_t pos = 0; (pos = out.find(name, pos)) != std::string::npos;) {
+    pos += name.size();
+    best = std::max(best, std::atof(out.c_str() + pos));
+  }
+  return best;
+}
+
+struct Roles {
+  std::string profile_server, profile_client;
+  std::vector<std::string> server, master, observer;  ///< extra network flags per role
+  bool discovery = false;                             ///< start discovery servers first
+};
+
+class MultiHost : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    lab_ = std::make_unique<NetnsLab>(3);
+    if (!lab_->create()) {
+      const std::string why = lab_->why();
+      lab_.reset();
+      std::printf("multi_host_test: SKIPPED: %s\n", why.c_str());
+      GTEST_SKIP() << "cannot build the test network: " << why;
+    }
+  }
+  void TearDown() override { lab_.reset(); }  // kills what is left, deletes the namespaces
+
+  /// A process on host i of the test network.
+  std::unique_ptr<Process> on(int i, const std::string& exe, std::vector<std::string> args,
+                              const std::string& tag) {
+    std::vector<std::string> argv = lab_->exec_prefix(i);
+    argv.push_back(exe);
+    argv.insert(argv.end(), args.begin(), args.end());
+    return std::make_unique<Process>(lab_->ip(), argv, "mh_" + tag);
+  }
+
+  void session(const std::string& name, int domain, const Roles& r) {
+    const std::string d = std::to_string(domain);
+    const std::string master_json = temp_path("mh", name + "_master.json");
+    const std::string server_json = temp_path("mh", name + "_server.json");
+    std::remove(master_json.c_str());
+    std::unique_ptr<Process> ds0, ds1;
+    if (r.discovery) {
+      // a main server (id 0) on host 1 and a second one (id 1, --backup) on host 2
+      ds0 = on(1, "/bin/bash",
+               {kDiscoveryScript, "--id", "0", "--address", NetnsLab::address(1), "--port", "11811"},
+               name + "_ds0");
+      ds1 = on(2, "/bin/bash",
+               {kDiscoveryScript, "--id", "1", "--address", NetnsLab::address(2), "--port", "11811",
+                "--backup", "--backup-dir", temp_path("mh", name + "_ds1")},
+               name + "_ds1");
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      ASSERT_TRUE(ds0->running()) << ds0->err() << ds0->out();
+      ASSERT_TRUE(ds1->running()) << ds1->err() << ds1->out();
+    }
+    std::vector<std::string> sargs = {"--domain", d, "--profile", r.profile_server, "--duration",
+                                      "60", "--quiet", "--scene", scene_file("tool_only.yaml"),
+                                      "--summary-json", server_json};
+    sargs.insert(sargs.end(), r.server.begin(), r.server.end());
+    auto server = on(1, kServerBinary, sargs, name + "_server");
+    std::vector<std::string> margs = {"--domain", d, "--profile", r.profile_client, "--samples",
+                                      "3000", "--homing", "0.5", "--wait-server", "20",
+                                      "--summary-json", master_json, "--quiet"};
+    margs.insert(margs.end(), r.master.begin(), r.master.end());
+    auto master = on(2, kMasterBinary, margs, name + "_master");
+    std::vector<std::unique_ptr<Process>> observers;
+    for (int k = 0; k < 2; ++k) {
+      std::vector<std::string> oargs = {"--domain", d, "--profile", r.profile_client,
+                                        "--duration", "6", "--period", "0.5"};
+      oargs.insert(oargs.end(), r.observer.begin(), r.observer.end());
+      observers.push_back(on(3, kMonitorBinary, oargs, name + "_obs" + std::to_string(k)));
+    }
+    const int master_rc = master->wait_for(60.0);
+    for (auto& o : observers) EXPECT_EQ(o->wait_for(30.0), 0) << o->err();
+    server->signal(SIGTERM);
+    EXPECT_EQ(server->wait_for(20.0), 0) << server->err();
+    ASSERT_EQ(master_rc, 0) << master->err() << master->out();
+
+    const std::string m = Process::slurp(master_json);
+    const double sent = json_value(m, "sent"), received = json_value(m, "received");
+    const double p50 = json_nested(m, "rtt_ms", "p50"), p99 = json_nested(m, "rtt_ms", "p99");
+    std::printf("multi_host %-16s commands %.0f/%.0f received, rtt p50 %.3f ms p99 %.3f ms\n",
+                name.c_str(), received, sent, p50, p99);
+    EXPECT_EQ(sent, 3000) << m;
+    EXPECT_GE(received, 0.99 * sent) << m;
+    EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;
+    EXPECT_GT(p99, 0.0) << m;
+    EXPECT_LT(p99, 100.0) << m;  // generous: a loaded 2-core machine
+    for (auto& o : observers) {
+      const std::string out = o->out();
+      EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos) << name << "\n" << out;
+      EXPECT_GT(max_rate(out, "slave_state"), 100.0) << name << "\n" << out;
+    }
+    if (ds0) ds0->signal(SIGTERM);
+    if (ds1) ds1->signal(SIGTERM);
+  }
+
+  std::unique_ptr<NetnsLab> lab_;
+};
+
+const std::string kH1 = NetnsLab::address(1), kH2 = NetnsLab::address(2),
+                  kH3 = NetnsLab::address(3);
+
+TEST_F(MultiHost, LanMulticast) {
+  session("lan", domains::kMultiHostLan, Roles{"lan", "lan", {}, {}, {}});
+}
+
+TEST_F(MultiHost, LanUnicastPeers) {
+  session("lan_unicast", domains::kMultiHostLanUnicast,
+          Roles{"lan_unicast", "lan_unicast", {"--peer", kH2, "--peer", kH3},
+                {"--peer", kH1, "--peer", kH3}, {"--peer", kH1, "--peer", kH2}});
+}
+
+TEST_F(MultiHost, WanTcp) {
+  session("wan_tcp", domains::kMultiHostWanTcp,
+          Roles{"wan_tcp_server", "wan_tcp_client",
+                {"--listen", "5100", "--public-address", kH1},
+                {"--peer", kH1 + ":5100"}, {"--peer", kH1 + ":5100"}});
+}
+
+TEST_F(MultiHost, DiscoveryServerWithASecondServer) {
+  const std::vector<std::string> servers = {"--discovery-server", kH1 + ":11811",
+                                            "--discovery-server", kH2 + ":11811"};
+  session("discovery", domains::kMultiHostDiscovery,
+          Roles{"discovery_client", "discovery_client", servers, servers, servers, true});
+}
+
+}  // namespace
+}  // namespace teleop::test
