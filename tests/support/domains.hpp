@@ -22,6 +22,7 @@ inline constexpr int kMultiHostLan = 64;        // multi_host_test, in its own n
 inline constexpr int kMultiHostWanTcp = 65;     // multi_host_test
 inline constexpr int kMultiHostDiscovery = 66;  // multi_host_test
 inline constexpr int kMultiHostLanUnicast = 69; // multi_host_test
+inline constexpr int kMultiHostDiscoveryBackup = 71;  // multi_host_test
 inline constexpr int kNetworkFlags = 70;        // network_flags_test (exits before DDS starts)
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks

@@ -81,6 +81,12 @@ class NetnsLab {
     }
   }
 
+  /// Adds a one-way delay to everything host i sends (tc netem on its veth); false where the
+  /// kernel has no netem (as on the project's machines).
+  bool add_netem_delay(int i, const std::string& delay) {
+    return run("netns exec " + host(i) + " tc qdisc add dev eth0 root netem delay " + delay);
+  }
+
   /// Removes namespaces left by an earlier test process that was killed before its cleanup
   /// (names tl<pid>h<i> / tl<pid>sw whose pid no longer exists).
   void remove_stale() {
