@@ -8,11 +8,15 @@
 #       [--discovery [USER@]ADDR] [--backup-discovery [USER@]ADDR]
 #       [--domain 7] [--remote-dir /opt/teleop] [--scene deploy/scenes/default.yaml]
 #       [--tcp-port 5100] [--public-address ADDR] [--discovery-port 11811]
-#       [--dry-run] [-- MASTER_FLAGS...]
+#       [--build-dir build] [--ssh "ssh"] [--dry-run] [-- MASTER_FLAGS...]
 #
 # ADDR is the host's IPv4 address as the other hosts reach it (also the ssh destination).
 # Every host needs the checkout built in --remote-dir (deploy/build.sh) and ssh access by key.
-# --dry-run prints every command (one per line) instead of running it.
+# --build-dir is the build folder relative to --remote-dir (or absolute). --ssh (or
+# TELEOP_LAUNCH_SSH) replaces the ssh command; it is called as `SSH [-t] -o OPT... HOST 'CMD'`
+# (the multi-host test passes a wrapper that runs CMD in a network namespace instead).
+# --dry-run prints every command (one per line) instead of running it. The exit status is the
+# master's.
 # Profiles (docs/networking.md): lan (multicast), lan_unicast (every process gets the other
 # hosts as --peer), wan_tcp (server wan_tcp_server --listen PORT; the others wan_tcp_client
 # --peer SERVER:PORT), discovery (discovery server on --discovery, default the server host;
@@ -28,6 +32,8 @@ scene="deploy/scenes/default.yaml"
 tcp_port=5100 discovery_port=11811 public_address=""
 dry_run=0
 master_extra=()
+build_dir="build"
+ssh_cmd="${TELEOP_LAUNCH_SSH:-ssh}"
 
 die() { echo "teleop_launch: $*" >&2; exit 2; }
 need_value() { [ "$#" -ge 2 ] || die "$1 needs a value"; }
@@ -45,6 +51,8 @@ while [ "$#" -gt 0 ]; do
     --tcp-port) need_value "$@"; tcp_port="$2"; shift 2 ;;
     --public-address) need_value "$@"; public_address="$2"; shift 2 ;;
     --discovery-port) need_value "$@"; discovery_port="$2"; shift 2 ;;
+    --build-dir) need_value "$@"; build_dir="$2"; shift 2 ;;
+    --ssh) need_value "$@"; ssh_cmd="$2"; shift 2 ;;
     --dry-run) dry_run=1; shift ;;
     --) shift; master_extra=("$@"); break ;;
     -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
@@ -129,14 +137,17 @@ run() {  # print (dry run) or execute
 start_bg() {  # host name command...
   local host="$1" name="$2"; shift 2
   local pidfile="/tmp/teleop_launch_${name}_$domain.pid" log="/tmp/teleop_launch_${name}_$domain.log"
-  run "ssh ${ssh_opts[*]} $host 'cd $remote_dir && nohup $* > $log 2>&1 < /dev/null & echo \$! > $pidfile'"
+  # `cd || exit; nohup ... &` (not `cd && nohup ... &`, which would background a subshell and
+  # record its pid instead of the program's)
+  run "$ssh_cmd ${ssh_opts[*]} $host 'cd $remote_dir || exit 1; nohup $* > $log 2>&1 < /dev/null & echo \$! > $pidfile'"
   started+=("$host $pidfile")
 }
-stop_all() {
-  local e host pidfile
-  for e in "${started[@]}"; do
+stop_all() {  # in reverse order: observers, server, then discovery servers
+  local e host pidfile k
+  for ((k = ${#started[@]} - 1; k >= 0; k--)); do
+    e="${started[$k]}"
     host="${e%% *}"; pidfile="${e#* }"
-    run "ssh ${ssh_opts[*]} $host 'kill \$(cat $pidfile) 2>/dev/null; rm -f $pidfile'" || true
+    run "$ssh_cmd ${ssh_opts[*]} $host 'kill \$(cat $pidfile) 2>/dev/null; rm -f $pidfile'" || true
   done
 }
 [ "$dry_run" = 1 ] || trap stop_all EXIT INT TERM
@@ -147,11 +158,14 @@ if [ "$profile" = discovery ]; then
     start_bg "$backup_discovery" discovery1 "deploy/teleop_discovery.sh --id 1 --address $backup_addr --port $discovery_port --backup --backup-dir /var/tmp/teleop-discovery"
   fi
 fi
-start_bg "$server" server "build/server/teleop_server --domain $domain --scene $scene $(net_flags server "$server_addr")"
+start_bg "$server" server "$build_dir/server/teleop_server --domain $domain --scene $scene $(net_flags server "$server_addr")"
 i=0
 for o in "${observers[@]}"; do
-  start_bg "$o" "observer$i" "build/client/teleop_monitor --domain $domain $(net_flags observer "${observer_addrs[$i]}")"
+  start_bg "$o" "observer$i" "$build_dir/client/teleop_monitor --domain $domain $(net_flags observer "${observer_addrs[$i]}")"
   i=$((i + 1))
 done
-run "ssh -t ${ssh_opts[*]} $master 'cd $remote_dir && build/client/teleop_master --domain $domain $(net_flags master "$master_addr") ${master_extra[*]}'"
+master_rc=0
+run "$ssh_cmd -t ${ssh_opts[*]} $master 'cd $remote_dir && $build_dir/client/teleop_master --domain $domain $(net_flags master "$master_addr") ${master_extra[*]}'" ||
+  master_rc=$?
 if [ "$dry_run" = 1 ]; then stop_all; fi
+exit "$master_rc"

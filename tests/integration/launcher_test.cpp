@@ -40,6 +40,9 @@ TEST(Launcher, DryRunLanUnicastGivesEveryProcessTheOtherHosts) {
                          "--master", "op@10.0.0.2", "--observer", "10.0.0.3", "--domain", "9",
                          "--", "--duration", "30"});
   ASSERT_EQ(l.size(), 5u);  // server, observer, master, then the two stops
+  // the program runs in the background with its own pid recorded, not a subshell's
+  EXPECT_TRUE(has(l[0], "cd /opt/teleop || exit 1; nohup build/server/teleop_server")) << l[0];
+  EXPECT_TRUE(has(l[0], "& echo $! > /tmp/teleop_launch_server_9.pid")) << l[0];
   EXPECT_TRUE(has(l[0], "ssh ") && has(l[0], " 10.0.0.1 ")) << l[0];
   EXPECT_TRUE(has(l[0], "build/server/teleop_server --domain 9")) << l[0];
   EXPECT_TRUE(has(l[0], "--profile lan_unicast --peer 10.0.0.2 --peer 10.0.0.3")) << l[0];
@@ -49,8 +52,9 @@ TEST(Launcher, DryRunLanUnicastGivesEveryProcessTheOtherHosts) {
   EXPECT_TRUE(has(l[2], "build/client/teleop_master --domain 9 --profile lan_unicast "
                         "--peer 10.0.0.1 --peer 10.0.0.3")) << l[2];
   EXPECT_TRUE(has(l[2], "--duration 30")) << l[2];
-  EXPECT_TRUE(has(l[3], "kill") && has(l[3], "10.0.0.1")) << l[3];
-  EXPECT_TRUE(has(l[4], "kill") && has(l[4], "10.0.0.3")) << l[4];
+  // stopped in reverse order: the observer, then the server
+  EXPECT_TRUE(has(l[3], "kill") && has(l[3], " 10.0.0.3 ")) << l[3];
+  EXPECT_TRUE(has(l[4], "kill") && has(l[4], " 10.0.0.1 ")) << l[4];
 }
 
 TEST(Launcher, DryRunWanTcpAndLan) {

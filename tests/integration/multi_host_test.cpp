@@ -186,5 +186,58 @@ TEST_F(MultiHost, DiscoveryServerBackupAloneIsEnough) {
   session("discovery_1only", domains::kMultiHostDiscoveryBackup, r);
 }
 
+// deploy/teleop_launch.sh for real, with ssh replaced by tests/support/netns_ssh.sh (runs the
+// remote command in the namespace of the host's address): discovery servers 0 (server host)
+// and 1 (--backup-discovery, host 3), server, two observers, the master in the foreground;
+// when the master ends the launcher stops everything it started.
+TEST_F(MultiHost, LauncherStartsAndStopsASessionOnThreeHosts) {
+  const std::string d = std::to_string(domains::kMultiHostLauncher);
+  const std::string master_json = temp_path("mh", "launch_master.json");
+  std::remove(master_json.c_str());
+  const std::string log_prefix = "/tmp/teleop_launch_observer";
+  for (int k = 0; k < 2; ++k) std::remove((log_prefix + std::to_string(k) + "_" + d + ".log").c_str());
+  const std::string map = kH1 + "=" + lab_->host(1) + "," + kH2 + "=" + lab_->host(2) + "," + kH3 +
+                          "=" + lab_->host(3);
+  setenv("TELEOP_NETNS_MAP", map.c_str(), 1);
+  setenv("TELEOP_IP", lab_->ip().c_str(), 1);
+  Process launch("/bin/bash",
+                 {std::string(TELEOP_SOURCE_DIR) + "/deploy/teleop_launch.sh", "--profile",
+                  "discovery", "--server", kH1, "--master", kH2, "--observer", kH3, "--observer",
+                  kH3, "--backup-discovery", kH3, "--domain", d, "--remote-dir", TELEOP_SOURCE_DIR,
+                  "--build-dir", TELEOP_BINARY_DIR, "--scene", scene_file("tool_only.yaml"),
+                  "--ssh", std::string(TELEOP_SOURCE_DIR) + "/tests/support/netns_ssh.sh", "--",
+                  "--samples", "3000", "--homing", "0.5", "--summary-json", master_json,
+                  "--quiet"},
+                 "mh_launch");
+  unsetenv("TELEOP_NETNS_MAP");
+  unsetenv("TELEOP_IP");
+  ASSERT_EQ(launch.wait_for(90.0), 0) << launch.err() << launch.out();
+  const std::string m = Process::slurp(master_json);
+  const double sent = json_value(m, "sent"), received = json_value(m, "received");
+  std::printf("multi_host launcher (discovery) commands %.0f/%.0f received, rtt p50 %.3f ms p99 "
+              "%.3f ms\n",
+              received, sent, json_nested(m, "rtt_ms", "p50"), json_nested(m, "rtt_ms", "p99"));
+  EXPECT_EQ(sent, 3000) << m;
+  EXPECT_GE(received, 0.99 * sent) << m;
+  EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;
+  for (int k = 0; k < 2; ++k) {
+    const std::string out = Process::slurp(log_prefix + std::to_string(k) + "_" + d + ".log");
+    EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos) << out;
+  }
+  // the launcher stopped what it started: nothing is left running on hosts 1 and 3
+  bool empty = false;
+  for (int t = 0; t < 200 && !empty; ++t) {
+    empty = true;
+    for (int i : {1, 3}) {
+      FILE* f = popen((lab_->ip() + " netns pids " + lab_->host(i)).c_str(), "r");
+      int pid = 0;
+      if (f && std::fscanf(f, "%d", &pid) == 1) empty = false;
+      if (f) pclose(f);
+    }
+    if (!empty) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_TRUE(empty) << "processes left in the namespaces after the launcher ended";
+}
+
 }  // namespace
 }  // namespace teleop::test
