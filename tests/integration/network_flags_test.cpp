@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,23 @@ namespace teleop::test {
 namespace {
 
 const std::string kMonitorBinary = std::string(TELEOP_BINARY_DIR) + "/client/teleop_monitor";
+
+/// Every case must fail before DDS starts; should one ever start a non-loopback participant,
+/// it runs in an empty network namespace of its own (`unshare -n`, where allowed) so that not
+/// even a regression sends a packet.
+std::vector<std::string> isolated(const std::string& exe, const std::vector<std::string>& args,
+                                  std::string* program) {
+  static const bool can_unshare = std::filesystem::exists("/usr/bin/unshare") &&
+                                  std::system("/usr/bin/unshare -n true >/dev/null 2>&1") == 0;
+  if (!can_unshare) {
+    *program = exe;
+    return args;
+  }
+  *program = "/usr/bin/unshare";
+  std::vector<std::string> out = {"-n", exe};
+  out.insert(out.end(), args.begin(), args.end());
+  return out;
+}
 
 struct Case {
   std::vector<std::string> args;
@@ -41,13 +59,17 @@ TEST(NetworkFlags, BadAddressesAndPortsExitWith2NamingTheFlag) {
     for (const auto& c : cases) {
       std::vector<std::string> args = {"--domain", d};
       args.insert(args.end(), c.args.begin(), c.args.end());
-      Process p(exe, args, "netflags" + std::to_string(k++));
+      std::string program;
+      const auto argv = isolated(exe, args, &program);
+      Process p(program, argv, "netflags" + std::to_string(k++));
       EXPECT_EQ(p.wait_for(20.0), 2) << exe << " " << c.expected << "\n" << p.err();
       EXPECT_NE(p.err().find(c.expected), std::string::npos) << exe << "\n" << p.err();
     }
   }
   setenv("TELEOP_PEERS", "10.0.0.1,10.0.0.x", 1);
-  Process p(kServerBinary, {"--domain", d, "--profile", "lan"}, "netflags_env");
+  std::string program;
+  const auto argv = isolated(kServerBinary, {"--domain", d, "--profile", "lan"}, &program);
+  Process p(program, argv, "netflags_env");
   unsetenv("TELEOP_PEERS");
   EXPECT_EQ(p.wait_for(20.0), 2) << p.err();
   EXPECT_NE(p.err().find("TELEOP_PEERS '10.0.0.x'"), std::string::npos) << p.err();
