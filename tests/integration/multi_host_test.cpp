@@ -4,7 +4,10 @@
 // as docs/networking.md writes them. Nothing is sent outside the namespaces the test creates;
 // they are removed at the end, also on failure. Skipped, with the reason, where namespaces
 // cannot be created (not root, no iproute2, a container without CAP_SYS_ADMIN).
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -45,6 +48,9 @@ struct Roles {
 class MultiHost : public ::testing::Test {
  protected:
   void SetUp() override {
+    // one multi-host session at a time, also under `ctest -j`: each is 6 processes at 1 kHz
+    lock_fd_ = open("/tmp/teleop_multi_host_test.lock", O_CREAT | O_RDWR, 0666);
+    if (lock_fd_ >= 0) flock(lock_fd_, LOCK_EX);
     lab_ = std::make_unique<NetnsLab>(3);
     if (!lab_->create()) {
       const std::string why = lab_->why();
@@ -53,7 +59,11 @@ class MultiHost : public ::testing::Test {
       GTEST_SKIP() << "cannot build the test network: " << why;
     }
   }
-  void TearDown() override { lab_.reset(); }  // kills what is left, deletes the namespaces
+  void TearDown() override {
+    lab_.reset();  // kills what is left, deletes the namespaces
+    if (lock_fd_ >= 0) close(lock_fd_);  // releases the lock
+    lock_fd_ = -1;
+  }
 
   /// A process on host i of the test network.
   std::unique_ptr<Process> on(int i, const std::string& exe, std::vector<std::string> args,
@@ -146,6 +156,7 @@ class MultiHost : public ::testing::Test {
   }
 
   std::unique_ptr<NetnsLab> lab_;
+  int lock_fd_ = -1;
 };
 
 const std::string kH1 = NetnsLab::address(1), kH2 = NetnsLab::address(2),
