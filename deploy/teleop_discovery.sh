@@ -57,8 +57,12 @@ if command -v fast-discovery-server >/dev/null 2>&1; then
 elif command -v fastdds >/dev/null 2>&1; then
   cmd=(fastdds discovery)
 else
-  [ "$dry_run" = 1 ] && cmd=(fast-discovery-server) ||
-    { echo "teleop_discovery: neither fast-discovery-server nor fastdds found (install fastdds-tools)" >&2; exit 1; }
+  if [ "$dry_run" = 1 ]; then
+    cmd=(fast-discovery-server)
+  else
+    echo "teleop_discovery: neither fast-discovery-server nor fastdds found (install fastdds-tools)" >&2
+    exit 1
+  fi
 fi
 cmd+=(-i "$id" -l "$address" -p "$port")
 [ "$backup" = 1 ] && cmd+=(-b)

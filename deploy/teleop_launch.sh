@@ -64,8 +64,11 @@ is_ipv4() {
   [[ "$1" =~ ^([0-9]{1,3})\.([0-9]{1,3})\.([0-9]{1,3})\.([0-9]{1,3})$ ]] || return 1
   for o in "${BASH_REMATCH[@]:1}"; do [ "$o" -le 255 ] || return 1; done
 }
-check_port() { [[ "$2" =~ ^[0-9]{1,5}$ ]] && [ "$2" -ge 1 ] && [ "$2" -le 65535 ] ||
-  die "$1 '$2' is not a port number in [1, 65535]"; }
+check_port() {
+  if ! { [[ "$2" =~ ^[0-9]{1,5}$ ]] && [ "$2" -ge 1 ] && [ "$2" -le 65535 ]; }; then
+    die "$1 '$2' is not a port number in [1, 65535]"
+  fi
+}
 # [USER@]ADDR -> ADDR, checked
 addr_of() {
   local flag="$1" spec="$2" a="${2##*@}"
@@ -80,7 +83,9 @@ case "$profile" in
 esac
 [ -n "$server" ] || die "--server is required"
 [ -n "$master" ] || die "--master is required"
-[[ "$domain" =~ ^[0-9]{1,3}$ ]] && [ "$domain" -le 232 ] || die "--domain '$domain' is not an integer in [0, 232]"
+if ! { [[ "$domain" =~ ^[0-9]{1,3}$ ]] && [ "$domain" -le 232 ]; }; then
+  die "--domain '$domain' is not an integer in [0, 232]"
+fi
 check_port --tcp-port "$tcp_port"
 check_port --discovery-port "$discovery_port"
 [ -z "$public_address" ] || is_ipv4 "$public_address" ||
