@@ -2,6 +2,8 @@
 # Installs every Debian package the project needs. Idempotent and non-interactive.
 # Usage: deploy/setup.sh            (as root, or through sudo)
 #        TELEOP_SETUP_VIEWER=0 deploy/setup.sh   (skip the OpenGL viewer packages)
+#        TELEOP_SETUP_VENDORS=0 deploy/setup.sh  (skip the optional other-vendor DDS used only by
+#                                                 tests/integration/other_vendor_test.cpp)
 set -euo pipefail
 
 packages=(
@@ -16,6 +18,11 @@ packages=(
 )
 if [ "${TELEOP_SETUP_VIEWER:-1}" = "1" ]; then
   packages+=(libglfw3-dev libgl-dev libimgui-dev zlib1g-dev xvfb xauth)
+fi
+# optional, tests only: Eclipse Cyclone DDS (C library + idlc) builds teleop_cyclone_reader,
+# the other-vendor reader of the interoperability test; without it that test skips
+if [ "${TELEOP_SETUP_VENDORS:-1}" = "1" ]; then
+  packages+=(cyclonedds-dev cyclonedds-tools)
 fi
 
 sudo_cmd=()

@@ -18,6 +18,7 @@
 
 #include "client/node/master_node.hpp"
 #include "common/config/config.hpp"
+#include "common/dds/network_flags.hpp"
 #include "common/dds/participant.hpp"
 
 namespace {
@@ -54,6 +55,8 @@ int main(int argc, char** argv) {
   app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
+  teleop::dds::NetworkFlags net_flags;
+  teleop::dds::add_network_flags(app, net_flags);
   app.add_option("--config", config_file,
                  "YAML with `controller:`, `delay:` (both directions) mappings; flags win");
   app.add_option("--scheme", o.controller.scheme, "bilateral control scheme")
@@ -114,7 +117,7 @@ int main(int argc, char** argv) {
   }
   try {
     using teleop::config::check_flag;
-    o.dds = teleop::dds::resolve_participant_options(profile, domain, "teleop_master");
+    o.dds = teleop::dds::resolve_participant_options(profile, domain, "teleop_master", net_flags);
     teleop::dds::profile_file(o.dds.profile);
     check_flag("--duration", o.duration_s, 0.0, 1e6);
     check_flag("--rate", o.rate_hz, 10.0, 20000.0);

@@ -15,6 +15,7 @@
 #include <optional>
 #include <thread>
 
+#include "common/dds/network_flags.hpp"
 #include "common/config/config.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/util/clock.hpp"
@@ -56,6 +57,8 @@ int main(int argc, char** argv) {
   double duration_s = 0.0;
   app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", profile, "Fast DDS profile (default: loopback)");
+  teleop::dds::NetworkFlags net_flags;
+  teleop::dds::add_network_flags(app, net_flags);
   app.add_option("--period", period_s, "print period [s], 0.1-60")->capture_default_str();
   app.add_option("--duration", duration_s, "stop after this long [s]; 0 = until SIGINT");
   try {
@@ -70,7 +73,7 @@ int main(int argc, char** argv) {
     using namespace teleop;
     config::check_flag("--period", period_s, 0.1, 60.0);
     config::check_flag("--duration", duration_s, 0.0, 1e7);
-    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_monitor");
+    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_monitor", net_flags);
     teleop::dds::Participant p(opts);
     install_stop_signal_handlers();
 

@@ -47,6 +47,7 @@
 #include "client/viewer/png.hpp"
 #include "client/viewer/ui/panel.hpp"
 #include "client/viewer/viewer_data.hpp"
+#include "common/dds/network_flags.hpp"
 #include "common/config/config.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/util/clock.hpp"
@@ -561,6 +562,8 @@ int main(int argc, char** argv) {
   Options o;
   app.add_option("--domain", o.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", o.profile, "Fast DDS profile (default: loopback)");
+  teleop::dds::NetworkFlags net_flags;
+  teleop::dds::add_network_flags(app, net_flags);
   app.add_option("--snapshot", o.snapshot,
                  "headless: render offscreen, write this PNG and exit (needs an X display, e.g. "
                  "xvfb-run)");
@@ -618,7 +621,7 @@ int main(int argc, char** argv) {
     }
     setenv("LP_NUM_THREADS", "0", 0);
     const auto dds_options =
-        teleop::dds::resolve_participant_options(o.profile, o.domain, "teleop_viewer");
+        teleop::dds::resolve_participant_options(o.profile, o.domain, "teleop_viewer", net_flags);
     teleop::dds::profile_file(dds_options.profile);  // fail early with the list of profiles
     install_stop_signal_handlers();
     ViewerApp viewer(o, dds_options);

@@ -4,7 +4,19 @@
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
+#include <arpa/inet.h>
+
+#include <algorithm>
+#include <cctype>
+#include <fastdds/rtps/attributes/ServerAttributes.h>
+#include <fastdds/rtps/transport/TCPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
+#include <fastrtps/utils/IPLocator.h>
 #include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
 #include <mutex>
 #include <set>
 
@@ -24,34 +36,269 @@ std::string profiles_dir() {
   if (const char* env = std::getenv("TELEOP_PROFILES_DIR"); env && *env) return env;
   return TELEOP_DEFAULT_PROFILES_DIR;
 }
+
+std::string slurp(const fs::path& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+/// participant profile names defined in an XML text, in order
+std::vector<std::string> participant_profiles(const std::string& xml) {
+  static const std::regex re(R"re(<participant\s[^>]*profile_name\s*=\s*"([^"]+)")re");
+  std::vector<std::string> names;
+  for (auto it = std::sregex_iterator(xml.begin(), xml.end(), re); it != std::sregex_iterator();
+       ++it) {
+    names.push_back((*it)[1].str());
+  }
+  return names;
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string out;
+  for (const auto& s : v) out += (out.empty() ? "" : ", ") + s;
+  return out;
+}
+
+std::vector<std::string> available_profiles() {
+  std::vector<std::string> names;
+  for (const auto& [name, file] : profile_index()) names.push_back(name);
+  return names;
+}
+
+int parse_port(const std::string& flag, const std::string& whole, const std::string& text) {
+  bool digits = !text.empty() && text.size() <= 5;
+  for (char c : text) digits = digits && std::isdigit(static_cast<unsigned char>(c));
+  const long port = digits ? std::stol(text) : -1;
+  if (port < 1 || port > 65535) {
+    throw config::ConfigError(flag + " '" + whole + "': '" + text +
+                              "' is not a port number in [1, 65535]");
+  }
+  return static_cast<int>(port);
+}
+
+void check_ipv4(const std::string& flag, const std::string& whole, const std::string& address,
+                const std::string& expected) {
+  in_addr a{};
+  if (address.empty() || inet_pton(AF_INET, address.c_str(), &a) != 1) {
+    throw config::ConfigError(flag + " '" + whole + "': '" + address +
+                              "' is not an IPv4 address (expected " + expected + ")");
+  }
+}
+
+/// "a,b;c" -> {a, b, c} (environment lists)
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : text) {
+    if (c == ',' || c == ';' || c == ' ') {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  if (!cur.empty()) out.push_back(cur);
+  return out;
+}
+
+const char* env_or_null(const char* name) {
+  const char* v = std::getenv(name);
+  return (v && *v) ? v : nullptr;
+}
+
+constexpr int kDefaultTcpPort = 5100;
+constexpr int kDefaultDiscoveryPort = 11811;
+
+void load_once(const std::string& file) {
+  // loading the same file twice is harmless, but guard concurrent loads in one process
+  static std::mutex load_mutex;
+  static std::set<std::string> loaded;
+  std::lock_guard<std::mutex> lock(load_mutex);
+  if (loaded.count(file)) return;
+  if (DomainParticipantFactory::get_instance()->load_XML_profiles_file(file) !=
+      ReturnCode_t::RETCODE_OK) {
+    throw DdsError("cannot load Fast DDS XML profiles from " + file);
+  }
+  loaded.insert(file);
+}
 }  // namespace
 
-std::string profile_file(const std::string& profile) {
+HostPort parse_host_port(const std::string& flag, const std::string& text, int default_port) {
+  HostPort hp;
+  const auto colon = text.rfind(':');
+  hp.address = text.substr(0, colon);
+  check_ipv4(flag, text, hp.address, "a.b.c.d[:port]");
+  hp.port = colon == std::string::npos ? default_port
+                                       : parse_port(flag, text, text.substr(colon + 1));
+  return hp;
+}
+
+std::map<std::string, std::string> profile_index() {
+  std::map<std::string, std::string> index;
+  const fs::path dir = profiles_dir();
+  if (!fs::is_directory(dir)) return index;
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.path().extension() == ".xml") files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  for (const auto& f : files) {
+    for (const auto& name : participant_profiles(slurp(f))) index.emplace(name, f.string());
+  }
+  return index;
+}
+
+ProfileRef resolve_profile(const std::string& profile) {
   if (profile.find('/') != std::string::npos || profile.ends_with(".xml")) {
-    if (!fs::exists(profile)) {
+    if (!fs::is_regular_file(profile)) {
       throw config::ConfigError("--profile '" + profile + "': file does not exist");
     }
-    return profile;
+    const auto names = participant_profiles(slurp(profile));
+    const std::string stem = fs::path(profile).stem().string();
+    if (std::find(names.begin(), names.end(), stem) != names.end()) return {profile, stem};
+    if (names.size() == 1) return {profile, names.front()};
+    throw config::ConfigError("--profile '" + profile + "': the file defines " +
+                              (names.empty() ? std::string("no participant profile")
+                                             : "participant profiles {" + join(names) +
+                                                   "}; give one by name with TELEOP_PROFILES_DIR"));
   }
-  const fs::path p = fs::path(profiles_dir()) / (profile + ".xml");
-  if (!fs::exists(p)) {
-    std::string names;
-    if (fs::is_directory(profiles_dir())) {
-      std::set<std::string> sorted;
-      for (const auto& e : fs::directory_iterator(profiles_dir())) {
-        if (e.path().extension() == ".xml") sorted.insert(e.path().stem().string());
-      }
-      for (const auto& s : sorted) names += (names.empty() ? "" : ", ") + s;
+  const auto index = profile_index();
+  const auto it = index.find(profile);
+  if (it == index.end()) {
+    throw config::ConfigError("--profile '" + profile + "': no participant profile of that name in " +
+                              profiles_dir() + "/*.xml; available profiles: {" +
+                              join(available_profiles()) + "}");
+  }
+  return {it->second, profile};
+}
+
+std::string profile_file(const std::string& profile) { return resolve_profile(profile).file; }
+
+DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileKind* kind_out) {
+  using namespace eprosima::fastrtps::rtps;
+  using eprosima::fastdds::rtps::TCPv4TransportDescriptor;
+  using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
+  const ProfileRef ref = resolve_profile(options.profile);
+  load_once(ref.file);
+  DomainParticipantQos qos;
+  if (DomainParticipantFactory::get_instance()->get_participant_qos_from_profile(ref.name, qos) !=
+      ReturnCode_t::RETCODE_OK) {
+    throw DdsError("profile '" + ref.name + "' not found in " + ref.file);
+  }
+  qos.name(options.name);
+  auto& builtin = qos.wire_protocol().builtin;
+  bool tcp = false, loopback_only = false;
+  for (const auto& t : qos.transport().user_transports) {
+    if (std::dynamic_pointer_cast<TCPv4TransportDescriptor>(t)) tcp = true;
+    if (auto u = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(t)) {
+      loopback_only = loopback_only ||
+                      (u->interfaceWhiteList.size() == 1 && u->interfaceWhiteList[0] == "127.0.0.1");
     }
-    throw config::ConfigError("--profile '" + profile + "': no file " + p.string() +
-                              "; available profiles: {" + names + "}");
   }
-  return p.string();
+  const auto protocol = builtin.discovery_config.discoveryProtocol;
+  const ProfileKind kind =
+      (protocol == DiscoveryProtocol_t::CLIENT || protocol == DiscoveryProtocol_t::SUPER_CLIENT)
+          ? ProfileKind::kDiscoveryClient
+          : (tcp ? ProfileKind::kTcp : ProfileKind::kUdp);
+  if (kind_out) *kind_out = kind;
+
+  const NetworkOptions& net = options.network;
+  const std::string in_profile = " does not apply to profile '" + ref.name + "'";
+  if (kind != ProfileKind::kTcp && net.listen_port != 0) {
+    throw config::ConfigError("--listen " + std::to_string(net.listen_port) + in_profile +
+                              " (TCP profiles only: wan_tcp_server, wan_tcp_client)");
+  }
+  if (kind != ProfileKind::kTcp && !net.public_address.empty()) {
+    throw config::ConfigError("--public-address " + net.public_address + in_profile +
+                              " (TCP profiles only: wan_tcp_server, wan_tcp_client)");
+  }
+  if (kind != ProfileKind::kDiscoveryClient && !net.discovery_servers.empty()) {
+    throw config::ConfigError("--discovery-server " + net.discovery_servers[0].address + in_profile +
+                              " (use --profile discovery_client)");
+  }
+  auto udp_locator = [](const HostPort& hp) {
+    Locator_t loc;
+    loc.kind = LOCATOR_KIND_UDPv4;
+    IPLocator::setIPv4(loc, hp.address);
+    loc.port = static_cast<uint32_t>(hp.port);  // 0: the well-known ports of the domain
+    return loc;
+  };
+
+  switch (kind) {
+    case ProfileKind::kUdp:
+      if (!net.peers.empty() && loopback_only) {
+        throw config::ConfigError("--peer " + net.peers[0].address + in_profile +
+                                  " (it talks to 127.0.0.1 only; use lan or lan_unicast)");
+      }
+      if (net.peers.empty() && ref.name == "lan_unicast") {
+        throw config::ConfigError("profile 'lan_unicast' needs --peer ADDR[:PORT] (or TELEOP_PEERS)"
+                                  ": the addresses of the other hosts");
+      }
+      for (const auto& p : net.peers) builtin.initialPeersList.push_back(udp_locator(p));
+      break;
+    case ProfileKind::kTcp: {
+      bool listening = false;
+      for (auto& t : qos.transport().user_transports) {
+        auto old = std::dynamic_pointer_cast<TCPv4TransportDescriptor>(t);
+        if (!old) continue;
+        auto d = std::make_shared<TCPv4TransportDescriptor>(*old);  // the XML's stays intact
+        if (net.listen_port != 0) d->listening_ports = {static_cast<uint16_t>(net.listen_port)};
+        if (!net.public_address.empty()) {
+          if (d->listening_ports.empty()) {
+            throw config::ConfigError("--public-address " + net.public_address +
+                                      " needs a listening port (--listen PORT, or profile "
+                                      "wan_tcp_server)");
+          }
+          d->set_WAN_address(net.public_address);
+        }
+        listening = listening || !d->listening_ports.empty();
+        t = d;
+      }
+      if (!listening && net.peers.empty()) {
+        throw config::ConfigError("profile '" + ref.name +
+                                  "' needs --peer SERVER_ADDRESS[:PORT] (or TELEOP_PEERS): the "
+                                  "address of the teleop_server host (port default 5100)");
+      }
+      for (const auto& p : net.peers) {
+        Locator_t loc;
+        loc.kind = LOCATOR_KIND_TCPv4;
+        IPLocator::setIPv4(loc, p.address);
+        IPLocator::setPhysicalPort(loc, static_cast<uint16_t>(p.port ? p.port : kDefaultTcpPort));
+        IPLocator::setLogicalPort(loc, 0);  // 0: the logical ports of the domain
+        builtin.initialPeersList.push_back(loc);
+      }
+      break;
+    }
+    case ProfileKind::kDiscoveryClient:
+      if (!net.peers.empty()) {
+        throw config::ConfigError("--peer " + net.peers[0].address + in_profile +
+                                  " (give the servers with --discovery-server)");
+      }
+      if (net.discovery_servers.empty() && builtin.discovery_config.m_DiscoveryServers.empty()) {
+        throw config::ConfigError(
+            "profile '" + ref.name +
+            "' needs --discovery-server ADDR[:PORT] (or TELEOP_DISCOVERY_SERVERS), once per "
+            "server in server-id order (port default 11811)");
+      }
+      if (!net.discovery_servers.empty()) builtin.discovery_config.m_DiscoveryServers.clear();
+      for (std::size_t i = 0; i < net.discovery_servers.size(); ++i) {
+        RemoteServerAttributes server;
+        get_server_client_default_guidPrefix(static_cast<int>(i), server.guidPrefix);
+        HostPort hp = net.discovery_servers[i];
+        if (hp.port == 0) hp.port = kDefaultDiscoveryPort;
+        server.metatrafficUnicastLocatorList.push_back(udp_locator(hp));
+        builtin.discovery_config.m_DiscoveryServers.push_back(server);
+      }
+      break;
+  }
+  return qos;
 }
 
 ParticipantOptions resolve_participant_options(const std::optional<std::string>& profile_flag,
                                                const std::optional<int>& domain_flag,
-                                               const std::string& name) {
+                                               const std::string& name, const NetworkFlags& net) {
   ParticipantOptions o;
   o.name = name;
   if (profile_flag) {
@@ -75,30 +322,49 @@ ParticipantOptions resolve_participant_options(const std::optional<std::string>&
     throw config::ConfigError("--domain " + std::to_string(o.domain) +
                               " is out of the allowed range [0, 232]");
   }
+  // network options: flag > environment; a bad value names the flag or the variable
+  if (!net.peers.empty()) {
+    for (const auto& p : net.peers) o.network.peers.push_back(parse_host_port("--peer", p, 0));
+  } else if (const char* env = env_or_null("TELEOP_PEERS")) {
+    for (const auto& p : split_list(env)) {
+      o.network.peers.push_back(parse_host_port("TELEOP_PEERS", p, 0));
+    }
+  }
+  if (net.listen) {
+    o.network.listen_port = parse_port("--listen", *net.listen, *net.listen);
+  } else if (const char* env = env_or_null("TELEOP_LISTEN_PORT")) {
+    o.network.listen_port = parse_port("TELEOP_LISTEN_PORT", env, env);
+  }
+  if (net.public_address) {
+    check_ipv4("--public-address", *net.public_address, *net.public_address, "a.b.c.d");
+    o.network.public_address = *net.public_address;
+  } else if (const char* env = env_or_null("TELEOP_PUBLIC_ADDRESS")) {
+    check_ipv4("TELEOP_PUBLIC_ADDRESS", env, env, "a.b.c.d");
+    o.network.public_address = env;
+  }
+  if (!net.discovery_servers.empty()) {
+    for (const auto& p : net.discovery_servers) {
+      o.network.discovery_servers.push_back(
+          parse_host_port("--discovery-server", p, kDefaultDiscoveryPort));
+    }
+  } else if (const char* env = env_or_null("TELEOP_DISCOVERY_SERVERS")) {
+    for (const auto& p : split_list(env)) {
+      o.network.discovery_servers.push_back(
+          parse_host_port("TELEOP_DISCOVERY_SERVERS", p, kDefaultDiscoveryPort));
+    }
+  }
+  participant_qos(o);  // fail early: unknown profile, options that do not fit it
   return o;
 }
 
 Participant::Participant(const ParticipantOptions& options) : options_(options) {
   auto* factory = DomainParticipantFactory::get_instance();
-  const std::string file = profile_file(options.profile);
-  // loading the same file twice is harmless, but guard concurrent loads in one process
-  static std::mutex load_mutex;
-  static std::set<std::string> loaded;
-  {
-    std::lock_guard<std::mutex> lock(load_mutex);
-    if (!loaded.count(file)) {
-      if (factory->load_XML_profiles_file(file) != ReturnCode_t::RETCODE_OK) {
-        throw DdsError("cannot load Fast DDS XML profiles from " + file);
-      }
-      loaded.insert(file);
-    }
-  }
-  const std::string profile_name = fs::path(options.profile).stem().string();
-  participant_ = factory->create_participant_with_profile(static_cast<DomainId_t>(options.domain),
-                                                          profile_name);
+  const DomainParticipantQos qos = participant_qos(options);
+  participant_ = factory->create_participant(static_cast<DomainId_t>(options.domain), qos);
   if (!participant_) {
-    throw DdsError("cannot create a DDS participant with profile '" + profile_name + "' from " +
-                   file + " on domain " + std::to_string(options.domain));
+    const ProfileRef ref = resolve_profile(options.profile);
+    throw DdsError("cannot create a DDS participant with profile '" + ref.name + "' from " +
+                   ref.file + " on domain " + std::to_string(options.domain));
   }
   publisher_ = participant_->create_publisher(PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(SUBSCRIBER_QOS_DEFAULT);

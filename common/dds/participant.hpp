@@ -1,11 +1,14 @@
 #pragma once
 // DDS participant factory and typed writer/reader helpers (Fast DDS 2.9).
 //
-// Profiles are XML files in deploy/profiles/<name>.xml holding a participant profile of the
-// same name. The default, `loopback`, sends nothing beyond 127.0.0.1. Choose another with
-// --profile (or TELEOP_PROFILE), the domain with --domain (or TELEOP_DOMAIN), and the folder
-// with TELEOP_PROFILES_DIR. Every return code is checked; failures throw DdsError with a
-// message that says what failed.
+// Profiles are participant profiles in the XML files of deploy/profiles/ (a file may hold
+// several, e.g. wan_tcp.xml holds wan_tcp_server and wan_tcp_client): a profile NAME is found
+// by its profile_name, whatever the file is called. The default, `loopback`, sends nothing
+// beyond 127.0.0.1. Choose another with --profile (or TELEOP_PROFILE), the domain with --domain
+// (or TELEOP_DOMAIN), and the folder with TELEOP_PROFILES_DIR. Addresses and ports of the
+// multi-machine profiles come from flags or environment (NetworkOptions), never from editing
+// the XML: they are put into the participant QoS in code. Every return code is checked;
+// failures throw DdsError with a message that says what failed.
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
@@ -16,6 +19,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace teleop::dds {
 
@@ -24,22 +28,78 @@ class DdsError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Which participant to create.
-struct ParticipantOptions {
-  std::string profile = "loopback";  ///< profile name == file stem in the profiles folder
-  int domain = 0;                    ///< DDS domain id [0, 232]
-  std::string name = "teleop";       ///< participant name shown in tools
+/// An IPv4 address and a port (0: the profile's default).
+struct HostPort {
+  std::string address;
+  int port = 0;
+  bool operator==(const HostPort&) const = default;
 };
 
-/// Resolves options: explicit flag > environment (TELEOP_PROFILE, TELEOP_DOMAIN) > default.
-/// @throws config::ConfigError for an out-of-range domain or malformed environment value.
+/// Addresses and ports of the multi-machine profiles (docs/networking.md).
+struct NetworkOptions {
+  std::vector<HostPort> peers;              ///< --peer / TELEOP_PEERS: unicast initial peers
+  int listen_port = 0;                      ///< --listen / TELEOP_LISTEN_PORT: TCP port (0: 5100)
+  std::string public_address;               ///< --public-address / TELEOP_PUBLIC_ADDRESS (TCP WAN)
+  std::vector<HostPort> discovery_servers;  ///< --discovery-server / TELEOP_DISCOVERY_SERVERS
+};
+
+/// The network flags as typed on the command line (unparsed); see network_flags.hpp.
+struct NetworkFlags {
+  std::vector<std::string> peers;
+  std::optional<std::string> listen;
+  std::optional<std::string> public_address;
+  std::vector<std::string> discovery_servers;
+};
+
+/// Which participant to create.
+struct ParticipantOptions {
+  std::string profile = "loopback";  ///< participant profile name (or an XML file path)
+  int domain = 0;                    ///< DDS domain id [0, 232]
+  std::string name = "teleop";       ///< participant name shown in tools
+  NetworkOptions network = {};       ///< addresses for the multi-machine profiles
+};
+
+/// Resolves options: explicit flag > environment (TELEOP_PROFILE, TELEOP_DOMAIN, TELEOP_PEERS,
+/// TELEOP_LISTEN_PORT, TELEOP_PUBLIC_ADDRESS, TELEOP_DISCOVERY_SERVERS) > default, and checks
+/// that the profile exists and that the network options fit it.
+/// @throws config::ConfigError naming the flag (or variable) and the value.
 ParticipantOptions resolve_participant_options(const std::optional<std::string>& profile_flag,
                                                const std::optional<int>& domain_flag,
-                                               const std::string& name);
+                                               const std::string& name,
+                                               const NetworkFlags& net = {});
 
-/// Path of the XML file for a profile name, or the name itself if it is a path to a file.
-/// @throws config::ConfigError if the file does not exist (lists the available profiles).
+/// Parses "a.b.c.d[:port]" given by `flag` (port 1-65535; none: default_port).
+/// @throws config::ConfigError naming the flag and the value.
+HostPort parse_host_port(const std::string& flag, const std::string& text, int default_port);
+
+/// Where a participant profile is defined.
+struct ProfileRef {
+  std::string file;  ///< XML file
+  std::string name;  ///< participant profile_name in it
+};
+
+/// Every participant profile of the profiles folder: name -> file.
+std::map<std::string, std::string> profile_index();
+
+/// The file and name of a profile given as a NAME (looked up in every XML file of the profiles
+/// folder) or as a path to an XML file (its participant profile named like the file, else its
+/// only one). @throws config::ConfigError listing the available profiles.
+ProfileRef resolve_profile(const std::string& profile);
+
+/// Path of the XML file defining a profile (resolve_profile(profile).file).
 std::string profile_file(const std::string& profile);
+
+/// How a profile uses the network options.
+enum class ProfileKind {
+  kUdp,              ///< UDP (loopback, lan, lan_unicast): --peer adds unicast peers
+  kTcp,              ///< TCPv4 (wan_tcp_*): --listen, --public-address, --peer ADDR[:5100]
+  kDiscoveryClient,  ///< discovery client: --discovery-server ADDR[:11811], one per server id
+};
+
+/// The participant QoS of the options: the XML profile with the network options applied.
+/// @throws config::ConfigError when an option does not fit the profile (names the flag).
+eprosima::fastdds::dds::DomainParticipantQos participant_qos(const ParticipantOptions& options,
+                                                             ProfileKind* kind = nullptr);
 
 /// Quality of service of each topic of the design's topic table.
 enum class TopicQos {

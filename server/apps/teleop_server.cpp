@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "common/config/config.hpp"
+#include "common/dds/network_flags.hpp"
 #include "common/dds/participant.hpp"
 #include "server/node/server_node.hpp"
 #include "server/world/scene.hpp"
@@ -35,6 +36,8 @@ int main(int argc, char** argv) {
   app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
+  teleop::dds::NetworkFlags net_flags;
+  teleop::dds::add_network_flags(app, net_flags);
   app.add_option("--summary-json", summary_json, "write a JSON summary here at exit");
   app.add_flag("--quiet", quiet, "print only warnings and errors");
   try {
@@ -48,7 +51,7 @@ int main(int argc, char** argv) {
   try {
     teleop::sim::SceneConfig scene = teleop::sim::load_scene(scene_file);
     teleop::server::ServerOptions o;
-    o.dds = teleop::dds::resolve_participant_options(profile, domain, "teleop_server");
+    o.dds = teleop::dds::resolve_participant_options(profile, domain, "teleop_server", net_flags);
     teleop::dds::profile_file(o.dds.profile);  // fail early with the list of profiles
     o.rate_hz = teleop::config::check_flag("--rate", rate_hz.value_or(scene.physics_rate_hz), 10.0,
                                            20000.0);

@@ -17,6 +17,14 @@ inline constexpr int kViewerNoData = 82;        // teleop_viewer with no server:
 inline constexpr int kWaveSession = 60;         // passivity_test: wave-variables over DDS
 inline constexpr int kTdpaSession = 61;         // passivity_test: tdpa over DDS
 inline constexpr int kBadWaveCommands = 62;     // passivity_test: hostile wave commands
+inline constexpr int kOtherVendor = 63;         // other_vendor_test: a Cyclone DDS reader
+inline constexpr int kMultiHostLan = 64;        // multi_host_test, in its own namespaces
+inline constexpr int kMultiHostWanTcp = 65;     // multi_host_test
+inline constexpr int kMultiHostDiscovery = 66;  // multi_host_test
+inline constexpr int kMultiHostLanUnicast = 69; // multi_host_test
+inline constexpr int kMultiHostDiscoveryBackup = 71;  // multi_host_test
+inline constexpr int kNetworkFlags = 70;
+inline constexpr int kMultiHostLauncher = 72;   // multi_host_test: deploy/teleop_launch.sh        // network_flags_test (exits before DDS starts)
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains

@@ -1,0 +1,41 @@
+#pragma once
+// The network flags shared by every executable (header-only: the apps link CLI11).
+//
+//   --profile NAME             participant profile (deploy/profiles/*.xml, by profile_name)
+//   --peer ADDR[:PORT]         unicast peer (lan, lan_unicast: UDP; wan_tcp_*: the TCP server,
+//                              port default 5100); repeatable
+//   --listen PORT              TCP listening port (wan_tcp_server default 5100)
+//   --public-address ADDR      the address peers reach a TCP listener at (NAT / WAN address)
+//   --discovery-server ADDR[:PORT]  discovery server of id 0, 1, ... in the order given
+//                              (discovery_client; port default 11811); repeatable
+//
+// Environment, used when the flag is absent: TELEOP_PEERS, TELEOP_LISTEN_PORT,
+// TELEOP_PUBLIC_ADDRESS, TELEOP_DISCOVERY_SERVERS (lists separated by commas).
+#include <CLI/CLI.hpp>
+
+#include "common/dds/participant.hpp"
+
+namespace teleop::dds {
+
+inline void add_network_flags(CLI::App& app, NetworkFlags& f) {
+  app.add_option("--peer", f.peers,
+                 "unicast peer ADDR[:PORT], repeatable (lan/lan_unicast: UDP; wan_tcp_client: "
+                 "the server, port default 5100) (default: $TELEOP_PEERS)")
+      ->type_name("ADDR[:PORT]")
+      ->allow_extra_args(false);
+  app.add_option("--listen", f.listen,
+                 "TCP listening port of the wan_tcp profiles (default: $TELEOP_LISTEN_PORT, "
+                 "wan_tcp_server 5100)")
+      ->type_name("PORT");
+  app.add_option("--public-address", f.public_address,
+                 "address other hosts reach this TCP listener at (default: "
+                 "$TELEOP_PUBLIC_ADDRESS)")
+      ->type_name("ADDR");
+  app.add_option("--discovery-server", f.discovery_servers,
+                 "discovery server ADDR[:PORT] of id 0, 1, ... in order, repeatable (profile "
+                 "discovery_client; port default 11811) (default: $TELEOP_DISCOVERY_SERVERS)")
+      ->type_name("ADDR[:PORT]")
+      ->allow_extra_args(false);
+}
+
+}  // namespace teleop::dds

@@ -1,0 +1,254 @@
+// Three hosts for each multi-machine profile: the test builds its own network (network
+// namespaces on a private bridge, tests/support/netns.hpp) and runs teleop_server on host 1,
+// teleop_master on host 2 and two teleop_monitor observers on host 3, with the profiles exactly
+// as docs/networking.md writes them. Nothing is sent outside the namespaces the test creates;
+// they are removed at the end, also on failure. Skipped, with the reason, where namespaces
+// cannot be created (not root, no iproute2, a container without CAP_SYS_ADMIN).
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tests/support/domains.hpp"
+#include "tests/support/integration.hpp"
+#include "tests/support/netns.hpp"
+#include "tests/support/process.hpp"
+
+namespace teleop::test {
+namespace {
+
+const std::string kMonitorBinary = std::string(TELEOP_BINARY_DIR) + "/client/teleop_monitor";
+const std::string kDiscoveryScript = std::string(TELEOP_SOURCE_DIR) + "/deploy/teleop_discovery.sh";
+
+/// Largest "<name> <rate> Hz" figure printed by teleop_monitor.
+double max_rate(const std::string& out, const std::string& name) {
+  double best = 0.0;
+  for (std::size_t pos = 0; (pos = out.find(name, pos)) != std::string::npos;) {
+    pos += name.size();
+    best = std::max(best, std::atof(out.c_str() + pos));
+  }
+  return best;
+}
+
+struct Roles {
+  std::string profile_server, profile_client;
+  std::vector<std::string> server, master, observer;  ///< extra network flags per role
+  bool discovery = false;                             ///< start discovery servers first
+  bool lose_discovery_server_0 = false;               ///< stop server 0 before the session
+  std::string delay = "";                             ///< one-way delay, e.g. "2ms"
+};
+
+class MultiHost : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    // one multi-host session at a time, also under `ctest -j`: each is 6 processes at 1 kHz
+    lock_fd_ = open("/tmp/teleop_multi_host_test.lock", O_CREAT | O_RDWR, 0666);
+    if (lock_fd_ >= 0) flock(lock_fd_, LOCK_EX);
+    lab_ = std::make_unique<NetnsLab>(3);
+    if (!lab_->create()) {
+      const std::string why = lab_->why();
+      lab_.reset();
+      std::printf("multi_host_test: SKIPPED: %s\n", why.c_str());
+      GTEST_SKIP() << "cannot build the test network: " << why;
+    }
+  }
+  void TearDown() override {
+    lab_.reset();  // kills what is left, deletes the namespaces
+    if (lock_fd_ >= 0) close(lock_fd_);  // releases the lock
+    lock_fd_ = -1;
+  }
+
+  /// A process on host i of the test network.
+  std::unique_ptr<Process> on(int i, const std::string& exe, std::vector<std::string> args,
+                              const std::string& tag) {
+    std::vector<std::string> argv = lab_->exec_prefix(i);
+    argv.push_back(exe);
+    argv.insert(argv.end(), args.begin(), args.end());
+    return std::make_unique<Process>(lab_->ip(), argv, "mh_" + tag);
+  }
+
+  void session(const std::string& name, int domain, const Roles& r) {
+    const std::string d = std::to_string(domain);
+    const std::string master_json = temp_path("mh", name + "_master.json");
+    const std::string server_json = temp_path("mh", name + "_server.json");
+    std::remove(master_json.c_str());
+    std::unique_ptr<Process> ds0, ds1;
+    if (r.discovery) {
+      // a main server (id 0) on host 1 and a second one (id 1, --backup) on host 2
+      ds0 = on(1, "/bin/bash",
+               {kDiscoveryScript, "--id", "0", "--address", NetnsLab::address(1), "--port", "11811"},
+               name + "_ds0");
+      ds1 = on(2, "/bin/bash",
+               {kDiscoveryScript, "--id", "1", "--address", NetnsLab::address(2), "--port", "11811",
+                "--backup", "--backup-dir", temp_path("mh", name + "_ds1")},
+               name + "_ds1");
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      ASSERT_TRUE(ds0->running()) << ds0->err() << ds0->out();
+      ASSERT_TRUE(ds1->running()) << ds1->err() << ds1->out();
+      if (r.lose_discovery_server_0) {
+        ds0->signal(SIGKILL);
+        ASSERT_NE(ds0->wait_for(10.0), -1);
+      }
+    }
+    std::vector<std::string> delay_flags;
+    if (!r.delay.empty()) {
+      // a network delay: tc netem on the master's and the server's veth where the kernel has
+      // it, else the master's user-space delay channel (both directions)
+      if (lab_->add_netem_delay(1, r.delay) && lab_->add_netem_delay(2, r.delay)) {
+        std::printf("multi_host %s: %s one-way delay from tc netem\n", name.c_str(),
+                    r.delay.c_str());
+      } else {
+        std::printf("multi_host %s: no tc netem here; %s one-way delay from the master's delay "
+                    "channel\n",
+                    name.c_str(), r.delay.c_str());
+        delay_flags = {"--delay", r.delay};
+      }
+    }
+    std::vector<std::string> sargs = {"--domain", d, "--profile", r.profile_server, "--duration",
+                                      "60", "--quiet", "--scene", scene_file("tool_only.yaml"),
+                                      "--summary-json", server_json};
+    sargs.insert(sargs.end(), r.server.begin(), r.server.end());
+    auto server = on(1, kServerBinary, sargs, name + "_server");
+    std::vector<std::string> margs = {"--domain", d, "--profile", r.profile_client, "--samples",
+                                      "3000", "--homing", "0.5", "--wait-server", "20",
+                                      "--summary-json", master_json, "--quiet"};
+    margs.insert(margs.end(), r.master.begin(), r.master.end());
+    margs.insert(margs.end(), delay_flags.begin(), delay_flags.end());
+    auto master = on(2, kMasterBinary, margs, name + "_master");
+    std::vector<std::unique_ptr<Process>> observers;
+    for (int k = 0; k < 2; ++k) {
+      std::vector<std::string> oargs = {"--domain", d, "--profile", r.profile_client,
+                                        "--duration", "6", "--period", "0.5"};
+      oargs.insert(oargs.end(), r.observer.begin(), r.observer.end());
+      observers.push_back(on(3, kMonitorBinary, oargs, name + "_obs" + std::to_string(k)));
+    }
+    const int master_rc = master->wait_for(60.0);
+    for (auto& o : observers) EXPECT_EQ(o->wait_for(30.0), 0) << o->err();
+    server->signal(SIGTERM);
+    EXPECT_EQ(server->wait_for(20.0), 0) << server->err();
+    ASSERT_EQ(master_rc, 0) << master->err() << master->out();
+
+    const std::string m = Process::slurp(master_json);
+    const double sent = json_value(m, "sent"), received = json_value(m, "received");
+    const double p50 = json_nested(m, "rtt_ms", "p50"), p99 = json_nested(m, "rtt_ms", "p99");
+    std::printf("multi_host %-16s commands %.0f/%.0f received, rtt p50 %.3f ms p99 %.3f ms\n",
+                name.c_str(), received, sent, p50, p99);
+    // with a delay, the last commands are still in the channel when the master stops
+    EXPECT_GE(sent, 2900) << m;
+    EXPECT_GE(received, 0.99 * sent) << m;
+    EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;
+    EXPECT_GT(p99, 0.0) << m;
+    EXPECT_LT(p99, 100.0) << m;  // generous: a loaded 2-core machine
+    for (auto& o : observers) {
+      const std::string out = o->out();
+      EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos) << name << "\n" << out;
+      EXPECT_GT(max_rate(out, "slave_state"), 100.0) << name << "\n" << out;
+    }
+    if (ds0) ds0->signal(SIGTERM);
+    if (ds1) ds1->signal(SIGTERM);
+  }
+
+  std::unique_ptr<NetnsLab> lab_;
+  int lock_fd_ = -1;
+};
+
+const std::string kH1 = NetnsLab::address(1), kH2 = NetnsLab::address(2),
+                  kH3 = NetnsLab::address(3);
+
+TEST_F(MultiHost, LanMulticastWithDelay) {
+  Roles r{"lan", "lan", {}, {}, {}};
+  r.delay = "2ms";
+  session("lan", domains::kMultiHostLan, r);
+}
+
+TEST_F(MultiHost, LanUnicastPeers) {
+  session("lan_unicast", domains::kMultiHostLanUnicast,
+          Roles{"lan_unicast", "lan_unicast", {"--peer", kH2, "--peer", kH3},
+                {"--peer", kH1, "--peer", kH3}, {"--peer", kH1, "--peer", kH2}});
+}
+
+TEST_F(MultiHost, WanTcp) {
+  session("wan_tcp", domains::kMultiHostWanTcp,
+          Roles{"wan_tcp_server", "wan_tcp_client",
+                {"--listen", "5100", "--public-address", kH1},
+                {"--peer", kH1 + ":5100"}, {"--peer", kH1 + ":5100"}});
+}
+
+TEST_F(MultiHost, DiscoveryServerWithASecondServer) {
+  const std::vector<std::string> servers = {"--discovery-server", kH1 + ":11811",
+                                            "--discovery-server", kH2 + ":11811"};
+  session("discovery", domains::kMultiHostDiscovery,
+          Roles{"discovery_client", "discovery_client", servers, servers, servers, true});
+}
+
+TEST_F(MultiHost, DiscoveryServerBackupAloneIsEnough) {
+  // server 0 is gone before anyone starts: everything is discovered through server 1
+  const std::vector<std::string> servers = {"--discovery-server", kH1 + ":11811",
+                                            "--discovery-server", kH2 + ":11811"};
+  Roles r{"discovery_client", "discovery_client", servers, servers, servers, true};
+  r.lose_discovery_server_0 = true;
+  session("discovery_1only", domains::kMultiHostDiscoveryBackup, r);
+}
+
+// deploy/teleop_launch.sh for real, with ssh replaced by tests/support/netns_ssh.sh (runs the
+// remote command in the namespace of the host's address): discovery servers 0 (server host)
+// and 1 (--backup-discovery, host 3), server, two observers, the master in the foreground;
+// when the master ends the launcher stops everything it started.
+TEST_F(MultiHost, LauncherStartsAndStopsASessionOnThreeHosts) {
+  const std::string d = std::to_string(domains::kMultiHostLauncher);
+  const std::string master_json = temp_path("mh", "launch_master.json");
+  std::remove(master_json.c_str());
+  const std::string log_prefix = "/tmp/teleop_launch_observer";
+  for (int k = 0; k < 2; ++k) std::remove((log_prefix + std::to_string(k) + "_" + d + ".log").c_str());
+  const std::string map = kH1 + "=" + lab_->host(1) + "," + kH2 + "=" + lab_->host(2) + "," + kH3 +
+                          "=" + lab_->host(3);
+  setenv("TELEOP_NETNS_MAP", map.c_str(), 1);
+  setenv("TELEOP_IP", lab_->ip().c_str(), 1);
+  Process launch("/bin/bash",
+                 {std::string(TELEOP_SOURCE_DIR) + "/deploy/teleop_launch.sh", "--profile",
+                  "discovery", "--server", kH1, "--master", kH2, "--observer", kH3, "--observer",
+                  kH3, "--backup-discovery", kH3, "--domain", d, "--remote-dir", TELEOP_SOURCE_DIR,
+                  "--build-dir", TELEOP_BINARY_DIR, "--scene", scene_file("tool_only.yaml"),
+                  "--ssh", std::string(TELEOP_SOURCE_DIR) + "/tests/support/netns_ssh.sh", "--",
+                  "--samples", "3000", "--homing", "0.5", "--summary-json", master_json,
+                  "--quiet"},
+                 "mh_launch");
+  unsetenv("TELEOP_NETNS_MAP");
+  unsetenv("TELEOP_IP");
+  ASSERT_EQ(launch.wait_for(90.0), 0) << launch.err() << launch.out();
+  const std::string m = Process::slurp(master_json);
+  const double sent = json_value(m, "sent"), received = json_value(m, "received");
+  std::printf("multi_host launcher (discovery) commands %.0f/%.0f received, rtt p50 %.3f ms p99 "
+              "%.3f ms\n",
+              received, sent, json_nested(m, "rtt_ms", "p50"), json_nested(m, "rtt_ms", "p99"));
+  EXPECT_EQ(sent, 3000) << m;
+  EXPECT_GE(received, 0.99 * sent) << m;
+  EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;
+  for (int k = 0; k < 2; ++k) {
+    const std::string out = Process::slurp(log_prefix + std::to_string(k) + "_" + d + ".log");
+    EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos) << out;
+  }
+  // the launcher stopped what it started: nothing is left running on hosts 1 and 3
+  bool empty = false;
+  for (int t = 0; t < 200 && !empty; ++t) {
+    empty = true;
+    for (int i : {1, 3}) {
+      FILE* f = popen((lab_->ip() + " netns pids " + lab_->host(i)).c_str(), "r");
+      int pid = 0;
+      if (f && std::fscanf(f, "%d", &pid) == 1) empty = false;
+      if (f) pclose(f);
+    }
+    if (!empty) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_TRUE(empty) << "processes left in the namespaces after the launcher ended";
+}
+
+}  // namespace
+}  // namespace teleop::test
