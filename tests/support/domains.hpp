@@ -17,6 +17,10 @@ inline constexpr int kViewerNoData = 82;        // teleop_viewer with no server:
 inline constexpr int kWaveSession = 60;         // passivity_test: wave-variables over DDS
 inline constexpr int kTdpaSession = 61;         // passivity_test: tdpa over DDS
 inline constexpr int kBadWaveCommands = 62;     // passivity_test: hostile wave commands
+inline constexpr int kRecordSession = 63;       // record_play_test: session under teleop_record
+inline constexpr int kPlayback = 64;            // record_play_test: teleop_play to a subscriber
+inline constexpr int kMonitorTui = 65;          // monitor_tui_test: teleop_monitor under tmux
+inline constexpr int kMonitorJson = 66;         // monitor_tui_test: teleop_monitor --json
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
