@@ -1,7 +1,8 @@
 // teleop_record: records every teleop/* topic of a session into one indexed file.
 //
 //   teleop_record --out session.db [--duration S] [--domain D] [--profile P]
-//                 [--queue-mb 64] [--exclude TOPIC]... [--summary-json FILE] [--quiet]
+//                 [--queue-mb 64] [--batch-ms 10] [--exclude TOPIC]... [--summary-json FILE]
+//                 [--quiet]
 //
 // Each sample is stored as the serialized CDR payload its writer sent, with the writer's
 // source timestamp, the recorder's receive timestamp, the writer's GUID and sequence number
@@ -42,6 +43,9 @@ int main(int argc, char** argv) {
   app.add_option("--queue-mb", queue_mb, "bound of the in-memory queue [MiB], 1-4096")
       ->capture_default_str();
   app.add_option("--exclude", ro.exclude, "topic not to record (repeatable)");
+  app.add_option("--batch-ms", ro.batch_ms,
+                 "take samples in batches this far apart [ms], 0-50 (0 = wake per sample)")
+      ->capture_default_str();
   app.add_option("--summary-json", summary_json, "write the counts as JSON here at exit");
   app.add_flag("--quiet", quiet, "print only warnings and errors");
   try {
@@ -56,6 +60,7 @@ int main(int argc, char** argv) {
     using namespace teleop;
     config::check_flag("--duration", duration_s, 0.0, 1e6);
     config::check_flag("--queue-mb", queue_mb, 1.0, 4096.0);
+    config::check_flag("--batch-ms", ro.batch_ms, 0.0, 50.0);
     for (const auto& t : ro.exclude) {
       if (!record::find_topic(t)) {
         std::string names;

@@ -144,6 +144,11 @@ void Recorder::read_loop() {
     }
     queue_cv_.notify_one();
     if (last_pass) break;
+    // take in batches: at 1 kHz per stream topic a wake-up per sample costs the session's
+    // processes CPU on a small machine; the reader histories (64 deep) hold a batch
+    if (options_.batch_ms > 0.0) {
+      std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(options_.batch_ms));
+    }
   }
   for (auto& t : topics_) waitset.detach_condition(t->reader->get_statuscondition());
   waitset.detach_condition(*guard);

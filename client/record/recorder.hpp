@@ -29,6 +29,9 @@ struct RecorderOptions {
   std::string out;                           ///< recording file
   std::size_t queue_bytes = 64u << 20;       ///< bound of the in-memory queue [bytes]
   std::vector<std::string> exclude;          ///< topic names not to record
+  /// The reader thread sleeps this long between passes over the readers [ms] (0: wake per
+  /// sample). Stream readers keep 64 samples, so up to ~50 ms is safe at 1 kHz.
+  double batch_ms = 10.0;
 };
 
 /// What was recorded on one topic.
