@@ -11,11 +11,11 @@
 // terminal (or with --lines) it prints the scrolling log of earlier versions, one block per
 // period; --json prints one JSON object per line (status every period, events and the scene as
 // they arrive) for scripts. The monitor's rendering lives in client/monitor/.
-#include <CLI/CLI.hpp>
 #include <poll.h>
 #include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <atomic>
 #include <cstdio>
@@ -114,7 +114,7 @@ int main(int argc, char** argv) {
   }
   try {
     using namespace teleop;
-    const Mode mode = json ? Mode::kJson
+    const Mode mode = json    ? Mode::kJson
                       : lines ? Mode::kLines
                       : tui   ? Mode::kTui
                               : (isatty(STDOUT_FILENO) ? Mode::kTui : Mode::kLines);
@@ -138,10 +138,14 @@ int main(int argc, char** argv) {
       double stale;
     };
     const std::vector<TopicDef> defs = {
-        {"slave_state", false, stale_s},   {"master_command", false, stale_s},
-        {"master_state", false, stale_s},  {"mesh_frame", false, stale_s},
-        {"server_stats", false, std::max(stale_s, 3.0)}, {"events", true, 0.0},
-        {"scene", true, 0.0},              {"mesh_topology", true, 0.0},
+        {"slave_state", false, stale_s},
+        {"master_command", false, stale_s},
+        {"master_state", false, stale_s},
+        {"mesh_frame", false, stale_s},
+        {"server_stats", false, std::max(stale_s, 3.0)},
+        {"events", true, 0.0},
+        {"scene", true, 0.0},
+        {"mesh_topology", true, 0.0},
     };
     std::deque<Counter> counters(defs.size());
     auto counter = [&](const char* n) -> Counter& {
@@ -158,7 +162,8 @@ int main(int argc, char** argv) {
 
     namespace tdds = teleop::dds;
     using Info = eprosima::fastdds::dds::SampleInfo;
-    tdds::Reader<SlaveStatePubSubType> r_slave(p, tdds::topics::kSlaveState, tdds::TopicQos::kStream,
+    tdds::Reader<SlaveStatePubSubType> r_slave(p, tdds::topics::kSlaveState,
+                                               tdds::TopicQos::kStream,
                                                [&](const SlaveState& s, const Info&) {
                                                  std::lock_guard<std::mutex> l(m);
                                                  snap.slave = s;
@@ -168,32 +173,34 @@ int main(int argc, char** argv) {
     tdds::Reader<MasterCommandPubSubType> r_cmd(
         p, tdds::topics::kMasterCommand, tdds::TopicQos::kStream,
         [&](const MasterCommand&, const Info&) { counter("master_command").hit(); });
-    tdds::Reader<MasterStatePubSubType> r_master(
-        p, tdds::topics::kMasterState, tdds::TopicQos::kStream,
-        [&](const MasterState& s, const Info&) {
-          std::lock_guard<std::mutex> l(m);
-          snap.master = s;
-          snap.have_master = true;
-          counter("master_state").hit();
-        });
-    tdds::Reader<ServerStatsPubSubType> r_stats(
-        p, tdds::topics::kServerStats, tdds::TopicQos::kReliableStream,
-        [&](const ServerStats& s, const Info&) {
-          std::lock_guard<std::mutex> l(m);
-          snap.stats = s;
-          snap.have_stats = true;
-          counter("server_stats").hit();
-        });
-    tdds::Reader<SceneDescriptionPubSubType> r_scene(
-        p, tdds::topics::kScene, tdds::TopicQos::kLatched,
-        [&](const SceneDescription& s, const Info&) {
-          std::lock_guard<std::mutex> l(m);
-          snap.scene = s;
-          snap.have_scene = true;
-          counter("scene").hit();
-          if (mode == Mode::kLines) print_now(monitor::scene_line(s));
-          if (mode == Mode::kJson) print_now(monitor::scene_json(s));
-        });
+    tdds::Reader<MasterStatePubSubType> r_master(p, tdds::topics::kMasterState,
+                                                 tdds::TopicQos::kStream,
+                                                 [&](const MasterState& s, const Info&) {
+                                                   std::lock_guard<std::mutex> l(m);
+                                                   snap.master = s;
+                                                   snap.have_master = true;
+                                                   counter("master_state").hit();
+                                                 });
+    tdds::Reader<ServerStatsPubSubType> r_stats(p, tdds::topics::kServerStats,
+                                                tdds::TopicQos::kReliableStream,
+                                                [&](const ServerStats& s, const Info&) {
+                                                  std::lock_guard<std::mutex> l(m);
+                                                  snap.stats = s;
+                                                  snap.have_stats = true;
+                                                  counter("server_stats").hit();
+                                                });
+    tdds::Reader<SceneDescriptionPubSubType> r_scene(p, tdds::topics::kScene,
+                                                     tdds::TopicQos::kLatched,
+                                                     [&](const SceneDescription& s, const Info&) {
+                                                       std::lock_guard<std::mutex> l(m);
+                                                       snap.scene = s;
+                                                       snap.have_scene = true;
+                                                       counter("scene").hit();
+                                                       if (mode == Mode::kLines)
+                                                         print_now(monitor::scene_line(s));
+                                                       if (mode == Mode::kJson)
+                                                         print_now(monitor::scene_json(s));
+                                                     });
     tdds::Reader<MeshTopologyPubSubType> r_topology(
         p, tdds::topics::kMeshTopology, tdds::TopicQos::kLatched,
         [&](const MeshTopology&, const Info&) { counter("mesh_topology").hit(); });

@@ -37,7 +37,8 @@ int main(int argc, char** argv) {
   app.add_option("--exclude", po.exclude, "topic not to publish (repeatable)");
   app.add_option("--wait", po.wait_s, "pause before the first sample, for discovery [s], 0-60")
       ->capture_default_str();
-  app.add_option("--linger", po.linger_s, "keep publishing latched topics after the end [s], 0-3600")
+  app.add_option("--linger", po.linger_s,
+                 "keep publishing latched topics after the end [s], 0-3600")
       ->capture_default_str();
   app.add_flag("--quiet", po.quiet, "print only warnings and errors");
   try {

@@ -94,11 +94,10 @@ int main(int argc, char** argv) {
                   static_cast<double>(recorder.stored_bytes()) / 1e6);
       for (const auto& c : recorder.counts()) {
         if (c.samples == 0 && c.dropped == 0) continue;
-        std::printf("  %-24s %8llu samples  %3llu writers  %llu lost  %llu dropped\n",
-                    c.name.c_str(), static_cast<unsigned long long>(c.samples),
-                    static_cast<unsigned long long>(c.writers),
-                    static_cast<unsigned long long>(c.gaps),
-                    static_cast<unsigned long long>(c.dropped));
+        std::printf(
+            "  %-24s %8llu samples  %3llu writers  %llu lost  %llu dropped\n", c.name.c_str(),
+            static_cast<unsigned long long>(c.samples), static_cast<unsigned long long>(c.writers),
+            static_cast<unsigned long long>(c.gaps), static_cast<unsigned long long>(c.dropped));
       }
     }
     if (!summary_json.empty()) {

@@ -18,7 +18,8 @@ std::unique_ptr<HapticDevice> make_hardware_device(const std::string& name) {
   if (name.rfind("evdev:", 0) == 0) {
     const std::string path = name.substr(6);
     if (path.empty()) {
-      throw config::ConfigError("--device '" + name + "': give the event node, e.g. "
+      throw config::ConfigError("--device '" + name +
+                                "': give the event node, e.g. "
                                 "evdev:/dev/input/event5");
     }
 #ifdef TELEOP_HAVE_EVDEV
@@ -26,7 +27,8 @@ std::unique_ptr<HapticDevice> make_hardware_device(const std::string& name) {
     p.path = path;
     return std::make_unique<EvdevDevice>(p);
 #else
-    throw config::ConfigError("--device '" + name + "': built without libevdev "
+    throw config::ConfigError("--device '" + name +
+                              "': built without libevdev "
                               "(install libevdev-dev and reconfigure)");
 #endif
   }
@@ -34,7 +36,8 @@ std::unique_ptr<HapticDevice> make_hardware_device(const std::string& name) {
 #ifdef TELEOP_WITH_VENDOR_SDK
     return make_vendor_sdk_device(name.size() > 7 ? name.substr(7) : std::string());
 #else
-    throw config::ConfigError("--device '" + name + "': built without a vendor SDK "
+    throw config::ConfigError("--device '" + name +
+                              "': built without a vendor SDK "
                               "(configure with -DTELEOP_WITH_VENDOR_SDK=ON; docs/tools.md)");
 #endif
   }

@@ -30,8 +30,8 @@ void EvdevDevice::configure() {
   if (fd_ >= 0) return;
   fd_ = ::open(params_.path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
   if (fd_ < 0) {
-    throw config::ConfigError("--device evdev:" + params_.path + ": cannot open: " +
-                              std::strerror(errno) +
+    throw config::ConfigError("--device evdev:" + params_.path +
+                              ": cannot open: " + std::strerror(errno) +
                               " (an event device under /dev/input; read/write access needed, "
                               "e.g. the input group)");
   }
@@ -55,7 +55,8 @@ void EvdevDevice::configure() {
   }
   button_count_ = 0;
   for (unsigned code = BTN_MISC; code < BTN_GEAR_UP + 1 && button_count_ < 32; ++code) {
-    if (libevdev_has_event_code(dev_, EV_KEY, code)) button_codes_[button_count_++] = static_cast<int>(code);
+    if (libevdev_has_event_code(dev_, EV_KEY, code))
+      button_codes_[button_count_++] = static_cast<int>(code);
   }
   has_ff_ = libevdev_has_event_code(dev_, EV_FF, FF_CONSTANT);
   full_scale_n_ = params_.spec.max_force_n;
@@ -65,7 +66,8 @@ void EvdevDevice::configure() {
     params_.spec.max_force_n = 0.0;
     params_.spec.max_continuous_force_n = 0.0;
   }
-  if (params_.spec.name == "evdev") params_.spec.name = std::string("evdev: ") + libevdev_get_name(dev_);
+  if (params_.spec.name == "evdev")
+    params_.spec.name = std::string("evdev: ") + libevdev_get_name(dev_);
   drain_events();
   state_ = DeviceLifecycle::kInactive;
 }
@@ -91,9 +93,9 @@ void EvdevDevice::activate() {
   if (has_ff_) {
     effect_id_ = -1;
     if (!upload(evdev::ConstantForce{})) {
-      throw config::ConfigError("--device evdev:" + params_.path +
-                                ": the constant-force effect upload failed: " +
-                                std::strerror(errno));
+      throw config::ConfigError(
+          "--device evdev:" + params_.path +
+          ": the constant-force effect upload failed: " + std::strerror(errno));
     }
     input_event play{};
     play.type = EV_FF;
@@ -143,7 +145,9 @@ void EvdevDevice::drain_events() {
 Eigen::Vector3d EvdevDevice::position_now() const {
   Eigen::Vector3d x;
   for (int i = 0; i < 3; ++i) {
-    const int v = axes_[i].present ? libevdev_get_event_value(dev_, EV_ABS, static_cast<unsigned>(kAxes[i])) : 0;
+    const int v = axes_[i].present
+                      ? libevdev_get_event_value(dev_, EV_ABS, static_cast<unsigned>(kAxes[i]))
+                      : 0;
     x[i] = evdev::axis_to_m(v, axes_[i], params_.spec.workspace_min_m[i],
                             params_.spec.workspace_max_m[i]);
   }

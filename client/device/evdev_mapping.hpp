@@ -30,14 +30,15 @@ struct AxisRange {
 /// Metres for the raw value of an axis whose range maps onto [lo, hi] [m].
 inline double axis_to_m(int value, const AxisRange& a, double lo, double hi) {
   if (!a.present || a.maximum <= a.minimum) return 0.5 * (lo + hi);
-  const double u = static_cast<double>(value - a.minimum) / static_cast<double>(a.maximum - a.minimum);
+  const double u =
+      static_cast<double>(value - a.minimum) / static_cast<double>(a.maximum - a.minimum);
   return lo + std::clamp(u, 0.0, 1.0) * (hi - lo);
 }
 
 /// A constant-force effect's level and direction.
 struct ConstantForce {
-  std::int16_t level = 0;      ///< 0 .. 0x7fff
-  std::uint16_t direction = 0; ///< 0x0000 +y, 0x4000 -x, 0x8000 -y, 0xC000 +x
+  std::int16_t level = 0;       ///< 0 .. 0x7fff
+  std::uint16_t direction = 0;  ///< 0x0000 +y, 0x4000 -x, 0x8000 -y, 0xC000 +x
   bool operator==(const ConstantForce& o) const {
     return level == o.level && direction == o.direction;
   }
@@ -54,8 +55,8 @@ inline ConstantForce force_to_effect(const Eigen::Vector3d& force_n, double max_
   e.level = static_cast<std::int16_t>(std::lround(std::min(mag / max_force_n, 1.0) * 0x7fff));
   double theta = std::atan2(-fx, fy);  // 0 at +y, pi/2 at -x
   if (theta < 0.0) theta += 2.0 * M_PI;
-  e.direction =
-      static_cast<std::uint16_t>(static_cast<long>(std::lround(theta / (2.0 * M_PI) * 65536.0)) & 0xffff);
+  e.direction = static_cast<std::uint16_t>(
+      static_cast<long>(std::lround(theta / (2.0 * M_PI) * 65536.0)) & 0xffff);
   return e;
 }
 

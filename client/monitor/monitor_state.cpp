@@ -29,8 +29,8 @@ std::string vec3(const std::array<double, 3>& v) {
 }
 
 std::uint64_t rejected(const ServerStats& s) {
-  return s.commands_rejected_nan() + s.commands_rejected_workspace() +
-         s.commands_rejected_stale() + s.commands_rejected_passivity();
+  return s.commands_rejected_nan() + s.commands_rejected_workspace() + s.commands_rejected_stale() +
+         s.commands_rejected_passivity();
 }
 
 }  // namespace
@@ -128,10 +128,11 @@ std::string slave_text(const Snapshot& s, const TopicView* t) {
   if (t && t->stale()) return fmt("slave   STALE: no slave_state for %.1f s", t->age_s);
   const auto& x = s.slave.tip_position_m();
   const auto& f = s.slave.contact_force_n();
-  return fmt("slave   tip (%.3f, %.3f, %.3f) m  contact %s  force (%.2f, %.2f, %.2f) N  "
-             "penetration %.2f mm%s",
-             x[0], x[1], x[2], s.slave.in_contact() ? "yes" : "no ", f[0], f[1], f[2],
-             s.slave.penetration_m() * 1e3, s.slave.holding() ? "  HOLDING" : "");
+  return fmt(
+      "slave   tip (%.3f, %.3f, %.3f) m  contact %s  force (%.2f, %.2f, %.2f) N  "
+      "penetration %.2f mm%s",
+      x[0], x[1], x[2], s.slave.in_contact() ? "yes" : "no ", f[0], f[1], f[2],
+      s.slave.penetration_m() * 1e3, s.slave.holding() ? "  HOLDING" : "");
 }
 
 std::string master_text(const Snapshot& s, const TopicView* t) {
@@ -146,12 +147,13 @@ std::string master_text(const Snapshot& s, const TopicView* t) {
 std::string server_text(const Snapshot& s, const TopicView* t) {
   if (!s.have_stats) return "";
   if (t && t->stale()) return fmt("server  STALE: no server_stats for %.1f s", t->age_s);
-  return fmt("server  loop %.0f Hz  step p50 %.1f us p99 %.1f us  overruns %llu  rejected %llu  "
-             "watchdog %llu",
-             s.stats.loop_rate_hz(), s.stats.step_us_p50(), s.stats.step_us_p99(),
-             static_cast<unsigned long long>(s.stats.overruns()),
-             static_cast<unsigned long long>(rejected(s.stats)),
-             static_cast<unsigned long long>(s.stats.watchdog_trips()));
+  return fmt(
+      "server  loop %.0f Hz  step p50 %.1f us p99 %.1f us  overruns %llu  rejected %llu  "
+      "watchdog %llu",
+      s.stats.loop_rate_hz(), s.stats.step_us_p50(), s.stats.step_us_p99(),
+      static_cast<unsigned long long>(s.stats.overruns()),
+      static_cast<unsigned long long>(rejected(s.stats)),
+      static_cast<unsigned long long>(s.stats.watchdog_trips()));
 }
 
 }  // namespace
@@ -177,9 +179,9 @@ std::vector<std::string> render_screen(const Snapshot& s, int rows, int cols) {
                       static_cast<unsigned long long>(t.count), t.stale() ? "  STALE" : ""));
   }
   out.push_back("");
-  for (const std::string& line : {slave_text(s, s.topic("slave_state")),
-                                  master_text(s, s.topic("master_state")),
-                                  server_text(s, s.topic("server_stats"))}) {
+  for (const std::string& line :
+       {slave_text(s, s.topic("slave_state")), master_text(s, s.topic("master_state")),
+        server_text(s, s.topic("server_stats"))}) {
     if (!line.empty()) out.push_back(line);
   }
   out.push_back("");
@@ -269,8 +271,8 @@ std::string event_json(const EventView& e) {
          ", \"source\": " + json_string(e.event.source().to_string()) +
          ", \"kind\": " + json_string(event_kind(e.event.kind())) +
          ", \"severity\": " + std::to_string(e.event.severity()) +
-         ", \"message\": " + json_string(e.event.message().to_string()) + ", \"value\": " + num(e.event.value()) +
-         "}";
+         ", \"message\": " + json_string(e.event.message().to_string()) +
+         ", \"value\": " + num(e.event.value()) + "}";
 }
 
 std::string scene_json(const SceneDescription& d) {

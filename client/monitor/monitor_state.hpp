@@ -14,8 +14,8 @@ namespace teleop::monitor {
 
 /// One topic as seen by the monitor.
 struct TopicView {
-  std::string name;         ///< short name, e.g. "slave_state"
-  bool latched = false;     ///< sent once (scene, topology): never stale
+  std::string name;      ///< short name, e.g. "slave_state"
+  bool latched = false;  ///< sent once (scene, topology): never stale
   double stale_after_s = 0.5;
   std::uint64_t count = 0;  ///< samples received
   double rate_hz = 0.0;     ///< over the last second

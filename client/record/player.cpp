@@ -26,8 +26,8 @@ void sleep_until(std::chrono::steady_clock::time_point t) {
   while (!stop_requested()) {
     const auto now = std::chrono::steady_clock::now();
     if (now >= t) return;
-    std::this_thread::sleep_for(std::min<std::chrono::steady_clock::duration>(
-        t - now, std::chrono::milliseconds(50)));
+    std::this_thread::sleep_for(
+        std::min<std::chrono::steady_clock::duration>(t - now, std::chrono::milliseconds(50)));
   }
 }
 
@@ -39,8 +39,10 @@ PlayerResult play(dds::Participant& participant, const PlayerOptions& o) {
   result.recording_s = static_cast<double>(rec.last_ns() - rec.first_ns()) * 1e-9;
   if (o.seek_s > result.recording_s) {
     char buf[160];
-    std::snprintf(buf, sizeof(buf), "command line: --seek %g is beyond the end of the recording "
-                  "(allowed: 0 to %.3f s)", o.seek_s, result.recording_s);
+    std::snprintf(buf, sizeof(buf),
+                  "command line: --seek %g is beyond the end of the recording "
+                  "(allowed: 0 to %.3f s)",
+                  o.seek_s, result.recording_s);
     throw config::ConfigError(buf);
   }
   struct Out {
@@ -80,14 +82,16 @@ PlayerResult play(dds::Participant& participant, const PlayerOptions& o) {
 
   const std::int64_t seek_ns = rec.first_ns() + static_cast<std::int64_t>(o.seek_s * 1e9);
   if (!o.quiet) {
-    std::printf("teleop_play: %s: %.3f s, %zu topics; playing from %.3f s at %gx on domain %d "
-                "(profile %s)\n",
-                o.file.c_str(), result.recording_s, outs.size(), o.seek_s, o.speed,
-                participant.options().domain, participant.options().profile.c_str());
+    std::printf(
+        "teleop_play: %s: %.3f s, %zu topics; playing from %.3f s at %gx on domain %d "
+        "(profile %s)\n",
+        o.file.c_str(), result.recording_s, outs.size(), o.seek_s, o.speed,
+        participant.options().domain, participant.options().profile.c_str());
     std::fflush(stdout);
   }
-  sleep_until(std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                                     std::chrono::duration<double>(o.wait_s)));
+  sleep_until(std::chrono::steady_clock::now() +
+              std::chrono::duration_cast<std::chrono::nanoseconds>(
+                  std::chrono::duration<double>(o.wait_s)));
 
   RecordedSample s;
   RawSample raw;
@@ -118,8 +122,9 @@ PlayerResult play(dds::Participant& participant, const PlayerOptions& o) {
     write(s);
   }
   // 3. let reliable readers acknowledge and late observers pick up the latched topics
-  sleep_until(std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                                     std::chrono::duration<double>(o.linger_s)));
+  sleep_until(std::chrono::steady_clock::now() +
+              std::chrono::duration_cast<std::chrono::nanoseconds>(
+                  std::chrono::duration<double>(o.linger_s)));
   if (!o.quiet) {
     std::printf("teleop_play: wrote %llu samples (%llu refused)\n",
                 static_cast<unsigned long long>(result.written),

@@ -15,19 +15,19 @@ namespace teleop::record {
 
 struct PlayerOptions {
   std::string file;
-  double speed = 1.0;      ///< 1 = as recorded, 2 = twice as fast
-  double seek_s = 0.0;     ///< start this far into the recording [s]
-  double wait_s = 0.5;     ///< pause after creating the writers, for discovery [s]
-  double linger_s = 1.0;   ///< keep the writers after the last sample [s]
+  double speed = 1.0;                ///< 1 = as recorded, 2 = twice as fast
+  double seek_s = 0.0;               ///< start this far into the recording [s]
+  double wait_s = 0.5;               ///< pause after creating the writers, for discovery [s]
+  double linger_s = 1.0;             ///< keep the writers after the last sample [s]
   std::vector<std::string> exclude;  ///< topic names not to publish
   bool quiet = false;
 };
 
 struct PlayerResult {
-  std::uint64_t written = 0;   ///< samples written
-  std::uint64_t failures = 0;  ///< write() refused by the middleware
+  std::uint64_t written = 0;         ///< samples written
+  std::uint64_t failures = 0;        ///< write() refused by the middleware
   std::uint64_t skipped_topics = 0;  ///< topics of unknown type, not published
-  double recording_s = 0.0;    ///< length of the recording [s]
+  double recording_s = 0.0;          ///< length of the recording [s]
 };
 
 /// Plays the recording until its end or a stop request (SIGINT/SIGTERM).

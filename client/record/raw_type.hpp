@@ -7,9 +7,9 @@
 // recorder takes what the writers sent byte for byte; a player writes those bytes back. Neither
 // depends on the QoS the session used nor on the IDL the recording was made with, as long as
 // the type name is the same.
-#include <fastdds/dds/topic/TopicDataType.hpp>
 #include <fastdds/rtps/common/InstanceHandle.h>
 #include <fastdds/rtps/common/SerializedPayload.h>
+#include <fastdds/dds/topic/TopicDataType.hpp>
 
 #include <cstdint>
 #include <cstring>
@@ -55,7 +55,9 @@ class RawPubSubType : public eprosima::fastdds::dds::TopicDataType {
   }
 
   std::function<std::uint32_t()> getSerializedSizeProvider(void* data) override {
-    return [data]() { return static_cast<std::uint32_t>(static_cast<RawSample*>(data)->bytes.size()); };
+    return [data]() {
+      return static_cast<std::uint32_t>(static_cast<RawSample*>(data)->bytes.size());
+    };
   }
 
   void* createData() override { return new RawSample(); }

@@ -26,9 +26,9 @@ class DataReader;
 namespace teleop::record {
 
 struct RecorderOptions {
-  std::string out;                           ///< recording file
-  std::size_t queue_bytes = 64u << 20;       ///< bound of the in-memory queue [bytes]
-  std::vector<std::string> exclude;          ///< topic names not to record
+  std::string out;                      ///< recording file
+  std::size_t queue_bytes = 64u << 20;  ///< bound of the in-memory queue [bytes]
+  std::vector<std::string> exclude;     ///< topic names not to record
   /// The reader thread sleeps this long between passes over the readers [ms] (0: wake per
   /// sample). Stream readers keep 64 samples, so up to ~50 ms is safe at 1 kHz.
   double batch_ms = 10.0;
@@ -37,12 +37,12 @@ struct RecorderOptions {
 /// What was recorded on one topic.
 struct TopicCounts {
   std::string name;
-  std::uint64_t samples = 0;        ///< recorded
-  std::uint64_t bytes = 0;          ///< serialized payload bytes recorded
-  std::uint64_t writers = 0;        ///< distinct writers heard
-  std::uint64_t gaps = 0;           ///< samples missing between a writer's first and last seen
-  std::uint64_t before_first = 0;   ///< a writer's samples written before the recorder heard it
-  std::uint64_t dropped = 0;        ///< dropped because the queue was full
+  std::uint64_t samples = 0;       ///< recorded
+  std::uint64_t bytes = 0;         ///< serialized payload bytes recorded
+  std::uint64_t writers = 0;       ///< distinct writers heard
+  std::uint64_t gaps = 0;          ///< samples missing between a writer's first and last seen
+  std::uint64_t before_first = 0;  ///< a writer's samples written before the recorder heard it
+  std::uint64_t dropped = 0;       ///< dropped because the queue was full
 };
 
 class Recorder {

@@ -38,11 +38,13 @@ RecordingWriter::RecordingWriter(const std::string& path) {
   exec("PRAGMA journal_mode=WAL");
   exec("PRAGMA synchronous=NORMAL");
   exec("CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT NOT NULL)");
-  exec("CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT UNIQUE NOT NULL, "
-       "type_name TEXT NOT NULL, qos TEXT NOT NULL)");
-  exec("CREATE TABLE samples(topic_id INTEGER NOT NULL, receive_ns INTEGER NOT NULL, "
-       "source_ns INTEGER NOT NULL, writer_guid BLOB, writer_seq INTEGER, codec INTEGER NOT NULL, "
-       "raw_size INTEGER NOT NULL, data BLOB NOT NULL)");
+  exec(
+      "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT UNIQUE NOT NULL, "
+      "type_name TEXT NOT NULL, qos TEXT NOT NULL)");
+  exec(
+      "CREATE TABLE samples(topic_id INTEGER NOT NULL, receive_ns INTEGER NOT NULL, "
+      "source_ns INTEGER NOT NULL, writer_guid BLOB, writer_seq INTEGER, codec INTEGER NOT NULL, "
+      "raw_size INTEGER NOT NULL, data BLOB NOT NULL)");
   exec("CREATE INDEX samples_by_time ON samples(receive_ns)");
   set_meta("format", kFormat);
   check(db_,
@@ -76,8 +78,9 @@ void RecordingWriter::exec(const std::string& sql) {
 int RecordingWriter::add_topic(const std::string& name, const std::string& type_name,
                                const std::string& qos) {
   sqlite3_stmt* st = nullptr;
-  check(db_, sqlite3_prepare_v2(db_, "INSERT INTO topics(name, type_name, qos) VALUES(?,?,?)", -1,
-                                &st, nullptr),
+  check(db_,
+        sqlite3_prepare_v2(db_, "INSERT INTO topics(name, type_name, qos) VALUES(?,?,?)", -1, &st,
+                           nullptr),
         "prepare topic");
   sqlite3_bind_text(st, 1, name.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(st, 2, type_name.c_str(), -1, SQLITE_TRANSIENT);
@@ -90,8 +93,9 @@ int RecordingWriter::add_topic(const std::string& name, const std::string& type_
 
 void RecordingWriter::set_meta(const std::string& key, const std::string& value) {
   sqlite3_stmt* st = nullptr;
-  check(db_, sqlite3_prepare_v2(db_, "INSERT OR REPLACE INTO meta(key, value) VALUES(?,?)", -1,
-                                &st, nullptr),
+  check(db_,
+        sqlite3_prepare_v2(db_, "INSERT OR REPLACE INTO meta(key, value) VALUES(?,?)", -1, &st,
+                           nullptr),
         "prepare meta");
   sqlite3_bind_text(st, 1, key.c_str(), -1, SQLITE_TRANSIENT);
   sqlite3_bind_text(st, 2, value.c_str(), -1, SQLITE_TRANSIENT);
@@ -151,8 +155,9 @@ RecordingReader::RecordingReader(const std::string& path) {
     throw RecordingError("'" + path + "' is not a teleop recording (" + kFormat + ")");
   }
   sqlite3_stmt* st = nullptr;
-  check(db_, sqlite3_prepare_v2(db_, "SELECT id, name, type_name, qos FROM topics ORDER BY id", -1,
-                                &st, nullptr),
+  check(db_,
+        sqlite3_prepare_v2(db_, "SELECT id, name, type_name, qos FROM topics ORDER BY id", -1, &st,
+                           nullptr),
         "read topics");
   while (sqlite3_step(st) == SQLITE_ROW) {
     TopicRecord t;
@@ -163,8 +168,9 @@ RecordingReader::RecordingReader(const std::string& path) {
     topics_.push_back(t);
   }
   sqlite3_finalize(st);
-  check(db_, sqlite3_prepare_v2(db_, "SELECT min(receive_ns), max(receive_ns) FROM samples", -1,
-                                &st, nullptr),
+  check(db_,
+        sqlite3_prepare_v2(db_, "SELECT min(receive_ns), max(receive_ns) FROM samples", -1, &st,
+                           nullptr),
         "read time range");
   if (sqlite3_step(st) == SQLITE_ROW) {
     first_ns_ = sqlite3_column_int64(st, 0);
@@ -195,8 +201,9 @@ std::map<std::string, std::string> RecordingReader::meta() const {
 std::map<int, std::int64_t> RecordingReader::counts() const {
   std::map<int, std::int64_t> out;
   sqlite3_stmt* st = nullptr;
-  check(db_, sqlite3_prepare_v2(db_, "SELECT topic_id, count(*) FROM samples GROUP BY topic_id",
-                                -1, &st, nullptr),
+  check(db_,
+        sqlite3_prepare_v2(db_, "SELECT topic_id, count(*) FROM samples GROUP BY topic_id", -1, &st,
+                           nullptr),
         "count samples");
   while (sqlite3_step(st) == SQLITE_ROW) {
     out[sqlite3_column_int(st, 0)] = sqlite3_column_int64(st, 1);

@@ -36,7 +36,7 @@ struct RecordedSample {
   std::int64_t receive_ns = 0;  ///< when the recorder received it (system clock) [ns]
   std::int64_t source_ns = 0;   ///< when the writer wrote it (its system clock) [ns]
   std::uint8_t writer_guid[16] = {};
-  std::int64_t writer_seq = 0;       ///< the writer's DDS sequence number
+  std::int64_t writer_seq = 0;        ///< the writer's DDS sequence number
   std::vector<std::uint8_t> payload;  ///< serialized CDR payload with encapsulation header
 };
 

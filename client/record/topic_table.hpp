@@ -11,9 +11,9 @@
 namespace teleop::record {
 
 struct TopicEntry {
-  std::string name;      ///< DDS topic name, e.g. "teleop/slave_state"
-  std::string type;      ///< DDS type name, e.g. "teleop::SlaveState"
-  dds::TopicQos qos;     ///< QoS class of the live writers
+  std::string name;   ///< DDS topic name, e.g. "teleop/slave_state"
+  std::string type;   ///< DDS type name, e.g. "teleop::SlaveState"
+  dds::TopicQos qos;  ///< QoS class of the live writers
   /// New generated type support of the topic (caller owns it).
   eprosima::fastdds::dds::TopicDataType* (*make_type)();
 };

@@ -35,13 +35,15 @@ class Tmux {
   ~Tmux() { std::system((base() + " kill-server >/dev/null 2>&1").c_str()); }
   std::string base() const { return "tmux -L " + socket_; }
   bool start(const std::string& command) {
-    return std::system((base() + " new-session -d -s mon -x 150 -y 45 '" + command + "'").c_str()) ==
-           0;
+    return std::system(
+               (base() + " new-session -d -s mon -x 150 -y 45 '" + command + "'").c_str()) == 0;
   }
   std::string capture() const { return run(base() + " capture-pane -p -t mon"); }
   std::string capture_history() const { return run(base() + " capture-pane -p -S - -t mon"); }
   void keys(const std::string& k) { std::system((base() + " send-keys -t mon " + k).c_str()); }
-  bool alive() const { return std::system((base() + " has-session -t mon 2>/dev/null").c_str()) == 0; }
+  bool alive() const {
+    return std::system((base() + " has-session -t mon 2>/dev/null").c_str()) == 0;
+  }
   /// Polls the pane until `pred` holds (true) or timeout_s passes (false).
   template <class Pred>
   bool wait_screen(Pred pred, double timeout_s, std::string* last = nullptr) {

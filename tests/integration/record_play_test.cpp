@@ -41,11 +41,13 @@ TEST(RecordPlay, SessionRecordedWithoutLossThenPlayedBack) {
   Process recorder(kRecordBinary, {"--domain", d, "--out", rec_file, "--summary-json", rec_json},
                    "rec_recorder");
   ASSERT_TRUE(wait_for_output(recorder, "recording", 20.0)) << recorder.err();
-  Process server(kServerBinary, {"--domain", d, "--duration", "60", "--summary-json", server_json,
-                                 "--scene", scene_file("tool_only.yaml")},
+  Process server(kServerBinary,
+                 {"--domain", d, "--duration", "60", "--summary-json", server_json, "--scene",
+                  scene_file("tool_only.yaml")},
                  "rec_server");
-  Process master(kMasterBinary, {"--domain", d, "--duration", "2", "--homing", "0.5",
-                                 "--summary-json", master_json, "--quiet"},
+  Process master(kMasterBinary,
+                 {"--domain", d, "--duration", "2", "--homing", "0.5", "--summary-json",
+                  master_json, "--quiet"},
                  "rec_master");
   ASSERT_EQ(master.wait_for(60.0), 0) << master.err();
   server.signal(SIGTERM);
@@ -63,11 +65,12 @@ TEST(RecordPlay, SessionRecordedWithoutLossThenPlayedBack) {
   const double cmd_before = topic_field(rec, "master_command", "before_first");
   const double st = topic_field(rec, "slave_state", "samples");
   const double st_before = topic_field(rec, "slave_state", "before_first");
-  std::printf("[ recorded ] master_command %.0f (+%.0f written before the recorder matched the "
-              "writer) of %.0f sent; slave_state %.0f (+%.0f) of %.0f steps; gaps %.0f, "
-              "dropped %.0f; master rtt p99 with the recorder %.3f ms\n",
-              cmd, cmd_before, sent, st, st_before, steps, json_value(rec, "gaps"),
-              json_value(rec, "dropped"), json_nested(m, "rtt_ms", "p99"));
+  std::printf(
+      "[ recorded ] master_command %.0f (+%.0f written before the recorder matched the "
+      "writer) of %.0f sent; slave_state %.0f (+%.0f) of %.0f steps; gaps %.0f, "
+      "dropped %.0f; master rtt p99 with the recorder %.3f ms\n",
+      cmd, cmd_before, sent, st, st_before, steps, json_value(rec, "gaps"),
+      json_value(rec, "dropped"), json_nested(m, "rtt_ms", "p99"));
   // every sample a writer sent after the recorder matched it is in the file
   EXPECT_EQ(json_value(rec, "gaps"), 0.0) << rec;
   EXPECT_EQ(json_value(rec, "dropped"), 0.0) << rec;
@@ -116,7 +119,8 @@ TEST(RecordPlay, SessionRecordedWithoutLossThenPlayedBack) {
   EXPECT_EQ(bad_speed.wait_for(20.0), 2);
   EXPECT_NE(bad_speed.err().find("--speed"), std::string::npos) << bad_speed.err();
   EXPECT_NE(bad_speed.err().find("500"), std::string::npos) << bad_speed.err();
-  Process bad_seek(kPlayBinary, {rec_file, "--seek", "1000", "--domain", std::to_string(domains::kPlayback)},
+  Process bad_seek(kPlayBinary,
+                   {rec_file, "--seek", "1000", "--domain", std::to_string(domains::kPlayback)},
                    "rec_bad_seek");
   EXPECT_EQ(bad_seek.wait_for(20.0), 2);
   EXPECT_NE(bad_seek.err().find("--seek"), std::string::npos) << bad_seek.err();

@@ -37,7 +37,8 @@ class Seqlock {
 
  private:
   // word-wise atomic copies keep the race formally defined (and ThreadSanitizer quiet)
-  static constexpr std::size_t kWords = (sizeof(T) + sizeof(std::uint64_t) - 1) / sizeof(std::uint64_t);
+  static constexpr std::size_t kWords =
+      (sizeof(T) + sizeof(std::uint64_t) - 1) / sizeof(std::uint64_t);
   void copy_in(const T& v) {
     std::uint64_t tmp[kWords] = {};
     __builtin_memcpy(tmp, &v, sizeof(T));

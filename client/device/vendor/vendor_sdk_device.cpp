@@ -21,8 +21,9 @@ HDCallbackCode HDCALLBACK servo_callback(void* self) {
 
 std::string hd_error_text() {
   const HDErrorInfo e = hdGetError();
-  return HD_DEVICE_ERROR(e) ? std::string(reinterpret_cast<const char*>(hdGetErrorString(e.errorCode)))
-                            : std::string("no error");
+  return HD_DEVICE_ERROR(e)
+             ? std::string(reinterpret_cast<const char*>(hdGetErrorString(e.errorCode)))
+             : std::string("no error");
 }
 
 }  // namespace
@@ -49,7 +50,8 @@ void VendorSdkDevice::configure() {
   hdGetDoublev(HD_NOMINAL_MAX_CONTINUOUS_FORCE, &max_cont);
   hdGetDoublev(HD_NOMINAL_MAX_STIFFNESS, &max_k);  // N/mm
   hdGetDoublev(HD_NOMINAL_MAX_DAMPING, &max_b);    // N s/mm
-  spec_.name = std::string("vendor: ") + reinterpret_cast<const char*>(hdGetString(HD_DEVICE_MODEL_TYPE));
+  spec_.name =
+      std::string("vendor: ") + reinterpret_cast<const char*>(hdGetString(HD_DEVICE_MODEL_TYPE));
   spec_.workspace_min_m = Eigen::Vector3d(ws[0], ws[1], ws[2]) * 1e-3;
   spec_.workspace_max_m = Eigen::Vector3d(ws[3], ws[4], ws[5]) * 1e-3;
   spec_.max_force_n = max_force;
@@ -89,8 +91,8 @@ bool VendorSdkDevice::servo_tick() {
   vendor::ServoReading r;
   HDdouble p[3], v[3], t[16];
   HDint buttons = 0;
-  hdGetDoublev(HD_CURRENT_POSITION, p);  // mm
-  hdGetDoublev(HD_CURRENT_VELOCITY, v);  // mm/s
+  hdGetDoublev(HD_CURRENT_POSITION, p);   // mm
+  hdGetDoublev(HD_CURRENT_VELOCITY, v);   // mm/s
   hdGetDoublev(HD_CURRENT_TRANSFORM, t);  // column-major 4x4
   hdGetIntegerv(HD_CURRENT_BUTTONS, &buttons);
   for (int i = 0; i < 3; ++i) {
@@ -122,7 +124,8 @@ DeviceReading VendorSdkDevice::read() {
   if (state_ != DeviceLifecycle::kActive || exchange_.reading.load(r) == 0 || r.fault) return out;
   out.time_s = time_s_;
   out.position_m = Eigen::Vector3d(r.position_m[0], r.position_m[1], r.position_m[2]);
-  out.linear_velocity_mps = Eigen::Vector3d(r.velocity_mps[0], r.velocity_mps[1], r.velocity_mps[2]);
+  out.linear_velocity_mps =
+      Eigen::Vector3d(r.velocity_mps[0], r.velocity_mps[1], r.velocity_mps[2]);
   out.orientation = Eigen::Quaterniond(r.orientation_wxyz[0], r.orientation_wxyz[1],
                                        r.orientation_wxyz[2], r.orientation_wxyz[3]);
   out.buttons = r.buttons;

@@ -50,8 +50,8 @@ class VendorSdkDevice final : public HapticDevice {
   DeviceSpec spec_;
   DeviceLifecycle state_ = DeviceLifecycle::kUnconfigured;
   vendor::ServoExchange exchange_;
-  unsigned long handle_ = 0;     // HHD
-  unsigned long callback_ = 0;   // HDSchedulerHandle
+  unsigned long handle_ = 0;    // HHD
+  unsigned long callback_ = 0;  // HDSchedulerHandle
   double time_s_ = 0.0;
 };
 

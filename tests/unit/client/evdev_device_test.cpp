@@ -60,7 +60,7 @@ TEST(EvdevMapping, ForceToConstantEffectFollowsTheLinuxDirectionConvention) {
   EXPECT_EQ(evdev::force_to_effect(Eigen::Vector3d(NAN, 0, 0), 2.0).level, 0);
   // round trip within the quantisation
   for (const Eigen::Vector3d& f : {Eigen::Vector3d(0.3, -1.2, 0), Eigen::Vector3d(-1.5, -0.4, 0),
-                                  Eigen::Vector3d(0.7, 0.7, 0)}) {
+                                   Eigen::Vector3d(0.7, 0.7, 0)}) {
     const Eigen::Vector3d back = evdev::effect_to_force(evdev::force_to_effect(f, 2.0), 2.0);
     EXPECT_NEAR((back - f).norm(), 0.0, 1e-3) << f.transpose() << " -> " << back.transpose();
   }
@@ -155,14 +155,15 @@ class VirtualJoystick {
     for (int attempt = 0; attempt < 100 && node_.empty(); ++attempt) {
       if (DIR* d = opendir(dir.c_str())) {
         while (dirent* e = readdir(d)) {
-          if (std::strncmp(e->d_name, "event", 5) == 0) node_ = std::string("/dev/input/") + e->d_name;
+          if (std::strncmp(e->d_name, "event", 5) == 0)
+            node_ = std::string("/dev/input/") + e->d_name;
         }
         closedir(d);
       }
       if (node_.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
-    for (int attempt = 0; attempt < 100 && !node_.empty() && access(node_.c_str(), R_OK | W_OK) != 0;
-         ++attempt) {
+    for (int attempt = 0;
+         attempt < 100 && !node_.empty() && access(node_.c_str(), R_OK | W_OK) != 0; ++attempt) {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));  // udev creates the node
     }
     if (node_.empty() || access(node_.c_str(), R_OK | W_OK) != 0) {
@@ -264,9 +265,9 @@ TEST(EvdevDevice, ReadsAxesAndUploadsConstantForceOnAVirtualUinputDevice) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   ASSERT_TRUE(r.valid);
-  EXPECT_NEAR(r.position_m.x(), 0.05, 1e-9);   // 750 of [0, 1000] on [-0.1, 0.1]
+  EXPECT_NEAR(r.position_m.x(), 0.05, 1e-9);  // 750 of [0, 1000] on [-0.1, 0.1]
   EXPECT_NEAR(r.position_m.y(), -0.05, 1e-9);
-  EXPECT_NEAR(r.position_m.z(), 0.0, 1e-12);   // no ABS_Z: the centre
+  EXPECT_NEAR(r.position_m.z(), 0.0, 1e-12);  // no ABS_Z: the centre
   EXPECT_EQ(r.buttons & 1u, 1u);
   // a force towards +x at half the peak becomes a constant effect "right", level 0x3fff
   dev.write(Eigen::Vector3d(1.0, 0.0, 0.3), Eigen::Vector3d::Zero());
