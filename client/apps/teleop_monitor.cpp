@@ -12,6 +12,7 @@
 // period; --json prints one JSON object per line (status every period, events and the scene as
 // they arrive) for scripts. The monitor's rendering lives in client/monitor/.
 #include <poll.h>
+#include <signal.h>
 #include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
@@ -126,6 +127,11 @@ int main(int argc, char** argv) {
     teleop::dds::profile_file(opts.profile);
     teleop::dds::Participant p(opts);
     install_stop_signal_handlers();
+    // a closed terminal (or tmux kill-server) ends the monitor cleanly too
+    struct sigaction hup {};
+    hup.sa_handler = [](int) { request_stop(); };
+    sigemptyset(&hup.sa_mask);
+    sigaction(SIGHUP, &hup, nullptr);
 
     const auto t0 = now_ns();
     std::mutex m;  // guards snap's values, events and stdout

@@ -32,7 +32,16 @@ std::string run(const std::string& cmd) {
 class Tmux {
  public:
   Tmux() : socket_("teleop_test_monitor_" + std::to_string(getpid())) {}
-  ~Tmux() { std::system((base() + " kill-server >/dev/null 2>&1").c_str()); }
+  ~Tmux() {
+    // the monitor ends on SIGHUP and deletes its DDS entities; if it had to be killed harder,
+    // its shared-memory segments would be left: clean them as the other tests do
+    const bool was_alive = alive();
+    std::system((base() + " kill-server >/dev/null 2>&1").c_str());
+    if (was_alive) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      std::system("fastdds shm clean >/dev/null 2>&1");
+    }
+  }
   std::string base() const { return "tmux -L " + socket_; }
   bool start(const std::string& command) {
     return std::system(
