@@ -13,6 +13,7 @@ packages=(
   libode-dev libfcl-dev libassimp-dev
   googletest libgtest-dev libgmock-dev libbenchmark-dev
   libyaml-cpp-dev libcli11-dev
+  libsqlite3-dev libzstd-dev libevdev-dev tmux
   python3-matplotlib python3-numpy
   clang-format
 )

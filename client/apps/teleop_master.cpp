@@ -16,6 +16,7 @@
 #include <optional>
 #include <sstream>
 
+#include "client/device/device_factory.hpp"
 #include "client/node/master_node.hpp"
 #include "common/config/config.hpp"
 #include "common/dds/network_flags.hpp"
@@ -71,8 +72,19 @@ int main(int argc, char** argv) {
                "wave-variables: no matching damper at the slave (waves reflect)");
   app.add_option("--tdpa-base", tdpa_base, "tdpa: base law")
       ->check(CLI::IsMember({"position-position", "force-position"}));
-  app.add_option("--device", o.device, "haptic device")
-      ->check(CLI::IsMember({"simulated", "replay", "external"}))
+  app.add_option("--device", o.device,
+                 "haptic device: simulated | replay | external | evdev:/dev/input/eventN | "
+                 "vendor[:NAME]")
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            if (v == "simulated" || v == "replay" || v == "external" ||
+                teleop::master::is_hardware_device_name(v)) {
+              return std::string();
+            }
+            return "--device '" + v + "' is not one of simulated, replay, external, "
+                   "evdev:/dev/input/eventN, vendor[:NAME]";
+          },
+          "DEVICE"))
       ->capture_default_str();
   app.add_option("--replay", o.replay_file, "CSV trajectory for --device replay");
   app.add_option("--script", o.script, "operator script of the simulated device")

@@ -1,20 +1,32 @@
 // teleop_monitor: a terminal observer of a running session. Subscribes only (it never
 // writes), so any number may join or leave without disturbing the loop.
 //
-//   teleop_monitor [--domain D] [--profile P] [--period 1] [--duration S]
+//   teleop_monitor [--domain D] [--profile P] [--period S] [--duration S] [--stale S]
+//                  [--json | --lines | --tui]
 //
-// Every period it prints the rates of SlaveState and MasterState, the server's loop rate,
-// step-time percentiles and overruns, the round trip reported by the master, the tip position,
-// contact force and penetration; events are printed as they arrive.
+// On a terminal it draws one screen refreshed in place (ANSI; q or Ctrl-C quits): the status
+// (waiting for a server on domain D, live, or stale), every topic's rate, age and sample count,
+// the newest slave, master and server figures, and the events as they arrive. Data older than
+// --stale is marked STALE and its values are no longer shown as live. When stdout is not a
+// terminal (or with --lines) it prints the scrolling log of earlier versions, one block per
+// period; --json prints one JSON object per line (status every period, events and the scene as
+// they arrive) for scripts. The monitor's rendering lives in client/monitor/.
+#include <poll.h>
+#include <signal.h>
+#include <sys/ioctl.h>
+#include <termios.h>
+#include <unistd.h>
 #include <CLI/CLI.hpp>
+
 #include <atomic>
-#include <cmath>
 #include <cstdio>
+#include <deque>
 #include <iostream>
 #include <mutex>
 #include <optional>
 #include <thread>
 
+#include "client/monitor/monitor_state.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/config/config.hpp"
 #include "common/dds/endpoint.hpp"
@@ -24,28 +36,51 @@
 
 namespace {
 
-const char* event_kind(std::uint8_t k) {
-  switch (k) {
-    case teleop::EVENT_CONTACT_BEGIN:
-      return "contact-begin";
-    case teleop::EVENT_CONTACT_END:
-      return "contact-end";
-    case teleop::EVENT_WATCHDOG:
-      return "watchdog";
-    case teleop::EVENT_FAULT:
-      return "FAULT";
-    case teleop::EVENT_MODE_CHANGE:
-      return "mode";
-    case teleop::EVENT_COMMAND_REJECTED:
-      return "rejected";
-    case teleop::EVENT_LIMIT:
-      return "limit";
-    case teleop::EVENT_SAFETY:
-      return "safety";
-    default:
-      return "info";
+using teleop::monitor::Snapshot;
+using teleop::monitor::TopicView;
+
+enum class Mode { kTui, kLines, kJson };
+
+/// Counts and the newest sample time of one topic, written by its reader thread.
+struct Counter {
+  std::atomic<std::uint64_t> count{0};
+  std::atomic<std::int64_t> last_ns{0};
+  void hit() {
+    last_ns.store(teleop::now_ns());
+    count.fetch_add(1);
   }
-}
+};
+
+/// Raw keyboard on a terminal stdin for the screen mode; restored on destruction.
+class RawKeys {
+ public:
+  RawKeys() {
+    if (!isatty(STDIN_FILENO) || tcgetattr(STDIN_FILENO, &saved_) != 0) return;
+    termios raw = saved_;
+    raw.c_lflag &= static_cast<tcflag_t>(~(ICANON | ECHO));
+    raw.c_cc[VMIN] = 0;
+    raw.c_cc[VTIME] = 0;
+    active_ = tcsetattr(STDIN_FILENO, TCSANOW, &raw) == 0;
+  }
+  ~RawKeys() {
+    if (active_) tcsetattr(STDIN_FILENO, TCSANOW, &saved_);
+  }
+  /// True if q was pressed.
+  bool quit_pressed() {
+    if (!active_) return false;
+    pollfd p{STDIN_FILENO, POLLIN, 0};
+    while (poll(&p, 1, 0) > 0 && (p.revents & POLLIN)) {
+      char c = 0;
+      if (read(STDIN_FILENO, &c, 1) != 1) return false;
+      if (c == 'q' || c == 'Q') return true;
+    }
+    return false;
+  }
+
+ private:
+  termios saved_{};
+  bool active_ = false;
+};
 
 }  // namespace
 
@@ -53,14 +88,26 @@ int main(int argc, char** argv) {
   CLI::App app{"teleop_monitor: terminal observer of a teleoperation session"};
   std::optional<int> domain;
   std::optional<std::string> profile;
-  double period_s = 1.0;
+  std::optional<double> period_flag;
   double duration_s = 0.0;
+  double stale_s = 0.5;
+  bool json = false, lines = false, tui = false;
   app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", profile, "Fast DDS profile (default: loopback)");
   teleop::dds::NetworkFlags net_flags;
   teleop::dds::add_network_flags(app, net_flags);
-  app.add_option("--period", period_s, "print period [s], 0.1-60")->capture_default_str();
-  app.add_option("--duration", duration_s, "stop after this long [s]; 0 = until SIGINT");
+  app.add_option("--period", period_flag,
+                 "refresh / print period [s], 0.05-60 (default: 0.25 on the screen, 1 otherwise)");
+  app.add_option("--duration", duration_s, "stop after this long [s], 0-1e7; 0 = until q/SIGINT");
+  app.add_option("--stale", stale_s,
+                 "a stream topic silent this long is STALE [s], 0.05-3600 (server_stats: at "
+                 "least 3 s)")
+      ->capture_default_str();
+  auto* json_opt = app.add_flag("--json", json, "one JSON object per line, for scripts");
+  auto* lines_opt = app.add_flag("--lines", lines, "scrolling text log (default off a terminal)");
+  auto* tui_opt = app.add_flag("--tui", tui, "screen refreshed in place (default on a terminal)");
+  json_opt->excludes(lines_opt)->excludes(tui_opt);
+  lines_opt->excludes(tui_opt);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -71,112 +118,180 @@ int main(int argc, char** argv) {
   }
   try {
     using namespace teleop;
-    config::check_flag("--period", period_s, 0.1, 60.0);
+    const Mode mode = json    ? Mode::kJson
+                      : lines ? Mode::kLines
+                      : tui   ? Mode::kTui
+                              : (isatty(STDOUT_FILENO) ? Mode::kTui : Mode::kLines);
+    double period_s = period_flag ? *period_flag : (mode == Mode::kTui ? 0.25 : 1.0);
+    config::check_flag("--period", period_s, 0.05, 60.0);
     config::check_flag("--duration", duration_s, 0.0, 1e7);
-    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_monitor", net_flags);
+    config::check_flag("--stale", stale_s, 0.05, 3600.0);
+    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_monitor",
+                                                                net_flags);
+    teleop::dds::profile_file(opts.profile);
     teleop::dds::Participant p(opts);
     install_stop_signal_handlers();
-
-    std::mutex m;
-    SlaveState slave;
-    MasterState master;
-    ServerStats stats;
-    std::string scene_name;
-    bool have_stats = false, have_slave = false, have_master = false;
-    std::atomic<std::uint64_t> n_slave{0}, n_master{0}, n_frames{0};
-
-    teleop::dds::Reader<SlaveStatePubSubType> r_slave(
-        p, teleop::dds::topics::kSlaveState, teleop::dds::TopicQos::kStream,
-        [&](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo&) {
-          ++n_slave;
-          std::lock_guard<std::mutex> l(m);
-          slave = s;
-          have_slave = true;
-        });
-    teleop::dds::Reader<MasterStatePubSubType> r_master(
-        p, teleop::dds::topics::kMasterState, teleop::dds::TopicQos::kStream,
-        [&](const MasterState& s, const eprosima::fastdds::dds::SampleInfo&) {
-          ++n_master;
-          std::lock_guard<std::mutex> l(m);
-          master = s;
-          have_master = true;
-        });
-    teleop::dds::Reader<ServerStatsPubSubType> r_stats(
-        p, teleop::dds::topics::kServerStats, teleop::dds::TopicQos::kReliableStream,
-        [&](const ServerStats& s, const eprosima::fastdds::dds::SampleInfo&) {
-          std::lock_guard<std::mutex> l(m);
-          stats = s;
-          have_stats = true;
-        });
-    teleop::dds::Reader<SceneDescriptionPubSubType> r_scene(
-        p, teleop::dds::topics::kScene, teleop::dds::TopicQos::kLatched,
-        [&](const SceneDescription& s, const eprosima::fastdds::dds::SampleInfo&) {
-          std::lock_guard<std::mutex> l(m);
-          scene_name = s.name();
-          std::printf("scene '%s': %zu objects, %u joints, physics %.0f Hz, tip radius %.3f m\n",
-                      s.name().c_str(), s.objects().size(), s.joint_count(), s.physics_rate_hz(),
-                      s.tip_radius_m());
-          std::fflush(stdout);
-        });
-    teleop::dds::Reader<MeshFramePubSubType> r_frames(
-        p, teleop::dds::topics::kMeshFrame, teleop::dds::TopicQos::kStream,
-        [&](const MeshFrame&, const eprosima::fastdds::dds::SampleInfo&) { ++n_frames; });
-    teleop::dds::Reader<EventPubSubType> r_events(
-        p, teleop::dds::topics::kEvents, teleop::dds::TopicQos::kEventLog,
-        [&](const Event& e, const eprosima::fastdds::dds::SampleInfo&) {
-          std::printf("event %-7s %-13s %s (%.3g)\n", e.source().c_str(), event_kind(e.kind()),
-                      e.message().c_str(), e.value());
-          std::fflush(stdout);
-        });
+    // a closed terminal (or tmux kill-server) ends the monitor cleanly too
+    struct sigaction hup {};
+    hup.sa_handler = [](int) { request_stop(); };
+    sigemptyset(&hup.sa_mask);
+    sigaction(SIGHUP, &hup, nullptr);
 
     const auto t0 = now_ns();
-    auto last = t0;
-    std::uint64_t last_slave = 0, last_master = 0, last_frames = 0;
-    while (!stop_requested()) {
-      std::this_thread::sleep_for(std::chrono::duration<double>(period_s));
-      const auto now = now_ns();
-      const double dt = seconds_between(last, now);
-      last = now;
-      const double slave_hz = static_cast<double>(n_slave - last_slave) / dt;
-      const double master_hz = static_cast<double>(n_master - last_master) / dt;
-      const double frame_hz = static_cast<double>(n_frames - last_frames) / dt;
-      last_slave = n_slave;
-      last_master = n_master;
-      last_frames = n_frames;
-      std::lock_guard<std::mutex> l(m);
-      std::printf("t=%6.1fs  slave_state %6.0f Hz  master_state %5.0f Hz  mesh %4.0f Hz",
-                  seconds_between(t0, now), slave_hz, master_hz, frame_hz);
-      if (have_stats) {
-        std::printf(
-            "  | server %6.0f Hz step p50 %.1f us p99 %.1f us overruns %llu "
-            "rejected %llu watchdog %llu",
-            stats.loop_rate_hz(), stats.step_us_p50(), stats.step_us_p99(),
-            static_cast<unsigned long long>(stats.overruns()),
-            static_cast<unsigned long long>(stats.commands_rejected_nan() +
-                                            stats.commands_rejected_workspace() +
-                                            stats.commands_rejected_stale()),
-            static_cast<unsigned long long>(stats.watchdog_trips()));
+    std::mutex m;  // guards snap's values, events and stdout
+    Snapshot snap;
+    snap.domain = opts.domain;
+    snap.profile = opts.profile;
+    struct TopicDef {
+      const char* name;
+      bool latched;
+      double stale;
+    };
+    const std::vector<TopicDef> defs = {
+        {"slave_state", false, stale_s},
+        {"master_command", false, stale_s},
+        {"master_state", false, stale_s},
+        {"mesh_frame", false, stale_s},
+        {"server_stats", false, std::max(stale_s, 3.0)},
+        {"events", true, 0.0},
+        {"scene", true, 0.0},
+        {"mesh_topology", true, 0.0},
+    };
+    std::deque<Counter> counters(defs.size());
+    auto counter = [&](const char* n) -> Counter& {
+      for (std::size_t i = 0; i < defs.size(); ++i) {
+        if (std::string(defs[i].name) == n) return counters[i];
       }
-      std::printf("\n");
-      if (have_slave) {
-        const auto& x = slave.tip_position_m();
-        const auto& f = slave.contact_force_n();
-        std::printf(
-            "           tip (%.3f, %.3f, %.3f) m  contact %s  force (%.2f, %.2f, %.2f) N"
-            "  penetration %.2f mm%s\n",
-            x[0], x[1], x[2], slave.in_contact() ? "yes" : "no ", f[0], f[1], f[2],
-            slave.penetration_m() * 1e3, slave.holding() ? "  HOLDING" : "");
-      }
-      if (have_master) {
-        const auto& fm = master.rendered_force_n();
-        std::printf(
-            "           master rtt %.3f ms  rendered force (%.2f, %.2f, %.2f) N  "
-            "error %.1f mm  link %s\n",
-            master.rtt_ms(), fm[0], fm[1], fm[2], master.position_error_m() * 1e3,
-            master.link_ok() ? "ok" : "LOST");
-      }
+      return counters[0];
+    };
+    auto print_now = [&](const std::string& text) {  // lines and json modes only
+      std::fputs(text.c_str(), stdout);
+      std::fputc('\n', stdout);
       std::fflush(stdout);
-      if (duration_s > 0 && seconds_between(t0, now) >= duration_s) break;
+    };
+
+    namespace tdds = teleop::dds;
+    using Info = eprosima::fastdds::dds::SampleInfo;
+    tdds::Reader<SlaveStatePubSubType> r_slave(p, tdds::topics::kSlaveState,
+                                               tdds::TopicQos::kStream,
+                                               [&](const SlaveState& s, const Info&) {
+                                                 std::lock_guard<std::mutex> l(m);
+                                                 snap.slave = s;
+                                                 snap.have_slave = true;
+                                                 counter("slave_state").hit();
+                                               });
+    tdds::Reader<MasterCommandPubSubType> r_cmd(
+        p, tdds::topics::kMasterCommand, tdds::TopicQos::kStream,
+        [&](const MasterCommand&, const Info&) { counter("master_command").hit(); });
+    tdds::Reader<MasterStatePubSubType> r_master(p, tdds::topics::kMasterState,
+                                                 tdds::TopicQos::kStream,
+                                                 [&](const MasterState& s, const Info&) {
+                                                   std::lock_guard<std::mutex> l(m);
+                                                   snap.master = s;
+                                                   snap.have_master = true;
+                                                   counter("master_state").hit();
+                                                 });
+    tdds::Reader<ServerStatsPubSubType> r_stats(p, tdds::topics::kServerStats,
+                                                tdds::TopicQos::kReliableStream,
+                                                [&](const ServerStats& s, const Info&) {
+                                                  std::lock_guard<std::mutex> l(m);
+                                                  snap.stats = s;
+                                                  snap.have_stats = true;
+                                                  counter("server_stats").hit();
+                                                });
+    tdds::Reader<SceneDescriptionPubSubType> r_scene(p, tdds::topics::kScene,
+                                                     tdds::TopicQos::kLatched,
+                                                     [&](const SceneDescription& s, const Info&) {
+                                                       std::lock_guard<std::mutex> l(m);
+                                                       snap.scene = s;
+                                                       snap.have_scene = true;
+                                                       counter("scene").hit();
+                                                       if (mode == Mode::kLines)
+                                                         print_now(monitor::scene_line(s));
+                                                       if (mode == Mode::kJson)
+                                                         print_now(monitor::scene_json(s));
+                                                     });
+    tdds::Reader<MeshTopologyPubSubType> r_topology(
+        p, tdds::topics::kMeshTopology, tdds::TopicQos::kLatched,
+        [&](const MeshTopology&, const Info&) { counter("mesh_topology").hit(); });
+    tdds::Reader<MeshFramePubSubType> r_frames(
+        p, tdds::topics::kMeshFrame, tdds::TopicQos::kStream,
+        [&](const MeshFrame&, const Info&) { counter("mesh_frame").hit(); });
+    tdds::Reader<EventPubSubType> r_events(
+        p, tdds::topics::kEvents, tdds::TopicQos::kEventLog, [&](const Event& e, const Info&) {
+          std::lock_guard<std::mutex> l(m);
+          counter("events").hit();
+          monitor::EventView ev{seconds_between(t0, now_ns()), e};
+          snap.events.push_back(ev);
+          while (snap.events.size() > 200) snap.events.pop_front();
+          if (mode == Mode::kLines) print_now(monitor::event_line(ev));
+          if (mode == Mode::kJson) print_now(monitor::event_json(ev));
+        });
+
+    RawKeys keys;
+    if (mode == Mode::kTui) {
+      std::fputs("\x1b[?1049h\x1b[?25l", stdout);  // alternate screen, hide the cursor
+      std::fflush(stdout);
+    }
+    // rate over the last second: counts at past refreshes
+    std::deque<std::pair<std::int64_t, std::vector<std::uint64_t>>> history;
+    auto next = t0;
+    while (!stop_requested()) {
+      next += static_cast<std::int64_t>(period_s * 1e9);
+      while (!stop_requested() && now_ns() < next) {
+        if (keys.quit_pressed()) request_stop();
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+      if (stop_requested()) break;
+      const auto now = now_ns();
+      std::vector<std::uint64_t> counts(defs.size());
+      for (std::size_t i = 0; i < defs.size(); ++i) counts[i] = counters[i].count.load();
+      history.emplace_back(now, counts);
+      while (history.size() > 2 && seconds_between(history[1].first, now) >= 1.0) {
+        history.pop_front();
+      }
+      const double window = seconds_between(history.front().first, now);
+      std::lock_guard<std::mutex> l(m);
+      snap.t_s = seconds_between(t0, now);
+      snap.topics.clear();
+      for (std::size_t i = 0; i < defs.size(); ++i) {
+        TopicView t;
+        t.name = defs[i].name;
+        t.latched = defs[i].latched;
+        t.stale_after_s = defs[i].stale;
+        t.count = counts[i];
+        t.rate_hz = window > 0.0
+                        ? static_cast<double>(counts[i] - history.front().second[i]) / window
+                        : 0.0;
+        const auto last = counters[i].last_ns.load();
+        t.age_s = t.count > 0 ? seconds_between(last, now) : -1.0;
+        snap.topics.push_back(t);
+      }
+      if (mode == Mode::kJson) {
+        print_now(monitor::render_json(snap));
+      } else if (mode == Mode::kLines) {
+        std::fputs(monitor::render_lines(snap).c_str(), stdout);
+        std::fflush(stdout);
+      } else {
+        winsize ws{};
+        int rows = 40, cols = 160;
+        if (ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_row > 0) {
+          rows = ws.ws_row;
+          cols = ws.ws_col;
+        }
+        std::string frame = "\x1b[H";
+        for (const auto& line : monitor::render_screen(snap, rows - 1, cols)) {
+          frame += line + "\x1b[K\n";
+        }
+        frame += "\x1b[J";
+        std::fputs(frame.c_str(), stdout);
+        std::fflush(stdout);
+      }
+      if (duration_s > 0 && snap.t_s >= duration_s) break;
+    }
+    if (mode == Mode::kTui) {
+      std::fputs("\x1b[?25h\x1b[?1049l", stdout);  // restore the screen and the cursor
+      std::fflush(stdout);
     }
     return 0;
   } catch (const teleop::config::ConfigError& e) {

@@ -10,6 +10,7 @@
 
 #include "client/control/loopback_session.hpp"
 #include "client/control/teleop_idl.hpp"
+#include "client/device/device_factory.hpp"
 #include "client/device/device_idl.hpp"
 #include "client/device/external_device.hpp"
 #include "client/device/replay_device.hpp"
@@ -142,6 +143,7 @@ struct MasterNode::Impl {
   }
 
   std::unique_ptr<HapticDevice> make_device() {
+    if (auto hw = make_hardware_device(options.device)) return hw;  // evdev:..., vendor
     if (options.device == "replay") {
       return std::make_unique<ReplayDevice>(options.replay_file);
     }

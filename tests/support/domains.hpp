@@ -23,8 +23,12 @@ inline constexpr int kMultiHostWanTcp = 65;     // multi_host_test
 inline constexpr int kMultiHostDiscovery = 66;  // multi_host_test
 inline constexpr int kMultiHostLanUnicast = 69; // multi_host_test
 inline constexpr int kMultiHostDiscoveryBackup = 71;  // multi_host_test
-inline constexpr int kNetworkFlags = 70;
-inline constexpr int kMultiHostLauncher = 72;   // multi_host_test: deploy/teleop_launch.sh        // network_flags_test (exits before DDS starts)
+inline constexpr int kNetworkFlags = 70;        // network_flags_test (exits before DDS starts)
+inline constexpr int kMultiHostLauncher = 72;   // multi_host_test: deploy/teleop_launch.sh
+inline constexpr int kRecordSession = 73;       // record_play_test: session under teleop_record
+inline constexpr int kPlayback = 74;            // record_play_test: teleop_play to a subscriber
+inline constexpr int kMonitorTui = 75;          // monitor_tui_test: teleop_monitor under tmux
+inline constexpr int kMonitorJson = 76;         // monitor_tui_test: teleop_monitor --json
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains

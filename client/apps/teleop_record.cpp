@@ -1,0 +1,115 @@
+// teleop_record: records every teleop/* topic of a session into one indexed file.
+//
+//   teleop_record --out session.db [--duration S] [--domain D] [--profile P]
+//                 [--queue-mb 64] [--batch-ms 10] [--exclude TOPIC]... [--summary-json FILE]
+//                 [--quiet]
+//
+// Each sample is stored as the serialized CDR payload its writer sent, with the writer's
+// source timestamp, the recorder's receive timestamp, the writer's GUID and sequence number
+// (client/record/recording.hpp: SQLite, zstd for large payloads). It only subscribes, with the
+// QoS class of each topic's live writers, so it never slows the loop. Memory is bounded by
+// --queue-mb; samples dropped because the queue was full, and samples lost before they reached
+// the recorder (gaps in a writer's sequence numbers), are counted and printed at the end.
+//
+// Exit status: 0 done, 2 bad command line, 1 runtime failure (file, DDS).
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <thread>
+
+#include "client/record/recorder.hpp"
+#include "client/record/topic_table.hpp"
+#include "common/config/config.hpp"
+#include "common/util/clock.hpp"
+#include "common/util/signals.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"teleop_record: record every topic of a teleoperation session"};
+  std::optional<int> domain;
+  std::optional<std::string> profile;
+  teleop::record::RecorderOptions ro;
+  double duration_s = 0.0;
+  double queue_mb = 64.0;
+  std::string summary_json;
+  bool quiet = false;
+  app.add_option("--out", ro.out, "recording file (SQLite; created or replaced)")->required();
+  app.add_option("--duration", duration_s, "stop after this long [s], 0-1e6; 0 = until SIGINT");
+  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
+  app.add_option("--profile", profile,
+                 "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
+  app.add_option("--queue-mb", queue_mb, "bound of the in-memory queue [MiB], 1-4096")
+      ->capture_default_str();
+  app.add_option("--exclude", ro.exclude, "topic not to record (repeatable)");
+  app.add_option("--batch-ms", ro.batch_ms,
+                 "take samples in batches this far apart [ms], 0-50 (0 = wake per sample)")
+      ->capture_default_str();
+  app.add_option("--summary-json", summary_json, "write the counts as JSON here at exit");
+  app.add_flag("--quiet", quiet, "print only warnings and errors");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "teleop_record: " << e.what() << "\n\n" << app.help();
+    return 2;
+  }
+  try {
+    using namespace teleop;
+    config::check_flag("--duration", duration_s, 0.0, 1e6);
+    config::check_flag("--queue-mb", queue_mb, 1.0, 4096.0);
+    config::check_flag("--batch-ms", ro.batch_ms, 0.0, 50.0);
+    for (const auto& t : ro.exclude) {
+      if (!record::find_topic(t)) {
+        std::string names;
+        for (const auto& e : record::known_topics()) names += (names.empty() ? "" : ", ") + e.name;
+        throw config::ConfigError("command line: --exclude '" + t +
+                                  "' is not a known topic (allowed: " + names + ")");
+      }
+    }
+    ro.queue_bytes = static_cast<std::size_t>(queue_mb * 1024.0 * 1024.0);
+    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_record");
+    teleop::dds::profile_file(opts.profile);
+    install_stop_signal_handlers();
+    teleop::dds::Participant p(opts);
+    record::Recorder recorder(p, ro);
+    if (!quiet) {
+      std::printf("teleop_record: recording %zu topics on domain %d (profile %s) to %s\n",
+                  record::known_topics().size() - ro.exclude.size(), opts.domain,
+                  opts.profile.c_str(), ro.out.c_str());
+      std::fflush(stdout);
+    }
+    const auto t0 = now_ns();
+    while (!stop_requested()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      if (duration_s > 0.0 && seconds_between(t0, now_ns()) >= duration_s) break;
+    }
+    recorder.stop();
+    if (!quiet) {
+      std::printf("teleop_record: %llu samples, %.1f MB of payload stored in %.1f MB\n",
+                  static_cast<unsigned long long>(recorder.samples()),
+                  static_cast<double>(recorder.raw_bytes()) / 1e6,
+                  static_cast<double>(recorder.stored_bytes()) / 1e6);
+      for (const auto& c : recorder.counts()) {
+        if (c.samples == 0 && c.dropped == 0) continue;
+        std::printf(
+            "  %-24s %8llu samples  %3llu writers  %llu lost  %llu dropped\n", c.name.c_str(),
+            static_cast<unsigned long long>(c.samples), static_cast<unsigned long long>(c.writers),
+            static_cast<unsigned long long>(c.gaps), static_cast<unsigned long long>(c.dropped));
+      }
+    }
+    if (!summary_json.empty()) {
+      std::ofstream f(summary_json);
+      f << recorder.summary_json() << "\n";
+    }
+    return 0;
+  } catch (const teleop::config::ConfigError& e) {
+    std::cerr << "teleop_record: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "teleop_record: error: " << e.what() << "\n";
+    return 1;
+  }
+}

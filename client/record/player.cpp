@@ -1,0 +1,137 @@
+#include "client/record/player.hpp"
+
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <map>
+#include <thread>
+
+#include "client/record/raw_type.hpp"
+#include "client/record/recording.hpp"
+#include "client/record/topic_table.hpp"
+#include "common/config/config.hpp"
+#include "common/util/signals.hpp"
+
+namespace teleop::record {
+
+namespace fdds = eprosima::fastdds::dds;
+
+namespace {
+
+/// Sleeps until `t` in short steps so a stop request is seen quickly.
+void sleep_until(std::chrono::steady_clock::time_point t) {
+  while (!stop_requested()) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= t) return;
+    std::this_thread::sleep_for(
+        std::min<std::chrono::steady_clock::duration>(t - now, std::chrono::milliseconds(50)));
+  }
+}
+
+}  // namespace
+
+PlayerResult play(dds::Participant& participant, const PlayerOptions& o) {
+  RecordingReader rec(o.file);
+  PlayerResult result;
+  result.recording_s = static_cast<double>(rec.last_ns() - rec.first_ns()) * 1e-9;
+  if (o.seek_s > result.recording_s) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf),
+                  "command line: --seek %g is beyond the end of the recording "
+                  "(allowed: 0 to %.3f s)",
+                  o.seek_s, result.recording_s);
+    throw config::ConfigError(buf);
+  }
+  struct Out {
+    fdds::DataWriter* writer = nullptr;
+    bool latched = false;
+    std::uint64_t written = 0;
+  };
+  std::map<int, Out> outs;
+  std::vector<int> latched_ids, all_ids;
+  for (const auto& t : rec.topics()) {
+    if (std::find(o.exclude.begin(), o.exclude.end(), t.name) != o.exclude.end()) continue;
+    const TopicEntry* e = find_topic(t.name);
+    if (!e || e->type != t.type_name) {
+      ++result.skipped_topics;
+      std::fprintf(stderr, "teleop_play: skipping topic %s: type %s is not known here\n",
+                   t.name.c_str(), t.type_name.c_str());
+      continue;
+    }
+    const dds::TopicQos qos = qos_from_name(t.qos);
+    auto* topic = participant.topic(t.name, fdds::TypeSupport(new RawPubSubType(e->make_type())));
+    fdds::DataWriterQos q = dds::writer_qos(participant.publisher(), qos);
+    Out out;
+    out.writer = participant.publisher()->create_datawriter(topic, q);
+    if (!out.writer) throw dds::DdsError("cannot create a DataWriter on " + t.name);
+    out.latched = is_latched(qos);
+    outs[t.id] = out;
+    all_ids.push_back(t.id);
+    if (out.latched) latched_ids.push_back(t.id);
+  }
+  struct Cleanup {
+    dds::Participant& p;
+    std::map<int, Out>& outs;
+    ~Cleanup() {
+      for (auto& [id, out] : outs) p.publisher()->delete_datawriter(out.writer);
+    }
+  } cleanup{participant, outs};
+
+  const std::int64_t seek_ns = rec.first_ns() + static_cast<std::int64_t>(o.seek_s * 1e9);
+  if (!o.quiet) {
+    std::printf(
+        "teleop_play: %s: %.3f s, %zu topics; playing from %.3f s at %gx on domain %d "
+        "(profile %s)\n",
+        o.file.c_str(), result.recording_s, outs.size(), o.seek_s, o.speed,
+        participant.options().domain, participant.options().profile.c_str());
+    std::fflush(stdout);
+  }
+  sleep_until(std::chrono::steady_clock::now() +
+              std::chrono::duration_cast<std::chrono::nanoseconds>(
+                  std::chrono::duration<double>(o.wait_s)));
+
+  RecordedSample s;
+  RawSample raw;
+  auto write = [&](const RecordedSample& sample) {
+    auto it = outs.find(sample.topic_id);
+    if (it == outs.end()) return;
+    raw.bytes = sample.payload;
+    if (it->second.writer->write(&raw)) {
+      ++it->second.written;
+      ++result.written;
+    } else {
+      ++result.failures;
+    }
+  };
+  // 1. the latched state before the seek point (scene, topology, events so far)
+  if (o.seek_s > 0.0 && !latched_ids.empty()) {
+    rec.scan(rec.first_ns(), seek_ns, latched_ids);
+    while (!stop_requested() && rec.next(s)) write(s);
+  }
+  // 2. everything from the seek point, paced by the recorded receive times
+  if (!all_ids.empty()) rec.scan(seek_ns, 0, all_ids);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!all_ids.empty() && !stop_requested() && rec.next(s)) {
+    const double offset_s = static_cast<double>(s.receive_ns - seek_ns) * 1e-9 / o.speed;
+    sleep_until(t0 + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                         std::chrono::duration<double>(offset_s)));
+    if (stop_requested()) break;
+    write(s);
+  }
+  // 3. let reliable readers acknowledge and late observers pick up the latched topics
+  sleep_until(std::chrono::steady_clock::now() +
+              std::chrono::duration_cast<std::chrono::nanoseconds>(
+                  std::chrono::duration<double>(o.linger_s)));
+  if (!o.quiet) {
+    std::printf("teleop_play: wrote %llu samples (%llu refused)\n",
+                static_cast<unsigned long long>(result.written),
+                static_cast<unsigned long long>(result.failures));
+    std::fflush(stdout);
+  }
+  return result;
+}
+
+}  // namespace teleop::record
