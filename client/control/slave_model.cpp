@@ -1,6 +1,6 @@
 #include "client/control/slave_model.hpp"
 
-#include "server/world/plane.hpp"
+#include "common/sim/plane.hpp"
 
 #include <algorithm>
 #include <cmath>

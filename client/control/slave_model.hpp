@@ -5,7 +5,7 @@
 //   - planes (a stiff wall/floor):   f = max(0, k d - b v_n) n,  d = penetration [m]
 //   - spheres (the deformable ball as a soft linear spring around its surface): same law
 //     with n the outward normal at the contact and d = R + r_tool - |x - c|.
-// It is the same law as the server's tool-only scene (server/world/tool_scene.hpp), with
+// It is the same law as the server's tool-only scene (common/sim/tool.hpp), with
 // spheres added; a test checks the two agree on a plane. step() allocates nothing.
 //
 // The passivity schemes (wave variables, TDPA) run their slave side through the same
@@ -13,7 +13,7 @@
 // the command goes through the port before the step, the PD force is recorded after it.
 #include <array>
 
-#include "client/control/bilateral_types.hpp"
+#include "common/control/bilateral_types.hpp"
 #include "common/control/slave_port.hpp"
 
 namespace teleop::master {

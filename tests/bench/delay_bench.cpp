@@ -29,7 +29,7 @@
 #include "common/util/csv.hpp"
 #include "common/util/registry.hpp"
 #include "common/util/stats.hpp"
-#include "server/world/tool_scene.hpp"
+#include "common/sim/tool.hpp"
 
 namespace {
 

@@ -4,7 +4,7 @@
 
 #include "client/control/press_scenario.hpp"
 #include "client/control/slave_model.hpp"
-#include "server/world/tool_scene.hpp"
+#include "common/sim/tool.hpp"
 
 namespace teleop::test {
 

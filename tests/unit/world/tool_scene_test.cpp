@@ -1,4 +1,4 @@
-#include "server/world/tool_scene.hpp"
+#include "common/sim/tool.hpp"
 
 #include <gtest/gtest.h>
 
