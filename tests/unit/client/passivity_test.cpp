@@ -379,7 +379,7 @@ TEST(WaveVariables, ToolSceneAndPointSlaveRunTheSameSlavePort) {
       mine.step(c, 1e-3);
       pv::SlavePortState st{ts.position_m, ts.velocity_mps, ts.contact_force_n};
       const pv::SlavePortTarget t = port.before_step(
-          port_command(c), st, pv::TrackingGains{tm.kp_n_per_m, tm.kd_ns_per_m}, 1e-3);
+          pv::port_command(c), st, pv::TrackingGains{tm.kp_n_per_m, tm.kd_ns_per_m}, 1e-3);
       teleop::sim::ToolInput in;
       in.target_position_m = t.position_m;
       in.target_velocity_mps = t.velocity_mps;
@@ -628,7 +628,7 @@ TEST(Passivity, HotPathsAllocateNothing) {
     for (int i = 0; i < 3000; ++i) {
       session.step();
       const pv::SlavePortTarget t = port.before_step(
-          port_command(session.slave_command()),
+          pv::port_command(session.slave_command()),
           pv::SlavePortState{slave.sample().position_m, slave.sample().velocity_mps,
                              slave.sample().contact_force_n},
           pv::TrackingGains{}, 1e-3);
