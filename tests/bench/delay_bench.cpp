@@ -33,6 +33,7 @@
 namespace {
 
 using namespace teleop::master;
+using namespace teleop;
 
 /// The server's tool law is the point slave's law now (common/sim/tool.hpp): the "tool_scene"
 /// rows run the same slave and stay in the CSV to show the unification changed no result.

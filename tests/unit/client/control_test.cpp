@@ -19,6 +19,7 @@
 #include "tests/unit/client/test_helpers.hpp"
 
 using namespace teleop::master;
+using namespace teleop;
 using teleop::config::ConfigError;
 using teleop::test::scenario;
 

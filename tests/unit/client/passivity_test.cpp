@@ -22,6 +22,7 @@
 #include "tests/unit/client/test_helpers.hpp"
 
 using namespace teleop::master;
+using namespace teleop;
 using teleop::test::scenario;
 namespace pv = teleop::passivity;
 using Eigen::Vector3d;
