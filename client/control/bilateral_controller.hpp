@@ -32,7 +32,7 @@
 #include <string>
 #include <vector>
 
-#include "client/control/bilateral_types.hpp"
+#include "common/control/bilateral_types.hpp"
 #include "client/device/haptic_device.hpp"
 #include "common/config/config.hpp"
 #include "common/control/time_domain_passivity.hpp"

@@ -16,7 +16,7 @@
 
 #include "client/device/haptic_device.hpp"
 #include "client/metrics/session_metrics.hpp"
-#include "server/world/events.hpp"
+#include "common/sim/events.hpp"
 
 namespace teleop::master {
 

@@ -9,8 +9,8 @@
 #include <thread>
 
 #include "client/control/loopback_session.hpp"
-#include "client/control/teleop_idl.hpp"
 #include "client/device/device_factory.hpp"
+#include "common/dds/teleop_idl.hpp"
 #include "client/device/device_idl.hpp"
 #include "client/device/external_device.hpp"
 #include "client/device/replay_device.hpp"

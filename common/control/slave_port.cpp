@@ -130,4 +130,29 @@ void SlavePassivityPort::after_step(const Vec3& tracking_force_n, double dt_s) {
   stepped_tdpa_ = false;
 }
 
+SlavePortCommand port_command(const SlaveCommand& c) {
+  SlavePortCommand p;
+  p.scheme = static_cast<std::uint8_t>(c.scheme);
+  p.session = c.passivity_session;
+  p.enabled = c.enabled;
+  p.position_m = c.position_m;
+  p.velocity_mps = c.velocity_mps;
+  p.wave_impedance_ns_per_m = c.wave_impedance_ns_per_m;
+  p.wave_matched = c.wave_matched;
+  p.wave_u_integral = c.wave_u_integral;
+  p.wave_u_energy_j = c.wave_u_energy_j;
+  p.tdpa_energy_in_j = c.tdpa_energy_in_j;
+  return p;
+}
+
+void apply_port_report(const SlavePortReport& r, SlaveSample& s) {
+  s.passivity_session = r.session;
+  s.wave_v = r.wave_v;
+  s.wave_v_integral = r.wave_v_integral;
+  s.wave_v_energy_j = r.wave_v_energy_j;
+  s.tdpa_energy_in_j = r.tdpa_energy_in_j;
+  s.tdpa_energy_out_j = r.tdpa_energy_out_j;
+  s.passivity_dissipated_j = r.dissipated_j;
+}
+
 }  // namespace teleop::passivity

@@ -19,6 +19,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 
+#include "common/control/bilateral_types.hpp"
 #include "common/control/time_domain_passivity.hpp"
 #include "common/control/wave_variables.hpp"
 
@@ -143,5 +144,11 @@ class SlavePassivityPort {
   double last_tdpa_in_j_ = 0.0;
   std::uint64_t rejected_ = 0;
 };
+
+/// The passivity fields of a command as the slave port reads them (the one conversion, used by
+/// the server and the in-process slaves alike).
+SlavePortCommand port_command(const SlaveCommand& c);
+/// Copies the slave port's report into a sample's passivity fields.
+void apply_port_report(const SlavePortReport& r, SlaveSample& s);
 
 }  // namespace teleop::passivity

@@ -13,7 +13,7 @@
 #include "common/dds/network_flags.hpp"
 #include "common/dds/participant.hpp"
 #include "server/node/server_node.hpp"
-#include "server/world/scene.hpp"
+#include "server/world/world_model.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"teleop_server: simulation server of the teleoperation system"};
@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    teleop::sim::SceneConfig scene = teleop::sim::load_scene(scene_file);
+    const teleop::sim::WorldModel scene = teleop::sim::load_world_model(scene_file);
     teleop::server::ServerOptions o;
     o.dds = teleop::dds::resolve_participant_options(profile, domain, "teleop_server", net_flags);
     teleop::dds::profile_file(o.dds.profile);  // fail early with the list of profiles

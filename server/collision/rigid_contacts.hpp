@@ -14,7 +14,7 @@
 #include <memory>
 #include <vector>
 
-#include "server/world/plane.hpp"
+#include "common/sim/plane.hpp"
 
 namespace teleop::sim::collision {
 

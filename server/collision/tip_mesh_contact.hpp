@@ -39,7 +39,7 @@
 
 #include "server/collision/aabb_tree.hpp"
 #include "server/collision/surface_topology.hpp"
-#include "server/world/events.hpp"
+#include "common/sim/events.hpp"
 
 namespace teleop::sim::collision {
 

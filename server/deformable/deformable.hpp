@@ -29,8 +29,8 @@
 
 #include "common/config/config.hpp"
 #include "common/mesh/tri_mesh.hpp"
-#include "server/world/events.hpp"
-#include "server/world/plane.hpp"
+#include "common/sim/events.hpp"
+#include "common/sim/plane.hpp"
 
 namespace teleop::sim::deformable {
 

@@ -1,5 +1,7 @@
 #include "server/node/command_validation.hpp"
 
+#include "common/dds/teleop_idl.hpp"
+
 #include <cmath>
 
 namespace teleop::server {
@@ -59,28 +61,9 @@ CommandVerdict validate_command(const MasterCommand& cmd, const Eigen::Vector3d&
   return CommandVerdict::kAccepted;
 }
 
-passivity::SlavePortCommand to_port_command(const MasterCommand& cmd) {
-  passivity::SlavePortCommand p;
-  const auto& pos = cmd.position_m();
-  const auto& v = cmd.linear_velocity_mps();
-  const auto& ui = cmd.wave_u_integral();
-  const auto& ue = cmd.wave_u_energy_j();
-  p.scheme = cmd.scheme();
-  p.session = cmd.passivity_session();
-  p.enabled = cmd.enabled();
-  p.position_m = {pos[0], pos[1], pos[2]};
-  p.velocity_mps = {v[0], v[1], v[2]};
-  p.wave_impedance_ns_per_m = cmd.wave_impedance_ns_per_m();
-  p.wave_matched = cmd.wave_matched();
-  p.wave_u_integral = {ui[0], ui[1], ui[2]};
-  p.wave_u_energy_j = {ue[0], ue[1], ue[2]};
-  p.tdpa_energy_in_j = cmd.tdpa_energy_in_j();
-  return p;
-}
-
 CommandVerdict validate_passivity(const MasterCommand& cmd, PassivityHistory& history) {
   if (!passivity::SlavePassivityPort::handles(cmd.scheme())) return CommandVerdict::kAccepted;
-  const passivity::SlavePortCommand p = to_port_command(cmd);
+  const passivity::SlavePortCommand p = passivity::port_command(from_idl(cmd));
   switch (passivity::check_port_command(p)) {
     case passivity::PortCommandCheck::kOk:
       break;
@@ -100,21 +83,6 @@ CommandVerdict validate_passivity(const MasterCommand& cmd, PassivityHistory& hi
   history.wave_u_energy_j = p.wave_u_energy_j;
   history.tdpa_energy_in_j = p.tdpa_energy_in_j;
   return CommandVerdict::kAccepted;
-}
-
-sim::WorldCommand to_world_command(const MasterCommand& cmd) {
-  sim::WorldCommand w;
-  const auto& p = cmd.position_m();
-  const auto& q = cmd.orientation_wxyz();
-  const auto& v = cmd.linear_velocity_mps();
-  const auto& a = cmd.angular_velocity_radps();
-  w.position_m = {p[0], p[1], p[2]};
-  w.orientation = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized();
-  w.velocity_mps = {v[0], v[1], v[2]};
-  w.angular_velocity_radps = {a[0], a[1], a[2]};
-  w.kp_override_n_per_m = cmd.position_gain_n_per_m();
-  w.hold = !cmd.enabled();
-  return w;
 }
 
 }  // namespace teleop::server

@@ -7,7 +7,6 @@
 #include <cstdint>
 
 #include "common/control/slave_port.hpp"
-#include "server/world/world.hpp"
 #include "teleop/idl/Teleop.h"
 
 namespace teleop::server {
@@ -40,11 +39,5 @@ struct PassivityHistory {
 /// Checks the passivity fields of `cmd` (after validate_command() accepted the rest) against
 /// the writer's history; on kAccepted updates `history`.
 CommandVerdict validate_passivity(const MasterCommand& cmd, PassivityHistory& history);
-
-/// Converts an accepted command to the world's input (normalises the quaternion).
-sim::WorldCommand to_world_command(const MasterCommand& cmd);
-
-/// The passivity fields of a command as the slave port reads them.
-passivity::SlavePortCommand to_port_command(const MasterCommand& cmd);
 
 }  // namespace teleop::server

@@ -8,8 +8,7 @@
 #include <string>
 
 #include "common/dds/participant.hpp"
-#include "server/world/scene.hpp"
-#include "server/world/world.hpp"
+#include "server/world/world_model.hpp"
 
 namespace teleop::server {
 
@@ -35,7 +34,8 @@ struct CommandCounters {
 
 class ServerNode {
  public:
-  ServerNode(const ServerOptions& options, const sim::SceneConfig& scene);
+  /// `model` must outlive the node.
+  ServerNode(const ServerOptions& options, const sim::WorldModel& model);
   ~ServerNode();
   /// Runs until stop_requested() or the duration elapses. Returns the process exit status.
   int run();

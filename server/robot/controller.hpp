@@ -12,7 +12,7 @@
 
 #include "server/robot/kinematics.hpp"
 #include "server/robot/robot_model.hpp"
-#include "server/world/events.hpp"
+#include "common/sim/events.hpp"
 
 namespace teleop::sim::robot {
 

@@ -28,8 +28,8 @@
 #include "server/robot/controller.hpp"
 #include "server/robot/kinematics.hpp"
 #include "server/robot/robot_model.hpp"
-#include "server/world/events.hpp"
-#include "server/world/plane.hpp"
+#include "common/sim/events.hpp"
+#include "common/sim/plane.hpp"
 
 namespace teleop::sim::robot {
 

@@ -1,14 +1,34 @@
 #pragma once
-// The simulated world as the server node sees it: one step per physics period, a command in,
-// the slave tip's state out. Implementations: ToolWorld (tool-only scene); the robot and
-// deformable scene assemble robot, planes, deformable bodies and contact.
+// The mutable half of the world and its one step (MuJoCo's mjData and mj_step):
+//
+//   world_step(model, data, command, dt, events)
+//
+// is the only way any program advances a scene: the server node, the world benchmark and the
+// world's unit tests. It serves every scene the loader accepts: tool-only, tool + deformable
+// bodies, robot, robot + deformable bodies. One step (dt):
+//   1. each body's f_ext is cleared; the tip-mesh contact of each body is updated along the
+//      tip's path of the last step (eq. 8 / continuous detection), giving the force on the tip
+//      and adding the equal and opposite reaction onto the body's nodes (a broad phase skips
+//      bodies the tip's swept sphere cannot reach);
+//   2. each body steps (mass-spring or Navier, nodes against the planes; asleep when at rest
+//      and untouched);
+//   3. the slave steps with the summed deformable contact force as an external tip force
+//      (robot: tau = J^T gamma, eq. 4, planes acting on tip and links in ODE; tool: the law of
+//      common/sim/tool.hpp, planes as its obstacles);
+//   4. outputs: tip state, total environment force on the tip (planes + bodies), penetration,
+//      and contact begin/end events for every object, deformable or plane.
+// Allocation-free after make_world_data(); deterministic for the same inputs. Faults (a
+// non-finite state, a body that blew up) are pushed as events and handled (state restored or
+// reset, force zero), never thrown.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
 #include <memory>
+#include <vector>
 
-#include "server/world/events.hpp"
-#include "server/world/scene.hpp"
+#include "common/sim/events.hpp"
+#include "server/robot/robot_sim.hpp"
+#include "server/world/world_model.hpp"
 
 namespace teleop::sim {
 
@@ -17,7 +37,7 @@ constexpr int kMaxJoints = 8;
 /// One validated command, in the slave (world) frame.
 struct WorldCommand {
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< relative to home
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
   Eigen::Vector3d angular_velocity_radps = Eigen::Vector3d::Zero();
   double kp_override_n_per_m = 0.0;  ///< >0 overrides the slave's position gain [N/m]
@@ -35,54 +55,38 @@ struct WorldOutput {
   double penetration_m = 0.0;  ///< contact spring compression x of F = k x [m]
   double deformation_m = 0.0;  ///< indentation of a deformable body since contact began [m]
   bool in_contact = false;
-  int contact_object = -1;
+  int contact_object = -1;  ///< id of the object touched deepest, -1 none
   /// Force of the slave's tracking controller on the tip this step [N] (tool: its PD, without
   /// gravity compensation; robot: estimated as -contact_force_n, the quasi-static balance).
   Eigen::Vector3d tracking_force_n = Eigen::Vector3d::Zero();
-  double tracking_kp_n_per_m = 400.0;  ///< the tracking law's default stiffness [N/m]
-  double tracking_kd_ns_per_m = 12.0;  ///< its damping [N s/m]
   int joint_count = 0;
   std::array<double, kMaxJoints> q_rad{}, qd_radps{}, tau_nm{};
   double sim_time_s = 0.0;
 };
 
-/// A deformable surface for publishing (topology once, positions at the visual rate).
-struct DeformableView {
-  int object_id = -1;
-  const Eigen::Matrix3Xi* triangles = nullptr;
-  const Eigen::Matrix3Xd* positions = nullptr;
+/// The changing part of one deformable body.
+struct DeformableBodyData {
+  deformable::DeformableState state;
+  collision::TipMeshContact contact;
+  collision::TipContactResult last;  ///< the contact of the last step
 };
 
-class World {
- public:
-  virtual ~World() = default;
-  /// Advances by dt [s]. Allocation-free. Faults are pushed into `events` and handled.
-  virtual void step(const WorldCommand& cmd, double dt_s, EventQueue& events) = 0;
-  virtual const WorldOutput& output() const = 0;
-  /// Deformable bodies to publish (empty for rigid-only scenes).
-  virtual int deformable_count() const { return 0; }
-  virtual DeformableView deformable(int /*index*/) const { return {}; }
+struct WorldData {
+  std::unique_ptr<robot::RobotSim> robot;  ///< the ODE robot (robot scenes), else null
+  Eigen::Quaterniond home_orientation = Eigen::Quaterniond::Identity();  ///< robot tip at home
+  ToolState tool;                                                        ///< the tool slave
+  std::vector<DeformableBodyData> bodies;  ///< one per model.bodies, same order
+  Eigen::Vector3d tip_prev_m = Eigen::Vector3d::Zero();  ///< tip centre before the last step
+  Eigen::Vector3d deformable_force_n = Eigen::Vector3d::Zero();  ///< bodies on the tip [N]
+  int plane_contact = -1;  ///< plane id the slave touched in the last step, -1 none
+  WorldOutput out;
 };
 
-/// The tool scene's input for a world command.
-ToolInput to_tool_input(const WorldCommand& cmd);
+/// Everything that changes, at the scene's initial state. Allocates (ODE, meshes, trees).
+WorldData make_world_data(const WorldModel& model);
 
-/// Builds the world for a scene. @throws config::ConfigError for an invalid scene.
-std::unique_ptr<World> make_world(const SceneConfig& scene);
-
-/// The tool-only scene as a World.
-class ToolWorld : public World {
- public:
-  explicit ToolWorld(const SceneConfig& scene);
-  void step(const WorldCommand& cmd, double dt_s, EventQueue& events) override;
-  const WorldOutput& output() const override { return out_; }
-  const ToolState& tool_state() const { return state_; }
-
- private:
-  ToolModel model_;
-  ToolState state_;
-  WorldOutput out_;
-  bool was_in_contact_ = false;
-};
+/// Advances the world by dt [s] towards `cmd`. Allocation-free; events go to `events`.
+void world_step(const WorldModel& model, WorldData& data, const WorldCommand& cmd, double dt_s,
+                EventQueue& events);
 
 }  // namespace teleop::sim

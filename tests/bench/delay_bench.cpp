@@ -29,82 +29,15 @@
 #include "common/util/csv.hpp"
 #include "common/util/registry.hpp"
 #include "common/util/stats.hpp"
-#include "server/world/tool_scene.hpp"
 
 namespace {
 
 using namespace teleop::master;
+using namespace teleop;
 
-/// The server's tool-only scene as an in-process slave (planes only).
-class ToolSceneSlave final : public SlaveSimulator {
- public:
-  explicit ToolSceneSlave(const PointSlaveParams& p) {
-    model_.mass_kg = p.mass_kg;
-    model_.radius_m = p.radius_m;
-    model_.kp_n_per_m = p.kp_n_per_m;
-    model_.kd_ns_per_m = p.kd_ns_per_m;
-    model_.linear_damping_ns_per_m = p.linear_damping_ns_per_m;
-    model_.max_force_n = p.max_force_n;
-    for (int i = 0; i < p.obstacle_count; ++i) {
-      const SlaveObstacle& o = p.obstacles[static_cast<std::size_t>(i)];
-      if (o.kind != SlaveObstacle::Kind::kPlane) continue;
-      teleop::sim::Plane& pl = model_.planes[static_cast<std::size_t>(model_.plane_count++)];
-      pl.id = o.id;
-      pl.normal = o.normal;
-      pl.offset_m = o.offset_m;
-      pl.stiffness_n_per_m = o.stiffness_n_per_m;
-      pl.damping_ns_per_m = o.damping_ns_per_m;
-    }
-  }
-  void reset(const Eigen::Vector3d& x) override {
-    state_ = teleop::sim::ToolState{};
-    state_.position_m = x;
-    seq_ = 0;
-    port_.reset();
-  }
-  void step(const SlaveCommand& c, double dt) override {
-    // the passivity schemes' slave side, exactly as the server runs it
-    const double kp = c.position_gain_n_per_m > 0.0 ? c.position_gain_n_per_m : model_.kp_n_per_m;
-    const teleop::passivity::SlavePortTarget t =
-        port_.before_step(port_command(c),
-                          teleop::passivity::SlavePortState{state_.position_m, state_.velocity_mps,
-                                                            state_.contact_force_n},
-                          teleop::passivity::TrackingGains{kp, model_.kd_ns_per_m}, dt);
-    teleop::sim::ToolInput in;
-    in.target_position_m = t.position_m;
-    in.target_velocity_mps = t.velocity_mps;
-    in.kp_override_n_per_m = c.position_gain_n_per_m;
-    in.hold = t.hold;
-    teleop::sim::tool_step(model_, state_, in, dt);
-    port_.after_step(state_.tracking_force_n, dt);
-    ++seq_;
-    cmd_seq_ = c.seq;
-    cmd_time_ = c.send_time_s;
-  }
-  SlaveSample sample() const override {
-    SlaveSample s;
-    s.seq = seq_;
-    s.command_seq = cmd_seq_;
-    s.command_send_time_s = cmd_time_;
-    s.sim_time_s = state_.sim_time_s;
-    s.position_m = state_.position_m;
-    s.orientation = state_.orientation;
-    s.velocity_mps = state_.velocity_mps;
-    s.contact_force_n = state_.contact_force_n;
-    s.penetration_m = state_.penetration_m;
-    s.in_contact = state_.contact_object >= 0;
-    s.valid = true;
-    apply_port_report(port_.report(), s);
-    return s;
-  }
-
- private:
-  teleop::sim::ToolModel model_;
-  teleop::sim::ToolState state_;
-  teleop::passivity::SlavePassivityPort port_;
-  std::uint64_t seq_ = 0, cmd_seq_ = 0;
-  double cmd_time_ = 0.0;
-};
+/// The server's tool law is the point slave's law now (common/sim/tool.hpp): the "tool_scene"
+/// rows run the same slave and stay in the CSV to show the unification changed no result.
+using ToolSceneSlave = PointSlave;
 
 struct RunRow {
   std::string sweep, scheme, environment, slave;

@@ -12,8 +12,7 @@
 #include "common/util/csv.hpp"
 #include "common/util/registry.hpp"
 #include "common/util/stats.hpp"
-#include "server/world/scene.hpp"
-#include "server/world/scene_world.hpp"
+#include "server/world/world.hpp"
 
 namespace teleop::bench {
 namespace {
@@ -23,17 +22,17 @@ int world(const CommandArgs& args) {
       args.option("--scene", std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
   const double dt = std::stod(args.option("--dt", "0.001"));
   const int n = args.quick ? 300 : 3000;
-  const sim::SceneConfig scene = sim::load_scene(scene_file);
-  sim::SceneWorld w(scene);
+  const sim::WorldModel model = sim::load_world_model(scene_file);
+  sim::WorldData w = sim::make_world_data(model);
   sim::EventQueue events;
   sim::SimEvent e;
   CsvWriter csv((args.out_dir / "world.csv").string(),
                 {"phase", "dt_s", "steps", "step_us_median", "step_us_p90", "step_us_p99",
                  "step_us_max", "in_contact_fraction", "sleeping_fraction"});
-  const Eigen::Vector3d start = w.output().tip_position_m;
+  const Eigen::Vector3d start = w.out.tip_position_m;
   Eigen::Vector3d top(0.6, 0.0, 0.5);
-  if (w.deformable_count() > 0) {
-    const auto& x = w.body(0).state.x;
+  if (!w.bodies.empty()) {
+    const auto& x = w.bodies[0].state.x;
     Eigen::Index i = 0;
     x.row(2).maxCoeff(&i);
     top = x.col(i);
@@ -46,10 +45,10 @@ int world(const CommandArgs& args) {
       sim::WorldCommand c;
       c.position_m = target(k);
       const auto t0 = now_ns();
-      w.step(c, dt, events);
+      sim::world_step(model, w, c, dt, events);
       us.push_back(static_cast<double>(now_ns() - t0) * 1e-3);
-      contact += w.output().in_contact;
-      if (w.deformable_count() > 0) sleeping += w.body(0).state.sleeping;
+      contact += w.out.in_contact;
+      if (!w.bodies.empty()) sleeping += w.bodies[0].state.sleeping;
       while (events.pop(e)) {
       }
     }

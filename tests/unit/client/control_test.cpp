@@ -11,14 +11,15 @@
 #include "client/control/press_scenario.hpp"
 #include "client/control/slave_model.hpp"
 #include "client/control/stability_analysis.hpp"
-#include "client/control/teleop_idl.hpp"
+#include "common/dds/teleop_idl.hpp"
 #include "client/device/simulated_device.hpp"
 #include "client/metrics/safety.hpp"
-#include "server/world/tool_scene.hpp"
+#include "common/sim/tool.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/unit/client/test_helpers.hpp"
 
 using namespace teleop::master;
+using namespace teleop;
 using teleop::config::ConfigError;
 using teleop::test::scenario;
 

@@ -13,6 +13,7 @@
 #include "tests/support/alloc_counter.hpp"
 
 using namespace teleop::master;
+using namespace teleop;
 using teleop::config::ConfigError;
 
 namespace {

@@ -14,6 +14,7 @@
 #include "tests/support/alloc_counter.hpp"
 
 using namespace teleop::master;
+using namespace teleop;
 
 TEST(MasterLoopExample, HandWiredLoopPressesTheSphere) {
   // --- setup (allocates; outside the real-time loop) ---

@@ -11,17 +11,18 @@
 #include "client/control/press_scenario.hpp"
 #include "client/control/slave_model.hpp"
 #include "client/control/stability_analysis.hpp"
-#include "client/control/teleop_idl.hpp"
+#include "common/dds/teleop_idl.hpp"
 #include "client/device/simulated_device.hpp"
 #include "common/control/slave_port.hpp"
 #include "common/control/time_domain_passivity.hpp"
 #include "common/control/wave_variables.hpp"
-#include "server/world/tool_scene.hpp"
+#include "common/sim/tool.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/config_error.hpp"
 #include "tests/unit/client/test_helpers.hpp"
 
 using namespace teleop::master;
+using namespace teleop;
 using teleop::test::scenario;
 namespace pv = teleop::passivity;
 using Eigen::Vector3d;
@@ -379,7 +380,7 @@ TEST(WaveVariables, ToolSceneAndPointSlaveRunTheSameSlavePort) {
       mine.step(c, 1e-3);
       pv::SlavePortState st{ts.position_m, ts.velocity_mps, ts.contact_force_n};
       const pv::SlavePortTarget t = port.before_step(
-          port_command(c), st, pv::TrackingGains{tm.kp_n_per_m, tm.kd_ns_per_m}, 1e-3);
+          pv::port_command(c), st, pv::TrackingGains{tm.kp_n_per_m, tm.kd_ns_per_m}, 1e-3);
       teleop::sim::ToolInput in;
       in.target_position_m = t.position_m;
       in.target_velocity_mps = t.velocity_mps;
@@ -628,7 +629,7 @@ TEST(Passivity, HotPathsAllocateNothing) {
     for (int i = 0; i < 3000; ++i) {
       session.step();
       const pv::SlavePortTarget t = port.before_step(
-          port_command(session.slave_command()),
+          pv::port_command(session.slave_command()),
           pv::SlavePortState{slave.sample().position_m, slave.sample().velocity_mps,
                              slave.sample().contact_force_n},
           pv::TrackingGains{}, 1e-3);

@@ -4,7 +4,7 @@
 
 #include "client/control/press_scenario.hpp"
 #include "client/control/slave_model.hpp"
-#include "server/world/tool_scene.hpp"
+#include "common/sim/tool.hpp"
 
 namespace teleop::test {
 
@@ -38,11 +38,7 @@ struct WallOnBothSlaves {
     wall.kind = SlaveObstacle::Kind::kPlane;
     wall.offset_m = 0.5;
     point.add(wall);
-    tool.plane_count = 1;
-    tool.planes[0].id = 0;
-    tool.planes[0].offset_m = wall.offset_m;
-    tool.planes[0].stiffness_n_per_m = wall.stiffness_n_per_m;
-    tool.planes[0].damping_ns_per_m = wall.damping_ns_per_m;
+    tool = point;  // one law now: the server's tool is the point slave's model
   }
 };
 

@@ -1,4 +1,6 @@
 #include "server/node/command_validation.hpp"
+#include "common/dds/teleop_idl.hpp"
+#include "server/node/server_cycle.hpp"
 
 #include <gtest/gtest.h>
 
@@ -64,7 +66,7 @@ TEST(CommandValidation, ConvertsToAWorldCommand) {
   auto c = valid(1);
   c.orientation_wxyz() = {2, 0, 0, 0};  // not unit: normalised
   c.enabled(false);
-  const auto w = to_world_command(c);
+  const auto w = to_world_command(from_idl(c));
   EXPECT_DOUBLE_EQ(w.orientation.norm(), 1.0);
   EXPECT_TRUE(w.hold);
   EXPECT_EQ(w.position_m, Eigen::Vector3d(0.1, 0.2, 0.3));
@@ -119,7 +121,7 @@ TEST(CommandValidation, RejectsUnusableWaveAndPassivityFields) {
 }
 
 TEST(CommandValidation, ConvertsThePassivityFields) {
-  const passivity::SlavePortCommand p = to_port_command(wave(3, 0.5));
+  const passivity::SlavePortCommand p = passivity::port_command(from_idl(wave(3, 0.5)));
   EXPECT_EQ(p.scheme, SCHEME_WAVE_VARIABLES);
   EXPECT_EQ(p.session, 5u);
   EXPECT_TRUE(p.enabled);

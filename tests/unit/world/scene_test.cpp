@@ -1,4 +1,4 @@
-#include "server/world/scene.hpp"
+#include "server/world/world_model.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@ namespace {
 
 std::string error_of(const std::string& yaml) {
   try {
-    parse_scene(config::Node::parse(yaml, "scene.yaml"));
+    parse_world_model(config::Node::parse(yaml, "scene.yaml"));
   } catch (const config::ConfigError& e) {
     return e.what();
   }
@@ -16,14 +16,14 @@ std::string error_of(const std::string& yaml) {
 
 TEST(Scene, ShippedScenesLoad) {
   for (const char* f : {"default.yaml", "tool_only.yaml"}) {
-    const SceneConfig s = load_scene(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/" + f);
+    const WorldModel s = load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/" + f);
     EXPECT_GT(s.physics_rate_hz, 0.0) << f;
     EXPECT_GE(s.planes.size(), 1u) << f;
   }
 }
 
 TEST(Scene, ParsesPlanesAndToolParameters) {
-  const SceneConfig s = parse_scene(config::Node::parse(R"(
+  const WorldModel s = parse_world_model(config::Node::parse(R"(
 name: t
 physics: {rate_hz: 2000, gravity_mps2: [0, 0, 0]}
 tool: {mass_kg: 0.5, kp_n_per_m: 800}
@@ -36,7 +36,7 @@ planes:
   EXPECT_EQ(s.tool.kp_n_per_m, 800.0);
   ASSERT_EQ(s.planes.size(), 1u);
   EXPECT_DOUBLE_EQ(s.planes[0].normal.norm(), 1.0);
-  EXPECT_EQ(s.tool.plane_count, 1);
+  EXPECT_EQ(s.tool.obstacle_count, 1);
 }
 
 TEST(Scene, OutOfRangeValueNamesFileFieldValueAndRange) {

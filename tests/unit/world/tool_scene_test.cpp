@@ -1,4 +1,4 @@
-#include "server/world/tool_scene.hpp"
+#include "common/sim/tool.hpp"
 
 #include <gtest/gtest.h>
 
@@ -22,8 +22,7 @@ ToolModel tool_over_floor() {
   floor.offset_m = 0.0;
   floor.stiffness_n_per_m = 2e4;
   floor.damping_ns_per_m = 50;
-  m.planes[0] = floor;
-  m.plane_count = 1;
+  m.add(Obstacle::of(floor));
   return m;
 }
 
@@ -48,7 +47,7 @@ TEST(ToolScene, FloorContactForceBalancesThePdPush) {
   // at rest: contact + control - m g = 0 (the control force includes gravity compensation)
   const double depth = s.penetration_m;
   EXPECT_GT(depth, 0.0);
-  EXPECT_NEAR(s.contact_force_n.z(), m.planes[0].stiffness_n_per_m * depth, 1e-6);
+  EXPECT_NEAR(s.contact_force_n.z(), m.obstacles[0].stiffness_n_per_m * depth, 1e-6);
   EXPECT_NEAR(s.contact_force_n.z(), -s.control_force_n.z() + m.mass_kg * 9.81, 0.05);
   EXPECT_EQ(s.contact_object, 100);
   // the tool stays on the floor surface within the penalty depth
@@ -91,34 +90,34 @@ TEST(ToolScene, StepIsDeterministicAndAllocationFree) {
   EXPECT_EQ(a.velocity_mps, b.velocity_mps);
 }
 
-TEST(ToolWorld, NonFiniteCommandIsReportedAndTheStateStaysFinite) {
-  SceneConfig scene;
-  scene.tool = tool_over_floor();
-  ToolWorld world(scene);
+TEST(WorldStepToolOnly, NonFiniteCommandIsReportedAndTheStateStaysFinite) {
+  WorldModel model;
+  model.tool = tool_over_floor();
+  WorldData world = make_world_data(model);
   EventQueue events;
   WorldCommand cmd;
   cmd.position_m = Eigen::Vector3d(std::nan(""), 0, 0);
-  world.step(cmd, 1e-3, events);
-  EXPECT_TRUE(world.output().tip_position_m.allFinite());
+  world_step(model, world, cmd, 1e-3, events);
+  EXPECT_TRUE(world.out.tip_position_m.allFinite());
   SimEvent e;
   bool fault = false;
   while (events.pop(e)) fault |= e.kind == EventKind::kFault;
   EXPECT_TRUE(fault);
 }
 
-TEST(ToolWorld, ReportsContactBeginAndEnd) {
-  SceneConfig scene;
-  scene.tool = tool_over_floor();
-  scene.tool_start_m = Eigen::Vector3d(0.6, 0, 0.2);
-  ToolWorld world(scene);
+TEST(WorldStepToolOnly, ReportsContactBeginAndEnd) {
+  WorldModel model;
+  model.tool = tool_over_floor();
+  model.tool_start_m = Eigen::Vector3d(0.6, 0, 0.2);
+  WorldData world = make_world_data(model);
   EventQueue events;
   WorldCommand cmd;
   cmd.position_m = Eigen::Vector3d(0.6, 0, 0.0);
-  for (int i = 0; i < 2000; ++i) world.step(cmd, 1e-3, events);
-  EXPECT_TRUE(world.output().in_contact);
+  for (int i = 0; i < 2000; ++i) world_step(model, world, cmd, 1e-3, events);
+  EXPECT_TRUE(world.out.in_contact);
   cmd.position_m = Eigen::Vector3d(0.6, 0, 0.3);
-  for (int i = 0; i < 2000; ++i) world.step(cmd, 1e-3, events);
-  EXPECT_FALSE(world.output().in_contact);
+  for (int i = 0; i < 2000; ++i) world_step(model, world, cmd, 1e-3, events);
+  EXPECT_FALSE(world.out.in_contact);
   int begins = 0, ends = 0;
   SimEvent e;
   while (events.pop(e)) {

@@ -1,8 +1,33 @@
-#include "server/world/scene.hpp"
+#include "server/world/world_model.hpp"
 
 #include <filesystem>
 
 namespace teleop::sim {
+
+collision::TipContactParams load_tip_contact_params(const config::Node& node) {
+  collision::TipContactParams p;
+  if (!node.defined()) return p;
+  node.reject_unknown_keys({"stiffness_n_per_m", "damping_ns_per_m", "damping_ramp_m",
+                            "friction_static", "friction_kinetic", "max_force_n", "patch_radius_m",
+                            "patch_blend", "node_stiffness_n_per_m", "node_damping_ns_per_m"});
+  p.stiffness_n_per_m = node.number_or("stiffness_n_per_m", p.stiffness_n_per_m, 1.0, 1e7);
+  p.damping_ns_per_m = node.number_or("damping_ns_per_m", p.damping_ns_per_m, 0.0, 1e5);
+  p.damping_ramp_m = node.number_or("damping_ramp_m", p.damping_ramp_m, 0.0, 0.1);
+  p.friction_static = node.number_or("friction_static", p.friction_static, 0.0, 5.0);
+  p.friction_kinetic = node.number_or("friction_kinetic", p.friction_kinetic, 0.0, 5.0);
+  if (p.friction_kinetic > p.friction_static) {
+    node.fail("friction_kinetic",
+              "must not exceed friction_static (" + std::to_string(p.friction_static) + ")");
+  }
+  p.max_force_n = node.number_or("max_force_n", p.max_force_n, 0.0, 1e5);
+  p.patch_radius_m = node.number_or("patch_radius_m", p.patch_radius_m, 0.0, 1.0);
+  p.patch_blend = node.number_or("patch_blend", p.patch_blend, 0.0, 1.0);
+  p.node_stiffness_n_per_m =
+      node.number_or("node_stiffness_n_per_m", p.node_stiffness_n_per_m, 0.0, 1e6);
+  p.node_damping_ns_per_m =
+      node.number_or("node_damping_ns_per_m", p.node_damping_ns_per_m, 0.0, 1e4);
+  return p;
+}
 
 namespace {
 Eigen::Vector3d vec3(const config::Node& n, const std::string& key, const Eigen::Vector3d& def,
@@ -12,13 +37,14 @@ Eigen::Vector3d vec3(const config::Node& n, const std::string& key, const Eigen:
 }
 }  // namespace
 
-SceneConfig parse_scene(const config::Node& root) {
-  SceneConfig s;
+WorldModel parse_world_model(const config::Node& root) {
+  WorldModel s;
   s.file = root.file();
   root.reject_unknown_keys(
       {"name", "kind", "physics", "command", "tool", "planes", "robot", "deformables"});
   s.name = root.string_or("name", s.name);
-  s.kind = root.choice_or("kind", s.kind, {"tool", "robot"});
+  const std::string kind = root.choice_or("kind", "tool", {"tool", "robot"});
+  s.slave = kind == "robot" ? SlaveKind::kRobot : SlaveKind::kTool;
 
   if (root.has("physics")) {
     const auto p = root.at("physics");
@@ -85,9 +111,9 @@ SceneConfig parse_scene(const config::Node& root) {
       s.planes.push_back(pl);
     }
   }
-  s.tool.plane_count = static_cast<int>(s.planes.size());
-  for (std::size_t i = 0; i < s.planes.size(); ++i) s.tool.planes[i] = s.planes[i];
+  for (const Plane& pl : s.planes) s.tool.add(Obstacle::of(pl));
 
+  std::optional<config::Node> robot_node;
   if (root.has("robot")) {
     // `robot: {include: FILE}` takes the `robot` mapping of another file (relative paths are
     // relative to this scene file), so one robot description serves several scenes
@@ -96,18 +122,30 @@ SceneConfig parse_scene(const config::Node& root) {
       r.reject_unknown_keys({"include"});
       std::filesystem::path inc = r.string("include");
       if (inc.is_relative()) inc = std::filesystem::path(root.file()).parent_path() / inc;
-      s.robot_node = config::Node::load_file(inc.string()).at("robot");
+      robot_node = config::Node::load_file(inc.string()).at("robot");
     } else {
-      s.robot_node = r;
+      robot_node = r;
     }
   }
-  if (s.kind == "robot" && !s.robot_node) {
+  if (s.slave == SlaveKind::kRobot && !robot_node) {
     root.fail("robot", "is required when kind is 'robot'");
   }
+  if (s.slave == SlaveKind::kRobot) s.robot = robot::load_robot_model(*robot_node);
   if (root.has("deformables")) {
     const auto ds = root.at("deformables");
     if (!ds.is_sequence()) ds.fail("", "must be a list of deformable bodies");
-    for (std::size_t i = 0; i < ds.size(); ++i) s.deformable_nodes.push_back(ds.at(i));
+    int next_id = 10;
+    for (std::size_t i = 0; i < ds.size(); ++i) {
+      const config::Node n = ds.at(i);
+      n.reject_unknown_keys({"id", "body", "contact"});
+      DeformableBodyModel b;
+      b.object_id = static_cast<int>(n.integer_or("id", next_id, 10, 99));
+      next_id = b.object_id + 1;
+      const deformable::DeformableParams params = deformable::load_deformable_params(n.at("body"));
+      b.body = deformable::make_model(deformable::make_mesh_for(params), params, s.planes);
+      b.contact = load_tip_contact_params(n.child("contact"));
+      s.bodies.push_back(std::move(b));
+    }
   }
   for (int i = 0; i < 3; ++i) {
     if (s.tool_start_m[i] < s.workspace_min_m[i] || s.tool_start_m[i] > s.workspace_max_m[i]) {
@@ -117,8 +155,8 @@ SceneConfig parse_scene(const config::Node& root) {
   return s;
 }
 
-SceneConfig load_scene(const std::string& file) {
-  return parse_scene(config::Node::load_file(file));
+WorldModel load_world_model(const std::string& file) {
+  return parse_world_model(config::Node::load_file(file));
 }
 
 }  // namespace teleop::sim

@@ -1,4 +1,4 @@
-#include "server/world/tool_scene.hpp"
+#include "common/sim/tool.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -22,24 +22,32 @@ void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input,
   if (model.gravity_compensation) f_ctrl -= model.mass_kg * model.gravity_mps2;
   state.control_force_n = f_ctrl;
 
-  // penalty contact with each plane: k x + b xdot (compression only, never pulling)
+  // penalty contact with each obstacle, compression only, in the order they were added
   Eigen::Vector3d f_contact = Eigen::Vector3d::Zero();
   state.penetration_m = 0.0;
   state.contact_object = -1;
-  for (int i = 0; i < model.plane_count; ++i) {
-    const Plane& pl = model.planes[static_cast<std::size_t>(i)];
-    const double gap = pl.normal.dot(state.position_m) - pl.offset_m - model.radius_m;
-    if (gap >= 0.0) continue;
-    const double depth = -gap;
-    const double vn = pl.normal.dot(state.velocity_mps);
+  for (int i = 0; i < model.obstacle_count; ++i) {
+    const Obstacle& o = model.obstacles[static_cast<std::size_t>(i)];
+    Eigen::Vector3d n;
+    double depth = 0.0;
+    if (o.kind == Obstacle::Kind::kPlane) {
+      n = o.normal;
+      depth = model.radius_m - (o.normal.dot(state.position_m) - o.offset_m);
+    } else {
+      const Eigen::Vector3d d = state.position_m - o.centre_m;
+      const double dist = d.norm();
+      n = dist > 1e-12 ? Eigen::Vector3d(d / dist) : Eigen::Vector3d::UnitZ();
+      depth = o.radius_m + model.radius_m - dist;
+    }
+    if (depth <= 0.0) continue;
+    const double vn = n.dot(state.velocity_mps);
     // damping ramps in over the first millimetre so the force is continuous at contact onset
     const double ramp = std::min(1.0, depth / kPlaneDampingRampM);
-    const double mag =
-        std::max(0.0, pl.stiffness_n_per_m * depth - ramp * pl.damping_ns_per_m * vn);
-    f_contact += mag * pl.normal;
+    const double mag = std::max(0.0, o.stiffness_n_per_m * depth - ramp * o.damping_ns_per_m * vn);
+    f_contact += mag * n;
     if (depth > state.penetration_m) {
       state.penetration_m = depth;
-      state.contact_object = pl.id;
+      state.contact_object = o.id;
     }
   }
   state.contact_force_n = f_contact;
@@ -71,6 +79,13 @@ void tool_step(const ToolModel& model, ToolState& state, const ToolInput& input,
             .normalized();
   }
   state.sim_time_s += dt;
+}
+
+ToolState tool_state_at(const Eigen::Vector3d& position_m) {
+  ToolState s;
+  s.position_m = position_m;
+  s.hold_position_m = position_m;
+  return s;
 }
 
 bool tool_step_checked(const ToolModel& model, ToolState& state, const ToolInput& input, double dt,

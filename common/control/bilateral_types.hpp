@@ -6,7 +6,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
-namespace teleop::master {
+namespace teleop {
 
 /// Scheme ids, equal to the SCHEME_* constants of idl/Teleop.idl.
 enum class SchemeId : std::uint8_t {
@@ -92,4 +92,4 @@ struct WorkspaceMap {
   }
 };
 
-}  // namespace teleop::master
+}  // namespace teleop

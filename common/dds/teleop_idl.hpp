@@ -1,21 +1,19 @@
 #pragma once
-// Conversions between the controller's types and the DDS types of idl/Teleop.idl:
-// SlaveCommand -> teleop::MasterCommand, teleop::SlaveState -> SlaveSample, and a
-// teleop::MasterState filler. Header-only and allocation-free (fixed arrays only); include it
-// where the generated types are wanted (the master node).
+// Conversions between the SI types of the bilateral loop (common/control/bilateral_types.hpp)
+// and the DDS types of idl/Teleop.idl, for both sides: the master writes SlaveCommand as
+// teleop::MasterCommand and reads teleop::SlaveState as SlaveSample; the server reads
+// teleop::MasterCommand as SlaveCommand. Header-only and allocation-free (fixed arrays only).
 //
 // Times: the IDL carries steady-clock nanoseconds; SlaveCommand/SlaveSample carry seconds.
-// to_idl() takes the send stamp in ns; from_idl() converts the echoed command stamp with
-// 1e-9 (absolute steady-clock seconds, the same clock the node uses for now_s if it uses
-// teleop::now_ns() * 1e-9).
+// to_idl() takes the send stamp in ns; from_idl() converts stamps with 1e-9 (absolute
+// steady-clock seconds, the clock of teleop::now_ns()).
 #include <cmath>
 #include <cstdint>
 
-#include "client/control/bilateral_controller.hpp"
-#include "client/device/haptic_device.hpp"
+#include "common/control/bilateral_types.hpp"
 #include "teleop/idl/Teleop.h"
 
-namespace teleop::master {
+namespace teleop {
 
 namespace detail {
 inline void put3(std::array<double, 3>& out, const Eigen::Vector3d& v) {
@@ -92,20 +90,28 @@ inline SlaveSample from_idl(const teleop::SlaveState& m) {
   return s;
 }
 
-/// Fills the teleop::MasterState fields this library knows (the node adds seq, time, rtt).
-inline void fill_master_state(const DeviceReading& r, const Eigen::Vector3d& rendered_force_n,
-                              const Eigen::Vector3d& environment_force_n, double position_error_m,
-                              double passivity_energy_j, SchemeId scheme, bool link_ok,
-                              teleop::MasterState& m) {
-  detail::put3(m.device_position_m(), r.position_m);
-  detail::put_q(m.device_orientation_wxyz(), r.orientation);
-  detail::put3(m.device_velocity_mps(), r.linear_velocity_mps);
-  detail::put3(m.rendered_force_n(), rendered_force_n);
-  detail::put3(m.environment_force_n(), environment_force_n);
-  m.position_error_m(position_error_m);
-  m.passivity_energy_j(passivity_energy_j);
-  m.mode(static_cast<std::uint8_t>(scheme));
-  m.link_ok(link_ok);
+/// teleop::MasterCommand -> SlaveCommand (the quaternion normalised; a near-zero one becomes
+/// the identity). Validation (non-finite fields, workspace, staleness) is the caller's.
+inline SlaveCommand from_idl(const teleop::MasterCommand& m) {
+  SlaveCommand c;
+  c.seq = m.seq();
+  c.send_time_s = static_cast<double>(m.send_time_ns()) * 1e-9;
+  c.position_m = detail::get3(m.position_m());
+  c.orientation = detail::get_q(m.orientation_wxyz());
+  c.velocity_mps = detail::get3(m.linear_velocity_mps());
+  c.angular_velocity_radps = detail::get3(m.angular_velocity_radps());
+  c.master_force_n = detail::get3(m.master_force_n());
+  c.wave_u = detail::get3(m.wave_u());
+  c.position_gain_n_per_m = m.position_gain_n_per_m();
+  c.scheme = static_cast<SchemeId>(m.scheme());
+  c.enabled = m.enabled();
+  c.passivity_session = m.passivity_session();
+  c.wave_impedance_ns_per_m = m.wave_impedance_ns_per_m();
+  c.wave_matched = m.wave_matched();
+  c.wave_u_integral = detail::get3(m.wave_u_integral());
+  c.wave_u_energy_j = detail::get3(m.wave_u_energy_j());
+  c.tdpa_energy_in_j = m.tdpa_energy_in_j();
+  return c;
 }
 
-}  // namespace teleop::master
+}  // namespace teleop

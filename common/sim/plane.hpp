@@ -5,6 +5,9 @@
 
 namespace teleop::sim {
 
+/// Most planes a scene may hold (the tool law's obstacle array has this many slots).
+inline constexpr int kMaxPlanes = 8;
+
 /// Penalty damping of plane contacts ramps in linearly over this depth, so the contact force is
 /// continuous at onset (no b*v step when a moving tool first touches) [m].
 inline constexpr double kPlaneDampingRampM = 1e-3;

@@ -1,0 +1,58 @@
+#include "server/node/mesh_publisher.hpp"
+
+#include "server/node/state_message.hpp"
+
+namespace teleop::server {
+
+MeshPublisher::MeshPublisher(const sim::WorldModel& model, const sim::WorldData& data,
+                             dds::Writer<MeshFramePubSubType>& writer)
+    : model_(model), writer_(writer) {
+  if (data.bodies.empty()) return;
+  for (const sim::DeformableBodyData& b : data.bodies) back_.push_back(b.state.x);
+  front_ = back_;
+  thread_ = std::thread([this] { run(); });
+}
+
+MeshPublisher::~MeshPublisher() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void MeshPublisher::offer(const sim::WorldData& data, double sim_time_s) {
+  if (!thread_.joinable()) return;
+  std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return;  // publisher busy swapping: skip this frame, never block
+  for (std::size_t i = 0; i < back_.size(); ++i) back_[i] = data.bodies[i].state.x;
+  ++frame_no_;
+  time_s_ = sim_time_s;
+  pending_ = true;
+  lock.unlock();
+  cv_.notify_one();
+}
+
+void MeshPublisher::run() {
+  MeshFrame frame;
+  while (true) {
+    std::uint64_t no = 0;
+    double t = 0.0;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [this] { return pending_ || stop_; });
+      if (stop_) return;
+      std::swap(front_, back_);
+      pending_ = false;
+      no = frame_no_;
+      t = time_s_;
+    }
+    for (std::size_t i = 0; i < front_.size(); ++i) {
+      pack_mesh_frame(model_.bodies[i].object_id, front_[i], no, t, frame);
+      writer_.write(frame);
+    }
+  }
+}
+
+}  // namespace teleop::server

@@ -1,0 +1,86 @@
+#include "server/node/server_cycle.hpp"
+
+#include "common/util/clock.hpp"
+
+namespace teleop::server {
+
+sim::WorldCommand to_world_command(const SlaveCommand& c) {
+  sim::WorldCommand w;
+  w.position_m = c.position_m;
+  w.orientation = c.orientation;
+  w.velocity_mps = c.velocity_mps;
+  w.angular_velocity_radps = c.angular_velocity_radps;
+  w.kp_override_n_per_m = c.position_gain_n_per_m;
+  w.hold = !c.enabled;
+  return w;
+}
+
+ServerCycle::ServerCycle(const sim::WorldModel& model, double dt_s, double command_timeout_s)
+    : model_(model),
+      data_(sim::make_world_data(model)),
+      dt_s_(dt_s),
+      timeout_ns_(static_cast<std::int64_t>(command_timeout_s * 1e9)) {
+  // until a command arrives the slave holds where it starts
+  world_cmd_.position_m = model.tool_start_m;
+  world_cmd_.hold = true;
+}
+
+void ServerCycle::on_command(const SlaveCommand& c, std::int64_t receive_ns,
+                             std::int64_t send_time_ns) {
+  send_time_ns_ = send_time_ns;
+  command_ = c;
+  world_cmd_ = to_world_command(c);
+  receive_ns_ = receive_ns;
+  have_command_ = true;
+}
+
+void ServerCycle::step(std::int64_t t_ns, sim::EventQueue& events) {
+  const double sim_time_s = data_.out.sim_time_s;
+  // watchdog: hold the slave when commands stop arriving
+  const bool stale = !have_command_ || (t_ns - receive_ns_) > timeout_ns_;
+  if (stale != watchdog_holding_) {
+    watchdog_holding_ = stale;
+    if (have_command_ && stale) {
+      ++watchdog_trips_;
+      events.push(sim::EventKind::kWatchdog, sim::Severity::kWarning, sim_time_s,
+                  seconds_between(receive_ns_, t_ns) * 1e3,
+                  "no valid command within the timeout: holding the slave");
+    } else if (have_command_) {
+      events.push(sim::EventKind::kWatchdog, sim::Severity::kInfo, sim_time_s, 0.0,
+                  "commands resumed: tracking again");
+    }
+  }
+  sim::WorldCommand applied = world_cmd_;
+  applied.hold = world_cmd_.hold || watchdog_holding_;
+
+  // wave variables / TDPA: the port turns the command into the tool's target, using the
+  // state and contact force of the last step
+  const passivity::SlavePortCommand port_cmd = passivity::port_command(command_);
+  port_active_ = have_command_ && passivity::SlavePassivityPort::handles(port_cmd.scheme);
+  if (port_active_) {
+    passivity::SlavePortCommand pc = port_cmd;
+    pc.enabled = !applied.hold;
+    const sim::WorldOutput& before = data_.out;
+    const passivity::SlavePortState ps{before.tip_position_m, before.tip_velocity_mps,
+                                       before.contact_force_n};
+    const passivity::TrackingGains gains{applied.kp_override_n_per_m > 0.0
+                                             ? applied.kp_override_n_per_m
+                                             : model_.tracking_kp_n_per_m(),
+                                         model_.tracking_kd_ns_per_m()};
+    const passivity::SlavePortTarget t = port_.before_step(pc, ps, gains, dt_s_);
+    applied.position_m = t.position_m;
+    applied.velocity_mps = t.velocity_mps;
+    applied.hold = t.hold;
+  } else if (port_.scheme() != 0xff) {
+    port_.reset();  // left the passivity scheme: the next session starts afresh
+  }
+
+  const std::int64_t ts = now_ns();
+  sim::world_step(model_, data_, applied, dt_s_, events);
+  step_time_us_ = static_cast<double>(now_ns() - ts) * 1e-3;
+  if (port_active_) port_.after_step(data_.out.tracking_force_n, dt_s_);
+  held_ = applied.hold;
+  ++steps_;
+}
+
+}  // namespace teleop::server

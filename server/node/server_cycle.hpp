@@ -1,0 +1,72 @@
+#pragma once
+// One physics period of the server, without DDS: the command watchdog, the slave side of the
+// passivity schemes and the world step, in that order. The server node feeds it the newest
+// accepted command and packs its result into SlaveState (state_message.hpp); tests drive it
+// with plain commands and a clock of their own.
+//
+//   cycle.on_command(cmd, receive_ns, sent_ns); // newest accepted command, when one arrives
+//   cycle.step(t_ns, events);                  // watchdog -> port -> world_step
+//
+// Allocation-free after construction; deterministic for the same commands and clock.
+#include <cstdint>
+
+#include "common/control/bilateral_types.hpp"
+#include "common/control/slave_port.hpp"
+#include "server/world/world.hpp"
+
+namespace teleop::server {
+
+/// The world's input for a slave command (hold when it is disabled).
+sim::WorldCommand to_world_command(const SlaveCommand& c);
+
+class ServerCycle {
+ public:
+  /// `model` must outlive the cycle. dt_s: physics period [s]; command_timeout_s: hold the
+  /// slave when no valid command arrived for this long [s].
+  ServerCycle(const sim::WorldModel& model, double dt_s, double command_timeout_s);
+
+  /// The newest accepted command, when it arrived [ns, server clock] and its send stamp as
+  /// written on the wire [ns, master clock] (echoed unchanged in SlaveState).
+  void on_command(const SlaveCommand& c, std::int64_t receive_ns, std::int64_t send_time_ns);
+  /// One period at server time t_ns [ns]: watchdog (hold when commands stop, events both ways),
+  /// passivity port (wave variables / TDPA turn the command into the tool's target), world step.
+  void step(std::int64_t t_ns, sim::EventQueue& events);
+
+  const sim::WorldModel& model() const { return model_; }
+  const sim::WorldData& data() const { return data_; }
+  const sim::WorldOutput& output() const { return data_.out; }
+  /// The command the slave tracks (its seq and send time are echoed).
+  const SlaveCommand& command() const { return command_; }
+  /// The tracked command's send stamp, as the master wrote it [ns].
+  std::int64_t command_send_time_ns() const { return send_time_ns_; }
+  bool have_command() const { return have_command_; }
+  /// The slave held its pose in the last step (watchdog, disabled command, or port).
+  bool held() const { return held_; }
+  /// The passivity port ran in the last step.
+  bool port_active() const { return port_active_; }
+  const passivity::SlavePassivityPort& port() const { return port_; }
+  std::uint64_t steps() const { return steps_; }
+  std::uint64_t watchdog_trips() const { return watchdog_trips_; }
+  /// Duration of the last world step [us].
+  double step_time_us() const { return step_time_us_; }
+
+ private:
+  const sim::WorldModel& model_;
+  sim::WorldData data_;
+  double dt_s_;
+  std::int64_t timeout_ns_;
+  SlaveCommand command_;
+  sim::WorldCommand world_cmd_;
+  passivity::SlavePassivityPort port_;
+  std::int64_t receive_ns_ = 0;
+  std::int64_t send_time_ns_ = 0;
+  bool have_command_ = false;
+  bool watchdog_holding_ = true;
+  bool held_ = true;
+  bool port_active_ = false;
+  std::uint64_t steps_ = 0;
+  std::uint64_t watchdog_trips_ = 0;
+  double step_time_us_ = 0.0;
+};
+
+}  // namespace teleop::server

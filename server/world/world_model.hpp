@@ -1,0 +1,73 @@
+#pragma once
+// The immutable half of the world (MuJoCo's mjModel, Pinocchio's Model): everything a scene
+// file says, loaded and validated in one place (load_world_model), with nothing left to parse
+// later. A WorldModel never changes during a run; WorldData (world.hpp) holds what does.
+//
+//   WorldModel model = load_world_model("deploy/scenes/default.yaml");   // throws ConfigError
+//   WorldData data = make_world_data(model);                              // allocates
+//   world_step(model, data, command, dt, events);                         // allocates nothing
+//
+// Slaves: a free tool (kind: tool, the law of common/sim/tool.hpp) or the 6-DoF robot in ODE
+// (kind: robot). Either may touch any number of deformable bodies and the rigid planes.
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/config/config.hpp"
+#include "common/sim/plane.hpp"
+#include "common/sim/tool.hpp"
+#include "server/collision/tip_mesh_contact.hpp"
+#include "server/deformable/deformable.hpp"
+#include "server/robot/robot_model.hpp"
+
+namespace teleop::sim {
+
+/// Which slave a scene drives.
+enum class SlaveKind : std::uint8_t { kTool = 0, kRobot = 1 };
+
+/// One deformable body of a scene: its model and its contact law with the slave's tip.
+struct DeformableBodyModel {
+  int object_id = 10;  ///< SceneObject id (10-99)
+  deformable::DeformableModel body;
+  collision::TipContactParams contact;
+};
+
+struct WorldModel {
+  std::string file;                 ///< where it was loaded from ("" when built in code)
+  std::string name = "tool-only";   ///< scene name
+  SlaveKind slave = SlaveKind::kTool;
+  double physics_rate_hz = 1000.0;  ///< [Hz]
+  double visual_rate_hz = 60.0;     ///< mesh frame rate [Hz]
+  Eigen::Vector3d gravity_mps2{0.0, 0.0, -9.81};
+  double command_timeout_s = 0.05;  ///< watchdog: hold when no valid command for this long [s]
+  Eigen::Vector3d workspace_min_m{-1.5, -1.5, -0.1};  ///< commands outside are rejected [m]
+  Eigen::Vector3d workspace_max_m{1.5, 1.5, 1.5};
+  Eigen::Vector3d tool_start_m{0.6, 0.0, 0.7};  ///< initial tool position (tool slave) [m]
+  ToolModel tool;                               ///< the tool slave (planes as its obstacles)
+  std::optional<robot::RobotModel> robot;       ///< the robot slave (kind: robot)
+  std::vector<Plane> planes;
+  std::vector<DeformableBodyModel> bodies;
+
+  bool has_robot() const { return slave == SlaveKind::kRobot; }
+  /// Radius of the slave's tip sphere: the robot's own tip, or the tool [m].
+  double tip_radius_m() const { return has_robot() ? robot->tip_radius_m : tool.radius_m; }
+  /// Mass of the tip sphere: the robot's tip mass, or the tool's [kg].
+  double tip_mass_kg() const { return has_robot() ? robot->tip_mass_kg : tool.mass_kg; }
+  /// Cartesian stiffness [N/m] and damping [N s/m] of the slave's tracking law, as the
+  /// passivity port and the master's defaults see it (the tool's PD; the robot's Cartesian
+  /// law is tuned to the same figures).
+  double tracking_kp_n_per_m() const { return tool.kp_n_per_m; }
+  double tracking_kd_ns_per_m() const { return tool.kd_ns_per_m; }
+};
+
+/// Loads and validates a scene file: every field, the robot (with `include`), every
+/// deformable body (mesh built, model checked). @throws config::ConfigError naming the file,
+/// the field, the value and the allowed range.
+WorldModel load_world_model(const std::string& file);
+/// The same from parsed YAML (`root.file()` used in messages). @throws config::ConfigError.
+WorldModel parse_world_model(const config::Node& root);
+/// Reads a `deformables[i].contact` mapping. @throws config::ConfigError.
+collision::TipContactParams load_tip_contact_params(const config::Node& node);
+
+}  // namespace teleop::sim
