@@ -81,7 +81,8 @@ int main(int argc, char** argv) {
                 teleop::master::is_hardware_device_name(v)) {
               return std::string();
             }
-            return "--device '" + v + "' is not one of simulated, replay, external, "
+            return "--device '" + v +
+                   "' is not one of simulated, replay, external, "
                    "evdev:/dev/input/eventN, vendor[:NAME]";
           },
           "DEVICE"))

@@ -27,9 +27,9 @@
 #include <thread>
 
 #include "client/monitor/monitor_state.hpp"
-#include "common/dds/network_flags.hpp"
 #include "common/config/config.hpp"
 #include "common/dds/endpoint.hpp"
+#include "common/dds/network_flags.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/signals.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
@@ -126,8 +126,8 @@ int main(int argc, char** argv) {
     config::check_flag("--period", period_s, 0.05, 60.0);
     config::check_flag("--duration", duration_s, 0.0, 1e7);
     config::check_flag("--stale", stale_s, 0.05, 3600.0);
-    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_monitor",
-                                                                net_flags);
+    const auto opts =
+        teleop::dds::resolve_participant_options(profile, domain, "teleop_monitor", net_flags);
     teleop::dds::profile_file(opts.profile);
     teleop::dds::Participant p(opts);
     install_stop_signal_handlers();

@@ -32,9 +32,9 @@
 #include <string>
 #include <vector>
 
-#include "common/control/bilateral_types.hpp"
 #include "client/device/haptic_device.hpp"
 #include "common/config/config.hpp"
+#include "common/control/bilateral_types.hpp"
 #include "common/control/time_domain_passivity.hpp"
 #include "common/control/wave_variables.hpp"
 

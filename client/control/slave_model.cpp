@@ -11,8 +11,8 @@ void PointSlave::reset(const Eigen::Vector3d& position_m) {
 }
 
 void PointSlave::step(const SlaveCommand& cmd, double dt) {
-  const double kp = cmd.position_gain_n_per_m > 0.0 ? cmd.position_gain_n_per_m
-                                                    : params_.kp_n_per_m;
+  const double kp =
+      cmd.position_gain_n_per_m > 0.0 ? cmd.position_gain_n_per_m : params_.kp_n_per_m;
   // the passivity schemes' slave side (other schemes pass through unchanged)
   const passivity::SlavePortTarget pt = port_.before_step(
       passivity::port_command(cmd),

@@ -10,7 +10,6 @@
 
 #include "client/control/loopback_session.hpp"
 #include "client/device/device_factory.hpp"
-#include "common/dds/teleop_idl.hpp"
 #include "client/device/device_idl.hpp"
 #include "client/device/external_device.hpp"
 #include "client/device/replay_device.hpp"
@@ -19,6 +18,7 @@
 #include "client/net/delay_channel.hpp"
 #include "client/node/rtt.hpp"
 #include "common/dds/endpoint.hpp"
+#include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/csv.hpp"
 #include "common/util/rate_loop.hpp"

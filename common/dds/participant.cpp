@@ -1,24 +1,24 @@
 #include "common/dds/participant.hpp"
 
+#include <arpa/inet.h>
 #include <fastdds/dds/core/policy/QosPolicies.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
-#include <arpa/inet.h>
 
-#include <algorithm>
-#include <cctype>
 #include <fastdds/rtps/attributes/ServerAttributes.h>
 #include <fastdds/rtps/transport/TCPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
-#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <fastrtps/utils/IPLocator.h>
+#include <algorithm>
+#include <cctype>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <filesystem>
 #include <fstream>
-#include <regex>
-#include <sstream>
 #include <mutex>
+#include <regex>
 #include <set>
+#include <sstream>
 
 #include "common/config/config.hpp"
 
@@ -130,8 +130,8 @@ HostPort parse_host_port(const std::string& flag, const std::string& text, int d
   const auto colon = text.rfind(':');
   hp.address = text.substr(0, colon);
   check_ipv4(flag, text, hp.address, "a.b.c.d[:port]");
-  hp.port = colon == std::string::npos ? default_port
-                                       : parse_port(flag, text, text.substr(colon + 1));
+  hp.port =
+      colon == std::string::npos ? default_port : parse_port(flag, text, text.substr(colon + 1));
   return hp;
 }
 
@@ -167,9 +167,9 @@ ProfileRef resolve_profile(const std::string& profile) {
   const auto index = profile_index();
   const auto it = index.find(profile);
   if (it == index.end()) {
-    throw config::ConfigError("--profile '" + profile + "': no participant profile of that name in " +
-                              profiles_dir() + "/*.xml; available profiles: {" +
-                              join(available_profiles()) + "}");
+    throw config::ConfigError("--profile '" + profile +
+                              "': no participant profile of that name in " + profiles_dir() +
+                              "/*.xml; available profiles: {" + join(available_profiles()) + "}");
   }
   return {it->second, profile};
 }
@@ -193,8 +193,8 @@ DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileK
   for (const auto& t : qos.transport().user_transports) {
     if (std::dynamic_pointer_cast<TCPv4TransportDescriptor>(t)) tcp = true;
     if (auto u = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(t)) {
-      loopback_only = loopback_only ||
-                      (u->interfaceWhiteList.size() == 1 && u->interfaceWhiteList[0] == "127.0.0.1");
+      loopback_only = loopback_only || (u->interfaceWhiteList.size() == 1 &&
+                                        u->interfaceWhiteList[0] == "127.0.0.1");
     }
   }
   const auto protocol = builtin.discovery_config.discoveryProtocol;
@@ -215,8 +215,8 @@ DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileK
                               " (TCP profiles only: wan_tcp_server, wan_tcp_client)");
   }
   if (kind != ProfileKind::kDiscoveryClient && !net.discovery_servers.empty()) {
-    throw config::ConfigError("--discovery-server " + net.discovery_servers[0].address + in_profile +
-                              " (use --profile discovery_client)");
+    throw config::ConfigError("--discovery-server " + net.discovery_servers[0].address +
+                              in_profile + " (use --profile discovery_client)");
   }
   auto udp_locator = [](const HostPort& hp) {
     Locator_t loc;
@@ -233,8 +233,9 @@ DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileK
                                   " (it talks to 127.0.0.1 only; use lan or lan_unicast)");
       }
       if (net.peers.empty() && ref.name == "lan_unicast") {
-        throw config::ConfigError("profile 'lan_unicast' needs --peer ADDR[:PORT] (or TELEOP_PEERS)"
-                                  ": the addresses of the other hosts");
+        throw config::ConfigError(
+            "profile 'lan_unicast' needs --peer ADDR[:PORT] (or TELEOP_PEERS)"
+            ": the addresses of the other hosts");
       }
       for (const auto& p : net.peers) builtin.initialPeersList.push_back(udp_locator(p));
       break;

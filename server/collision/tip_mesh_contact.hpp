@@ -37,9 +37,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/sim/events.hpp"
 #include "server/collision/aabb_tree.hpp"
 #include "server/collision/surface_topology.hpp"
-#include "common/sim/events.hpp"
 
 namespace teleop::sim::collision {
 

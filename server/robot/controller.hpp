@@ -10,9 +10,9 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
+#include "common/sim/events.hpp"
 #include "server/robot/kinematics.hpp"
 #include "server/robot/robot_model.hpp"
-#include "common/sim/events.hpp"
 
 namespace teleop::sim::robot {
 

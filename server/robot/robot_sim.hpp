@@ -25,11 +25,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/sim/events.hpp"
+#include "common/sim/plane.hpp"
 #include "server/robot/controller.hpp"
 #include "server/robot/kinematics.hpp"
 #include "server/robot/robot_model.hpp"
-#include "common/sim/events.hpp"
-#include "common/sim/plane.hpp"
 
 namespace teleop::sim::robot {
 

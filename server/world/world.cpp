@@ -88,8 +88,8 @@ BodiesOnTip step_bodies(const WorldModel& model, WorldData& d, double dt_s, Even
     // out of contact and clear of the body's box: the tree refit and the query are skipped
     // (about 20 us at level 4)
     const bool near = b.contact.in_contact() || tip_may_reach(b.state.x, d.tip_prev_m, tip_now, r);
-    b.last = near ? b.contact.update(b.state.x, &b.state.v, d.tip_prev_m, tip_now, r, tip_vel,
-                                     dt_s, b.state.f_ext)
+    b.last = near ? b.contact.update(b.state.x, &b.state.v, d.tip_prev_m, tip_now, r, tip_vel, dt_s,
+                                     b.state.f_ext)
                   : collision::TipContactResult{};
     if (b.last.fault) {
       events.push(EventKind::kFault, Severity::kWarning, d.out.sim_time_s, bm.object_id,
@@ -191,8 +191,7 @@ void world_step(const WorldModel& model, WorldData& d, const WorldCommand& cmd, 
   out.in_contact = out.in_contact || on_tip.deepest_id >= 0;
   out.deformation_m = on_tip.deformation_m;
   // the robot's joint-space PD has no Cartesian force to report: quasi-static estimate
-  out.tracking_force_n =
-      d.robot ? Eigen::Vector3d(-out.contact_force_n) : d.tool.tracking_force_n;
+  out.tracking_force_n = d.robot ? Eigen::Vector3d(-out.contact_force_n) : d.tool.tracking_force_n;
 }
 
 }  // namespace teleop::sim

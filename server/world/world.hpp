@@ -75,7 +75,7 @@ struct WorldData {
   std::unique_ptr<robot::RobotSim> robot;  ///< the ODE robot (robot scenes), else null
   Eigen::Quaterniond home_orientation = Eigen::Quaterniond::Identity();  ///< robot tip at home
   ToolState tool;                                                        ///< the tool slave
-  std::vector<DeformableBodyData> bodies;  ///< one per model.bodies, same order
+  std::vector<DeformableBodyData> bodies;                ///< one per model.bodies, same order
   Eigen::Vector3d tip_prev_m = Eigen::Vector3d::Zero();  ///< tip centre before the last step
   Eigen::Vector3d deformable_force_n = Eigen::Vector3d::Zero();  ///< bodies on the tip [N]
   int plane_contact = -1;  ///< plane id the slave touched in the last step, -1 none

@@ -34,8 +34,8 @@ struct DeformableBodyModel {
 };
 
 struct WorldModel {
-  std::string file;                 ///< where it was loaded from ("" when built in code)
-  std::string name = "tool-only";   ///< scene name
+  std::string file;                ///< where it was loaded from ("" when built in code)
+  std::string name = "tool-only";  ///< scene name
   SlaveKind slave = SlaveKind::kTool;
   double physics_rate_hz = 1000.0;  ///< [Hz]
   double visual_rate_hz = 60.0;     ///< mesh frame rate [Hz]

@@ -33,12 +33,14 @@ std::vector<std::string> launch(std::vector<std::string> args, int rc = 0,
   return lines(p.out());
 }
 
-bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+bool has(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
 
 TEST(Launcher, DryRunLanUnicastGivesEveryProcessTheOtherHosts) {
-  const auto l = launch({"--dry-run", "--profile", "lan_unicast", "--server", "10.0.0.1",
-                         "--master", "op@10.0.0.2", "--observer", "10.0.0.3", "--domain", "9",
-                         "--", "--duration", "30"});
+  const auto l =
+      launch({"--dry-run", "--profile", "lan_unicast", "--server", "10.0.0.1", "--master",
+              "op@10.0.0.2", "--observer", "10.0.0.3", "--domain", "9", "--", "--duration", "30"});
   ASSERT_EQ(l.size(), 5u);  // server, observer, master, then the two stops
   // the program runs in the background with its own pid recorded, not a subshell's
   EXPECT_TRUE(has(l[0], "cd /opt/teleop || exit 1; nohup build/server/teleop_server")) << l[0];
@@ -49,8 +51,10 @@ TEST(Launcher, DryRunLanUnicastGivesEveryProcessTheOtherHosts) {
   EXPECT_TRUE(has(l[1], " 10.0.0.3 ") && has(l[1], "build/client/teleop_monitor")) << l[1];
   EXPECT_TRUE(has(l[1], "--peer 10.0.0.1 --peer 10.0.0.2")) << l[1];
   EXPECT_TRUE(has(l[2], "ssh -t") && has(l[2], " op@10.0.0.2 ")) << l[2];
-  EXPECT_TRUE(has(l[2], "build/client/teleop_master --domain 9 --profile lan_unicast "
-                        "--peer 10.0.0.1 --peer 10.0.0.3")) << l[2];
+  EXPECT_TRUE(has(l[2],
+                  "build/client/teleop_master --domain 9 --profile lan_unicast "
+                  "--peer 10.0.0.1 --peer 10.0.0.3"))
+      << l[2];
   EXPECT_TRUE(has(l[2], "--duration 30")) << l[2];
   // stopped in reverse order: the observer, then the server
   EXPECT_TRUE(has(l[3], "kill") && has(l[3], " 10.0.0.3 ")) << l[3];
@@ -58,9 +62,9 @@ TEST(Launcher, DryRunLanUnicastGivesEveryProcessTheOtherHosts) {
 }
 
 TEST(Launcher, DryRunWanTcpAndLan) {
-  auto l = launch({"--dry-run", "--profile", "wan_tcp", "--server", "10.0.0.1", "--master",
-                   "10.0.0.2", "--observer", "10.0.0.3", "--tcp-port", "6000",
-                   "--public-address", "203.0.113.5"});
+  auto l =
+      launch({"--dry-run", "--profile", "wan_tcp", "--server", "10.0.0.1", "--master", "10.0.0.2",
+              "--observer", "10.0.0.3", "--tcp-port", "6000", "--public-address", "203.0.113.5"});
   ASSERT_GE(l.size(), 3u);
   EXPECT_TRUE(has(l[0], "--profile wan_tcp_server --listen 6000 --public-address 203.0.113.5"))
       << l[0];
@@ -73,14 +77,16 @@ TEST(Launcher, DryRunWanTcpAndLan) {
 }
 
 TEST(Launcher, DryRunDiscoveryStartsTheServersFirst) {
-  const auto l = launch({"--dry-run", "--profile", "discovery", "--server", "10.0.0.1", "--master",
-                         "10.0.0.2", "--backup-discovery", "10.0.0.3", "--discovery-port",
-                         "12000"});
+  const auto l =
+      launch({"--dry-run", "--profile", "discovery", "--server", "10.0.0.1", "--master", "10.0.0.2",
+              "--backup-discovery", "10.0.0.3", "--discovery-port", "12000"});
   ASSERT_GE(l.size(), 4u);
   EXPECT_TRUE(has(l[0], "deploy/teleop_discovery.sh --id 0 --address 10.0.0.1 --port 12000"))
       << l[0];
-  EXPECT_TRUE(has(l[1], "deploy/teleop_discovery.sh --id 1 --address 10.0.0.3 --port 12000 "
-                        "--backup")) << l[1];
+  EXPECT_TRUE(has(l[1],
+                  "deploy/teleop_discovery.sh --id 1 --address 10.0.0.3 --port 12000 "
+                  "--backup"))
+      << l[1];
   const std::string servers =
       "--profile discovery_client --discovery-server 10.0.0.1:12000 --discovery-server "
       "10.0.0.3:12000";
@@ -103,8 +109,9 @@ TEST(Launcher, BadArgumentsExitWith2NamingTheFlag) {
 }
 
 TEST(DiscoveryScript, DryRunAndBadArguments) {
-  Process p("/bin/bash", {kDiscovery, "--dry-run", "--id", "1", "--address", "10.0.0.3", "--port",
-                          "11900", "--backup", "--backup-dir", "/var/tmp/ds"},
+  Process p("/bin/bash",
+            {kDiscovery, "--dry-run", "--id", "1", "--address", "10.0.0.3", "--port", "11900",
+             "--backup", "--backup-dir", "/var/tmp/ds"},
             "ds_dry");
   ASSERT_EQ(p.wait_for(20.0), 0) << p.err();
   EXPECT_TRUE(has(p.out(), "cd /var/tmp/ds && ")) << p.out();

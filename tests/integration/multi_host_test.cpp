@@ -60,7 +60,7 @@ class MultiHost : public ::testing::Test {
     }
   }
   void TearDown() override {
-    lab_.reset();  // kills what is left, deletes the namespaces
+    lab_.reset();                        // kills what is left, deletes the namespaces
     if (lock_fd_ >= 0) close(lock_fd_);  // releases the lock
     lock_fd_ = -1;
   }
@@ -82,9 +82,10 @@ class MultiHost : public ::testing::Test {
     std::unique_ptr<Process> ds0, ds1;
     if (r.discovery) {
       // a main server (id 0) on host 1 and a second one (id 1, --backup) on host 2
-      ds0 = on(1, "/bin/bash",
-               {kDiscoveryScript, "--id", "0", "--address", NetnsLab::address(1), "--port", "11811"},
-               name + "_ds0");
+      ds0 =
+          on(1, "/bin/bash",
+             {kDiscoveryScript, "--id", "0", "--address", NetnsLab::address(1), "--port", "11811"},
+             name + "_ds0");
       ds1 = on(2, "/bin/bash",
                {kDiscoveryScript, "--id", "1", "--address", NetnsLab::address(2), "--port", "11811",
                 "--backup", "--backup-dir", temp_path("mh", name + "_ds1")},
@@ -105,27 +106,37 @@ class MultiHost : public ::testing::Test {
         std::printf("multi_host %s: %s one-way delay from tc netem\n", name.c_str(),
                     r.delay.c_str());
       } else {
-        std::printf("multi_host %s: no tc netem here; %s one-way delay from the master's delay "
-                    "channel\n",
-                    name.c_str(), r.delay.c_str());
+        std::printf(
+            "multi_host %s: no tc netem here; %s one-way delay from the master's delay "
+            "channel\n",
+            name.c_str(), r.delay.c_str());
         delay_flags = {"--delay", r.delay};
       }
     }
-    std::vector<std::string> sargs = {"--domain", d, "--profile", r.profile_server, "--duration",
-                                      "60", "--quiet", "--scene", scene_file("tool_only.yaml"),
-                                      "--summary-json", server_json};
+    std::vector<std::string> sargs = {"--domain",
+                                      d,
+                                      "--profile",
+                                      r.profile_server,
+                                      "--duration",
+                                      "60",
+                                      "--quiet",
+                                      "--scene",
+                                      scene_file("tool_only.yaml"),
+                                      "--summary-json",
+                                      server_json};
     sargs.insert(sargs.end(), r.server.begin(), r.server.end());
     auto server = on(1, kServerBinary, sargs, name + "_server");
-    std::vector<std::string> margs = {"--domain", d, "--profile", r.profile_client, "--samples",
-                                      "3000", "--homing", "0.5", "--wait-server", "20",
-                                      "--summary-json", master_json, "--quiet"};
+    std::vector<std::string> margs = {"--domain",      d,      "--profile",      r.profile_client,
+                                      "--samples",     "3000", "--homing",       "0.5",
+                                      "--wait-server", "20",   "--summary-json", master_json,
+                                      "--quiet"};
     margs.insert(margs.end(), r.master.begin(), r.master.end());
     margs.insert(margs.end(), delay_flags.begin(), delay_flags.end());
     auto master = on(2, kMasterBinary, margs, name + "_master");
     std::vector<std::unique_ptr<Process>> observers;
     for (int k = 0; k < 2; ++k) {
-      std::vector<std::string> oargs = {"--domain", d, "--profile", r.profile_client,
-                                        "--duration", "6", "--period", "0.5"};
+      std::vector<std::string> oargs = {"--domain",   d,   "--profile", r.profile_client,
+                                        "--duration", "6", "--period",  "0.5"};
       oargs.insert(oargs.end(), r.observer.begin(), r.observer.end());
       observers.push_back(on(3, kMonitorBinary, oargs, name + "_obs" + std::to_string(k)));
     }
@@ -170,15 +181,20 @@ TEST_F(MultiHost, LanMulticastWithDelay) {
 
 TEST_F(MultiHost, LanUnicastPeers) {
   session("lan_unicast", domains::kMultiHostLanUnicast,
-          Roles{"lan_unicast", "lan_unicast", {"--peer", kH2, "--peer", kH3},
-                {"--peer", kH1, "--peer", kH3}, {"--peer", kH1, "--peer", kH2}});
+          Roles{"lan_unicast",
+                "lan_unicast",
+                {"--peer", kH2, "--peer", kH3},
+                {"--peer", kH1, "--peer", kH3},
+                {"--peer", kH1, "--peer", kH2}});
 }
 
 TEST_F(MultiHost, WanTcp) {
   session("wan_tcp", domains::kMultiHostWanTcp,
-          Roles{"wan_tcp_server", "wan_tcp_client",
+          Roles{"wan_tcp_server",
+                "wan_tcp_client",
                 {"--listen", "5100", "--public-address", kH1},
-                {"--peer", kH1 + ":5100"}, {"--peer", kH1 + ":5100"}});
+                {"--peer", kH1 + ":5100"},
+                {"--peer", kH1 + ":5100"}});
 }
 
 TEST_F(MultiHost, DiscoveryServerWithASecondServer) {
@@ -206,18 +222,43 @@ TEST_F(MultiHost, LauncherStartsAndStopsASessionOnThreeHosts) {
   const std::string master_json = temp_path("mh", "launch_master.json");
   std::remove(master_json.c_str());
   const std::string log_prefix = "/tmp/teleop_launch_observer";
-  for (int k = 0; k < 2; ++k) std::remove((log_prefix + std::to_string(k) + "_" + d + ".log").c_str());
-  const std::string map = kH1 + "=" + lab_->host(1) + "," + kH2 + "=" + lab_->host(2) + "," + kH3 +
-                          "=" + lab_->host(3);
+  for (int k = 0; k < 2; ++k)
+    std::remove((log_prefix + std::to_string(k) + "_" + d + ".log").c_str());
+  const std::string map =
+      kH1 + "=" + lab_->host(1) + "," + kH2 + "=" + lab_->host(2) + "," + kH3 + "=" + lab_->host(3);
   setenv("TELEOP_NETNS_MAP", map.c_str(), 1);
   setenv("TELEOP_IP", lab_->ip().c_str(), 1);
   Process launch("/bin/bash",
-                 {std::string(TELEOP_SOURCE_DIR) + "/deploy/teleop_launch.sh", "--profile",
-                  "discovery", "--server", kH1, "--master", kH2, "--observer", kH3, "--observer",
-                  kH3, "--backup-discovery", kH3, "--domain", d, "--remote-dir", TELEOP_SOURCE_DIR,
-                  "--build-dir", TELEOP_BINARY_DIR, "--scene", scene_file("tool_only.yaml"),
-                  "--ssh", std::string(TELEOP_SOURCE_DIR) + "/tests/support/netns_ssh.sh", "--",
-                  "--samples", "3000", "--homing", "0.5", "--summary-json", master_json,
+                 {std::string(TELEOP_SOURCE_DIR) + "/deploy/teleop_launch.sh",
+                  "--profile",
+                  "discovery",
+                  "--server",
+                  kH1,
+                  "--master",
+                  kH2,
+                  "--observer",
+                  kH3,
+                  "--observer",
+                  kH3,
+                  "--backup-discovery",
+                  kH3,
+                  "--domain",
+                  d,
+                  "--remote-dir",
+                  TELEOP_SOURCE_DIR,
+                  "--build-dir",
+                  TELEOP_BINARY_DIR,
+                  "--scene",
+                  scene_file("tool_only.yaml"),
+                  "--ssh",
+                  std::string(TELEOP_SOURCE_DIR) + "/tests/support/netns_ssh.sh",
+                  "--",
+                  "--samples",
+                  "3000",
+                  "--homing",
+                  "0.5",
+                  "--summary-json",
+                  master_json,
                   "--quiet"},
                  "mh_launch");
   unsetenv("TELEOP_NETNS_MAP");
@@ -225,9 +266,10 @@ TEST_F(MultiHost, LauncherStartsAndStopsASessionOnThreeHosts) {
   ASSERT_EQ(launch.wait_for(90.0), 0) << launch.err() << launch.out();
   const std::string m = Process::slurp(master_json);
   const double sent = json_value(m, "sent"), received = json_value(m, "received");
-  std::printf("multi_host launcher (discovery) commands %.0f/%.0f received, rtt p50 %.3f ms p99 "
-              "%.3f ms\n",
-              received, sent, json_nested(m, "rtt_ms", "p50"), json_nested(m, "rtt_ms", "p99"));
+  std::printf(
+      "multi_host launcher (discovery) commands %.0f/%.0f received, rtt p50 %.3f ms p99 "
+      "%.3f ms\n",
+      received, sent, json_nested(m, "rtt_ms", "p50"), json_nested(m, "rtt_ms", "p99"));
   EXPECT_EQ(sent, 3000) << m;
   EXPECT_GE(received, 0.99 * sent) << m;
   EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;

@@ -30,8 +30,9 @@ const char* kCycloneLoopback =
 
 TEST(OtherVendor, CycloneDdsReaderReceivesStateSceneStatsAndEvents) {
 #ifndef TELEOP_CYCLONE_READER
-  std::printf("other_vendor_test: SKIPPED: Cyclone DDS (cyclonedds-dev, idlc) was not found when "
-              "configuring; install it (deploy/setup.sh) and re-run cmake\n");
+  std::printf(
+      "other_vendor_test: SKIPPED: Cyclone DDS (cyclonedds-dev, idlc) was not found when "
+      "configuring; install it (deploy/setup.sh) and re-run cmake\n");
   GTEST_SKIP() << "Cyclone DDS not found at configure time";
 #else
   const std::string d = std::to_string(domains::kOtherVendor);

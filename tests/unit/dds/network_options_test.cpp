@@ -2,12 +2,12 @@
 // the network flags are parsed, checked against the profile and put into the participant QoS.
 #include <gtest/gtest.h>
 
+#include <fastdds/rtps/transport/TCPv4TransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
 #include <cstdlib>
 #include <map>
 #include <string>
 #include <vector>
-#include <fastdds/rtps/transport/TCPv4TransportDescriptor.h>
-#include <fastrtps/utils/IPLocator.h>
 
 #include "common/config/config.hpp"
 #include "common/dds/participant.hpp"
@@ -59,9 +59,12 @@ std::string error_of(F f) {
 
 TEST(ProfileLookup, EveryDocumentedNameResolvesToItsFile) {
   const std::map<std::string, std::string> expected = {
-      {"loopback", "loopback.xml"},       {"loopback_shm", "loopback_shm.xml"},
-      {"lan", "lan.xml"},                 {"lan_unicast", "lan.xml"},
-      {"wan_tcp_server", "wan_tcp.xml"},  {"wan_tcp_client", "wan_tcp.xml"},
+      {"loopback", "loopback.xml"},
+      {"loopback_shm", "loopback_shm.xml"},
+      {"lan", "lan.xml"},
+      {"lan_unicast", "lan.xml"},
+      {"wan_tcp_server", "wan_tcp.xml"},
+      {"wan_tcp_client", "wan_tcp.xml"},
       {"discovery_client", "discovery_server.xml"}};
   const auto index = profile_index();
   for (const auto& [name, file] : expected) {
@@ -152,10 +155,8 @@ TEST(NetworkFlags, OptionsThatDoNotFitTheProfileAreRefused) {
     return error_of([&] { resolve_participant_options(profile, 5, "t", f); });
   };
   EXPECT_NE(err(peers({"10.0.0.2"}), "loopback").find("--peer"), std::string::npos);
-  EXPECT_NE(err(listen("5100"), "lan").find("--listen 5100 does not apply"),
-            std::string::npos);
-  EXPECT_NE(err(servers({"10.0.0.1"}), "lan").find("--discovery-server"),
-            std::string::npos);
+  EXPECT_NE(err(listen("5100"), "lan").find("--listen 5100 does not apply"), std::string::npos);
+  EXPECT_NE(err(servers({"10.0.0.1"}), "lan").find("--discovery-server"), std::string::npos);
   EXPECT_NE(err({}, "wan_tcp_client").find("needs --peer"), std::string::npos);
   EXPECT_NE(err({}, "lan_unicast").find("needs --peer"), std::string::npos);
   EXPECT_NE(err({}, "discovery_client").find("needs --discovery-server"), std::string::npos);
@@ -178,8 +179,7 @@ TEST(NetworkFlags, FlagsWinOverTheEnvironment) {
 TEST(NetworkFlags, TcpOptionsReachTheTransport) {
   clear_env();
   using eprosima::fastdds::rtps::TCPv4TransportDescriptor;
-  auto o = resolve_participant_options("wan_tcp_server", 5, "t",
-                                       listen("6200", "192.0.2.10"));
+  auto o = resolve_participant_options("wan_tcp_server", 5, "t", listen("6200", "192.0.2.10"));
   ProfileKind kind{};
   auto qos = participant_qos(o, &kind);
   EXPECT_EQ(kind, ProfileKind::kTcp);
@@ -207,9 +207,8 @@ TEST(NetworkFlags, TcpOptionsReachTheTransport) {
 
 TEST(NetworkFlags, DiscoveryServersGetTheIdsOfTheirOrder) {
   clear_env();
-  auto o = resolve_participant_options(
-      "discovery_client", 5, "t",
-      servers({"192.0.2.1", "192.0.2.2:12000"}));
+  auto o = resolve_participant_options("discovery_client", 5, "t",
+                                       servers({"192.0.2.1", "192.0.2.2:12000"}));
   ProfileKind kind{};
   const auto qos = participant_qos(o, &kind);
   EXPECT_EQ(kind, ProfileKind::kDiscoveryClient);

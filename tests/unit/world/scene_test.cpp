@@ -30,7 +30,7 @@ tool: {mass_kg: 0.5, kp_n_per_m: 800}
 planes:
   - {name: floor, normal: [0, 0, 2], offset_m: 0.1}
 )",
-                                                        "scene.yaml"));
+                                                             "scene.yaml"));
   EXPECT_EQ(s.physics_rate_hz, 2000.0);
   EXPECT_EQ(s.tool.mass_kg, 0.5);
   EXPECT_EQ(s.tool.kp_n_per_m, 800.0);
