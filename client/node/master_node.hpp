@@ -13,7 +13,7 @@
 #include <string>
 
 #include "client/control/bilateral_controller.hpp"
-#include "client/metrics/safety.hpp"
+#include "client/control/safety.hpp"
 #include "client/net/delay_config.hpp"
 #include "common/dds/participant.hpp"
 

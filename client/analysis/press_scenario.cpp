@@ -1,4 +1,4 @@
-#include "client/control/press_scenario.hpp"
+#include "client/analysis/press_scenario.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "client/control/stability_analysis.hpp"
+#include "client/analysis/stability_analysis.hpp"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "client/control/slave_model.hpp"
+#include "client/sim/slave_model.hpp"
 
 namespace teleop::master {
 

@@ -1,4 +1,4 @@
-#include "client/metrics/safety.hpp"
+#include "client/control/safety.hpp"
 
 #include <algorithm>
 #include <cmath>

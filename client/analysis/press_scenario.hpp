@@ -6,8 +6,8 @@
 // height, k = 2e4 N/m). Used by the tests and by `teleop_bench delay`.
 #include <string>
 
-#include "client/control/loopback_session.hpp"
-#include "client/control/stability_analysis.hpp"
+#include "client/sim/loopback_session.hpp"
+#include "client/analysis/stability_analysis.hpp"
 #include "client/device/simulated_device.hpp"
 
 namespace teleop::master {

@@ -1,0 +1,142 @@
+#pragma once
+// MasterCycle: one haptic cycle of the master, the same for teleop_master (DDS) and for the
+// in-process loopback session (tests, the delay sweep, experiments):
+//
+//   link.receive -> backward delay channel -> controller.update (newest slave sample)
+//   -> safety.filter -> device.write -> forward delay channel -> link.send      (step)
+//   -> metrics.update (slave at the master, or the slave's truth in-process)
+//   -> losses, verdict, device.advance(dt)                                       (finish)
+//
+// Before the session the cycle may home: the slave is brought along a minimum-jerk path from
+// where it is to the mapped device position while no force is rendered; the controller is
+// activated once the slave is there. The clock is an argument (seconds on any steady clock);
+// metrics time counts from start(). step() and finish() allocate nothing.
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+
+#include "client/control/bilateral_controller.hpp"
+#include "client/control/safety.hpp"
+#include "client/cycle/slave_link.hpp"
+#include "client/device/haptic_device.hpp"
+#include "client/metrics/session_metrics.hpp"
+#include "client/net/delay_channel.hpp"
+
+namespace teleop::master {
+
+/// How the forward channel's due commands reach the link each cycle.
+enum class ForwardDelivery {
+  kEveryDue,   ///< every due command, in delivery order (a network carries each one)
+  kNewestDue,  ///< only the newest due command (an in-process slave reads one per step)
+};
+
+/// Everything a master cycle needs besides the device and the link.
+struct MasterCycleConfig {
+  ControllerParams controller;  ///< scheme, gains, workspace map
+  DelayConfig forward;          ///< master -> slave injected impairment
+  DelayConfig backward;         ///< slave -> master injected impairment
+  SafetyParams safety;          ///< safety layer thresholds
+  bool safety_enabled = true;   ///< false: the controller's force goes straight to the device
+  VerdictParams verdict;        ///< verdict thresholds
+  double dt_s = 1e-3;           ///< haptic period [s]
+  ForwardDelivery delivery = ForwardDelivery::kEveryDue;
+  std::uint32_t session_id = 0;  ///< passivity session id sent to the slave (0: controller's)
+};
+
+/// One master cycle. See the file comment.
+class MasterCycle {
+ public:
+  /// Allocates channels and the controller. @throws ConfigError on bad configuration.
+  MasterCycle(const MasterCycleConfig& cfg, HapticDevice& device, SlaveLink& link);
+
+  /// Configures and activates device, controller and safety; clears channels and metrics.
+  /// Metrics time counts from `now_s`. Without homing the controller is activated at once.
+  void start(double now_s);
+  /// Homes instead: the slave goes from `slave_tip_m` to the mapped device position along a
+  /// minimum-jerk path of `duration_s`, then (once within `tolerance_m`, or `timeout_s` after
+  /// the path ended) the controller is activated. No force is rendered while homing.
+  void start_homing(double now_s, const Eigen::Vector3d& slave_tip_m, double duration_s,
+                    double tolerance_m = 0.005, double timeout_s = 3.0);
+
+  /// The master half of a cycle (see the file comment). Real-time safe.
+  void step(double now_s);
+  /// Closes the cycle: metrics from the newest slave sample at the master, or from
+  /// `slave_truth` when the caller knows the slave's true state (in-process). Real-time safe.
+  void finish(double now_s, const SlaveSample* slave_truth = nullptr);
+
+  /// Deactivates the controller and the device (zero force written first).
+  void stop();
+
+  bool homing() const { return homing_; }
+  /// True if the last step() was a homing cycle (nothing rendered, no metrics recorded).
+  bool homing_cycle() const { return homing_cycle_; }
+  /// Time the session proper began (homing over) [s]; negative while homing.
+  double session_start_s() const { return session_start_s_; }
+  /// Seq of the newest command issued into the forward channel.
+  std::uint64_t command_seq() const { return seq_; }
+  /// True if a new slave sample reached the controller this cycle.
+  bool sample_arrived() const { return sample_arrived_; }
+
+  const DeviceReading& reading() const { return reading_; }
+  /// Newest slave sample the master has (after the backward channel).
+  const SlaveSample& slave_at_master() const { return newest_; }
+  /// Newest metrics sample (what was recorded this cycle).
+  const MetricsSample& last_sample() const { return sample_; }
+  /// Force written to the device this cycle [N].
+  const Eigen::Vector3d& device_force_n() const { return force_n_; }
+  /// Force the controller asked for before the safety layer this cycle [N].
+  const Eigen::Vector3d& controller_force_n() const { return controller_force_n_; }
+  const SessionMetrics& metrics() const { return metrics_; }
+  SessionMetrics& metrics() { return metrics_; }
+  const SafetyLayer& safety() const { return safety_; }
+  SafetyLayer& safety() { return safety_; }
+  const BilateralController& controller() const { return *controller_; }
+  const DelayChannel<SlaveCommand>& forward() const { return forward_; }
+  const DelayChannel<SlaveSample>& backward() const { return backward_; }
+  const MasterCycleConfig& config() const { return cfg_; }
+
+ private:
+  void prepare(double now_s);
+  void end_homing(double now_s);
+
+  MasterCycleConfig cfg_;
+  HapticDevice& device_;
+  SlaveLink& link_;
+  std::unique_ptr<BilateralController> controller_;
+  DelayChannel<SlaveCommand> forward_;
+  DelayChannel<SlaveSample> backward_;
+  SafetyLayer safety_;
+  SessionMetrics metrics_;
+
+  DeviceReading reading_;
+  SlaveSample newest_;     // newest sample at the master
+  MetricsSample sample_;   // this cycle's metrics sample
+  SlaveCommand command_;   // this cycle's command
+  Eigen::Vector3d force_n_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d controller_force_n_ = Eigen::Vector3d::Zero();
+  double origin_s_ = 0.0;   // metrics time zero
+  double last_rx_s_ = -1.0;  // when the controller last got a new sample
+  std::uint64_t seq_ = 0;
+  bool sample_arrived_ = false;
+  bool homing_cycle_ = false;  // this cycle was a homing cycle (no metrics)
+
+  // homing
+  bool homing_ = false;
+  double session_start_s_ = -1.0;
+  double homing_start_s_ = 0.0;
+  double homing_duration_s_ = 0.0;
+  double homing_tolerance_m_ = 0.005;
+  double homing_timeout_s_ = 3.0;
+  Eigen::Vector3d homing_from_m_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d homing_goal_m_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d homing_target_m_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d slave_tip_m_ = Eigen::Vector3d::Zero();  // where the slave is, as known
+};
+
+/// JSON object of a channel report: {"pushed":..,"delay_mean_ms":..,"delay_p50_ms":..,...}.
+std::string channel_json(const ChannelReport& r);
+
+/// Minimum-jerk blend s(t) in [0, 1] for t in [0, T].
+double min_jerk(double t_s, double duration_s);
+
+}  // namespace teleop::master

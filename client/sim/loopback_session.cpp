@@ -1,0 +1,65 @@
+#include "client/sim/loopback_session.hpp"
+
+#include <cstdio>
+
+namespace teleop::master {
+
+MasterCycleConfig LoopbackSession::cycle_config(const LoopbackConfig& cfg) {
+  MasterCycleConfig c = cfg;
+  c.delivery = ForwardDelivery::kNewestDue;  // the slave steps with the newest command
+  return c;
+}
+
+LoopbackSession::LoopbackSession(const LoopbackConfig& cfg, HapticDevice& device,
+                                 SlaveSimulator& slave)
+    : cfg_(cfg), slave_(slave), cycle_(cycle_config(cfg), device, link_) {}
+
+void LoopbackSession::start() {
+  cycle_.start(0.0);
+  slave_.reset(cfg_.controller.workspace.to_slave_position(cycle_.reading().position_m));
+  link_.command = SlaveCommand{};
+  link_.command.enabled = false;  // hold until the first command arrives
+  link_.pending = false;
+  t_s_ = 0.0;
+  started_ = true;
+}
+
+bool LoopbackSession::step() {
+  if (t_s_ >= cfg_.duration_s - 0.5 * cfg_.dt_s) return false;
+  const double now = t_s_;
+  cycle_.step(now);
+  // the slave steps with the newest command it has; its sample travels back next cycle
+  slave_.step(link_.command, cfg_.dt_s);
+  const SlaveSample truth = slave_.sample();
+  if (!link_.outage) {
+    link_.sample = truth;
+    link_.sample_at_s = now;
+    link_.pending = true;
+  }
+  // metrics from the slave's ground truth, since both run here
+  cycle_.finish(now, &truth);
+  t_s_ += cfg_.dt_s;
+  return true;
+}
+
+void LoopbackSession::run() {
+  if (!started_) start();
+  while (step()) {
+  }
+}
+
+std::string LoopbackSession::summary_json() const {
+  std::string s = "{\"scheme\":\"";
+  s += controller().name();
+  s += "\",\"metrics\":" + metrics().summary_json();
+  s += ",\"forward\":" + channel_json(forward().report());
+  s += ",\"backward\":" + channel_json(backward().report());
+  s += ",\"safety\":{\"cut\":";
+  s += safety().cut() ? "true" : "false";
+  s += ",\"reason\":\"";
+  s += safety().cut_reason();
+  s += "\"}}";
+  return s;
+}
+
+}  // namespace teleop::master
