@@ -244,7 +244,6 @@ void RobotSim::reset(const JointVector& q0) {
   state_.link_contacts = 0;
   contact_count_ = 0;
   dJointGroupEmpty(contact_group_);
-  was_tip_contact_ = false;
   read_state();
   controller_reset(model_, state_.controller, state_.q);
   state_.command.q_ref = state_.q;
@@ -448,16 +447,8 @@ void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
     last_good_q_ = state_.q;
   }
 
-  // contact begin / end events of the tip
-  if (ev && state_.tip_in_contact != was_tip_contact_) {
-    if (state_.tip_in_contact) {
-      ev->push(EventKind::kContactBegin, Severity::kInfo, t,
-               static_cast<double>(state_.tip_contact_plane), "robot tip touches a plane");
-    } else {
-      ev->push(EventKind::kContactEnd, Severity::kInfo, t, -1.0, "robot tip left the plane");
-    }
-  }
-  was_tip_contact_ = state_.tip_in_contact;
+  // contact begin / end events are the world's (server/world/world.cpp), one place for
+  // every slave and object
 
   state_.sim_time_s = t + dt_s;
   ++state_.steps;

@@ -140,7 +140,6 @@ class RobotSim {
   std::array<Eigen::Vector3d, kMaxContacts> contact_pos_{};
   std::array<int, kMaxContacts> contact_plane_{};
   int contact_count_ = 0;
-  bool was_tip_contact_ = false;
   JointVector last_good_q_;
   double last_ode_step_s_ = 0.0;
   double last_collision_s_ = 0.0;

@@ -122,8 +122,20 @@ BodiesOnTip step_bodies(const WorldModel& model, WorldData& d, double dt_s, Even
 }
 
 /// Step 3: the slave, with the deformable contact force on its tip.
-void step_slave(const WorldModel& model, WorldData& d, const WorldCommand& cmd, double dt_s,
+void step_slave(const WorldModel& model, WorldData& d, const WorldCommand& cmd_in, double dt_s,
                 EventQueue& events) {
+  // a non-finite command never reaches either slave: it holds, and the fault is reported
+  WorldCommand held;
+  const bool finite = cmd_in.position_m.allFinite() && cmd_in.orientation.coeffs().allFinite() &&
+                      cmd_in.velocity_mps.allFinite() &&
+                      cmd_in.angular_velocity_radps.allFinite() &&
+                      std::isfinite(cmd_in.kp_override_n_per_m);
+  if (!finite) {
+    held.hold = true;
+    events.push(EventKind::kFault, Severity::kError, d.out.sim_time_s, 0.0,
+                "world: non-finite command; the slave holds its pose");
+  }
+  const WorldCommand& cmd = finite ? cmd_in : held;
   if (d.robot) {
     robot::RobotInput in;
     in.mode = cmd.hold ? robot::ControlMode::kHold : robot::ControlMode::kTrackPose;

@@ -5,7 +5,7 @@
 // 1 kHz, for each scheme, one-way delay 0-200 ms against the environment (elastic sphere,
 // stiff wall) and the gain (position-position: K_pm = K_ps; force-position: K_f), plus a
 // stiffness sweep (sphere k 500 - 2e4 N/m). Each run's verdict is compared with the analytic
-// delay margin of the linearised loop (client/control/stability_analysis.hpp).
+// delay margin of the linearised loop (client/analysis/stability_analysis.hpp).
 //
 // The passivity-based schemes run the same grid: wave-variables (gain = K_ps; b = K_ps 25 ms,
 // at most 20 N s/m), tdpa (on position-position, gain = K_pm = K_ps) and tdpa-fp (tdpa on
@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "client/control/press_scenario.hpp"
+#include "client/analysis/press_scenario.hpp"
 #include "common/util/csv.hpp"
 #include "common/util/registry.hpp"
 #include "common/util/stats.hpp"

@@ -4,7 +4,7 @@
 // FCL rigid-contact module agrees with the plane's analytic distance for the deepest node.
 #include <gtest/gtest.h>
 
-#include "server/collision/rigid_contacts.hpp"
+#include "tests/unit/server/collision/fcl_rigid_contacts.hpp"
 #include "server/deformable/deformable.hpp"
 
 namespace tc = teleop::sim::collision;

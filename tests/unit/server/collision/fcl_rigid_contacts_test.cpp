@@ -1,12 +1,11 @@
-// FCL rigid contacts against analytic sphere-plane and sphere-box formulas; the broad phase
-// against brute force.
-#include "server/collision/rigid_contacts.hpp"
+// The FCL rigid contacts (the collision tests' independent reference) against analytic
+// sphere-plane, sphere-box and box-box formulas.
+#include "tests/unit/server/collision/fcl_rigid_contacts.hpp"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "server/collision/broad_phase.hpp"
 
 namespace tc = teleop::sim::collision;
 using Eigen::Vector3d;
@@ -128,44 +127,6 @@ TEST(RigidContacts, BoxOnPlane) {
   pose.translation().z() = 0.06;
   rc.query_box(Vector3d(0.1, 0.1, 0.05), pose, out);
   EXPECT_TRUE(out.empty());
-}
-
-TEST(BroadPhase, PairsMatchBruteForce) {
-  std::mt19937 rng(4);
-  std::uniform_real_distribution<double> u(-1.0, 1.0), s(0.02, 0.3);
-  tc::BroadPhase bp;
-  bp.reserve(60);
-  std::vector<tc::Aabb> boxes;
-  for (int i = 0; i < 60; ++i) {
-    tc::Aabb b;
-    const Vector3d c(u(rng), u(rng), u(rng));
-    const Vector3d h(s(rng), s(rng), s(rng));
-    b.lo = c - h;
-    b.hi = c + h;
-    boxes.push_back(b);
-    bp.add(100 + i, b);
-  }
-  std::vector<std::pair<int, int>> pairs;
-  pairs.reserve(2000);
-  for (int round = 0; round < 3; ++round) {
-    bp.pairs(pairs);
-    std::vector<std::pair<int, int>> brute;
-    for (int i = 0; i < 60; ++i) {
-      for (int j = i + 1; j < 60; ++j) {
-        if (boxes[i].overlaps(boxes[j])) brute.emplace_back(100 + i, 100 + j);
-      }
-    }
-    std::sort(pairs.begin(), pairs.end());
-    std::sort(brute.begin(), brute.end());
-    EXPECT_EQ(pairs, brute);
-    EXPECT_FALSE(brute.empty());
-    for (int i = 0; i < 60; ++i) {  // move everything a little and update
-      const Vector3d d(0.1 * u(rng), 0.1 * u(rng), 0.1 * u(rng));
-      boxes[i].lo += d;
-      boxes[i].hi += d;
-      bp.update(i, boxes[i]);
-    }
-  }
 }
 
 TEST(RigidContacts, BoxAgainstBox) {

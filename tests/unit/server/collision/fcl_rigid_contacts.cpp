@@ -1,4 +1,4 @@
-#include "server/collision/rigid_contacts.hpp"
+#include "tests/unit/server/collision/fcl_rigid_contacts.hpp"
 
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/halfspace.h>

@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "tests/unit/robot/robot_test_util.hpp"
+#include "tests/unit/server/robot/robot_test_util.hpp"
 
 namespace teleop::sim::robot {
 namespace {

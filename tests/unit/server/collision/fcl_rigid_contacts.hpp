@@ -1,4 +1,6 @@
 #pragma once
+// The collision tests' independent reference (test code: the world's rigid pairs, the tip and
+// the deformable nodes against planes, are analytic and checked against this).
 // Rigid contacts through FCL 0.7: the tip sphere (or a box) against the scene's planes
 // (FCL half-spaces) and boxes. Results use one convention: `normal` is the unit direction
 // that pushes the query shape out of the object (from the object towards the query), depth

@@ -6,7 +6,7 @@
 #include <random>
 
 #include "server/collision/surface_topology.hpp"
-#include "tests/unit/collision/test_meshes.hpp"
+#include "tests/unit/server/collision/test_meshes.hpp"
 
 namespace tc = teleop::sim::collision;
 using Eigen::Vector3d;

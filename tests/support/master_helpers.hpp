@@ -2,8 +2,8 @@
 // Shared helpers of the master-side tests (tests/unit/client).
 #include <string>
 
-#include "client/control/press_scenario.hpp"
-#include "client/control/slave_model.hpp"
+#include "client/analysis/press_scenario.hpp"
+#include "client/sim/slave_model.hpp"
 #include "common/sim/tool.hpp"
 
 namespace teleop::test {

@@ -7,7 +7,7 @@
 
 #include "server/deformable/deformable.hpp"
 #include "tests/support/alloc_counter.hpp"
-#include "tests/unit/deformable/test_helpers.hpp"
+#include "tests/unit/server/deformable/test_helpers.hpp"
 
 namespace {
 

@@ -6,7 +6,7 @@
 #include <random>
 
 #include "tests/support/alloc_counter.hpp"
-#include "tests/unit/collision/test_meshes.hpp"
+#include "tests/unit/server/collision/test_meshes.hpp"
 
 namespace tc = teleop::sim::collision;
 using Eigen::Vector3d;

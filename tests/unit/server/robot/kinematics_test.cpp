@@ -6,7 +6,7 @@
 #include <random>
 
 #include "tests/support/alloc_counter.hpp"
-#include "tests/unit/robot/robot_test_util.hpp"
+#include "tests/unit/server/robot/robot_test_util.hpp"
 
 namespace teleop::sim::robot {
 namespace {

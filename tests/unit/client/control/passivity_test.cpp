@@ -7,10 +7,10 @@
 #include <vector>
 
 #include "client/control/bilateral_controller.hpp"
-#include "client/control/loopback_session.hpp"
-#include "client/control/press_scenario.hpp"
-#include "client/control/slave_model.hpp"
-#include "client/control/stability_analysis.hpp"
+#include "client/sim/loopback_session.hpp"
+#include "client/analysis/press_scenario.hpp"
+#include "client/sim/slave_model.hpp"
+#include "client/analysis/stability_analysis.hpp"
 #include "client/device/simulated_device.hpp"
 #include "common/control/slave_port.hpp"
 #include "common/control/time_domain_passivity.hpp"
@@ -19,7 +19,7 @@
 #include "common/sim/tool.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/config_error.hpp"
-#include "tests/unit/client/test_helpers.hpp"
+#include "tests/support/master_helpers.hpp"
 
 using namespace teleop::master;
 using namespace teleop;

@@ -1,0 +1,150 @@
+// The safety layer (link loss, saturation and energy cuts, fades), checked on the in-process loop.
+#include <gtest/gtest.h>
+
+#include "tests/support/config_error.hpp"
+
+#include <cmath>
+#include <functional>
+
+#include "client/control/bilateral_controller.hpp"
+#include "client/sim/loopback_session.hpp"
+#include "client/analysis/press_scenario.hpp"
+#include "client/sim/slave_model.hpp"
+#include "client/analysis/stability_analysis.hpp"
+#include "client/device/simulated_device.hpp"
+#include "client/control/safety.hpp"
+#include "common/dds/teleop_idl.hpp"
+#include "common/sim/tool.hpp"
+#include "tests/support/alloc_counter.hpp"
+#include "tests/support/master_helpers.hpp"
+
+using namespace teleop::master;
+using namespace teleop;
+using teleop::config::ConfigError;
+using teleop::test::scenario;
+
+namespace {
+
+[[maybe_unused]] std::string error_of(const std::function<void()>& fn) { return teleop::test::config_error_of(fn); }
+
+/// A press scenario whose operator steps down into the object and holds (steady contact).
+struct SteadyContact {
+  PressSetup setup;
+  explicit SteadyContact(const PressScenario& s) : setup(build_press_setup(s)) {
+    setup.device.script.kind = ScriptKind::kStep;
+    setup.device.script.start_m = Eigen::Vector3d(0.0, 0.0, 0.02);
+    setup.device.script.step_m = Eigen::Vector3d(0.0, 0.0, -0.035);  // 1.5 cm below the top
+    setup.device.script.step_time_s = 0.2;
+    setup.device.script.tremor_amplitude_m = 0.0;
+    setup.loop.duration_s = 3.0;
+  }
+};
+
+TEST(Safety, LostLinkFadesForceToZeroAndBack) {
+  SafetyLayer safety;
+  SafetyParams p;
+  p.link_timeout_s = 0.1;
+  p.link_fade_s = 0.2;
+  p.thermal_limit = false;
+  safety.configure(p, DeviceSpec{});
+  SessionMetrics metrics;
+  const Eigen::Vector3d f(0.0, 0.0, 4.0);
+  const double dt = 1e-3;
+  double last_rx = 0.0;
+  double t = 0.0;
+  for (; t < 1.0; t += dt) {
+    last_rx = t;  // samples arriving
+    EXPECT_NEAR(safety.filter(t, dt, f, last_rx, 10.0, metrics).z(), 4.0, 1e-12);
+  }
+  // the link dies at t = 1.0: nothing for 0.1 s, then a fade of 0.2 s
+  double at_timeout = 0, mid_fade = 0, after = 0;
+  for (; t < 1.6; t += dt) {
+    const double z = safety.filter(t, dt, f, last_rx, 10.0, metrics).z();
+    if (std::fabs(t - 1.09) < 0.5 * dt) at_timeout = z;
+    if (std::fabs(t - 1.2) < 0.5 * dt) mid_fade = z;
+    if (t > 1.31) after = std::max(after, std::fabs(z));
+  }
+  EXPECT_NEAR(at_timeout, 4.0, 1e-12);
+  EXPECT_GT(mid_fade, 0.5);
+  EXPECT_LT(mid_fade, 3.5);
+  EXPECT_EQ(after, 0.0);
+  EXPECT_TRUE(safety.link_lost());
+  // the link comes back: the force ramps in again (no jump)
+  const double first = safety.filter(t, dt, f, t, 10.0, metrics).z();
+  EXPECT_LT(first, 0.1);
+  for (int i = 0; i < 300; ++i) {
+    t += dt;
+    safety.filter(t, dt, f, t, 10.0, metrics);
+  }
+  t += dt;
+  EXPECT_NEAR(safety.filter(t, dt, f, t, 10.0, metrics).z(), 4.0, 1e-12);
+  teleop::sim::SimEvent e;
+  int watchdog = 0;
+  while (safety.events().pop(e)) watchdog += e.kind == teleop::sim::EventKind::kWatchdog;
+  EXPECT_EQ(watchdog, 2);  // lost, back
+}
+
+TEST(Safety, LostLinkInTheLoopFadesDeviceForce) {
+  // steady contact, then the slave->master link dies: the master holds a stale contact force
+  SteadyContact sc(scenario("force-position", Environment::kSphere, 2000, 1.0, 0.0));
+  sc.setup.loop.duration_s = 2.5;
+  SimulatedDevice dev(sc.setup.device);
+  PointSlave slave(sc.setup.slave);
+  LoopbackSession session(sc.setup.loop, dev, slave);
+  session.start();
+  while (session.time_s() < 1.5) session.step();
+  ASSERT_GT(session.device_force_n().norm(), 1.0);
+  session.set_backward_outage(true);
+  const double timeout = sc.setup.loop.safety.link_timeout_s;
+  const double fade = sc.setup.loop.safety.link_fade_s;
+  double during_timeout = 0.0;
+  while (session.step()) {
+    const double since = session.time_s() - 1.5;
+    if (since < timeout - 0.005) during_timeout = session.device_force_n().norm();
+    if (since > timeout + fade + 0.005) {
+      EXPECT_EQ(session.device_force_n().norm(), 0.0) << since;
+      EXPECT_GT(session.controller_force_n().norm(), 1.0);  // the stale force is still asked for
+    }
+  }
+  EXPECT_GT(during_timeout, 1.0);  // not cut before the timeout
+  EXPECT_TRUE(session.safety().link_lost());
+  EXPECT_FALSE(session.safety().cut());
+}
+
+TEST(Safety, ForceAtTheLimitTooLongCutsAndLatches) {
+  SafetyLayer safety;
+  SafetyParams p;
+  p.saturation_limit_s = 0.2;
+  p.cut_fade_s = 0.05;
+  p.thermal_limit = false;
+  safety.configure(p, DeviceSpec{});
+  SessionMetrics metrics;
+  double t = 0.0;
+  for (; t < 0.5; t += 1e-3) safety.filter(t, 1e-3, Eigen::Vector3d(10, 0, 0), t, 10.0, metrics);
+  EXPECT_TRUE(safety.cut());
+  EXPECT_NEAR(safety.cut_time_s(), 0.2, 0.01);
+  // latched: a small force later stays cut until rearm()
+  EXPECT_EQ(safety.filter(t, 1e-3, Eigen::Vector3d(1, 0, 0), t, 10.0, metrics).norm(), 0.0);
+  safety.rearm();
+  for (int i = 0; i < 400; ++i) {
+    t += 1e-3;
+    safety.filter(t, 1e-3, Eigen::Vector3d(1, 0, 0), t, 10.0, metrics);
+  }
+  EXPECT_NEAR(safety.filter(t, 1e-3, Eigen::Vector3d(1, 0, 0), t, 10.0, metrics).x(), 1.0, 1e-12);
+}
+
+TEST(Safety, ThermalLimitClampsToContinuousForceAndNaNIsZeroed) {
+  SafetyLayer safety;
+  safety.configure(SafetyParams{}, DeviceSpec{});
+  SessionMetrics metrics;
+  double out = 0.0;
+  for (double t = 0.0; t < 5.0; t += 1e-3) {
+    out = safety.filter(t, 1e-3, Eigen::Vector3d(0, 8.0, 0), t, 10.0, metrics).norm();
+  }
+  EXPECT_NEAR(out, DeviceSpec{}.max_continuous_force_n, 1e-9);
+  const Eigen::Vector3d nan(std::nan(""), 0, 0);
+  EXPECT_EQ(safety.filter(5.0, 1e-3, nan, 5.0, 10.0, metrics).norm(), 0.0);
+  EXPECT_EQ(safety.faults(), 1u);
+}
+
+}  // namespace

@@ -1,0 +1,306 @@
+#include "common/sim/tool.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "server/world/world.hpp"
+#include "tests/support/alloc_counter.hpp"
+
+namespace teleop::sim {
+namespace {
+
+ToolModel free_tool() {
+  ToolModel m;
+  m.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
+  return m;
+}
+
+ToolModel tool_over_floor() {
+  ToolModel m = free_tool();
+  Plane floor;
+  floor.id = 100;
+  floor.normal = Eigen::Vector3d::UnitZ();
+  floor.offset_m = 0.0;
+  floor.stiffness_n_per_m = 2e4;
+  floor.damping_ns_per_m = 50;
+  m.add(Obstacle::of(floor));
+  return m;
+}
+
+TEST(ToolScene, TracksACommandedPositionUnderGravity) {
+  const ToolModel m = free_tool();
+  ToolState s;
+  s.position_m = Eigen::Vector3d(0.6, 0.0, 0.7);
+  ToolInput in;
+  in.target_position_m = Eigen::Vector3d(0.5, 0.1, 0.4);
+  for (int i = 0; i < 3000; ++i) tool_step(m, s, in, 1e-3);
+  EXPECT_LT((s.position_m - in.target_position_m).norm(), 1e-3);
+  EXPECT_LT(s.velocity_mps.norm(), 1e-3);
+}
+
+TEST(ToolScene, FloorContactForceBalancesThePdPush) {
+  const ToolModel m = tool_over_floor();
+  ToolState s;
+  s.position_m = Eigen::Vector3d(0.6, 0.0, 0.3);
+  ToolInput in;
+  in.target_position_m = Eigen::Vector3d(0.6, 0.0, 0.0);  // 50 mm below where the tool rests
+  for (int i = 0; i < 5000; ++i) tool_step(m, s, in, 1e-3);
+  // at rest: contact + control - m g = 0 (the control force includes gravity compensation)
+  const double depth = s.penetration_m;
+  EXPECT_GT(depth, 0.0);
+  EXPECT_NEAR(s.contact_force_n.z(), m.obstacles[0].stiffness_n_per_m * depth, 1e-6);
+  EXPECT_NEAR(s.contact_force_n.z(), -s.control_force_n.z() + m.mass_kg * 9.81, 0.05);
+  EXPECT_EQ(s.contact_object, 100);
+  // the tool stays on the floor surface within the penalty depth
+  EXPECT_NEAR(s.position_m.z(), m.radius_m - depth, 1e-9);
+}
+
+TEST(ToolScene, HoldLatchesThePositionAndIgnoresTargets) {
+  const ToolModel m = free_tool();
+  ToolState s;
+  s.position_m = Eigen::Vector3d(0.2, 0.2, 0.2);
+  ToolInput in;
+  in.hold = true;
+  in.target_position_m = Eigen::Vector3d(1, 1, 1);
+  for (int i = 0; i < 2000; ++i) tool_step(m, s, in, 1e-3);
+  EXPECT_LT((s.position_m - Eigen::Vector3d(0.2, 0.2, 0.2)).norm(), 1e-3);
+}
+
+TEST(ToolScene, RotatesTowardTheCommandedOrientation) {
+  const ToolModel m = free_tool();
+  ToolState s;
+  ToolInput in;
+  in.target_orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()));
+  for (int i = 0; i < 5000; ++i) tool_step(m, s, in, 1e-3);
+  EXPECT_LT(s.orientation.angularDistance(in.target_orientation), 1e-3);
+}
+
+TEST(ToolScene, StepIsDeterministicAndAllocationFree) {
+  const ToolModel m = tool_over_floor();
+  ToolState a, b;
+  a.position_m = b.position_m = Eigen::Vector3d(0.6, 0, 0.3);
+  ToolInput in;
+  in.target_position_m = Eigen::Vector3d(0.6, 0, 0.01);
+  teleop::test::NoAllocScope scope;
+  for (int i = 0; i < 1000; ++i) {
+    tool_step(m, a, in, 1e-3);
+    tool_step(m, b, in, 1e-3);
+  }
+  EXPECT_EQ(scope.allocations(), 0u);
+  EXPECT_EQ(a.position_m, b.position_m);
+  EXPECT_EQ(a.velocity_mps, b.velocity_mps);
+}
+
+TEST(WorldStepToolOnly, NonFiniteCommandIsReportedAndTheStateStaysFinite) {
+  WorldModel model;
+  model.tool = tool_over_floor();
+  WorldData world = make_world_data(model);
+  EventQueue events;
+  WorldCommand cmd;
+  cmd.position_m = Eigen::Vector3d(std::nan(""), 0, 0);
+  world_step(model, world, cmd, 1e-3, events);
+  EXPECT_TRUE(world.out.tip_position_m.allFinite());
+  SimEvent e;
+  bool fault = false;
+  while (events.pop(e)) fault |= e.kind == EventKind::kFault;
+  EXPECT_TRUE(fault);
+}
+
+TEST(WorldStepToolOnly, ReportsContactBeginAndEnd) {
+  WorldModel model;
+  model.tool = tool_over_floor();
+  model.tool_start_m = Eigen::Vector3d(0.6, 0, 0.2);
+  WorldData world = make_world_data(model);
+  EventQueue events;
+  WorldCommand cmd;
+  cmd.position_m = Eigen::Vector3d(0.6, 0, 0.0);
+  for (int i = 0; i < 2000; ++i) world_step(model, world, cmd, 1e-3, events);
+  EXPECT_TRUE(world.out.in_contact);
+  cmd.position_m = Eigen::Vector3d(0.6, 0, 0.3);
+  for (int i = 0; i < 2000; ++i) world_step(model, world, cmd, 1e-3, events);
+  EXPECT_FALSE(world.out.in_contact);
+  int begins = 0, ends = 0;
+  SimEvent e;
+  while (events.pop(e)) {
+    begins += e.kind == EventKind::kContactBegin;
+    ends += e.kind == EventKind::kContactEnd;
+  }
+  EXPECT_GE(begins, 1);
+  EXPECT_EQ(begins, ends);
+}
+
+// --- robot and robot + sphere: the default scene through world_step --------------------------
+
+WorldModel default_scene() {
+  return load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
+}
+
+/// Counts the events of `kind` about object `id` (any object when id < 0) and empties the queue.
+struct EventCount {
+  int begins = 0, ends = 0, faults = 0;
+  void drain(EventQueue& q, int id) {
+    SimEvent e;
+    while (q.pop(e)) {
+      const bool mine = id < 0 || static_cast<int>(e.value) == id;
+      begins += mine && e.kind == EventKind::kContactBegin;
+      ends += mine && e.kind == EventKind::kContactEnd;
+      faults += e.kind == EventKind::kFault;
+    }
+  }
+};
+
+/// Steps towards `to` along a straight line over `ramp_s`, then holds there for `hold_s`.
+void move(const WorldModel& m, WorldData& d, EventQueue& q, EventCount& c, int id,
+          const Eigen::Vector3d& to, double ramp_s, double hold_s) {
+  const Eigen::Vector3d from = d.out.tip_position_m;
+  const int ramp = static_cast<int>(ramp_s * 1000), hold = static_cast<int>(hold_s * 1000);
+  WorldCommand cmd;
+  for (int i = 1; i <= ramp + hold; ++i) {
+    const double s = std::min(1.0, static_cast<double>(i) / std::max(1, ramp));
+    cmd.position_m = from + s * (to - from);
+    world_step(m, d, cmd, 1e-3, q);
+    c.drain(q, id);
+  }
+}
+
+int plane_id(const WorldModel& m, const std::string& name) {
+  for (const Plane& p : m.planes) {
+    if (p.name == name) return p.id;
+  }
+  return -1;
+}
+
+TEST(WorldStepRobot, TouchesTheFloorWithContactEventsAndStaysFinite) {
+  WorldModel model = default_scene();
+  model.bodies.clear();  // the robot alone over its floor and wall
+  ASSERT_TRUE(model.has_robot());
+  WorldData world = make_world_data(model);
+  EXPECT_EQ(world.out.joint_count, 6);
+  EventQueue events;
+  EventCount floor;
+  const int floor_id = plane_id(model, "floor");
+  ASSERT_GE(floor_id, 0);
+  // away from where the sphere was, down onto the floor (tip radius 0.05 m), then back up
+  move(model, world, events, floor, floor_id, Eigen::Vector3d(0.35, 0.3, 0.3), 1.5, 0.5);
+  EXPECT_EQ(floor.begins, 0);
+  move(model, world, events, floor, floor_id, Eigen::Vector3d(0.35, 0.3, 0.03), 1.0, 0.5);
+  EXPECT_TRUE(world.out.in_contact);
+  EXPECT_EQ(world.out.contact_object, floor_id);
+  EXPECT_GT(world.out.contact_force_n.z(), 0.0);  // the floor pushes up
+  EXPECT_EQ(floor.begins, 1);  // one event per contact (the world's; the robot emits none)
+  EXPECT_EQ(floor.ends, 0);
+  move(model, world, events, floor, floor_id, Eigen::Vector3d(0.35, 0.3, 0.3), 1.0, 0.5);
+  EXPECT_FALSE(world.out.in_contact);
+  EXPECT_EQ(floor.ends, 1);
+  EXPECT_EQ(floor.faults, 0);
+  EXPECT_NEAR((world.out.tip_position_m - Eigen::Vector3d(0.35, 0.3, 0.3)).norm(), 0.0, 0.01);
+}
+
+TEST(WorldStepRobot, NonFiniteCommandIsAFaultNotAJump) {
+  WorldModel model = default_scene();
+  model.bodies.clear();
+  WorldData world = make_world_data(model);
+  EventQueue events;
+  const Eigen::Vector3d before = world.out.tip_position_m;
+  WorldCommand cmd;
+  cmd.position_m = Eigen::Vector3d(std::nan(""), 0.0, 0.5);
+  EventCount c;
+  for (int i = 0; i < 50; ++i) {
+    world_step(model, world, cmd, 1e-3, events);
+    c.drain(events, -1);
+  }
+  EXPECT_GE(c.faults, 1);
+  EXPECT_TRUE(world.out.tip_position_m.allFinite());
+  EXPECT_LT((world.out.tip_position_m - before).norm(), 0.01);  // held, not thrown
+}
+
+TEST(WorldStepRobotSphere, SphereSleepsAwayFromTheTipAndWakesOnContact) {
+  const WorldModel model = default_scene();
+  ASSERT_EQ(model.bodies.size(), 1u);
+  const int sphere = model.bodies[0].object_id;
+  WorldData world = make_world_data(model);
+  EventQueue events;
+  EventCount c;
+  // the tip stays 0.2 m above the sphere's top: the body settles on the floor and sleeps
+  // (it settles in about 3.5 s from its rest shape under gravity)
+  move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, 0.75), 0.5, 5.0);
+  EXPECT_TRUE(world.bodies[0].state.sleeping);
+  const std::uint64_t asleep = world.bodies[0].state.sleeping_steps;
+  move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, 0.75), 0.0, 0.1);
+  EXPECT_EQ(world.bodies[0].state.sleeping_steps, asleep + 100);  // skipped, not integrated
+  EXPECT_EQ(c.begins, 0);
+  // down into the top (at z = 0.5; tip radius 0.05): contact begins, the body wakes and pushes
+  move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, 0.53), 1.0, 0.5);
+  EXPECT_TRUE(world.out.in_contact);
+  EXPECT_EQ(world.out.contact_object, sphere);
+  EXPECT_FALSE(world.bodies[0].state.sleeping);
+  EXPECT_GT(world.out.contact_force_n.z(), 0.0);
+  EXPECT_GT(world.out.deformation_m, 0.0);
+  EXPECT_EQ(c.begins, 1);
+  // and up again: one end event, no fault
+  move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, 0.75), 1.0, 0.5);
+  EXPECT_FALSE(world.out.in_contact);
+  EXPECT_EQ(c.ends, 1);
+  EXPECT_EQ(c.faults, 0);
+}
+
+TEST(WorldStepRobotSphere, ABodyThatBlowsUpIsResetAndReportedNotPropagated) {
+  const WorldModel model = default_scene();
+  WorldData world = make_world_data(model);
+  EventQueue events;
+  EventCount c;
+  move(model, world, events, c, -1, Eigen::Vector3d(0.6, 0.0, 0.75), 0.2, 0.1);
+  world.bodies[0].state.x(2, 0) = std::nan("");  // a node's state goes bad
+  deformable::wake(world.bodies[0].state);
+  move(model, world, events, c, -1, Eigen::Vector3d(0.6, 0.0, 0.75), 0.0, 0.2);
+  EXPECT_GE(c.faults, 1);
+  EXPECT_TRUE(world.bodies[0].state.x.allFinite());
+  EXPECT_TRUE(world.out.contact_force_n.allFinite());
+  EXPECT_TRUE(world.out.tip_position_m.allFinite());
+}
+
+TEST(WorldStepRobotSphere, DeterministicAndAllocationFreeThroughAPress) {
+  const WorldModel model = default_scene();
+  WorldData a = make_world_data(model);
+  WorldData b = make_world_data(model);
+  EventQueue qa, qb;
+  WorldCommand cmd;
+  const Eigen::Vector3d from = a.out.tip_position_m;
+  const Eigen::Vector3d to(0.6, 0.0, 0.52);
+  SimEvent e;
+  std::uint64_t allocations = 0;
+  for (int i = 1; i <= 2500; ++i) {
+    cmd.position_m = from + std::min(1.0, i / 2000.0) * (to - from);
+    teleop::test::NoAllocScope scope;
+    world_step(model, a, cmd, 1e-3, qa);
+    world_step(model, b, cmd, 1e-3, qb);
+    while (qa.pop(e)) {
+    }
+    while (qb.pop(e)) {
+    }
+    allocations += scope.allocations();
+  }
+  EXPECT_EQ(allocations, 0u);
+  EXPECT_TRUE(a.out.in_contact);
+  EXPECT_EQ(a.out.tip_position_m, b.out.tip_position_m);
+  EXPECT_EQ(a.out.contact_force_n, b.out.contact_force_n);
+  EXPECT_EQ(a.bodies[0].state.x, b.bodies[0].state.x);
+}
+
+TEST(EventQueue, DropsTheOldestWhenFull) {
+  EventQueue q;
+  for (std::size_t i = 0; i < EventQueue::kCapacity + 5; ++i) {
+    q.push(EventKind::kInfo, Severity::kInfo, 0.0, static_cast<double>(i), "x");
+  }
+  EXPECT_EQ(q.size(), EventQueue::kCapacity);
+  EXPECT_EQ(q.dropped(), 5u);
+  SimEvent e;
+  ASSERT_TRUE(q.pop(e));
+  EXPECT_EQ(e.value, 5.0);
+}
+
+}  // namespace
+}  // namespace teleop::sim
