@@ -35,11 +35,8 @@ Eigen::Vector3d parse_point(const std::string& flag, const std::string& text) {
   return p;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"teleop_master: master-side client of the teleoperation system"};
-  teleop::master::MasterOptions o;
+/// Command-line values that are applied on top of the YAML config (unset: keep it).
+struct Flags {
   std::optional<int> domain;
   std::optional<std::string> profile;
   std::string config_file;
@@ -49,28 +46,32 @@ int main(int argc, char** argv) {
   std::optional<std::uint64_t> seed;
   bool reorder = false;
   std::optional<double> link_timeout;
+  std::optional<double> wave_b;
+  std::optional<std::string> tdpa_base;
+  bool wave_unmatched = false;
+  teleop::dds::NetworkFlags net_flags;
+};
+
+/// Declares every flag of teleop_master.
+void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   app.add_option("--duration", o.duration_s,
                  "session length after homing [s], 0-1e6 (0 = the script's length + 1 s)");
   app.add_option("--samples", o.samples, "stop after N haptic cycles (0 = no limit)");
   app.add_option("--rate", o.rate_hz, "haptic loop rate [Hz], 10-20000")->capture_default_str();
-  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
-  app.add_option("--profile", profile,
+  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
+  app.add_option("--profile", f.profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
-  teleop::dds::NetworkFlags net_flags;
-  teleop::dds::add_network_flags(app, net_flags);
-  app.add_option("--config", config_file,
+  teleop::dds::add_network_flags(app, f.net_flags);
+  app.add_option("--config", f.config_file,
                  "YAML with `controller:`, `delay:` (both directions) mappings; flags win");
   app.add_option("--scheme", o.controller.scheme, "bilateral control scheme")
       ->check(CLI::IsMember(teleop::master::controller_names()))
       ->capture_default_str();
-  std::optional<double> wave_b;
-  std::optional<std::string> tdpa_base;
-  bool wave_unmatched = false;
-  app.add_option("--wave-impedance", wave_b,
+  app.add_option("--wave-impedance", f.wave_b,
                  "wave-variables: wave impedance b [N s/m], 0-1e4 (0 = K_ps * 0.025 s)");
-  app.add_flag("--wave-unmatched", wave_unmatched,
+  app.add_flag("--wave-unmatched", f.wave_unmatched,
                "wave-variables: no matching damper at the slave (waves reflect)");
-  app.add_option("--tdpa-base", tdpa_base, "tdpa: base law")
+  app.add_option("--tdpa-base", f.tdpa_base, "tdpa: base law")
       ->check(CLI::IsMember({"position-position", "force-position"}));
   app.add_option("--device", o.device,
                  "haptic device: simulated | replay | external | evdev:/dev/input/eventN | "
@@ -94,32 +95,116 @@ int main(int argc, char** argv) {
   app.add_option("--press-depth", o.press_depth_m, "press-slip depth below the surface [m]")
       ->capture_default_str();
   app.add_option("--tremor", o.tremor_m, "operator tremor amplitude [m]");
-  app.add_option("--contact-point", contact_point,
+  app.add_option("--contact-point", f.contact_point,
                  "slave point 'x,y,z' [m] of the master origin (default: top of the first "
                  "deformable body, else the floor under the tip)");
-  app.add_option("--kps", kps, "slave position gain K_ps [N/m]");
-  app.add_option("--kpm", kpm, "master position gain K_pm [N/m] (0 = transparent choice)");
-  app.add_option("--bm", bm, "master damping B_m [N s/m]");
-  app.add_option("--force-gain", kf, "force-position reflection gain K_f [-]");
-  app.add_option("--position-scale", alpha, "slave metres per master metre [-]");
-  app.add_option("--force-scale", beta, "master newtons per slave newton [-]");
-  app.add_option("--max-force", max_force, "device force saturation [N] (0 = the spec's)");
-  app.add_option("--delay", delay, "one-way injected delay, each direction (e.g. 50ms)");
-  app.add_option("--jitter", jitter, "jitter scale (e.g. 5ms)");
-  app.add_option("--jitter-dist", jitter_dist, "uniform | normal");
-  app.add_flag("--reorder", reorder, "let jittered samples overtake each other");
-  app.add_option("--loss", loss, "Bernoulli loss probability (e.g. 1%)");
-  app.add_option("--burst-loss", burst_loss, "Gilbert-Elliott P_GB,P_BG (e.g. 0.01,0.2)");
-  app.add_option("--seed", seed, "random seed of the channels (backward uses seed + 1)");
+  app.add_option("--kps", f.kps, "slave position gain K_ps [N/m]");
+  app.add_option("--kpm", f.kpm, "master position gain K_pm [N/m] (0 = transparent choice)");
+  app.add_option("--bm", f.bm, "master damping B_m [N s/m]");
+  app.add_option("--force-gain", f.kf, "force-position reflection gain K_f [-]");
+  app.add_option("--position-scale", f.alpha, "slave metres per master metre [-]");
+  app.add_option("--force-scale", f.beta, "master newtons per slave newton [-]");
+  app.add_option("--max-force", f.max_force, "device force saturation [N] (0 = the spec's)");
+  app.add_option("--delay", f.delay, "one-way injected f.delay, each direction (e.g. 50ms)");
+  app.add_option("--jitter", f.jitter, "jitter scale (e.g. 5ms)");
+  app.add_option("--jitter-dist", f.jitter_dist, "uniform | normal");
+  app.add_flag("--reorder", f.reorder, "let jittered samples overtake each other");
+  app.add_option("--loss", f.loss, "Bernoulli f.loss probability (e.g. 1%)");
+  app.add_option("--burst-loss", f.burst_loss, "Gilbert-Elliott P_GB,P_BG (e.g. 0.01,0.2)");
+  app.add_option("--seed", f.seed, "random f.seed of the channels (backward uses f.seed + 1)");
   app.add_option("--homing", o.homing_s, "time to bring the slave to the script start [s]")
       ->capture_default_str();
   app.add_option("--wait-server", o.wait_server_s, "wait for the server this long [s]")
       ->capture_default_str();
-  app.add_option("--link-timeout", link_timeout,
+  app.add_option("--link-timeout", f.link_timeout,
                  "no SlaveState for this long fades the force to zero [s], 0.001-10");
   app.add_option("--log", o.log_csv, "per-cycle CSV log");
   app.add_option("--summary-json", o.summary_json, "JSON summary at exit");
   app.add_flag("--quiet", o.quiet, "print only warnings and errors");
+}
+
+/// Validates the flags and folds the YAML config (if any) and the flags into `o`.
+/// @throws teleop::config::ConfigError naming the flag or file, the value and the range.
+void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOptions& o) {
+  using teleop::config::check_flag;
+  o.dds = teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_master", f.net_flags);
+  teleop::dds::profile_file(o.dds.profile);
+  check_flag("--duration", o.duration_s, 0.0, 1e6);
+  check_flag("--rate", o.rate_hz, 10.0, 20000.0);
+  check_flag("--wait-server", o.wait_server_s, 0.0, 3600.0);
+  check_flag("--homing", o.homing_s, 0.0, 60.0);
+  check_flag("--press-depth", o.press_depth_m, 0.0, 0.2);
+  check_flag("--tremor", o.tremor_m, 0.0, 0.01);
+  if (o.device == "replay" && o.replay_file.empty()) {
+    throw teleop::config::ConfigError("command line: --device replay needs --replay FILE.csv");
+  }
+  // YAML first, flags on top
+  if (!f.config_file.empty()) {
+    const auto root = teleop::config::Node::load_file(f.config_file);
+    root.reject_unknown_keys({"controller", "delay", "forward_delay", "backward_delay"});
+    const std::string scheme = o.controller.scheme;
+    if (root.has("controller")) {
+      o.controller = teleop::master::controller_params_from_yaml(root.at("controller"));
+    }
+    if (app.count("--scheme")) o.controller.scheme = scheme;
+    if (root.has("delay")) {
+      o.forward = teleop::master::delay_config_from_yaml(root.at("delay"));
+      o.backward = o.forward;
+      o.backward.seed = o.forward.seed + 1;
+    }
+    if (root.has("forward_delay")) {
+      o.forward = teleop::master::delay_config_from_yaml(root.at("forward_delay"));
+    }
+    if (root.has("backward_delay")) {
+      o.backward = teleop::master::delay_config_from_yaml(root.at("backward_delay"));
+    }
+  }
+  if (f.kps) o.controller.slave_stiffness_n_per_m = *f.kps;
+  if (f.kpm) o.controller.master_stiffness_n_per_m = *f.kpm;
+  if (f.bm) o.controller.master_damping_ns_per_m = *f.bm;
+  if (f.kf) o.controller.force_gain = *f.kf;
+  if (f.alpha) o.controller.workspace.position_scale = *f.alpha;
+  if (f.beta) o.controller.workspace.force_scale = *f.beta;
+  if (f.max_force) o.controller.max_force_n = *f.max_force;
+  if (f.wave_b)
+    o.controller.wave_impedance_ns_per_m = check_flag("--wave-impedance", *f.wave_b, 0.0, 1e4);
+  if (f.wave_unmatched) o.controller.wave_matched = false;
+  if (f.tdpa_base) o.controller.tdpa_base = *f.tdpa_base;
+  o.controller.validate();
+  std::vector<std::string> dflags;
+  auto add = [&](const char* f, const std::optional<std::string>& v) {
+    if (v) {
+      dflags.push_back(f);
+      dflags.push_back(*v);
+    }
+  };
+  add("--delay", f.delay);
+  add("--jitter", f.jitter);
+  add("--jitter-dist", f.jitter_dist);
+  add("--loss", f.loss);
+  add("--burst-loss", f.burst_loss);
+  if (f.seed) add("--seed", std::to_string(*f.seed));
+  if (f.reorder) dflags.push_back("--reorder");
+  if (!dflags.empty()) {
+    teleop::master::parse_delay_flags(o.forward, dflags);
+    teleop::master::parse_delay_flags(o.backward, dflags);
+    o.backward.seed = o.forward.seed + 1;
+  }
+  if (f.contact_point) {
+    o.contact_point_m = parse_point("--contact-point", *f.contact_point);
+    o.has_contact_point = true;
+  }
+  if (f.link_timeout)
+    o.safety.link_timeout_s = check_flag("--link-timeout", *f.link_timeout, 0.001, 10.0);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"teleop_master: master-side client of the teleoperation system"};
+  teleop::master::MasterOptions o;
+  Flags f;
+  add_flags(app, o, f);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -129,76 +214,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    using teleop::config::check_flag;
-    o.dds = teleop::dds::resolve_participant_options(profile, domain, "teleop_master", net_flags);
-    teleop::dds::profile_file(o.dds.profile);
-    check_flag("--duration", o.duration_s, 0.0, 1e6);
-    check_flag("--rate", o.rate_hz, 10.0, 20000.0);
-    check_flag("--wait-server", o.wait_server_s, 0.0, 3600.0);
-    check_flag("--homing", o.homing_s, 0.0, 60.0);
-    check_flag("--press-depth", o.press_depth_m, 0.0, 0.2);
-    check_flag("--tremor", o.tremor_m, 0.0, 0.01);
-    if (o.device == "replay" && o.replay_file.empty()) {
-      throw teleop::config::ConfigError("command line: --device replay needs --replay FILE.csv");
-    }
-    // YAML first, flags on top
-    if (!config_file.empty()) {
-      const auto root = teleop::config::Node::load_file(config_file);
-      root.reject_unknown_keys({"controller", "delay", "forward_delay", "backward_delay"});
-      const std::string scheme = o.controller.scheme;
-      if (root.has("controller")) {
-        o.controller = teleop::master::controller_params_from_yaml(root.at("controller"));
-      }
-      if (app.count("--scheme")) o.controller.scheme = scheme;
-      if (root.has("delay")) {
-        o.forward = teleop::master::delay_config_from_yaml(root.at("delay"));
-        o.backward = o.forward;
-        o.backward.seed = o.forward.seed + 1;
-      }
-      if (root.has("forward_delay")) {
-        o.forward = teleop::master::delay_config_from_yaml(root.at("forward_delay"));
-      }
-      if (root.has("backward_delay")) {
-        o.backward = teleop::master::delay_config_from_yaml(root.at("backward_delay"));
-      }
-    }
-    if (kps) o.controller.slave_stiffness_n_per_m = *kps;
-    if (kpm) o.controller.master_stiffness_n_per_m = *kpm;
-    if (bm) o.controller.master_damping_ns_per_m = *bm;
-    if (kf) o.controller.force_gain = *kf;
-    if (alpha) o.controller.workspace.position_scale = *alpha;
-    if (beta) o.controller.workspace.force_scale = *beta;
-    if (max_force) o.controller.max_force_n = *max_force;
-    if (wave_b)
-      o.controller.wave_impedance_ns_per_m = check_flag("--wave-impedance", *wave_b, 0.0, 1e4);
-    if (wave_unmatched) o.controller.wave_matched = false;
-    if (tdpa_base) o.controller.tdpa_base = *tdpa_base;
-    o.controller.validate();
-    std::vector<std::string> dflags;
-    auto add = [&](const char* f, const std::optional<std::string>& v) {
-      if (v) {
-        dflags.push_back(f);
-        dflags.push_back(*v);
-      }
-    };
-    add("--delay", delay);
-    add("--jitter", jitter);
-    add("--jitter-dist", jitter_dist);
-    add("--loss", loss);
-    add("--burst-loss", burst_loss);
-    if (seed) add("--seed", std::to_string(*seed));
-    if (reorder) dflags.push_back("--reorder");
-    if (!dflags.empty()) {
-      teleop::master::parse_delay_flags(o.forward, dflags);
-      teleop::master::parse_delay_flags(o.backward, dflags);
-      o.backward.seed = o.forward.seed + 1;
-    }
-    if (contact_point) {
-      o.contact_point_m = parse_point("--contact-point", *contact_point);
-      o.has_contact_point = true;
-    }
-    if (link_timeout)
-      o.safety.link_timeout_s = check_flag("--link-timeout", *link_timeout, 0.001, 10.0);
+    apply_flags(app, f, o);
     teleop::master::MasterNode node(o);
     return node.run();
   } catch (const teleop::config::ConfigError& e) {

@@ -1,0 +1,151 @@
+// The master cycle on its own, with a scripted link: homing, delivery of due commands, the
+// verdict after a safety cut, and no allocation in step()/finish().
+#include "client/cycle/master_cycle.hpp"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "client/device/simulated_device.hpp"
+#include "tests/support/alloc_counter.hpp"
+
+namespace teleop::master {
+namespace {
+
+/// A link whose slave is where the newest command put it (a perfect position servo), with an
+/// optional constant contact force; it counts what it was sent.
+struct ServoLink final : SlaveLink {
+  std::vector<SlaveCommand> sent;
+  SlaveSample slave;
+  bool have_command = false;
+  Eigen::Vector3d contact_force_n = Eigen::Vector3d::Zero();
+  explicit ServoLink(const Eigen::Vector3d& tip) {
+    slave.valid = true;
+    slave.position_m = tip;
+    sent.reserve(20000);
+  }
+  void send(const SlaveCommand& c) override {
+    sent.push_back(c);
+    have_command = true;
+    slave.position_m = c.position_m;
+    slave.command_seq = c.seq;
+  }
+  bool receive(double now_s, SlaveSample& s, double& at_s) override {
+    slave.contact_force_n = contact_force_n;
+    slave.in_contact = contact_force_n.squaredNorm() > 0.0;
+    s = slave;
+    at_s = now_s;
+    return true;
+  }
+};
+
+SimulatedDeviceParams holding_device(const Eigen::Vector3d& at) {
+  SimulatedDeviceParams p;
+  p.script.kind = ScriptKind::kHold;
+  p.script.start_m = at;
+  return p;
+}
+
+MasterCycleConfig config(const std::string& scheme) {
+  MasterCycleConfig c;
+  c.controller.scheme = scheme;
+  c.controller.workspace.offset_m = Eigen::Vector3d(0.6, 0.0, 0.5);
+  return c;
+}
+
+TEST(MasterCycle, HomesAlongAMinimumJerkPathWithoutForceThenActivates) {
+  SimulatedDevice device(holding_device(Eigen::Vector3d::Zero()));
+  const Eigen::Vector3d tip(0.4, 0.1, 0.8);  // where the slave is: 0.37 m from the goal
+  ServoLink link(tip);
+  MasterCycle cycle(config("position-position"), device, link);
+  cycle.start_homing(0.0, tip, 1.0);
+  ASSERT_TRUE(cycle.homing());
+  const Eigen::Vector3d goal(0.6, 0.0, 0.5);  // the device's origin mapped to the slave
+  int homing_cycles = 0;
+  double max_step_m = 0.0;
+  Eigen::Vector3d prev = tip;
+  double t = 0.0;
+  while (cycle.homing() && t < 5.0) {
+    cycle.step(t);
+    cycle.finish(t);
+    ++homing_cycles;
+    EXPECT_EQ(cycle.device_force_n(), Eigen::Vector3d::Zero());
+    const Eigen::Vector3d c = link.sent.back().position_m;
+    max_step_m = std::max(max_step_m, (c - prev).norm());
+    prev = c;
+    t += 1e-3;
+  }
+  EXPECT_FALSE(cycle.homing());
+  EXPECT_NEAR(homing_cycles, 1001, 2);  // the path's 1 s, then the slave is there
+  EXPECT_LT((link.sent.back().position_m - goal).norm(), 1e-9);
+  // minimum jerk: peak speed 1.875 |goal - tip| / T, so no command jumps more than that * dt
+  EXPECT_LT(max_step_m, 1.875 * (goal - tip).norm() * 1e-3 * 1.01);
+  EXPECT_EQ(cycle.metrics().samples(), 0u);  // homing is not part of the session's figures
+  EXPECT_NEAR(cycle.session_start_s(), 1.0, 2e-3);
+  cycle.step(t);
+  cycle.finish(t);
+  EXPECT_EQ(cycle.metrics().samples(), 1u);
+}
+
+TEST(MasterCycle, EveryDueVersusNewestDueDelivery) {
+  for (ForwardDelivery d : {ForwardDelivery::kEveryDue, ForwardDelivery::kNewestDue}) {
+    SimulatedDevice device(holding_device(Eigen::Vector3d::Zero()));
+    ServoLink link(Eigen::Vector3d(0.6, 0.0, 0.5));
+    MasterCycleConfig c = config("position-position");
+    c.delivery = d;
+    c.forward.delay_s = 0.005;
+    c.forward.jitter_s = 0.004;  // jittered and reordered: several can fall due at once
+    c.forward.reorder = true;
+    MasterCycle cycle(c, device, link);
+    cycle.start(0.0);
+    std::size_t most_in_one_cycle = 0;
+    for (int i = 0; i < 2000; ++i) {
+      const std::size_t before = link.sent.size();
+      cycle.step(i * 1e-3);
+      cycle.finish(i * 1e-3);
+      most_in_one_cycle = std::max(most_in_one_cycle, link.sent.size() - before);
+    }
+    if (d == ForwardDelivery::kEveryDue) {
+      EXPECT_GT(most_in_one_cycle, 1u);
+      EXPECT_GE(link.sent.size(), 1980u);  // all but the last few in flight
+    } else {
+      EXPECT_EQ(most_in_one_cycle, 1u);
+      EXPECT_LT(link.sent.size(), 1980u);  // superseded ones never reach the slave
+    }
+  }
+}
+
+TEST(MasterCycle, ASafetyCutMakesTheVerdictUnstable) {
+  SimulatedDevice device(holding_device(Eigen::Vector3d::Zero()));
+  ServoLink link(Eigen::Vector3d(0.6, 0.0, 0.5));
+  link.contact_force_n = Eigen::Vector3d(0.0, 0.0, 200.0);  // far beyond the device's peak
+  MasterCycle cycle(config("force-position"), device, link);
+  cycle.start(0.0);
+  for (int i = 0; i < 2000 && !cycle.safety().cut(); ++i) {
+    cycle.step(i * 1e-3);
+    cycle.finish(i * 1e-3);
+  }
+  ASSERT_TRUE(cycle.safety().cut());
+  EXPECT_EQ(cycle.metrics().verdict(), Verdict::kUnstable);
+  EXPECT_LE(cycle.device_force_n().norm(), device.spec().max_force_n + 1e-9);
+}
+
+TEST(MasterCycle, StepAndFinishAllocateNothing) {
+  SimulatedDevice device(holding_device(Eigen::Vector3d::Zero()));
+  ServoLink link(Eigen::Vector3d(0.6, 0.0, 0.5));
+  MasterCycleConfig c = config("tdpa");
+  c.forward.delay_s = c.backward.delay_s = 0.02;
+  c.forward.jitter_s = 0.002;
+  MasterCycle cycle(c, device, link);
+  cycle.start_homing(0.0, Eigen::Vector3d(0.5, 0.0, 0.6), 0.2);
+  teleop::test::NoAllocScope scope;
+  for (int i = 0; i < 3000; ++i) {
+    cycle.step(i * 1e-3);
+    cycle.finish(i * 1e-3);
+  }
+  EXPECT_EQ(scope.allocations(), 0u);
+  EXPECT_FALSE(cycle.homing());
+}
+
+}  // namespace
+}  // namespace teleop::master
