@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
   teleop::dds::NetworkFlags net_flags;
-  teleop::dds::add_network_flags(app, net_flags);
+  teleop::dds::add_network_flags(app, net_flags, "master");
   app.add_option("--config", config_file,
                  "YAML with `controller:`, `delay:` (both directions) mappings; flags win");
   app.add_option("--scheme", o.controller.scheme, "bilateral control scheme")
