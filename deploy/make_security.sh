@@ -6,7 +6,8 @@
 #
 #   deploy/make_security.sh [options] DIR
 #
-#   --identity NAME:ROLE   an identity to make (repeatable); ROLE is server, master or observer.
+#   --identity NAME:ROLE   an identity to make (repeatable); ROLE is server, master, observer or
+#                          bench (teleop_bench rtt's bench/* topics only).
 #                          Default: server:server master:master observer:observer
 #   --days N               validity of certificates and permissions (default 365)
 #   --org NAME             O= of every subject (default teleop-test)
@@ -30,11 +31,13 @@
 #             server_stats; subscribes teleop/*
 #   master    publishes teleop/master_command, master_state, events; subscribes teleop/*
 #   observer  subscribes teleop/*; publishes nothing
+#   bench     publishes and subscribes bench/* (teleop_bench rtt); no teleop topic
 # Keys are ECDSA P-256 (prime256v1), signatures SHA-256: both supported by Fast DDS 2.9's
-# builtin.PKI-DH. The whole run takes well under a second.
+# builtin.PKI-DH. A run takes under a second of CPU (about 10 s of wall time on the loaded
+# 2-core test machine).
 set -euo pipefail
 
-usage() { sed -n '2,36p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,39p' "$0" | sed 's/^# \{0,1\}//'; }
 die() {
   echo "make_security.sh: $*" >&2
   exit 2
@@ -69,8 +72,8 @@ dmax="${BASH_REMATCH[2]}"
 [ "$dmin" -le "$dmax" ] && [ "$dmax" -le 232 ] || die "--domains '$domains': need 0 <= MIN <= MAX <= 232"
 [ ${#identities[@]} -gt 0 ] || identities=(server:server master:master observer:observer)
 for spec in "${identities[@]}"; do
-  [[ "$spec" =~ ^[A-Za-z0-9_.-]+:(server|master|observer)$ ]] ||
-    die "--identity '$spec' is not NAME:ROLE (NAME of letters, digits, _ . -; ROLE server, master or observer)"
+  [[ "$spec" =~ ^[A-Za-z0-9_.-]+:(server|master|observer|bench)$ ]] ||
+    die "--identity '$spec' is not NAME:ROLE (NAME of letters, digits, _ . -; ROLE server, master, observer or bench)"
   [[ "$spec" != ca:* && "$spec" != other:* ]] || die "--identity '$spec': names 'ca' and 'other' are reserved"
 done
 
@@ -143,13 +146,15 @@ publish_topics() {
     server) echo "teleop/slave_state teleop/scene teleop/mesh_topology teleop/mesh_frame teleop/events teleop/server_stats" ;;
     master) echo "teleop/master_command teleop/master_state teleop/events" ;;
     observer) echo "" ;;
+    bench) echo "bench/*" ;;
   esac
 }
 
 # permissions_xml NAME ROLE SUBJECT
 permissions_xml() {
-  local name="$1" role="$2" subject="$3" pub t
+  local name="$1" role="$2" subject="$3" pub t sub="teleop/*"
   pub="$(publish_topics "$role")"
+  [ "$role" = bench ] && sub="bench/*"
   cat <<EOF
 <?xml version="1.0" encoding="UTF-8"?>
 <!-- teleop permissions of '$name' (role $role) -->
@@ -177,7 +182,7 @@ EOF
   cat <<EOF
         <subscribe>
           <topics>
-            <topic>teleop/*</topic>
+            <topic>$sub</topic>
           </topics>
         </subscribe>
       </allow_rule>

@@ -22,6 +22,7 @@
 #include <sstream>
 
 #include "common/config/config.hpp"
+#include "common/dds/security_check.hpp"
 
 #ifndef TELEOP_DEFAULT_PROFILES_DIR
 #define TELEOP_DEFAULT_PROFILES_DIR "deploy/profiles"
@@ -526,12 +527,23 @@ Participant::Participant(const ParticipantOptions& options) : options_(options) 
     std::string why;
     if (is_secure(qos)) {
       const SecurityOptions& s = options.network.security;
-      why = ": DDS Security refused identity '" + s.identity + "' of " + security_dir_label(s) +
+      std::string reason;
+      try {
+        reason = diagnose_security_files(security_files(s));
+      } catch (const std::exception& e) {
+        reason = e.what();
+      }
+      if (!reason.empty()) {
+        why = ": DDS Security refused identity '" + s.identity + "' of " + security_dir_label(s) +
+              ": " + reason;
+      } else {
+        why = ": DDS Security refused identity '" + s.identity + "' of " + security_dir_label(s) +
             " (its certificate must be signed by identity_ca.cert.pem and match its key; "
             "governance.p7s and its permissions.p7s must be signed by permissions_ca.cert.pem, "
             "the permissions must name the certificate's subject, be valid now and allow "
             "domain " +
             std::to_string(options.domain) + "); Fast DDS's own error is printed above";
+      }
     }
     throw DdsError("cannot create a DDS participant with profile '" + ref.name + "' from " +
                    ref.file + " on domain " + std::to_string(options.domain) + why);

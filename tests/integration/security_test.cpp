@@ -318,11 +318,31 @@ TEST_F(Security, IdentityOfAnotherCaIsRefusedAtStart) {
                  "sec_stranger");
   const int rc = master.wait_for(20.0);
   const std::string err = master.err();
-  fs::remove_all(copy);
   EXPECT_NE(rc, 0) << err;
   EXPECT_NE(rc, -1) << "still running: " << err;
   EXPECT_NE(err.find("DDS Security refused identity 'nobody'"), std::string::npos) << err;
   EXPECT_NE(err.find("--security-dir '" + copy + "'"), std::string::npos) << err;
+  // the reason, found with OpenSSL: the certificate's issuer is not our identity CA
+  EXPECT_NE(err.find(copy + "/nobody/identity.cert.pem does not verify with the identity CA"),
+            std::string::npos)
+      << err;
+
+  // the server's key in the master's folder: the key is not the certificate's
+  fs::copy_file(copy + "/server/identity.key.pem", copy + "/master/identity.key.pem",
+                fs::copy_options::overwrite_existing);
+  Process swapped(kMasterBinary,
+                  {"--profile", "secure", "--security-dir", copy, "--domain",
+                   std::to_string(domains::kSecureStranger), "--samples", "100"},
+                  "sec_swapped");
+  const int rc2 = swapped.wait_for(20.0);
+  const std::string err2 = swapped.err();
+  fs::remove_all(copy);
+  EXPECT_NE(rc2, 0) << err2;
+  EXPECT_NE(rc2, -1) << "still running: " << err2;
+  EXPECT_NE(err2.find(copy + "/master/identity.key.pem is not the private key of " + copy +
+                      "/master/identity.cert.pem"),
+            std::string::npos)
+      << err2;
 }
 
 }  // namespace
