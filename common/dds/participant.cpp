@@ -126,17 +126,17 @@ std::string security_dir_label(const SecurityOptions& s) {
 }
 
 /// Checks one security file: exists, is a readable regular file holding `marker`.
-void check_security_file(const SecurityOptions& s, const std::string& path,
-                         const std::string& what, const std::string& marker,
-                         const std::string& expected) {
-  const std::string where =
-      security_dir_label(s) + " (identity '" + s.identity + "'" +
-      (s.identity_source.empty() ? ", the default of this program"
-                                 : ", from " + s.identity_source) +
-      "): ";
+void check_security_file(const SecurityOptions& s, const std::string& path, const std::string& what,
+                         const std::string& marker, const std::string& expected) {
+  const std::string where = security_dir_label(s) + " (identity '" + s.identity + "'" +
+                            (s.identity_source.empty() ? ", the default of this program"
+                                                       : ", from " + s.identity_source) +
+                            "): ";
   const std::string hint = " (make the files with deploy/make_security.sh; docs/networking.md)";
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw config::ConfigError(where + "missing " + path + ": " + what + hint);
+  if (!fs::exists(path, ec)) {
+    throw config::ConfigError(where + "missing " + path + ": " + what + hint);
+  }
   if (!fs::is_regular_file(path, ec)) {
     throw config::ConfigError(where + path + " is not a regular file: " + what + hint);
   }
@@ -227,7 +227,8 @@ SecurityFiles security_files(const SecurityOptions& s) {
   if (!std::regex_match(s.identity, identity_re)) {
     throw config::ConfigError(
         (s.identity_source.empty() ? std::string("identity") : s.identity_source) + " '" +
-        s.identity + "' is not an identity name (letters, digits, _ . -; e.g. server, master, "
+        s.identity +
+        "' is not an identity name (letters, digits, _ . -; e.g. server, master, "
         "observer)");
   }
   std::error_code ec;
@@ -266,9 +267,8 @@ SecurityFiles security_files(const SecurityOptions& s) {
                       "a PEM certificate, " + pem_cert);
   check_security_file(s, f.governance, "the governance document signed by the permissions CA",
                       "pkcs7-signature", "an S/MIME signed document: openssl smime -sign");
-  check_security_file(s, f.identity_certificate,
-                      "the identity certificate of '" + s.identity + "'", pem_cert,
-                      "a PEM certificate, " + pem_cert);
+  check_security_file(s, f.identity_certificate, "the identity certificate of '" + s.identity + "'",
+                      pem_cert, "a PEM certificate, " + pem_cert);
   check_security_file(s, f.private_key, "the private key of '" + s.identity + "'",
                       "PRIVATE KEY-----", "a PEM private key, -----BEGIN ... PRIVATE KEY-----");
   check_security_file(s, f.permissions,
@@ -538,11 +538,11 @@ Participant::Participant(const ParticipantOptions& options) : options_(options) 
               ": " + reason;
       } else {
         why = ": DDS Security refused identity '" + s.identity + "' of " + security_dir_label(s) +
-            " (its certificate must be signed by identity_ca.cert.pem and match its key; "
-            "governance.p7s and its permissions.p7s must be signed by permissions_ca.cert.pem, "
-            "the permissions must name the certificate's subject, be valid now and allow "
-            "domain " +
-            std::to_string(options.domain) + "); Fast DDS's own error is printed above";
+              " (its certificate must be signed by identity_ca.cert.pem and match its key; "
+              "governance.p7s and its permissions.p7s must be signed by permissions_ca.cert.pem, "
+              "the permissions must name the certificate's subject, be valid now and allow "
+              "domain " +
+              std::to_string(options.domain) + "); Fast DDS's own error is printed above";
       }
     }
     throw DdsError("cannot create a DDS participant with profile '" + ref.name + "' from " +

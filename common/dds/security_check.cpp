@@ -65,15 +65,16 @@ std::string no_spaces(std::string s) {
   return s;
 }
 
-/// Verifies the S/MIME document at `path` with `ca`; on success `content` holds the signed text.
-/// Returns an empty string, or why it does not verify.
-std::string verify_smime(const std::string& path, X509* ca, std::string& content) {
+/// Verifies the S/MIME document at `path` with `ca` (read from `ca_path`); on success `content`
+/// holds the signed text. Returns an empty string, or why it does not verify.
+std::string verify_smime(const std::string& path, X509* ca, const std::string& ca_path,
+                         std::string& content) {
   BioPtr in(BIO_new_file(path.c_str(), "r"));
-  if (!in) return "cannot be read";
+  if (!in) return path + " cannot be read";
   BIO* raw_content = nullptr;
   Pkcs7Ptr p7(SMIME_read_PKCS7(in.get(), &raw_content));
   BioPtr signed_content(raw_content);
-  if (!p7) return "is not an S/MIME signed document";
+  if (!p7) return path + " is not an S/MIME signed document";
   StorePtr store = store_of(ca);
   BioPtr out(BIO_new(BIO_s_mem()));
   ERR_clear_error();
@@ -81,7 +82,7 @@ std::string verify_smime(const std::string& path, X509* ca, std::string& content
       1) {
     char buf[256];
     ERR_error_string_n(ERR_get_error(), buf, sizeof(buf));
-    return std::string("does not verify with the permissions CA (") + buf + ")";
+    return path + " does not verify with the permissions CA " + ca_path + " (" + buf + ")";
   }
   char* data = nullptr;
   const long n = BIO_get_mem_data(out.get(), &data);
@@ -128,11 +129,13 @@ std::string diagnose_security_files(const SecurityFiles& f) {
   const X509Ptr permissions_ca = read_cert(f.permissions_ca);
   if (!permissions_ca) return f.permissions_ca + " is not a readable PEM certificate";
   std::string governance, permissions;
-  if (auto why = verify_smime(f.governance, permissions_ca.get(), governance); !why.empty()) {
-    return f.governance + " " + why + " " + f.permissions_ca;
+  if (auto why = verify_smime(f.governance, permissions_ca.get(), f.permissions_ca, governance);
+      !why.empty()) {
+    return why;
   }
-  if (auto why = verify_smime(f.permissions, permissions_ca.get(), permissions); !why.empty()) {
-    return f.permissions + " " + why + " " + f.permissions_ca;
+  if (auto why = verify_smime(f.permissions, permissions_ca.get(), f.permissions_ca, permissions);
+      !why.empty()) {
+    return why;
   }
   const std::string subject = xml_field(permissions, "subject_name");
   const std::string cert_subject = subject_rfc2253(cert.get());

@@ -63,8 +63,7 @@ std::vector<std::string> split_commas(const std::string& text) {
 int rtt_echo(const CommandArgs& args) {
   const int domain = std::stoi(args.option("--domain", "100"));
   const std::string profile = args.option("--profile", "loopback");
-  dds::Participant p(
-      bench_options(profile, domain, "rtt-echo", args.option("--security-dir", "")));
+  dds::Participant p(bench_options(profile, domain, "rtt-echo", args.option("--security-dir", "")));
   dds::Writer<MeshFramePubSubType> pong(p, kPong, dds::TopicQos::kStream);
   std::atomic<bool> stop{false};
   dds::Reader<MeshFramePubSubType> ping(
@@ -134,11 +133,11 @@ int rtt(const CommandArgs& args) {
     const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
     if (n <= 0) throw std::runtime_error("cannot find /proc/self/exe");
     self[n] = '\0';
-    teleop::test::Process echo(self,
-                               {"rtt-echo", "--out", args.out_dir.string(), "--domain",
-                                std::to_string(domain), "--profile", profile,
-                                "--security-dir", security_dir},
-                               "rtt_echo");
+    teleop::test::Process echo(
+        self,
+        {"rtt-echo", "--out", args.out_dir.string(), "--domain", std::to_string(domain),
+         "--profile", profile, "--security-dir", security_dir},
+        "rtt_echo");
     dds::Participant p(bench_options(profile, domain, "rtt-ping", security_dir));
     dds::Writer<MeshFramePubSubType> ping(p, kPing, dds::TopicQos::kStream);
     std::mutex m;

@@ -31,9 +31,9 @@ const std::string kMakeSecurity = std::string(TELEOP_SOURCE_DIR) + "/deploy/make
 /// Arguments of a secure tool-scene server on `domain` writing `summary_json` at exit.
 std::vector<std::string> secure_server_args(int domain, const std::string& dir,
                                             const std::string& summary_json) {
-  return {"--profile",      "secure",     "--security-dir", dir,       "--domain",
-          std::to_string(domain), "--duration", "60",     "--summary-json", summary_json,
-          "--scene",        kToolScene};
+  return {
+      "--profile",  "secure", "--security-dir", dir,          "--domain", std::to_string(domain),
+      "--duration", "60",     "--summary-json", summary_json, "--scene",  kToolScene};
 }
 
 dds::ParticipantOptions secure_options(int domain, const std::string& dir,
@@ -114,8 +114,7 @@ class Security : public ::testing::Test {
     fs::remove_all(dir_);
     have_openssl_ = std::system("command -v openssl > /dev/null 2>&1") == 0;
     if (!have_openssl_) return;
-    const std::string cmd =
-        "bash '" + kMakeSecurity + "' '" + dir_ + "' > '" + dir_ + ".log' 2>&1";
+    const std::string cmd = "bash '" + kMakeSecurity + "' '" + dir_ + "' > '" + dir_ + ".log' 2>&1";
     status_ = std::system(cmd.c_str());
   }
   static void TearDownTestSuite() {
@@ -163,9 +162,8 @@ TEST_F(Security, ParticipantsWithoutOurCredentialsSeeNothingAndCommandNothing) {
   EXPECT_EQ(observer.scenes, 1);
   EXPECT_EQ(plain.total(), 0) << "states " << plain.states << " scenes " << plain.scenes
                               << " stats " << plain.stats << " events " << plain.events;
-  EXPECT_EQ(stranger.total(), 0) << "states " << stranger.states << " scenes "
-                                 << stranger.scenes << " stats " << stranger.stats
-                                 << " events " << stranger.events;
+  EXPECT_EQ(stranger.total(), 0) << "states " << stranger.states << " scenes " << stranger.scenes
+                                 << " stats " << stranger.stats << " events " << stranger.events;
   EXPECT_EQ(plain.matched_writers(), 0);
   EXPECT_EQ(stranger.matched_writers(), 0);
   EXPECT_EQ(plain.matched_readers(), 0);
@@ -186,7 +184,8 @@ TEST_F(Security, ObserverReadsStateButCannotWriteCommands) {
   Process server(kServerBinary, secure_server_args(domain, dir_, server_json), "sec_obs_server");
   Listener observer(secure_options(domain, dir_, "observer", "sec_observer"));
   ASSERT_TRUE(wait_until(20.0, [&] { return observer.states > 200 && observer.stats > 0; }))
-      << "states " << observer.states << " stats " << observer.stats << "\n" << server.err();
+      << "states " << observer.states << " stats " << observer.stats << "\n"
+      << server.err();
   EXPECT_EQ(observer.scenes, 1);
   EXPECT_GT(observer.events, 0);  // the server's start-up events (transient local)
 
@@ -219,8 +218,8 @@ TEST_F(Security, SecureSessionRunsStable) {
   const std::string server_json = temp_path("sec", "session_server.json");
   Process server(kServerBinary, secure_server_args(domain, dir_, server_json), "sec_s_server");
   Process master(kMasterBinary,
-                 {"--profile", "secure", "--security-dir", dir_, "--domain", d, "--samples",
-                  "3000", "--summary-json", master_json},
+                 {"--profile", "secure", "--security-dir", dir_, "--domain", d, "--samples", "3000",
+                  "--summary-json", master_json},
                  "sec_s_master");
   ASSERT_EQ(master.wait_for(50.0), 0) << master.err() << master.out();
   server.signal(SIGTERM);
@@ -264,9 +263,9 @@ TEST_F(Security, BadSecurityFilesExit2NamingFlagPathAndWhat) {
   EXPECT_NE(err.find("no such directory"), std::string::npos) << err;
 
   // an identity that is not there: the message lists those that are
-  std::tie(rc, err) = run(kMasterBinary,
-                          {"--profile", "secure", "--security-dir", dir_, "--identity", "alice"},
-                          "sec_bad3");
+  std::tie(rc, err) =
+      run(kMasterBinary, {"--profile", "secure", "--security-dir", dir_, "--identity", "alice"},
+          "sec_bad3");
   EXPECT_EQ(rc, 2) << err;
   EXPECT_NE(err.find("no identity 'alice'"), std::string::npos) << err;
   EXPECT_NE(err.find("master, observer, server"), std::string::npos) << err;
@@ -283,8 +282,8 @@ TEST_F(Security, BadSecurityFilesExit2NamingFlagPathAndWhat) {
   EXPECT_NE(err.find("missing " + copy + "/master/identity.key.pem"), std::string::npos) << err;
   EXPECT_NE(err.find("private key of 'master'"), std::string::npos) << err;
   std::ofstream(copy + "/permissions_ca.cert.pem") << "not a certificate\n";
-  std::tie(rc, err) = run(kServerBinary, {"--profile", "secure", "--security-dir", copy},
-                          "sec_bad5");
+  std::tie(rc, err) =
+      run(kServerBinary, {"--profile", "secure", "--security-dir", copy}, "sec_bad5");
   EXPECT_EQ(rc, 2) << err;
   EXPECT_NE(err.find(copy + "/permissions_ca.cert.pem does not hold the permissions CA"),
             std::string::npos)
@@ -313,8 +312,8 @@ TEST_F(Security, IdentityOfAnotherCaIsRefusedAtStart) {
   fs::copy(dir_, copy, fs::copy_options::recursive);
   fs::copy(dir_ + "/other/nobody", copy + "/nobody", fs::copy_options::recursive);
   Process master(kMasterBinary,
-                 {"--profile", "secure", "--security-dir", copy, "--identity", "nobody",
-                  "--domain", std::to_string(domains::kSecureStranger), "--samples", "100"},
+                 {"--profile", "secure", "--security-dir", copy, "--identity", "nobody", "--domain",
+                  std::to_string(domains::kSecureStranger), "--samples", "100"},
                  "sec_stranger");
   const int rc = master.wait_for(20.0);
   const std::string err = master.err();

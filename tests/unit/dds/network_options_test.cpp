@@ -193,8 +193,7 @@ TEST(SecurityFlags, FlagsWinOverTheEnvironmentAndMessagesNameTheSource) {
   // a bad identity from the environment names the variable
   setenv("TELEOP_IDENTITY", "../master", 1);
   std::string m = error_of([] { resolve_participant_options("secure", 5, "t"); });
-  EXPECT_NE(m.find("TELEOP_IDENTITY '../master' is not an identity name"), std::string::npos)
-      << m;
+  EXPECT_NE(m.find("TELEOP_IDENTITY '../master' is not an identity name"), std::string::npos) << m;
   unsetenv("TELEOP_IDENTITY");
   // a plain profile refuses the security variables too, naming them
   m = error_of([] { resolve_participant_options("lan", 5, "t"); });
