@@ -34,7 +34,9 @@ inline constexpr int kSecureObserver = 106;    // security_test: observer reads,
 inline constexpr int kSecureSession = 107;     // security_test: server + master, secure
 inline constexpr int kSecureBadFiles = 108;    // security_test: bad files (exits before DDS)
 inline constexpr int kSecureStranger = 109;    // security_test: identity of another CA
-// 110-114: reserved for security tests and tests/bench/security_rtt.sh
+// 110, 111: tests/bench/security_rtt.sh (plain, secure); 112: teleop_bench rtt in docs
+inline constexpr int kMultiHostSecureLanUnicast = 113;  // multi_host_test, secure_lan_unicast
+inline constexpr int kMultiHostSecureWanTcp = 114;      // multi_host_test, secure_wan_tcp_*
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
