@@ -8,7 +8,7 @@
 #       [--discovery [USER@]ADDR] [--backup-discovery [USER@]ADDR]
 #       [--domain 7] [--remote-dir /opt/teleop] [--scene deploy/scenes/default.yaml]
 #       [--tcp-port 5100] [--public-address ADDR] [--discovery-port 11811]
-#       [--build-dir build] [--ssh "ssh"] [--dry-run] [-- MASTER_FLAGS...]
+#       [--build-dir build] [--ssh "ssh"] [--security-dir DIR] [--dry-run] [-- MASTER_FLAGS...]
 #
 # ADDR is the host's IPv4 address as the other hosts reach it (also the ssh destination).
 # Every host needs the checkout built in --remote-dir (deploy/build.sh) and ssh access by key.
@@ -21,6 +21,10 @@
 # hosts as --peer), wan_tcp (server wan_tcp_server --listen PORT; the others wan_tcp_client
 # --peer SERVER:PORT), discovery (discovery server on --discovery, default the server host;
 # --backup-discovery adds a second server, id 1, started with --backup).
+# --security-dir DIR (a folder on every host, made by deploy/make_security.sh; each host needs
+# only its own identity's folder) runs the secure variant of the profile (secure_lan,
+# secure_lan_unicast, secure_wan_tcp_*); each program uses the identity of its role (server,
+# master, observer). There is no secure discovery profile.
 # Exit status 2 for a bad argument (the message names the flag and the value).
 set -euo pipefail
 
@@ -34,6 +38,7 @@ dry_run=0
 master_extra=()
 build_dir="build"
 ssh_cmd="${TELEOP_LAUNCH_SSH:-ssh}"
+security_dir=""
 
 die() { echo "teleop_launch: $*" >&2; exit 2; }
 need_value() { [ "$#" -ge 2 ] || die "$1 needs a value"; }
@@ -53,9 +58,10 @@ while [ "$#" -gt 0 ]; do
     --discovery-port) need_value "$@"; discovery_port="$2"; shift 2 ;;
     --build-dir) need_value "$@"; build_dir="$2"; shift 2 ;;
     --ssh) need_value "$@"; ssh_cmd="$2"; shift 2 ;;
+    --security-dir) need_value "$@"; security_dir="$2"; shift 2 ;;
     --dry-run) dry_run=1; shift ;;
     --) shift; master_extra=("$@"); break ;;
-    -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,28p' "$0"; exit 0 ;;
     *) die "unknown argument '$1' (see --help)" ;;
   esac
 done
@@ -102,6 +108,12 @@ fi
 if [ "$profile" != discovery ] && { [ -n "$discovery" ] || [ -n "$backup_discovery" ]; }; then
   die "--discovery/--backup-discovery need --profile discovery"
 fi
+if [ -n "$security_dir" ]; then
+  [ "$profile" != discovery ] ||
+    die "--security-dir '$security_dir' does not apply to --profile discovery (no secure discovery profile; use lan, lan_unicast or wan_tcp)"
+  [[ "$security_dir" =~ ^[A-Za-z0-9_./-]+$ ]] ||
+    die "--security-dir '$security_dir': use a path of letters, digits, _ . / - only"
+fi
 
 # the network flags of each role
 all_addrs=("$server_addr" "$master_addr" "${observer_addrs[@]}")
@@ -114,7 +126,15 @@ peers_except() {  # --peer for every host address but $1 (each once)
     printf -- '--peer %s ' "$a"
   done
 }
-net_flags() {  # role address
+net_flags() {  # role address; the secure variant with --security-dir
+  local flags
+  flags="$(plain_net_flags "$@")"
+  if [ -n "$security_dir" ]; then
+    flags="${flags/--profile /--profile secure_} --security-dir $security_dir"
+  fi
+  echo "$flags"
+}
+plain_net_flags() {  # role address
   local role="$1" self="$2"
   case "$profile" in
     lan) echo "--profile lan" ;;

@@ -61,7 +61,7 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", f.profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
-  teleop::dds::add_network_flags(app, f.net_flags);
+  teleop::dds::add_network_flags(app, f.net_flags, "master");
   app.add_option("--config", f.config_file,
                  "YAML with `controller:`, `delay:` (both directions) mappings; flags win");
   app.add_option("--scheme", o.controller.scheme, "bilateral control scheme")

@@ -8,16 +8,23 @@
 //   --public-address ADDR      the address peers reach a TCP listener at (NAT / WAN address)
 //   --discovery-server ADDR[:PORT]  discovery server of id 0, 1, ... in the order given
 //                              (discovery_client; port default 11811); repeatable
+//   --security-dir DIR         DDS Security files (secure profiles; deploy/make_security.sh)
+//   --identity NAME            whose certificate, key and permissions in DIR (default: the
+//                              executable's role: server, master or observer)
 //
 // Environment, used when the flag is absent: TELEOP_PEERS, TELEOP_LISTEN_PORT,
-// TELEOP_PUBLIC_ADDRESS, TELEOP_DISCOVERY_SERVERS (lists separated by commas).
+// TELEOP_PUBLIC_ADDRESS, TELEOP_DISCOVERY_SERVERS (lists separated by commas),
+// TELEOP_SECURITY_DIR, TELEOP_IDENTITY.
 #include <CLI/CLI.hpp>
 
 #include "common/dds/participant.hpp"
 
 namespace teleop::dds {
 
-inline void add_network_flags(CLI::App& app, NetworkFlags& f) {
+/// Adds the flags to `app`; `role` is the default --identity of the secure profiles.
+inline void add_network_flags(CLI::App& app, NetworkFlags& f,
+                              const std::string& role = "observer") {
+  f.default_identity = role;
   app.add_option("--peer", f.peers,
                  "unicast peer ADDR[:PORT], repeatable (lan/lan_unicast: UDP; wan_tcp_client: "
                  "the server, port default 5100) (default: $TELEOP_PEERS)")
@@ -36,6 +43,15 @@ inline void add_network_flags(CLI::App& app, NetworkFlags& f) {
                  "discovery_client; port default 11811) (default: $TELEOP_DISCOVERY_SERVERS)")
       ->type_name("ADDR[:PORT]")
       ->allow_extra_args(false);
+  app.add_option("--security-dir", f.security_dir,
+                 "DDS Security files of the secure profiles, made by deploy/make_security.sh "
+                 "(default: $TELEOP_SECURITY_DIR)")
+      ->type_name("DIR");
+  app.add_option("--identity", f.identity,
+                 "identity in --security-dir whose certificate, key and permissions to use "
+                 "(default: $TELEOP_IDENTITY, else " +
+                     role + ")")
+      ->type_name("NAME");
 }
 
 }  // namespace teleop::dds

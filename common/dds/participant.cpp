@@ -6,6 +6,7 @@
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
 
+#include <fastdds/rtps/attributes/PropertyPolicy.h>
 #include <fastdds/rtps/attributes/ServerAttributes.h>
 #include <fastdds/rtps/transport/TCPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
@@ -21,6 +22,7 @@
 #include <sstream>
 
 #include "common/config/config.hpp"
+#include "common/dds/security_check.hpp"
 
 #ifndef TELEOP_DEFAULT_PROFILES_DIR
 #define TELEOP_DEFAULT_PROFILES_DIR "deploy/profiles"
@@ -108,6 +110,50 @@ const char* env_or_null(const char* name) {
   return (v && *v) ? v : nullptr;
 }
 
+/// The secure profiles of the profiles folder (names starting with "secure"), for messages.
+std::string secure_profile_names() {
+  std::vector<std::string> names;
+  for (const auto& [name, file] : profile_index()) {
+    if (name.starts_with("secure")) names.push_back(name);
+  }
+  return names.empty() ? std::string("none in ") + profiles_dir() : join(names);
+}
+
+/// "--security-dir 'DIR'" or "TELEOP_SECURITY_DIR='DIR'"
+std::string security_dir_label(const SecurityOptions& s) {
+  return s.dir_source == "TELEOP_SECURITY_DIR" ? "TELEOP_SECURITY_DIR='" + s.dir + "'"
+                                               : "--security-dir '" + s.dir + "'";
+}
+
+/// Checks one security file: exists, is a readable regular file holding `marker`.
+void check_security_file(const SecurityOptions& s, const std::string& path, const std::string& what,
+                         const std::string& marker, const std::string& expected) {
+  const std::string where = security_dir_label(s) + " (identity '" + s.identity + "'" +
+                            (s.identity_source.empty() ? ", the default of this program"
+                                                       : ", from " + s.identity_source) +
+                            "): ";
+  const std::string hint = " (make the files with deploy/make_security.sh; docs/networking.md)";
+  std::error_code ec;
+  if (!fs::exists(path, ec)) {
+    throw config::ConfigError(where + "missing " + path + ": " + what + hint);
+  }
+  if (!fs::is_regular_file(path, ec)) {
+    throw config::ConfigError(where + path + " is not a regular file: " + what + hint);
+  }
+  std::ifstream f(path);
+  if (!f) throw config::ConfigError(where + "cannot read " + path + " (permissions?): " + what);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const std::string text = ss.str();
+  if (text.empty()) throw config::ConfigError(where + path + " is empty: " + what + hint);
+  if (text.find(marker) == std::string::npos) {
+    throw config::ConfigError(where + path + " does not hold " + what + " (expected " + expected +
+                              ")" + hint);
+  }
+}
+
+std::string file_uri(const std::string& path) { return "file://" + path; }
+
 constexpr int kDefaultTcpPort = 5100;
 constexpr int kDefaultDiscoveryPort = 11811;
 
@@ -176,6 +222,67 @@ ProfileRef resolve_profile(const std::string& profile) {
 
 std::string profile_file(const std::string& profile) { return resolve_profile(profile).file; }
 
+SecurityFiles security_files(const SecurityOptions& s) {
+  static const std::regex identity_re("[A-Za-z0-9_][A-Za-z0-9_.-]*");
+  if (!std::regex_match(s.identity, identity_re)) {
+    throw config::ConfigError(
+        (s.identity_source.empty() ? std::string("identity") : s.identity_source) + " '" +
+        s.identity +
+        "' is not an identity name (letters, digits, _ . -; e.g. server, master, "
+        "observer)");
+  }
+  std::error_code ec;
+  if (s.dir.empty()) throw config::ConfigError("--security-dir: empty path");
+  if (!fs::is_directory(s.dir, ec)) {
+    throw config::ConfigError(security_dir_label(s) + ": " +
+                              (fs::exists(s.dir, ec) ? "not a directory" : "no such directory") +
+                              " (make one with deploy/make_security.sh DIR; docs/networking.md)");
+  }
+  const fs::path dir = fs::absolute(s.dir, ec);
+  const fs::path id = dir / s.identity;
+  if (!fs::is_directory(id, ec)) {
+    std::vector<std::string> have;
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+      if (e.is_directory() && fs::exists(e.path() / "identity.cert.pem")) {
+        have.push_back(e.path().filename().string());
+      }
+    }
+    std::sort(have.begin(), have.end());
+    throw config::ConfigError(
+        security_dir_label(s) + ": no identity '" + s.identity + "' (missing folder " +
+        id.string() + " with identity.cert.pem, identity.key.pem, permissions.p7s); identities " +
+        "there: {" + join(have) + "}; choose one with --identity NAME (or TELEOP_IDENTITY)");
+  }
+  SecurityFiles f;
+  f.identity_ca = (dir / "identity_ca.cert.pem").string();
+  f.permissions_ca = (dir / "permissions_ca.cert.pem").string();
+  f.governance = (dir / "governance.p7s").string();
+  f.identity_certificate = (id / "identity.cert.pem").string();
+  f.private_key = (id / "identity.key.pem").string();
+  f.permissions = (id / "permissions.p7s").string();
+  const std::string pem_cert = "-----BEGIN CERTIFICATE-----";
+  check_security_file(s, f.identity_ca, "the identity CA certificate", pem_cert,
+                      "a PEM certificate, " + pem_cert);
+  check_security_file(s, f.permissions_ca, "the permissions CA certificate", pem_cert,
+                      "a PEM certificate, " + pem_cert);
+  check_security_file(s, f.governance, "the governance document signed by the permissions CA",
+                      "pkcs7-signature", "an S/MIME signed document: openssl smime -sign");
+  check_security_file(s, f.identity_certificate, "the identity certificate of '" + s.identity + "'",
+                      pem_cert, "a PEM certificate, " + pem_cert);
+  check_security_file(s, f.private_key, "the private key of '" + s.identity + "'",
+                      "PRIVATE KEY-----", "a PEM private key, -----BEGIN ... PRIVATE KEY-----");
+  check_security_file(s, f.permissions,
+                      "the permissions of '" + s.identity + "' signed by the permissions CA",
+                      "pkcs7-signature", "an S/MIME signed document: openssl smime -sign");
+  return f;
+}
+
+bool is_secure(const DomainParticipantQos& qos) {
+  const auto* auth = eprosima::fastrtps::rtps::PropertyPolicyHelper::find_property(
+      qos.properties(), "dds.sec.auth.plugin");
+  return auth != nullptr && !auth->empty();
+}
+
 DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileKind* kind_out) {
   using namespace eprosima::fastrtps::rtps;
   using eprosima::fastdds::rtps::TCPv4TransportDescriptor;
@@ -218,6 +325,41 @@ DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileK
     throw config::ConfigError("--discovery-server " + net.discovery_servers[0].address +
                               in_profile + " (use --profile discovery_client)");
   }
+  const SecurityOptions& sec = net.security;
+  if (is_secure(qos)) {
+    if (sec.dir.empty()) {
+      throw config::ConfigError(
+          "profile '" + ref.name +
+          "' needs --security-dir DIR (or TELEOP_SECURITY_DIR): the folder made by "
+          "deploy/make_security.sh, with identity_ca.cert.pem, permissions_ca.cert.pem, "
+          "governance.p7s and IDENTITY/{identity.cert.pem, identity.key.pem, permissions.p7s} "
+          "(identity '" +
+          sec.identity + "'; another with --identity NAME)");
+    }
+    const SecurityFiles f = security_files(sec);
+    auto& props = qos.properties().properties();
+    auto set = [&props](const std::string& name, const std::string& value) {
+      for (auto& p : props) {
+        if (p.name() == name) {
+          p.value() = value;
+          return;
+        }
+      }
+      props.emplace_back(name, value);
+    };
+    set("dds.sec.auth.builtin.PKI-DH.identity_ca", file_uri(f.identity_ca));
+    set("dds.sec.auth.builtin.PKI-DH.identity_certificate", file_uri(f.identity_certificate));
+    set("dds.sec.auth.builtin.PKI-DH.private_key", file_uri(f.private_key));
+    set("dds.sec.access.builtin.Access-Permissions.permissions_ca", file_uri(f.permissions_ca));
+    set("dds.sec.access.builtin.Access-Permissions.governance", file_uri(f.governance));
+    set("dds.sec.access.builtin.Access-Permissions.permissions", file_uri(f.permissions));
+  } else if (!sec.dir.empty()) {
+    throw config::ConfigError(security_dir_label(sec) + in_profile +
+                              " (secure profiles only: " + secure_profile_names() + ")");
+  } else if (!sec.identity_source.empty()) {
+    throw config::ConfigError(sec.identity_source + " '" + sec.identity + "'" + in_profile +
+                              " (secure profiles only: " + secure_profile_names() + ")");
+  }
   auto udp_locator = [](const HostPort& hp) {
     Locator_t loc;
     loc.kind = LOCATOR_KIND_UDPv4;
@@ -232,10 +374,10 @@ DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileK
         throw config::ConfigError("--peer " + net.peers[0].address + in_profile +
                                   " (it talks to 127.0.0.1 only; use lan or lan_unicast)");
       }
-      if (net.peers.empty() && ref.name == "lan_unicast") {
-        throw config::ConfigError(
-            "profile 'lan_unicast' needs --peer ADDR[:PORT] (or TELEOP_PEERS)"
-            ": the addresses of the other hosts");
+      if (net.peers.empty() && (ref.name == "lan_unicast" || ref.name == "secure_lan_unicast")) {
+        throw config::ConfigError("profile '" + ref.name +
+                                  "' needs --peer ADDR[:PORT] (or TELEOP_PEERS)"
+                                  ": the addresses of the other hosts");
       }
       for (const auto& p : net.peers) builtin.initialPeersList.push_back(udp_locator(p));
       break;
@@ -354,6 +496,24 @@ ParticipantOptions resolve_participant_options(const std::optional<std::string>&
           parse_host_port("TELEOP_DISCOVERY_SERVERS", p, kDefaultDiscoveryPort));
     }
   }
+  // security: flag > environment; the identity defaults to the executable's role
+  SecurityOptions& sec = o.network.security;
+  if (net.security_dir) {
+    sec.dir = *net.security_dir;
+    sec.dir_source = "--security-dir";
+  } else if (const char* env = env_or_null("TELEOP_SECURITY_DIR")) {
+    sec.dir = env;
+    sec.dir_source = "TELEOP_SECURITY_DIR";
+  }
+  if (net.identity) {
+    sec.identity = *net.identity;
+    sec.identity_source = "--identity";
+  } else if (const char* env = env_or_null("TELEOP_IDENTITY")) {
+    sec.identity = env;
+    sec.identity_source = "TELEOP_IDENTITY";
+  } else {
+    sec.identity = net.default_identity;
+  }
   participant_qos(o);  // fail early: unknown profile, options that do not fit it
   return o;
 }
@@ -364,8 +524,29 @@ Participant::Participant(const ParticipantOptions& options) : options_(options) 
   participant_ = factory->create_participant(static_cast<DomainId_t>(options.domain), qos);
   if (!participant_) {
     const ProfileRef ref = resolve_profile(options.profile);
+    std::string why;
+    if (is_secure(qos)) {
+      const SecurityOptions& s = options.network.security;
+      std::string reason;
+      try {
+        reason = diagnose_security_files(security_files(s));
+      } catch (const std::exception& e) {
+        reason = e.what();
+      }
+      if (!reason.empty()) {
+        why = ": DDS Security refused identity '" + s.identity + "' of " + security_dir_label(s) +
+              ": " + reason;
+      } else {
+        why = ": DDS Security refused identity '" + s.identity + "' of " + security_dir_label(s) +
+              " (its certificate must be signed by identity_ca.cert.pem and match its key; "
+              "governance.p7s and its permissions.p7s must be signed by permissions_ca.cert.pem, "
+              "the permissions must name the certificate's subject, be valid now and allow "
+              "domain " +
+              std::to_string(options.domain) + "); Fast DDS's own error is printed above";
+      }
+    }
     throw DdsError("cannot create a DDS participant with profile '" + ref.name + "' from " +
-                   ref.file + " on domain " + std::to_string(options.domain));
+                   ref.file + " on domain " + std::to_string(options.domain) + why);
   }
   publisher_ = participant_->create_publisher(PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(SUBSCRIBER_QOS_DEFAULT);

@@ -35,12 +35,40 @@ struct HostPort {
   bool operator==(const HostPort&) const = default;
 };
 
+/// DDS Security of the secure profiles (docs/networking.md, "Security"): where the files are.
+/// The layout is deploy/make_security.sh's: DIR/identity_ca.cert.pem,
+/// DIR/permissions_ca.cert.pem, DIR/governance.p7s and DIR/IDENTITY/{identity.cert.pem,
+/// identity.key.pem, permissions.p7s}.
+struct SecurityOptions {
+  std::string dir;              ///< --security-dir / TELEOP_SECURITY_DIR (empty: none given)
+  std::string dir_source;       ///< "--security-dir" or "TELEOP_SECURITY_DIR" (for messages)
+  std::string identity;         ///< --identity / TELEOP_IDENTITY, else the executable's role
+  std::string identity_source;  ///< "--identity", "TELEOP_IDENTITY" or "" (the default)
+  bool operator==(const SecurityOptions&) const = default;
+};
+
+/// The files DDS Security reads for one identity, checked to exist and to look right.
+struct SecurityFiles {
+  std::string identity_ca;           ///< DIR/identity_ca.cert.pem
+  std::string identity_certificate;  ///< DIR/IDENTITY/identity.cert.pem
+  std::string private_key;           ///< DIR/IDENTITY/identity.key.pem
+  std::string permissions_ca;        ///< DIR/permissions_ca.cert.pem
+  std::string governance;            ///< DIR/governance.p7s
+  std::string permissions;           ///< DIR/IDENTITY/permissions.p7s
+};
+
+/// The files of `security` after checking that each exists, is readable and holds what it
+/// should (a PEM certificate, a PEM private key, an S/MIME-signed document).
+/// @throws config::ConfigError naming the flag (or variable), the path and what is missing.
+SecurityFiles security_files(const SecurityOptions& security);
+
 /// Addresses and ports of the multi-machine profiles (docs/networking.md).
 struct NetworkOptions {
   std::vector<HostPort> peers;              ///< --peer / TELEOP_PEERS: unicast initial peers
   int listen_port = 0;                      ///< --listen / TELEOP_LISTEN_PORT: TCP port (0: 5100)
   std::string public_address;               ///< --public-address / TELEOP_PUBLIC_ADDRESS (TCP WAN)
   std::vector<HostPort> discovery_servers;  ///< --discovery-server / TELEOP_DISCOVERY_SERVERS
+  SecurityOptions security = {};            ///< secure profiles: --security-dir, --identity
 };
 
 /// The network flags as typed on the command line (unparsed); see network_flags.hpp.
@@ -49,6 +77,9 @@ struct NetworkFlags {
   std::optional<std::string> listen;
   std::optional<std::string> public_address;
   std::vector<std::string> discovery_servers;
+  std::optional<std::string> security_dir;    ///< --security-dir DIR
+  std::optional<std::string> identity;        ///< --identity NAME
+  std::string default_identity = "observer";  ///< the executable's role when --identity is absent
 };
 
 /// Which participant to create.
@@ -60,8 +91,9 @@ struct ParticipantOptions {
 };
 
 /// Resolves options: explicit flag > environment (TELEOP_PROFILE, TELEOP_DOMAIN, TELEOP_PEERS,
-/// TELEOP_LISTEN_PORT, TELEOP_PUBLIC_ADDRESS, TELEOP_DISCOVERY_SERVERS) > default, and checks
-/// that the profile exists and that the network options fit it.
+/// TELEOP_LISTEN_PORT, TELEOP_PUBLIC_ADDRESS, TELEOP_DISCOVERY_SERVERS, TELEOP_SECURITY_DIR,
+/// TELEOP_IDENTITY) > default, and checks that the profile exists and that the network and
+/// security options fit it (a secure profile's files exist and look right).
 /// @throws config::ConfigError naming the flag (or variable) and the value.
 ParticipantOptions resolve_participant_options(const std::optional<std::string>& profile_flag,
                                                const std::optional<int>& domain_flag,
@@ -96,7 +128,11 @@ enum class ProfileKind {
   kDiscoveryClient,  ///< discovery client: --discovery-server ADDR[:11811], one per server id
 };
 
-/// The participant QoS of the options: the XML profile with the network options applied.
+/// True when a participant QoS turns DDS Security on (the profile sets dds.sec.auth.plugin).
+bool is_secure(const eprosima::fastdds::dds::DomainParticipantQos& qos);
+
+/// The participant QoS of the options: the XML profile with the network options applied; for
+/// a secure profile, the security files' paths added as the plugins' properties.
 /// @throws config::ConfigError when an option does not fit the profile (names the flag).
 eprosima::fastdds::dds::DomainParticipantQos participant_qos(const ParticipantOptions& options,
                                                              ProfileKind* kind = nullptr);

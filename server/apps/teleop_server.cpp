@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
   teleop::dds::NetworkFlags net_flags;
-  teleop::dds::add_network_flags(app, net_flags);
+  teleop::dds::add_network_flags(app, net_flags, "server");
   app.add_option("--summary-json", summary_json, "write a JSON summary here at exit");
   app.add_flag("--quiet", quiet, "print only warnings and errors");
   try {

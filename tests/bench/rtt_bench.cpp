@@ -3,6 +3,11 @@
 // 1 kHz and as fast as possible, over UDP on 127.0.0.1 (profile loopback, the default) and
 // shared memory + UDP (profile loopback_shm). Writes DIR/rtt.csv and DIR/rtt.png.
 //
+// --profiles A,B   other profiles (default loopback,loopback_shm); a secure profile also needs
+//                  --security-dir DIR (deploy/make_security.sh, which makes the identity "bench"
+//                  allowed to publish and subscribe bench/*), e.g.
+//   teleop_bench rtt --profiles loopback,secure --security-dir /tmp/sec --out /tmp/r --no-chart
+//
 // The echo side is this same executable, started as `teleop_bench rtt-echo`.
 #include <unistd.h>
 
@@ -12,7 +17,9 @@
 #include <cstdio>
 #include <iostream>
 #include <mutex>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "common/dds/endpoint.hpp"
 #include "common/util/clock.hpp"
@@ -30,10 +37,33 @@ constexpr const char* kPing = "bench/ping";
 constexpr const char* kPong = "bench/pong";
 constexpr std::uint64_t kStopFrame = ~0ULL;
 
+/// Options of a bench participant: a secure profile uses the identity "bench" of --security-dir.
+dds::ParticipantOptions bench_options(const std::string& profile, int domain,
+                                      const std::string& name, const std::string& security_dir) {
+  dds::ParticipantOptions o{profile, domain, name};
+  if (profile.starts_with("secure")) {
+    o.network.security = {security_dir, "--security-dir", "bench", "--identity"};
+  }
+  return o;
+}
+
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> out;
+  std::size_t p = 0;
+  while (p <= text.size()) {
+    const auto c = text.find(',', p);
+    const std::string item = text.substr(p, c == std::string::npos ? std::string::npos : c - p);
+    if (!item.empty()) out.push_back(item);
+    if (c == std::string::npos) break;
+    p = c + 1;
+  }
+  return out;
+}
+
 int rtt_echo(const CommandArgs& args) {
   const int domain = std::stoi(args.option("--domain", "100"));
   const std::string profile = args.option("--profile", "loopback");
-  dds::Participant p(dds::ParticipantOptions{profile, domain, "rtt-echo"});
+  dds::Participant p(bench_options(profile, domain, "rtt-echo", args.option("--security-dir", "")));
   dds::Writer<MeshFramePubSubType> pong(p, kPong, dds::TopicQos::kStream);
   std::atomic<bool> stop{false};
   dds::Reader<MeshFramePubSubType> ping(
@@ -95,17 +125,20 @@ int rtt(const CommandArgs& args) {
   const std::string csv_path = (args.out_dir / "rtt.csv").string();
   CsvWriter csv(csv_path, {"profile", "payload_bytes", "mode", "samples", "lost", "rtt_us_p50",
                            "rtt_us_p90", "rtt_us_p99", "rtt_us_p999", "rtt_us_max"});
-  for (const std::string profile : {"loopback", "loopback_shm"}) {
+  const std::string security_dir = args.option("--security-dir", "");
+  for (const std::string& profile :
+       split_commas(args.option("--profiles", "loopback,loopback_shm"))) {
     // the echo side: this executable in another process
     char self[4096];
     const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
     if (n <= 0) throw std::runtime_error("cannot find /proc/self/exe");
     self[n] = '\0';
-    teleop::test::Process echo(self,
-                               {"rtt-echo", "--out", args.out_dir.string(), "--domain",
-                                std::to_string(domain), "--profile", profile},
-                               "rtt_echo");
-    dds::Participant p(dds::ParticipantOptions{profile, domain, "rtt-ping"});
+    teleop::test::Process echo(
+        self,
+        {"rtt-echo", "--out", args.out_dir.string(), "--domain", std::to_string(domain),
+         "--profile", profile, "--security-dir", security_dir},
+        "rtt_echo");
+    dds::Participant p(bench_options(profile, domain, "rtt-ping", security_dir));
     dds::Writer<MeshFramePubSubType> ping(p, kPing, dds::TopicQos::kStream);
     std::mutex m;
     std::condition_variable cv;

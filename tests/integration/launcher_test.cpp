@@ -76,6 +76,31 @@ TEST(Launcher, DryRunWanTcpAndLan) {
   EXPECT_FALSE(has(l[0], "--peer")) << l[0];
 }
 
+TEST(Launcher, DryRunWithSecurityDirUsesTheSecureProfiles) {
+  auto l = launch({"--dry-run", "--profile", "wan_tcp", "--server", "10.0.0.1", "--master",
+                   "10.0.0.2", "--observer", "10.0.0.3", "--security-dir", "/etc/teleop/dds"});
+  ASSERT_GE(l.size(), 3u);
+  EXPECT_TRUE(has(l[0],
+                  "--profile secure_wan_tcp_server --listen 5100 --security-dir "
+                  "/etc/teleop/dds"))
+      << l[0];
+  EXPECT_TRUE(has(l[1],
+                  "--profile secure_wan_tcp_client --peer 10.0.0.1:5100 --security-dir "
+                  "/etc/teleop/dds"))
+      << l[1];
+  l = launch({"--dry-run", "--profile", "lan_unicast", "--server", "10.0.0.1", "--master",
+              "10.0.0.2", "--security-dir", "/etc/teleop/dds"});
+  ASSERT_GE(l.size(), 2u);
+  EXPECT_TRUE(has(l[0], "--profile secure_lan_unicast --peer 10.0.0.2")) << l[0];
+  EXPECT_TRUE(has(l[0], "--security-dir /etc/teleop/dds")) << l[0];
+  std::string err;
+  launch({"--dry-run", "--profile", "discovery", "--server", "10.0.0.1", "--master", "10.0.0.2",
+          "--security-dir", "/etc/teleop/dds"},
+         2, &err);
+  EXPECT_TRUE(has(err, "--security-dir '/etc/teleop/dds' does not apply to --profile discovery"))
+      << err;
+}
+
 TEST(Launcher, DryRunDiscoveryStartsTheServersFirst) {
   const auto l =
       launch({"--dry-run", "--profile", "discovery", "--server", "10.0.0.1", "--master", "10.0.0.2",

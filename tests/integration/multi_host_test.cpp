@@ -6,11 +6,14 @@
 // cannot be created (not root, no iproute2, a container without CAP_SYS_ADMIN).
 #include <fcntl.h>
 #include <gtest/gtest.h>
+
 #include <sys/file.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <thread>
@@ -195,6 +198,40 @@ TEST_F(MultiHost, WanTcp) {
                 {"--listen", "5100", "--public-address", kH1},
                 {"--peer", kH1 + ":5100"},
                 {"--peer", kH1 + ":5100"}});
+}
+
+/// DDS Security files for a secure multi-host session (deploy/make_security.sh into a temporary
+/// folder; removed by the caller). Empty if the script failed.
+std::string make_security_dir(const std::string& name) {
+  const std::string dir = temp_path("mh", name + "_certs");
+  std::filesystem::remove_all(dir);
+  const std::string cmd = "bash '" + std::string(TELEOP_SOURCE_DIR) +
+                          "/deploy/make_security.sh' --no-other '" + dir + "' > /dev/null 2>&1";
+  return std::system(cmd.c_str()) == 0 ? dir : std::string();
+}
+
+TEST_F(MultiHost, SecureLanUnicastPeers) {
+  const std::string sec = make_security_dir("secure_lan_unicast");
+  ASSERT_FALSE(sec.empty()) << "deploy/make_security.sh failed";
+  session("secure_lan_unicast", domains::kMultiHostSecureLanUnicast,
+          Roles{"secure_lan_unicast",
+                "secure_lan_unicast",
+                {"--peer", kH2, "--peer", kH3, "--security-dir", sec},
+                {"--peer", kH1, "--peer", kH3, "--security-dir", sec},
+                {"--peer", kH1, "--peer", kH2, "--security-dir", sec}});
+  std::filesystem::remove_all(sec);
+}
+
+TEST_F(MultiHost, SecureWanTcp) {
+  const std::string sec = make_security_dir("secure_wan_tcp");
+  ASSERT_FALSE(sec.empty()) << "deploy/make_security.sh failed";
+  session("secure_wan_tcp", domains::kMultiHostSecureWanTcp,
+          Roles{"secure_wan_tcp_server",
+                "secure_wan_tcp_client",
+                {"--listen", "5100", "--public-address", kH1, "--security-dir", sec},
+                {"--peer", kH1 + ":5100", "--security-dir", sec},
+                {"--peer", kH1 + ":5100", "--security-dir", sec}});
+  std::filesystem::remove_all(sec);
 }
 
 TEST_F(MultiHost, DiscoveryServerWithASecondServer) {

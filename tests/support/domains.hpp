@@ -29,6 +29,14 @@ inline constexpr int kRecordSession = 73;      // record_play_test: session unde
 inline constexpr int kPlayback = 74;           // record_play_test: teleop_play to a subscriber
 inline constexpr int kMonitorTui = 75;         // monitor_tui_test: teleop_monitor under tmux
 inline constexpr int kMonitorJson = 76;        // monitor_tui_test: teleop_monitor --json
+inline constexpr int kSecureOutsiders = 105;   // security_test: no credentials / foreign CA
+inline constexpr int kSecureObserver = 106;    // security_test: observer reads, cannot command
+inline constexpr int kSecureSession = 107;     // security_test: server + master, secure
+inline constexpr int kSecureBadFiles = 108;    // security_test: bad files (exits before DDS)
+inline constexpr int kSecureStranger = 109;    // security_test: identity of another CA
+// 110, 111: tests/bench/security_rtt.sh (plain, secure); 112: teleop_bench rtt in docs
+inline constexpr int kMultiHostSecureLanUnicast = 113;  // multi_host_test, secure_lan_unicast
+inline constexpr int kMultiHostSecureWanTcp = 114;      // multi_host_test, secure_wan_tcp_*
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains

@@ -2,9 +2,14 @@
 // the network flags are parsed, checked against the profile and put into the participant QoS.
 #include <gtest/gtest.h>
 
+#include <fastdds/rtps/attributes/PropertyPolicy.h>
 #include <fastdds/rtps/transport/TCPv4TransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
+#include <unistd.h>
+
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
@@ -19,7 +24,8 @@ using eprosima::fastrtps::rtps::IPLocator;
 
 void clear_env() {
   for (const char* v : {"TELEOP_PROFILE", "TELEOP_DOMAIN", "TELEOP_PEERS", "TELEOP_LISTEN_PORT",
-                        "TELEOP_PUBLIC_ADDRESS", "TELEOP_DISCOVERY_SERVERS"}) {
+                        "TELEOP_PUBLIC_ADDRESS", "TELEOP_DISCOVERY_SERVERS", "TELEOP_SECURITY_DIR",
+                        "TELEOP_IDENTITY"}) {
     unsetenv(v);
   }
 }
@@ -46,6 +52,27 @@ NetworkFlags servers(std::vector<std::string> v) {
   return f;
 }
 
+/// A folder laid out as deploy/make_security.sh's with files that only look right (the checks
+/// before DDS starts read markers, not signatures): identities server, master, observer.
+std::string fake_security_dir() {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("teleop_fake_sec_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  const std::string cert = "-----BEGIN CERTIFICATE-----\nx\n-----END CERTIFICATE-----\n";
+  const std::string smime = "Content-Type: multipart/signed; application/x-pkcs7-signature\n";
+  fs::create_directories(dir);
+  std::ofstream(dir / "identity_ca.cert.pem") << cert;
+  std::ofstream(dir / "permissions_ca.cert.pem") << cert;
+  std::ofstream(dir / "governance.p7s") << smime;
+  for (const char* id : {"server", "master", "observer"}) {
+    fs::create_directories(dir / id);
+    std::ofstream(dir / id / "identity.cert.pem") << cert;
+    std::ofstream(dir / id / "identity.key.pem") << "-----BEGIN EC PRIVATE KEY-----\nx\n";
+    std::ofstream(dir / id / "permissions.p7s") << smime;
+  }
+  return dir.string();
+}
+
 /// The message of the ConfigError `f` throws ("" if none).
 template <class F>
 std::string error_of(F f) {
@@ -65,7 +92,12 @@ TEST(ProfileLookup, EveryDocumentedNameResolvesToItsFile) {
       {"lan_unicast", "lan.xml"},
       {"wan_tcp_server", "wan_tcp.xml"},
       {"wan_tcp_client", "wan_tcp.xml"},
-      {"discovery_client", "discovery_server.xml"}};
+      {"discovery_client", "discovery_server.xml"},
+      {"secure", "secure.xml"},
+      {"secure_lan", "secure.xml"},
+      {"secure_lan_unicast", "secure.xml"},
+      {"secure_wan_tcp_server", "secure_wan_tcp.xml"},
+      {"secure_wan_tcp_client", "secure_wan_tcp.xml"}};
   const auto index = profile_index();
   for (const auto& [name, file] : expected) {
     const ProfileRef ref = resolve_profile(name);
@@ -97,12 +129,91 @@ TEST(ProfileLookup, AnXmlPathUsesTheProfileNamedLikeTheFileOrItsOnlyOne) {
 
 TEST(ProfileLookup, EveryProfileGivesAParticipantQos) {
   clear_env();
+  const std::string sec = fake_security_dir();
   for (const auto& [name, file] : profile_index()) {
     ParticipantOptions o{name, 0, "t"};
-    if (name == "lan_unicast" || name == "wan_tcp_client") o.network.peers = {{"10.1.2.3", 0}};
+    if (name.ends_with("lan_unicast") || name.ends_with("wan_tcp_client")) {
+      o.network.peers = {{"10.1.2.3", 0}};
+    }
     if (name == "discovery_client") o.network.discovery_servers = {{"10.1.2.3", 11811}};
+    if (name.starts_with("secure")) o.network.security = {sec, "--security-dir", "master", ""};
     EXPECT_NO_THROW(participant_qos(o)) << name;
+    EXPECT_EQ(is_secure(participant_qos(o)), name.starts_with("secure")) << name;
   }
+  std::filesystem::remove_all(sec);
+}
+
+TEST(SecurityFlags, SecureProfilesGetTheFilesOfTheIdentityAsPluginProperties) {
+  clear_env();
+  const std::string sec = fake_security_dir();
+  NetworkFlags f;
+  f.security_dir = sec;
+  f.default_identity = "master";
+  auto o = resolve_participant_options("secure", 5, "t", f);
+  EXPECT_EQ(o.network.security.identity, "master");
+  const auto qos = participant_qos(o);
+  auto prop = [&](const std::string& n) {
+    const auto* v =
+        eprosima::fastrtps::rtps::PropertyPolicyHelper::find_property(qos.properties(), n);
+    return v ? *v : std::string("(none)");
+  };
+  EXPECT_EQ(prop("dds.sec.auth.plugin"), "builtin.PKI-DH");
+  EXPECT_EQ(prop("dds.sec.access.plugin"), "builtin.Access-Permissions");
+  EXPECT_EQ(prop("dds.sec.crypto.plugin"), "builtin.AES-GCM-GMAC");
+  EXPECT_EQ(prop("dds.sec.auth.builtin.PKI-DH.identity_ca"),
+            "file://" + sec + "/identity_ca.cert.pem");
+  EXPECT_EQ(prop("dds.sec.auth.builtin.PKI-DH.identity_certificate"),
+            "file://" + sec + "/master/identity.cert.pem");
+  EXPECT_EQ(prop("dds.sec.auth.builtin.PKI-DH.private_key"),
+            "file://" + sec + "/master/identity.key.pem");
+  EXPECT_EQ(prop("dds.sec.access.builtin.Access-Permissions.permissions_ca"),
+            "file://" + sec + "/permissions_ca.cert.pem");
+  EXPECT_EQ(prop("dds.sec.access.builtin.Access-Permissions.governance"),
+            "file://" + sec + "/governance.p7s");
+  EXPECT_EQ(prop("dds.sec.access.builtin.Access-Permissions.permissions"),
+            "file://" + sec + "/master/permissions.p7s");
+  // the plain profiles carry no security property at all
+  EXPECT_FALSE(is_secure(participant_qos(resolve_participant_options("loopback", 5, "t"))));
+  std::filesystem::remove_all(sec);
+}
+
+TEST(SecurityFlags, FlagsWinOverTheEnvironmentAndMessagesNameTheSource) {
+  clear_env();
+  const std::string sec = fake_security_dir();
+  setenv("TELEOP_SECURITY_DIR", sec.c_str(), 1);
+  setenv("TELEOP_IDENTITY", "observer", 1);
+  NetworkFlags f;
+  f.default_identity = "server";
+  auto o = resolve_participant_options("secure", 5, "t", f);
+  EXPECT_EQ(o.network.security.dir, sec);
+  EXPECT_EQ(o.network.security.dir_source, "TELEOP_SECURITY_DIR");
+  EXPECT_EQ(o.network.security.identity, "observer");
+  f.identity = "master";
+  EXPECT_EQ(resolve_participant_options("secure", 5, "t", f).network.security.identity, "master");
+  // a bad identity from the environment names the variable
+  setenv("TELEOP_IDENTITY", "../master", 1);
+  std::string m = error_of([] { resolve_participant_options("secure", 5, "t"); });
+  EXPECT_NE(m.find("TELEOP_IDENTITY '../master' is not an identity name"), std::string::npos) << m;
+  unsetenv("TELEOP_IDENTITY");
+  // a plain profile refuses the security variables too, naming them
+  m = error_of([] { resolve_participant_options("lan", 5, "t"); });
+  EXPECT_NE(m.find("TELEOP_SECURITY_DIR='" + sec + "' does not apply to profile 'lan'"),
+            std::string::npos)
+      << m;
+  unsetenv("TELEOP_SECURITY_DIR");
+  NetworkFlags g;
+  g.identity = "master";
+  m = error_of([&] { resolve_participant_options("loopback", 5, "t", g); });
+  EXPECT_NE(m.find("--identity 'master' does not apply to profile 'loopback'"), std::string::npos)
+      << m;
+  // a secure profile without a folder, and secure_lan_unicast without peers
+  m = error_of([] { resolve_participant_options("secure_lan", 5, "t"); });
+  EXPECT_NE(m.find("profile 'secure_lan' needs --security-dir DIR"), std::string::npos) << m;
+  NetworkFlags h;
+  h.security_dir = sec;
+  m = error_of([&] { resolve_participant_options("secure_lan_unicast", 5, "t", h); });
+  EXPECT_NE(m.find("profile 'secure_lan_unicast' needs --peer"), std::string::npos) << m;
+  std::filesystem::remove_all(sec);
 }
 
 TEST(NetworkFlags, AddressesAndPortsAreParsed) {
