@@ -134,7 +134,8 @@ Trace run_ours(int level, double dt, double t_end, double sample_dt, KernelKind 
 }
 
 #ifdef TELEOP_HAVE_BULLET
-constexpr double kBulletPressure = 2.0;  // kPR [J]: p = kPR / V on every node (see docs)
+double g_bullet_pressure = 2.0;  // kPR [J]: p = kPR / V on every node (--bullet-kpr)
+constexpr double kOurDrag_per_s = 10.0;  // our mass_damping_per_s default: Bullet's kDP = it x dt
 
 /// Bullet's soft body on the same mesh, mass and step.
 Trace run_bullet(int level, double dt, double t_end, double sample_dt, int piterations) {
@@ -166,10 +167,14 @@ Trace run_bullet(int level, double dt, double t_end, double sample_dt, int piter
       info, verts.data(), tris.data(), static_cast<int>(mesh.triangles.cols()), false);
   sb->m_materials[0]->m_kLST = 1.0;  // its stiffest
   sb->m_cfg.piterations = piterations;
-  sb->m_cfg.kPR = static_cast<btScalar>(kBulletPressure);
-  sb->m_cfg.kDP = 0.0;
+  sb->m_cfg.kPR = static_cast<btScalar>(g_bullet_pressure);
+  sb->m_cfg.kDP = static_cast<btScalar>(kOurDrag_per_s * dt);  // v *= 1 - kDP each step
   sb->setTotalMass(static_cast<btScalar>(kMass_kg), true);
   world->addSoftBody(sb);
+  // Bullet recomputes its runtime constants (and resets the links' rest lengths to the current
+  // positions) on the first step after setTotalMass: do it now, at the rest shape
+  sb->updateConstants();
+  sb->m_bUpdateRtCst = false;
   const btVector3 u = sb->m_nodes[kProbe].m_x.normalized();
   sb->m_nodes[kProbe].m_x += u * static_cast<btScalar>(kPull_m);
   sb->m_nodes[kProbe].m_q = sb->m_nodes[kProbe].m_x;
@@ -222,7 +227,8 @@ int bench_peers(const teleop::CommandArgs& a) {
   const int rounds = std::stoi(a.option("--rounds", a.quick ? "1" : "3"));
   const double t_end = a.quick ? 0.05 : 1.0;
   const double sample_dt = 1e-3;
-  const int piterations = 1;  // Bullet's default
+  const int piterations = std::stoi(a.option("--bullet-piterations", "1"));  // 1: its default
+  g_bullet_pressure = std::stod(a.option("--bullet-kpr", "2"));
   std::vector<Config> configs;
   for (int level : levels) {
     for (double dt : dts) {
