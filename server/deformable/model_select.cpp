@@ -59,7 +59,8 @@ std::string fmt1(double v) { return fmt(v, 1, true); }
 std::string ms_text(double s) { return fmt4(s * 1e3) + " ms"; }
 
 /// The entry as a candidate for a world step of dt_s; false when it cannot run at that step.
-bool as_candidate(const TableEntry& e, double dt_s, ModelChoice& out) {
+bool as_candidate(const TableEntry& e, const ModelRequest& r, ModelChoice& out) {
+  const double dt_s = r.physics_dt_s;
   if (!std::isfinite(e.error_m) || !(e.dt_s > 0.0) || !(e.step_us_median >= 0.0)) return false;
   const double ratio = dt_s / e.dt_s;
   const double n = std::round(ratio);
@@ -68,7 +69,9 @@ bool as_candidate(const TableEntry& e, double dt_s, ModelChoice& out) {
   out.substeps = static_cast<int>(n);
   out.cost_us_median = n * e.step_us_median;
   out.cost_us_p99 = n * e.step_us_p99;
-  out.error_mm = e.error_m * 1e3;
+  out.dynamic_error_mm = e.error_m * 1e3;
+  out.shape_error_mm = e.level >= 0 && e.level <= 6 ? r.shape_error_mm[static_cast<std::size_t>(e.level)] : 0.0;
+  out.error_mm = out.dynamic_error_mm + out.shape_error_mm;
   return true;
 }
 
@@ -228,11 +231,23 @@ ModelTable parse_model_table(const std::string& csv_text, const std::string& fil
   return t;
 }
 
+double icosphere_shape_error_m(int level, double radius_m) {
+  const teleop::mesh::TriMesh m = teleop::mesh::make_icosphere(level, radius_m, Eigen::Vector3d::Zero());
+  double closest = radius_m;
+  for (Eigen::Index t = 0; t < m.triangles.cols(); ++t) {
+    const Eigen::Vector3d a = m.vertices.col(m.triangles(0, t));
+    const Eigen::Vector3d n =
+        (m.vertices.col(m.triangles(1, t)) - a).cross(m.vertices.col(m.triangles(2, t)) - a);
+    closest = std::min(closest, std::fabs(n.normalized().dot(a)));
+  }
+  return radius_m - closest;
+}
+
 std::string default_model_table_file() {
 #ifdef TELEOP_SOURCE_DIR
-  return std::string(TELEOP_SOURCE_DIR) + "/deploy/data/deformable_table.csv";
+  return std::string(TELEOP_SOURCE_DIR) + "/deploy/data/deformable.csv";
 #else
-  return "deploy/data/deformable_table.csv";
+  return "deploy/data/deformable.csv";
 #endif
 }
 
@@ -241,8 +256,8 @@ ModelTable load_model_table(const std::string& file) {
   if (!in) {
     throw ConfigError(file +
                       ": cannot read the speed-accuracy table; measure it with `teleop_bench "
-                      "deformable --out deploy/data --no-chart` and rename deformable.csv to "
-                      "deformable_table.csv (docs/deformable.md, \"Automatic model\")");
+                      "deformable --out deploy/data --no-chart` (docs/deformable.md, \"Automatic "
+                      "model\")");
   }
   std::ostringstream text;
   text << in.rdbuf();
@@ -254,7 +269,7 @@ SelectResult select_model(const ModelTable& table, const ModelRequest& r) {
   bool have_accurate = false, have_cheapest_accurate = false, have_choice = false;
   for (const TableEntry& e : table.entries) {
     ModelChoice c;
-    if (!matches(e, r) || !as_candidate(e, r.physics_dt_s, c)) continue;
+    if (!matches(e, r) || !as_candidate(e, r, c)) continue;
     ++out.matching;
     if (!have_accurate || c.error_mm < out.most_accurate.error_mm ||
         (c.error_mm == out.most_accurate.error_mm && cheaper(c, out.most_accurate))) {
@@ -305,7 +320,10 @@ std::string AutoBody::report() const {
   o << "  predicted cost " << fmt1(choice->cost_us_median * stability_substeps)
     << " us per world step (median; p99 " << fmt1(choice->cost_us_p99 * stability_substeps)
     << " us), error " << fmt4(choice->error_mm)
-    << " mm (RMS displacement against the model's level-6 reference, teleop_bench deformable)";
+    << " mm = " << fmt4(choice->dynamic_error_mm)
+    << " dynamic (RMS displacement of a released bump against the model's level-6 reference, "
+       "teleop_bench deformable) + "
+    << fmt4(choice->shape_error_mm) << " shape (flat triangles against the sphere)";
   if (stability_substeps > 1) {
     o << "\n  this body needs " << stability_substeps
       << " stability sub-steps per table step (cost included)";
@@ -366,6 +384,16 @@ AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
     req.kernel = node.choice("kernel", {"auto", "scalar", "simd"}) == "simd" ? KernelKind::kSimd
                                                                               : KernelKind::kScalar;
   }  // not given: chosen too (an automatic selection may take the simd kernel)
+  const double radius_m = node.number_or("radius_m", DeformableParams{}.radius_m, 1e-3, 100.0);
+  // the shape error scales with the radius: computed once per level for the unit sphere
+  static const std::array<double, 7> unit_shape_error = [] {
+    std::array<double, 7> e{};
+    for (int l = 0; l <= 6; ++l) e[static_cast<std::size_t>(l)] = icosphere_shape_error_m(l, 1.0);
+    return e;
+  }();
+  for (std::size_t l = 0; l < unit_shape_error.size(); ++l) {
+    req.shape_error_mm[l] = 1e3 * radius_m * unit_shape_error[l];
+  }
   out.tolerance_mm = req.tolerance_mm;
   out.budget_us = req.budget_us;
   std::string table_file = default_model_table_file();

@@ -1,19 +1,25 @@
 #pragma once
 // Automatic model: `model: auto`, `integrator: auto`, `level: auto` (and `kernel: auto`) in a
 // scene's deformable body pick, from the speed-accuracy table that `teleop_bench deformable`
-// measured on this machine (deploy/data/deformable_table.csv), the cheapest combination whose
+// measured on this machine (deploy/data/deformable.csv), the cheapest combination whose
 // error stays within the body's `tolerance_mm` and whose cost per world step fits `budget_us`.
 // Runs once at load (allocates; never in the loop). docs/deformable.md, "Automatic model".
 //
-// Error: the table's `error` column, i.e. the RMS over 0-0.1 s (samples every 1 ms) of the
-// radial displacement of icosahedron vertex 5 after a 5 mm cos^2 bump is released, against the
-// same model's converged reference (level 6, dt 62.5 us, symplectic Euler): the discretisation
-// error of the mesh level, the step and the integrator, for the default material.
+// Error [mm] = dynamic error + shape error:
+//  - dynamic: the table's `error` column, i.e. the RMS over 0-0.1 s (samples every 1 ms) of the
+//    radial displacement of icosahedron vertex 5 after a 5 mm cos^2 bump is released, against the
+//    same model's converged reference (level 6, dt 62.5 us, symplectic Euler): the error of the
+//    mesh level, the step and the integrator in the motion, for the default material;
+//  - shape: the largest distance between the level's flat triangles and the sphere they stand
+//    for (icosphere_shape_error_m, scaled to the body's radius): what the tip touches. Without it
+//    a 42-node level-1 ball (9.6 mm off the sphere) would look as good as level 4, because the
+//    mass-spring model's motion converges fast in the level.
 // Cost: n x (the entry's median step), n = world step / entry step (an integer; n > 1 means
 // n accuracy sub-steps per world step, params.min_substeps).
 //
 //   AutoBody b = load_deformable_body(scene.at("deformables").at(0).at("body"), 1e-3, planes);
 //   // b.choice is set when anything was `auto`; b.model is built either way
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -44,7 +50,7 @@ struct ModelTable {
 ModelTable parse_model_table(const std::string& csv_text, const std::string& file);
 /// Reads and parses a table file. @throws config::ConfigError (missing file: says how to make it).
 ModelTable load_model_table(const std::string& file);
-/// The table shipped with the repository: <source>/deploy/data/deformable_table.csv.
+/// The table shipped with the repository: <source>/deploy/data/deformable.csv.
 std::string default_model_table_file();
 
 /// What a scene asks for: fixed fields (set) and automatic ones (nullopt).
@@ -56,7 +62,14 @@ struct ModelRequest {
   double tolerance_mm = 0.0;  ///< largest accepted error [mm], > 0
   double budget_us = 0.0;     ///< largest accepted cost per world step (median) [us], > 0
   double physics_dt_s = 1e-3; ///< the world's step [s]
+  /// Shape error of each icosphere level 0-6 for this body [mm] (icosphere_shape_error_m); zero:
+  /// the table's dynamic error alone.
+  std::array<double, 7> shape_error_mm{};
 };
+
+/// Largest distance between the flat triangles of make_icosphere(level, radius_m) and the sphere
+/// of that radius [m] (r minus the smallest distance from the centre to a triangle's plane).
+double icosphere_shape_error_m(int level, double radius_m);
 
 /// A table entry as it would run in the world.
 struct ModelChoice {
@@ -64,7 +77,9 @@ struct ModelChoice {
   int substeps = 1;            ///< entry steps per world step (params.min_substeps)
   double cost_us_median = 0.0; ///< substeps x entry median [us]
   double cost_us_p99 = 0.0;    ///< substeps x entry p99 [us] (an upper guide, not a percentile)
-  double error_mm = 0.0;       ///< the entry's error [mm]
+  double error_mm = 0.0;       ///< dynamic_error_mm + shape_error_mm [mm]
+  double dynamic_error_mm = 0.0;  ///< the entry's error column [mm]
+  double shape_error_mm = 0.0;    ///< the level's shape error for this body [mm]
   /// "mass_spring symplectic_euler simd level 4, 1 x 1 ms": the combination, short.
   std::string name() const;
 };

@@ -184,35 +184,69 @@ class AutoBodyYaml : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
+TEST(ShapeError, IsTheIcosahedronsSagAtLevelZeroAndShrinksFourfoldPerLevel) {
+  // regular icosahedron: inradius / circumradius = 0.7946544723
+  EXPECT_NEAR(icosphere_shape_error_m(0, 1.0), 1.0 - 0.7946544723, 1e-9);
+  double prev = icosphere_shape_error_m(0, 0.25);
+  EXPECT_NEAR(prev, 0.25 * (1.0 - 0.7946544723), 1e-9);  // scales with the radius
+  for (int l = 1; l <= 5; ++l) {
+    const double e = icosphere_shape_error_m(l, 0.25);
+    RecordProperty("shape_error_mm_level_" + std::to_string(l), std::to_string(e * 1e3));
+    EXPECT_GT(prev / e, 3.0) << l;
+    EXPECT_LT(prev / e, 5.5) << l;
+    prev = e;
+  }
+  EXPECT_GT(icosphere_shape_error_m(4, 0.25), 0.25e-3);  // 0.28 mm at the paper's sphere
+  EXPECT_LT(icosphere_shape_error_m(4, 0.25), 0.32e-3);
+}
+
+TEST(SelectModel, ShapeErrorRulesOutCoarseMeshes) {
+  ModelRequest r = all_auto(0.2, 1000);
+  r.shape_error_mm = {50, 10, 2.4, 0.6, 0.15, 0.04, 0.01};
+  const SelectResult c = select_model(table(), r);
+  ASSERT_EQ(c.outcome, SelectOutcome::kChosen);
+  EXPECT_EQ(c.choice.entry.level, 4);  // level 2 is 2.4 mm off the sphere whatever its motion
+  EXPECT_EQ(c.choice.substeps, 4);     // level 4 at 1 ms: 0.11 + 0.15 > 0.2
+  EXPECT_NEAR(c.choice.error_mm, 0.027 + 0.15, 1e-9);
+  EXPECT_NEAR(c.choice.dynamic_error_mm, 0.027, 1e-12);
+  EXPECT_NEAR(c.choice.shape_error_mm, 0.15, 1e-12);
+}
+
 TEST_F(AutoBodyYaml, BuildsTheChosenBodyAndSaysWhy) {
+  // radius 0.25 m: level 2 is 4.4 mm off the sphere, level 4 0.28 mm; 0.35 mm needs level 4 at
+  // 0.25 ms (0.027 + 0.28), 4 sub-steps of the 60 us scalar entry
   const AutoBody b = load(
-      "body: {model: auto, integrator: auto, level: auto, tolerance_mm: 0.05, budget_us: 1000,\n"
+      "body: {model: auto, integrator: auto, level: auto, tolerance_mm: 0.35, budget_us: 1000,\n"
       "       model_table: table.csv, centre_m: [0, 0, 0]}\n");
   ASSERT_TRUE(b.choice.has_value());
-  EXPECT_EQ(b.model.params.level, 2);
+  EXPECT_EQ(b.model.params.level, 4);
   EXPECT_EQ(b.model.params.model, ModelKind::kMassSpring);
   EXPECT_EQ(b.model.params.integrator, IntegratorKind::kSymplecticEuler);
+  EXPECT_EQ(b.model.params.kernel, KernelKind::kScalar);
   EXPECT_EQ(b.model.params.min_substeps, 4);
   EXPECT_EQ(b.model.substeps_for(1e-3), 4);
-  EXPECT_EQ(b.model.node_count, 162);
+  EXPECT_EQ(b.model.node_count, 2562);
   EXPECT_EQ(b.stability_substeps, 1);
   EXPECT_TRUE(b.differs_from_table.empty());
+  EXPECT_NEAR(b.choice->shape_error_mm, 1e3 * icosphere_shape_error_m(4, 0.25), 1e-12);
   const std::string s = b.summary();
   EXPECT_LT(s.size(), 128u);
-  EXPECT_NE(s.find("mass_spring symplectic_euler scalar level 2, 4 x 0.25 ms"), std::string::npos)
+  EXPECT_NE(s.find("mass_spring symplectic_euler scalar level 4, 4 x 0.25 ms"), std::string::npos)
       << s;
-  EXPECT_NE(s.find("predicted 20.0 us"), std::string::npos) << s;
-  EXPECT_NE(s.find("error 0.03 mm"), std::string::npos) << s;
-  EXPECT_NE(b.report().find("tolerance 0.05 mm"), std::string::npos) << b.report();
+  EXPECT_NE(s.find("predicted 240.0 us"), std::string::npos) << s;
+  EXPECT_NE(b.report().find("tolerance 0.35 mm"), std::string::npos) << b.report();
+  EXPECT_NE(b.report().find("shape"), std::string::npos) << b.report();
 }
 
 TEST_F(AutoBodyYaml, FixedFieldsStayAndOtherMaterialIsFlagged) {
+  // a larger tolerance: level 4 at 1 ms (0.11 + 0.28 mm), the scalar kernel as fixed
   const AutoBody b = load(
-      "body: {model: mass_spring, level: auto, kernel: scalar, tolerance_mm: 0.2,\n"
+      "body: {model: mass_spring, level: auto, kernel: scalar, tolerance_mm: 0.45,\n"
       "       budget_us: 1000, model_table: table.csv, edge_stiffness_n_per_m: 200}\n");
   ASSERT_TRUE(b.choice.has_value());
   EXPECT_EQ(b.model.params.kernel, KernelKind::kScalar);
-  EXPECT_EQ(b.model.params.level, 2);
+  EXPECT_EQ(b.model.params.level, 4);
+  EXPECT_EQ(b.model.params.min_substeps, 1);
   EXPECT_DOUBLE_EQ(b.model.params.edge_stiffness_n_per_m, 200.0);
   ASSERT_EQ(b.differs_from_table.size(), 1u);
   EXPECT_EQ(b.differs_from_table[0], "edge_stiffness_n_per_m");
@@ -244,17 +278,17 @@ TEST_F(AutoBodyYaml, BadValuesAreRefusedNamingFieldValueAndRange) {
   e = error_of(head + "tolerance_mm: -1, budget_us: 100}\n");
   EXPECT_NE(e.find("body.tolerance_mm"), std::string::npos) << e;
   // budget below every entry within tolerance: names the cheapest one and its cost
-  e = error_of(head + "tolerance_mm: 0.2, budget_us: 1}\n");
+  e = error_of(head + "tolerance_mm: 0.45, budget_us: 1}\n");
   EXPECT_NE(e.find("body.budget_us"), std::string::npos) << e;
   EXPECT_NE(e.find("value 1 "), std::string::npos) << e;
-  EXPECT_NE(e.find("mass_spring symplectic_euler simd level 2, 1 x 1 ms: 2.5 us"),
+  EXPECT_NE(e.find("mass_spring symplectic_euler simd level 4, 1 x 1 ms: 25.0 us"),
             std::string::npos)
       << e;
-  EXPECT_NE(e.find("allowed range [2.5, 1e+06]"), std::string::npos) << e;
-  // a tolerance no entry meets: names the smallest error
+  EXPECT_NE(e.find("allowed range [25.0, 1e+06]"), std::string::npos) << e;
+  // a tolerance no entry meets: names the smallest error (level 4 at 0.25 ms, shape included)
   e = error_of(head + "tolerance_mm: 0.001, budget_us: 1000}\n");
   EXPECT_NE(e.find("body.tolerance_mm"), std::string::npos) << e;
-  EXPECT_NE(e.find("0.027 mm"), std::string::npos) << e;
+  EXPECT_NE(e.find("level 4, 4 x 0.25 ms"), std::string::npos) << e;
   // missing fields, fields without auto, auto with a mesh file, unknown values
   e = error_of(head + "budget_us: 100}\n");
   EXPECT_NE(e.find("body.tolerance_mm': is required"), std::string::npos) << e;
@@ -275,7 +309,7 @@ TEST_F(AutoBodyYaml, StifferMaterialCountsItsStabilitySubSteps) {
   // selection moves on to an entry it can afford, or refuses naming the real cost
   const AutoBody b = load(
       "body: {model: mass_spring, integrator: symplectic_euler, level: auto, kernel: scalar,\n"
-      "       tolerance_mm: 0.2, budget_us: 1000, model_table: table.csv,\n"
+      "       tolerance_mm: 0.45, budget_us: 1000, model_table: table.csv,\n"
       "       edge_stiffness_n_per_m: 1500, radial_stiffness_n_per_m3: 1.5e6,\n"
       "       youngs_modulus_pa: 60000}\n");
   ASSERT_TRUE(b.choice.has_value());
