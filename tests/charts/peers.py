@@ -62,6 +62,7 @@ def main(path, trace_path, out):
     axes[1].set_ylabel("released node: radial offset from rest [mm]")
     axes[1].set_title(f"Node pulled 5 mm out, released (level {lv}, dt {dt * 1e3:g} ms)")
     axes[1].set_xscale("symlog", linthresh=0.02)
+    axes[1].set_xlim(0, max(max(d["t"]) for d in trace.values()))
     axes[1].legend(fontsize=8)
     axes[1].grid(alpha=0.3)
     axes[2].axhline(0, color="k", linewidth=0.6)
