@@ -70,7 +70,8 @@ bool as_candidate(const TableEntry& e, const ModelRequest& r, ModelChoice& out) 
   out.cost_us_median = n * e.step_us_median;
   out.cost_us_p99 = n * e.step_us_p99;
   out.dynamic_error_mm = e.error_m * 1e3;
-  out.shape_error_mm = e.level >= 0 && e.level <= 6 ? r.shape_error_mm[static_cast<std::size_t>(e.level)] : 0.0;
+  out.shape_error_mm =
+      e.level >= 0 && e.level <= 6 ? r.shape_error_mm[static_cast<std::size_t>(e.level)] : 0.0;
   out.error_mm = out.dynamic_error_mm + out.shape_error_mm;
   return true;
 }
@@ -222,8 +223,9 @@ ModelTable parse_model_table(const std::string& csv_text, const std::string& fil
     e.error_m = parse_number(cells[static_cast<std::size_t>(c_err)], where);
     if (!(e.dt_s > 0.0) || !std::isfinite(e.dt_s) || !(e.step_us_median >= 0.0) ||
         !std::isfinite(e.step_us_median) || std::isnan(e.error_m) || e.error_m < 0.0) {
-      throw ConfigError(where + ": dt_s must be > 0, step_us_median finite and >= 0, error >= 0 "
-                                "or inf");
+      throw ConfigError(where +
+                        ": dt_s must be > 0, step_us_median finite and >= 0, error >= 0 "
+                        "or inf");
     }
     t.entries.push_back(e);
   }
@@ -232,7 +234,8 @@ ModelTable parse_model_table(const std::string& csv_text, const std::string& fil
 }
 
 double icosphere_shape_error_m(int level, double radius_m) {
-  const teleop::mesh::TriMesh m = teleop::mesh::make_icosphere(level, radius_m, Eigen::Vector3d::Zero());
+  const teleop::mesh::TriMesh m =
+      teleop::mesh::make_icosphere(level, radius_m, Eigen::Vector3d::Zero());
   double closest = radius_m;
   for (Eigen::Index t = 0; t < m.triangles.cols(); ++t) {
     const Eigen::Vector3d a = m.vertices.col(m.triangles(0, t));
@@ -319,8 +322,7 @@ std::string AutoBody::report() const {
     << budget_us << " us, table " << table_file << ")\n";
   o << "  predicted cost " << fmt1(choice->cost_us_median * stability_substeps)
     << " us per world step (median; p99 " << fmt1(choice->cost_us_p99 * stability_substeps)
-    << " us), error " << fmt4(choice->error_mm)
-    << " mm = " << fmt4(choice->dynamic_error_mm)
+    << " us), error " << fmt4(choice->error_mm) << " mm = " << fmt4(choice->dynamic_error_mm)
     << " dynamic (RMS displacement of a released bump against the model's level-6 reference, "
        "teleop_bench deformable) + "
     << fmt4(choice->shape_error_mm) << " shape (flat triangles against the sphere)";
@@ -382,7 +384,7 @@ AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
   }
   if (!is_auto(node, "kernel") && node.has("kernel")) {
     req.kernel = node.choice("kernel", {"auto", "scalar", "simd"}) == "simd" ? KernelKind::kSimd
-                                                                              : KernelKind::kScalar;
+                                                                             : KernelKind::kScalar;
   }  // not given: chosen too (an automatic selection may take the simd kernel)
   const double radius_m = node.number_or("radius_m", DeformableParams{}.radius_m, 1e-3, 100.0);
   // the shape error scales with the radius: computed once per level for the unit sphere
@@ -414,25 +416,25 @@ AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
       case SelectOutcome::kChosen:
         break;
       case SelectOutcome::kNoEntry:
-        node.fail(is_auto(node, "level") ? "level" : is_auto(node, "model") ? "model"
-                                                   : is_auto(node, "integrator") ? "integrator"
-                                                                                 : "kernel",
+        node.fail(is_auto(node, "level")        ? "level"
+                  : is_auto(node, "model")      ? "model"
+                  : is_auto(node, "integrator") ? "integrator"
+                                                : "kernel",
                   "auto: no entry of " + table_file +
                       " matches the fixed fields at a step dividing the world step " + dt_text +
                       " (or every matching entry blew up)");
       case SelectOutcome::kTolerance:
-        node.fail("tolerance_mm",
-                  "value " + fmtg(req.tolerance_mm) +
-                      " is below the smallest error in the table for this body (" +
-                      fmt4(r.most_accurate.error_mm) + " mm: " + r.most_accurate.name() +
-                      "); allowed range [" + fmt4(r.most_accurate.error_mm) + ", " +
-                      fmtg(kToleranceMaxMm) + "]");
+        node.fail("tolerance_mm", "value " + fmtg(req.tolerance_mm) +
+                                      " is below the smallest error in the table for this body (" +
+                                      fmt4(r.most_accurate.error_mm) +
+                                      " mm: " + r.most_accurate.name() + "); allowed range [" +
+                                      fmt4(r.most_accurate.error_mm) + ", " +
+                                      fmtg(kToleranceMaxMm) + "]");
       case SelectOutcome::kBudget:
         node.fail("budget_us", "value " + fmtg(req.budget_us) +
                                    " is below the cheapest entry within tolerance " +
-                                   fmtg(req.tolerance_mm) + " mm (" +
-                                   r.cheapest_accurate.name() + ": " +
-                                   fmt1(r.cheapest_accurate.cost_us_median) +
+                                   fmtg(req.tolerance_mm) + " mm (" + r.cheapest_accurate.name() +
+                                   ": " + fmt1(r.cheapest_accurate.cost_us_median) +
                                    " us per world step of " + dt_text + "); allowed range [" +
                                    fmt1(r.cheapest_accurate.cost_us_median) + ", " +
                                    fmtg(kBudgetMaxUs) + "]");
@@ -447,7 +449,8 @@ AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
     y["level"] = c.entry.level;
     y["kernel"] = to_string(c.entry.kernel);
     if (c.substeps > 1) y["min_substeps"] = c.substeps;
-    const DeformableParams params = load_deformable_params(config::Node(y, node.file(), node.path()));
+    const DeformableParams params =
+        load_deformable_params(config::Node(y, node.file(), node.path()));
     DeformableModel m = make_model(make_mesh_for(params), params, planes);
     const int stab = m.substeps_needed(c.entry.dt_s);
     if (stab > 1 && c.cost_us_median * stab > req.budget_us) {
@@ -464,8 +467,8 @@ AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
       if (!table.entries.empty()) continue;
       node.fail("budget_us", "value " + fmtg(req.budget_us) +
                                  " is below what this body costs with the sub-steps its "
-                                 "stiffness needs (" + c.name() + ": " +
-                                 fmt1(c.cost_us_median * stab) + " us)");
+                                 "stiffness needs (" +
+                                 c.name() + ": " + fmt1(c.cost_us_median * stab) + " us)");
     }
     out.model = std::move(m);
     out.choice = c;
@@ -473,7 +476,8 @@ AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
     out.differs_from_table = differences_from_table(params);
     return out;
   }
-  node.fail("budget_us", "no entry of " + table_file + " fits the budget with this body's stiffness");
+  node.fail("budget_us",
+            "no entry of " + table_file + " fits the budget with this body's stiffness");
 }
 
 }  // namespace teleop::sim::deformable

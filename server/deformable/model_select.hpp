@@ -34,10 +34,10 @@ struct TableEntry {
   IntegratorKind integrator = IntegratorKind::kSymplecticEuler;
   KernelKind kernel = KernelKind::kScalar;
   int level = 4;
-  double dt_s = 1e-3;            ///< the step the entry was measured at [s]
-  double step_us_median = 0.0;   ///< wall time of one step, median [us]
-  double step_us_p99 = 0.0;      ///< [us]
-  double error_m = 0.0;          ///< see the file comment; +inf when the run blew up [m]
+  double dt_s = 1e-3;           ///< the step the entry was measured at [s]
+  double step_us_median = 0.0;  ///< wall time of one step, median [us]
+  double step_us_p99 = 0.0;     ///< [us]
+  double error_m = 0.0;         ///< see the file comment; +inf when the run blew up [m]
 };
 
 struct ModelTable {
@@ -59,9 +59,9 @@ struct ModelRequest {
   std::optional<IntegratorKind> integrator;
   std::optional<int> level;
   std::optional<KernelKind> kernel;
-  double tolerance_mm = 0.0;  ///< largest accepted error [mm], > 0
-  double budget_us = 0.0;     ///< largest accepted cost per world step (median) [us], > 0
-  double physics_dt_s = 1e-3; ///< the world's step [s]
+  double tolerance_mm = 0.0;   ///< largest accepted error [mm], > 0
+  double budget_us = 0.0;      ///< largest accepted cost per world step (median) [us], > 0
+  double physics_dt_s = 1e-3;  ///< the world's step [s]
   /// Shape error of each icosphere level 0-6 for this body [mm] (icosphere_shape_error_m); zero:
   /// the table's dynamic error alone.
   std::array<double, 7> shape_error_mm{};
@@ -74,10 +74,10 @@ double icosphere_shape_error_m(int level, double radius_m);
 /// A table entry as it would run in the world.
 struct ModelChoice {
   TableEntry entry;
-  int substeps = 1;            ///< entry steps per world step (params.min_substeps)
-  double cost_us_median = 0.0; ///< substeps x entry median [us]
-  double cost_us_p99 = 0.0;    ///< substeps x entry p99 [us] (an upper guide, not a percentile)
-  double error_mm = 0.0;       ///< dynamic_error_mm + shape_error_mm [mm]
+  int substeps = 1;               ///< entry steps per world step (params.min_substeps)
+  double cost_us_median = 0.0;    ///< substeps x entry median [us]
+  double cost_us_p99 = 0.0;       ///< substeps x entry p99 [us] (an upper guide, not a percentile)
+  double error_mm = 0.0;          ///< dynamic_error_mm + shape_error_mm [mm]
   double dynamic_error_mm = 0.0;  ///< the entry's error column [mm]
   double shape_error_mm = 0.0;    ///< the level's shape error for this body [mm]
   /// "mass_spring symplectic_euler simd level 4, 1 x 1 ms": the combination, short.

@@ -184,8 +184,8 @@ int bench_growth(const teleop::CommandArgs& a) {
     if (series[i].kind == "collision" && series[i].name != "collision tree_refit") continue;
     for (int l = min_level; l <= std::min(top, series[i].max_level); ++l) jobs.push_back({i, l});
   }
-  std::vector<std::vector<std::vector<double>>> samples(
-      series.size(), std::vector<std::vector<double>>(7));
+  std::vector<std::vector<std::vector<double>>> samples(series.size(),
+                                                        std::vector<std::vector<double>>(7));
   for (int r = 0; r < rounds; ++r) {
     for (std::size_t j = 0; j < jobs.size(); ++j) {
       const Job& job = jobs[(j + static_cast<std::size_t>(r) * 3) % jobs.size()];
@@ -213,7 +213,8 @@ int bench_growth(const teleop::CommandArgs& a) {
     for (int l = min_level; l <= std::min(top, s.max_level); ++l) {
       const auto& us = samples[i][static_cast<std::size_t>(l)];
       if (us.empty()) continue;
-      const double n = s.kind == "deformable" ? 10.0 * std::pow(4.0, l) + 2.0 : 20.0 * std::pow(4.0, l);
+      const double n =
+          s.kind == "deformable" ? 10.0 * std::pow(4.0, l) + 2.0 : 20.0 * std::pow(4.0, l);
       const double med = teleop::percentile(us, 50.0), p99 = teleop::percentile(us, 99.0);
       ns.push_back(n);
       meds.push_back(med);
@@ -225,18 +226,19 @@ int bench_growth(const teleop::CommandArgs& a) {
     }
     if (ns.size() >= 2) {
       const auto f = fit_power(ns, meds);
-      fit_csv.row_text({s.name, s.kind, teleop::format_number(f[0]), teleop::format_number(f[1]),
-                        teleop::format_number(f[2]),
-                        std::to_string(min_level) + "-" + std::to_string(std::min(top, s.max_level))});
+      fit_csv.row_text(
+          {s.name, s.kind, teleop::format_number(f[0]), teleop::format_number(f[1]),
+           teleop::format_number(f[2]),
+           std::to_string(min_level) + "-" + std::to_string(std::min(top, s.max_level))});
       std::printf("%-32s cost ~ n^%.3f  (r^2 %.4f)\n", s.name.c_str(), f[0], f[2]);
     }
   }
   csv.flush();
   fit_csv.flush();
   if (!a.no_chart) {
-    teleop::run_chart_script("growth.py", {(a.out_dir / "growth.csv").string(),
-                                           (a.out_dir / "growth_fit.csv").string(),
-                                           (a.out_dir / "growth.png").string()});
+    teleop::run_chart_script(
+        "growth.py", {(a.out_dir / "growth.csv").string(), (a.out_dir / "growth_fit.csv").string(),
+                      (a.out_dir / "growth.png").string()});
   }
   return 0;
 }

@@ -134,7 +134,7 @@ Trace run_ours(int level, double dt, double t_end, double sample_dt, KernelKind 
 }
 
 #ifdef TELEOP_HAVE_BULLET
-double g_bullet_pressure = 2.0;  // kPR [J]: p = kPR / V on every node (--bullet-kpr)
+double g_bullet_pressure = 2.0;          // kPR [J]: p = kPR / V on every node (--bullet-kpr)
 constexpr double kOurDrag_per_s = 10.0;  // our mass_damping_per_s default: Bullet's kDP = it x dt
 
 /// Bullet's soft body on the same mesh, mass and step.
@@ -308,9 +308,9 @@ int bench_peers(const teleop::CommandArgs& a) {
   csv.flush();
   trace.flush();
   if (!a.no_chart) {
-    teleop::run_chart_script("peers.py", {(a.out_dir / "peers.csv").string(),
-                                          (a.out_dir / "peers_trace.csv").string(),
-                                          (a.out_dir / "peers.png").string()});
+    teleop::run_chart_script(
+        "peers.py", {(a.out_dir / "peers.csv").string(), (a.out_dir / "peers_trace.csv").string(),
+                     (a.out_dir / "peers.png").string()});
   }
   return 0;
 }

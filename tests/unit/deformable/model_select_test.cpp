@@ -257,8 +257,8 @@ TEST_F(AutoBodyYaml, WithoutAutoItIsTheExplicitBody) {
   const AutoBody b = load("body: {model: mass_spring, level: 2, centre_m: [0, 0, 0]}\n");
   EXPECT_FALSE(b.choice.has_value());
   EXPECT_TRUE(b.summary().empty());
-  DeformableParams p = testing::small_params(ModelKind::kMassSpring,
-                                             IntegratorKind::kSymplecticEuler, 2);
+  DeformableParams p =
+      testing::small_params(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, 2);
   p.gravity_mps2 = DeformableParams{}.gravity_mps2;
   p.sleep_time_s = DeformableParams{}.sleep_time_s;
   const DeformableModel m = make_model(make_mesh_for(p), p);
@@ -296,8 +296,9 @@ TEST_F(AutoBodyYaml, BadValuesAreRefusedNamingFieldValueAndRange) {
   EXPECT_NE(e.find("body.tolerance_mm': is used only when"), std::string::npos) << e;
   e = error_of(head + "tolerance_mm: 0.2, budget_us: 100, mesh_file: x.obj}\n");
   EXPECT_NE(e.find("body.mesh_file"), std::string::npos) << e;
-  e = error_of("body: {model: auto, integrator: leapfrog, tolerance_mm: 1, budget_us: 100,"
-               " model_table: table.csv}\n");
+  e = error_of(
+      "body: {model: auto, integrator: leapfrog, tolerance_mm: 1, budget_us: 100,"
+      " model_table: table.csv}\n");
   EXPECT_NE(e.find("body.integrator"), std::string::npos) << e;
   e = error_of("body: {level: auto, tolerance_mm: 1, budget_us: 100, model_table: nope.csv}\n");
   EXPECT_NE(e.find("nope.csv"), std::string::npos) << e;
@@ -352,8 +353,8 @@ TEST(ModelTable, TheAutoSceneLoadsThroughTheWorldLoader) {
 // ---- the accuracy sub-steps the selection relies on ----
 
 TEST(MinSubsteps, SplitsTheStepExactlyLikeShorterSingleSteps) {
-  DeformableParams p = testing::small_params(ModelKind::kMassSpring,
-                                             IntegratorKind::kSymplecticEuler, 2);
+  DeformableParams p =
+      testing::small_params(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, 2);
   p.min_substeps = 4;
   const DeformableModel m4 = make_model(make_mesh_for(p), p);
   p.min_substeps = 1;
