@@ -4,6 +4,8 @@
 #        TELEOP_SETUP_VIEWER=0 deploy/setup.sh   (skip the OpenGL viewer packages)
 #        TELEOP_SETUP_VENDORS=0 deploy/setup.sh  (skip the optional other-vendor DDS used only by
 #                                                 tests/integration/other_vendor_test.cpp)
+#        TELEOP_SETUP_PEERS=0 deploy/setup.sh    (skip the optional peer engines used only by
+#                                                 `teleop_bench peers`: Bullet, MuJoCo)
 set -euo pipefail
 
 packages=(
@@ -25,6 +27,12 @@ fi
 # the other-vendor reader of the interoperability test; without it that test skips
 if [ "${TELEOP_SETUP_VENDORS:-1}" = "1" ]; then
   packages+=(cyclonedds-dev cyclonedds-tools)
+fi
+
+# optional, benchmarks only: Bullet's soft body (and MuJoCo 2.2.2, which has no mesh-based soft
+# body to compare: docs/results.md) for `teleop_bench peers`; without them that command skips
+if [ "${TELEOP_SETUP_PEERS:-1}" = "1" ]; then
+  packages+=(libbullet-dev libmujoco-dev)
 fi
 
 sudo_cmd=()

@@ -131,6 +131,10 @@ struct DeformableParams {
   /// Automatic step: at most this many equal sub-steps per step() call (explicit and symplectic
   /// Euler). Beyond it the body runs at a step longer than its stable step and an event says so.
   int max_substeps = 64;
+  /// Accuracy sub-steps: at least this many equal sub-steps per step() call, whatever the stable
+  /// step (the automatic model selection sets it when the table's entry has a shorter step than
+  /// the world's, docs/deformable.md "Automatic model"). 1: only what stability needs.
+  int min_substeps = 1;
 };
 
 /// Reads and validates the `deformable:` YAML mapping. Unknown keys, wrong types and values out
@@ -222,7 +226,7 @@ struct DeformableModel {
   double stable_step_s = 0.0;
   /// Sub-steps step() takes for dt: 1 when dt <= stable_step_s, else ceil(dt / stable_step_s),
   /// at most params.max_substeps; 1 when stable_step_s is 0 (explicit Euler without damping is
-  /// unstable at any step: step() warns once).
+  /// unstable at any step: step() warns once); never fewer than params.min_substeps.
   int substeps_for(double dt_s) const;
   /// Like substeps_for without the params.max_substeps cap (what stability would need).
   int substeps_needed(double dt_s) const;

@@ -105,6 +105,7 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
   check_range("cg_max_iterations", params.cg_max_iterations, 1, 1e5);
   check_range("max_speed_mps", params.max_speed_mps, 1e-6, 1e9);
   check_range("max_substeps", params.max_substeps, 1, 1e5);
+  check_range("min_substeps", params.min_substeps, 1, 1e5);
   if (!params.gravity_mps2.allFinite()) bad("gravity_mps2 must be finite");
   if (params.kernel == KernelKind::kSimd &&
       (params.model != ModelKind::kMassSpring ||

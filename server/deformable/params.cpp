@@ -91,7 +91,8 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
                             "sleep_speed_mps",
                             "sleep_time_s",
                             "max_speed_mps",
-                            "max_substeps"});
+                            "max_substeps",
+                            "min_substeps"});
   DeformableParams p;
   p.model = parse_model_kind(node.choice_or(
       "model", "mass_spring", {"mass_spring", "navier_linear", "navier_corotational"}));
@@ -148,6 +149,7 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   p.sleep_time_s = node.number_or("sleep_time_s", p.sleep_time_s, 0.0, 1e3);
   p.max_speed_mps = node.number_or("max_speed_mps", p.max_speed_mps, 1e-3, 1e6);
   p.max_substeps = static_cast<int>(node.integer_or("max_substeps", p.max_substeps, 1, 10000));
+  p.min_substeps = static_cast<int>(node.integer_or("min_substeps", p.min_substeps, 1, 10000));
   if (p.model == ModelKind::kMassSpring && p.edge_stiffness_n_per_m <= 0.0 &&
       p.radial_stiffness_n_per_m3 <= 0.0) {
     node.fail("edge_stiffness_n_per_m",

@@ -212,11 +212,19 @@ void update_stable_step(DeformableModel& m) {
   m.stable_step_s = est.stable_step_s;
 }
 
+namespace {
+int stability_substeps(const DeformableModel& m, double dt_s) {
+  if (!(dt_s > m.stable_step_s)) return 1;  // also: implicit Euler (stable step = inf), bad dt
+  if (!(m.stable_step_s > 0.0)) return 1;   // unstable at any step: sub-steps would not help
+  const double n = std::ceil(dt_s / m.stable_step_s);
+  return n >= static_cast<double>(m.params.max_substeps) ? m.params.max_substeps
+                                                         : static_cast<int>(n);
+}
+}  // namespace
+
 int DeformableModel::substeps_for(double dt_s) const {
-  if (!(dt_s > stable_step_s)) return 1;  // also: implicit Euler (stable step = inf), bad dt
-  if (!(stable_step_s > 0.0)) return 1;   // unstable at any step: sub-steps would not help
-  const double n = std::ceil(dt_s / stable_step_s);
-  return n >= static_cast<double>(params.max_substeps) ? params.max_substeps : static_cast<int>(n);
+  const int n = stability_substeps(*this, dt_s);
+  return params.min_substeps > n && dt_s > 0.0 ? params.min_substeps : n;
 }
 
 int DeformableModel::substeps_needed(double dt_s) const {

@@ -947,7 +947,12 @@ StepStatus step_substeps(const DeformableModel& m, DeformableState& s, double dt
   if (!s.substeps_announced && events != nullptr && std::isfinite(dt)) {
     const int needed = m.substeps_needed(dt);
     char msg[128];
-    if (needed > n) {
+    if (needed < n) {  // params.min_substeps: accuracy, not stability
+      std::snprintf(msg, sizeof(msg),
+                    "deformable: %d sub-steps of %.3g ms (min_substeps, for accuracy; stable step "
+                    "%.3g ms)",
+                    n, h * 1e3, m.stable_step_s * 1e3);
+    } else if (needed > n) {
       std::snprintf(msg, sizeof(msg),
                     "deformable: dt %.3g ms needs %d sub-steps, capped at %d (max_substeps): "
                     "may blow up",

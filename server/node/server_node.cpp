@@ -153,6 +153,15 @@ struct ServerNode::Impl {
                   options.rate_hz, options.dds.domain, options.dds.profile.c_str());
     publish_event(start);
     if (!options.quiet) std::cerr << "teleop_server: " << start.message << "\n";
+    for (const sim::DeformableBodyModel& b : model.bodies) {  // the automatic model's choice
+      if (b.auto_summary.empty()) continue;
+      sim::SimEvent choice{};
+      std::snprintf(choice.message, sizeof(choice.message), "deformable %d %s", b.object_id,
+                    b.auto_summary.c_str());
+      choice.value = static_cast<double>(b.object_id);
+      publish_event(choice);
+      if (!options.quiet) std::cerr << "teleop_server: " << b.auto_report << "\n";
+    }
   }
 
   /// Rejected commands: one event per second at most, with the counts so far.

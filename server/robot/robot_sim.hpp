@@ -6,7 +6,7 @@
 // ODE keeps its own world, so the model/state split holds as far as ODE allows: RobotModel is
 // immutable; RobotSim owns the ODE world (bodies, hinges, friction motors, contact joints) and
 // exposes the mutable RobotState. step() does not allocate after warm-up (see docs/robot.md and
-// tests/unit/robot/robot_sim_test.cpp, which proves it with NoAllocScope).
+// tests/unit/server/robot/robot_sim_test.cpp, which proves it with NoAllocScope).
 //
 // Joint actuation per step, all inside ODE's constraint solver (implicit, stable for any gain):
 //  - the hinge motor row is the joint PD plus viscous friction:

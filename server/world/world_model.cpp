@@ -141,8 +141,12 @@ WorldModel parse_world_model(const config::Node& root) {
       DeformableBodyModel b;
       b.object_id = static_cast<int>(n.integer_or("id", next_id, 10, 99));
       next_id = b.object_id + 1;
-      const deformable::DeformableParams params = deformable::load_deformable_params(n.at("body"));
-      b.body = deformable::make_model(deformable::make_mesh_for(params), params, s.planes);
+      // `auto` fields pick the model from the measured table (server/deformable/model_select)
+      deformable::AutoBody ab =
+          deformable::load_deformable_body(n.at("body"), 1.0 / s.physics_rate_hz, s.planes);
+      b.body = std::move(ab.model);
+      b.auto_summary = ab.summary();
+      b.auto_report = ab.report();
       b.contact = load_tip_contact_params(n.child("contact"));
       s.bodies.push_back(std::move(b));
     }

@@ -19,6 +19,7 @@
 #include "common/sim/tool.hpp"
 #include "server/collision/tip_mesh_contact.hpp"
 #include "server/deformable/deformable.hpp"
+#include "server/deformable/model_select.hpp"
 #include "server/robot/robot_model.hpp"
 
 namespace teleop::sim {
@@ -31,6 +32,9 @@ struct DeformableBodyModel {
   int object_id = 10;  ///< SceneObject id (10-99)
   deformable::DeformableModel body;
   collision::TipContactParams contact;
+  /// Automatic model (`auto` in the scene): the choice, predicted cost and error in one line
+  /// (published as an info event) and the full report printed at load; empty otherwise.
+  std::string auto_summary, auto_report;
 };
 
 struct WorldModel {

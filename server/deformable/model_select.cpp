@@ -1,0 +1,483 @@
+// Automatic model selection from the measured speed-accuracy table (model_select.hpp).
+#include "server/deformable/model_select.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+namespace teleop::sim::deformable {
+
+namespace {
+
+using config::ConfigError;
+
+constexpr double kToleranceMaxMm = 1000.0;
+constexpr double kBudgetMaxUs = 1e6;
+
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cell;
+  std::istringstream in(line);
+  while (std::getline(in, cell, ',')) {
+    while (!cell.empty() && (cell.back() == '\r' || cell.back() == ' ')) cell.pop_back();
+    while (!cell.empty() && cell.front() == ' ') cell.erase(cell.begin());
+    out.push_back(cell);
+  }
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+double parse_number(const std::string& text, const std::string& where) {
+  if (text == "inf" || text == "+inf") return std::numeric_limits<double>::infinity();
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used == text.size()) return v;
+  } catch (const std::exception&) {
+  }
+  throw ConfigError(where + ": '" + text + "' is not a number");
+}
+
+/// v with `digits` significant digits (%g), or with `digits` decimals when fixed.
+std::string fmt(double v, int digits, bool fixed = false) {
+  char buf[64];
+  if (fixed) {
+    std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
+  } else {
+    std::snprintf(buf, sizeof(buf), "%.*g", digits, v);
+  }
+  return buf;
+}
+std::string fmt4(double v) { return fmt(v, 4); }
+std::string fmtg(double v) { return fmt(v, 6); }
+std::string fmt1(double v) { return fmt(v, 1, true); }
+
+std::string ms_text(double s) { return fmt4(s * 1e3) + " ms"; }
+
+/// The entry as a candidate for a world step of dt_s; false when it cannot run at that step.
+bool as_candidate(const TableEntry& e, const ModelRequest& r, ModelChoice& out) {
+  const double dt_s = r.physics_dt_s;
+  if (!std::isfinite(e.error_m) || !(e.dt_s > 0.0) || !(e.step_us_median >= 0.0)) return false;
+  const double ratio = dt_s / e.dt_s;
+  const double n = std::round(ratio);
+  if (n < 1.0 || n > 10000.0 || std::fabs(ratio - n) > 1e-6 * n) return false;
+  out.entry = e;
+  out.substeps = static_cast<int>(n);
+  out.cost_us_median = n * e.step_us_median;
+  out.cost_us_p99 = n * e.step_us_p99;
+  out.dynamic_error_mm = e.error_m * 1e3;
+  out.shape_error_mm =
+      e.level >= 0 && e.level <= 6 ? r.shape_error_mm[static_cast<std::size_t>(e.level)] : 0.0;
+  out.error_mm = out.dynamic_error_mm + out.shape_error_mm;
+  return true;
+}
+
+bool matches(const TableEntry& e, const ModelRequest& r) {
+  return (!r.model || *r.model == e.model) && (!r.integrator || *r.integrator == e.integrator) &&
+         (!r.level || *r.level == e.level) && (!r.kernel || *r.kernel == e.kernel);
+}
+
+/// Cheaper first; on equal cost the smaller error.
+bool cheaper(const ModelChoice& a, const ModelChoice& b) {
+  if (a.cost_us_median != b.cost_us_median) return a.cost_us_median < b.cost_us_median;
+  return a.error_mm < b.error_mm;
+}
+
+/// The material and geometry the table was measured with (tests/bench/deformable_bench.cpp):
+/// the default parameters, zero gravity, no radial springs for the Navier models.
+std::vector<std::string> differences_from_table(const DeformableParams& p) {
+  const DeformableParams d;
+  std::vector<std::string> out;
+  auto cmp = [&](const char* name, double a, double b) {
+    if (std::fabs(a - b) > 1e-12 * std::max(std::fabs(a), std::fabs(b))) out.emplace_back(name);
+  };
+  if (!p.mesh_file.empty()) out.emplace_back("mesh_file");
+  cmp("radius_m", p.radius_m, d.radius_m);
+  if (p.density_kg_per_m3 > 0.0) {
+    out.emplace_back("density_kg_per_m3");
+  } else {
+    cmp("mass_kg", p.mass_kg, d.mass_kg);
+  }
+  if (p.model == ModelKind::kMassSpring) {
+    cmp("centre_mass_fraction", p.centre_mass_fraction, d.centre_mass_fraction);
+    cmp("edge_stiffness_n_per_m", p.edge_stiffness_n_per_m, d.edge_stiffness_n_per_m);
+    cmp("radial_stiffness_n_per_m3", p.radial_stiffness_n_per_m3, d.radial_stiffness_n_per_m3);
+    cmp("radial_damping_s", p.radial_damping_s, d.radial_damping_s);
+  } else {
+    cmp("youngs_modulus_pa", p.youngs_modulus_pa, d.youngs_modulus_pa);
+    cmp("poisson_ratio", p.poisson_ratio, d.poisson_ratio);
+    cmp("radial_stiffness_n_per_m3", p.radial_stiffness_n_per_m3, 0.0);
+  }
+  cmp("stiffness_damping_s", p.stiffness_damping_s, d.stiffness_damping_s);
+  cmp("mass_damping_per_s", p.mass_damping_per_s, d.mass_damping_per_s);
+  if (p.integrator == IntegratorKind::kImplicitEuler) {
+    cmp("cg_max_iterations", p.cg_max_iterations, d.cg_max_iterations);
+    cmp("cg_tolerance", p.cg_tolerance, d.cg_tolerance);
+  }
+  return out;
+}
+
+/// Reads `key` as a number in (0, hi]; "value V is out of the allowed range (0, hi]".
+double positive_number(const config::Node& n, const std::string& key, double hi) {
+  if (!n.has(key)) n.fail(key, "is required with model, integrator, level or kernel: auto");
+  double v = 0.0;
+  bool ok = true;
+  try {
+    v = n.raw()[key].as<double>();
+  } catch (const YAML::Exception&) {
+    ok = false;
+  }
+  const std::string text = n.raw()[key].IsScalar() ? n.raw()[key].Scalar() : "(not a number)";
+  const std::string range = "(0, " + fmtg(hi) + "]";
+  if (!ok) n.fail(key, "value " + text + " is not a number; allowed range " + range);
+  if (!std::isfinite(v) || v <= 0.0 || v > hi) {
+    n.fail(key, "value " + text + " is out of the allowed range " + range);
+  }
+  return v;
+}
+
+bool is_auto(const config::Node& n, const std::string& key) {
+  return n.has(key) && n.raw()[key].IsScalar() && n.raw()[key].Scalar() == "auto";
+}
+
+}  // namespace
+
+std::string ModelChoice::name() const {
+  std::string s = std::string(to_string(entry.model)) + " " + to_string(entry.integrator) + " " +
+                  to_string(entry.kernel) + " level " + std::to_string(entry.level) + ", " +
+                  std::to_string(substeps) + " x " + ms_text(entry.dt_s);
+  return s;
+}
+
+ModelTable parse_model_table(const std::string& csv_text, const std::string& file) {
+  ModelTable t;
+  t.file = file;
+  std::istringstream in(csv_text);
+  std::string line;
+  std::vector<std::string> header;
+  int line_no = 0;
+  int c_model = -1, c_integ = -1, c_level = -1, c_dt = -1, c_med = -1, c_p99 = -1, c_err = -1,
+      c_kernel = -1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    const std::vector<std::string> cells = split_csv_line(line);
+    const std::string where = file + ": line " + std::to_string(line_no);
+    if (header.empty()) {
+      header = cells;
+      for (int i = 0; i < static_cast<int>(header.size()); ++i) {
+        const std::string& h = header[static_cast<std::size_t>(i)];
+        if (h == "model") c_model = i;
+        if (h == "integrator") c_integ = i;
+        if (h == "level") c_level = i;
+        if (h == "dt_s") c_dt = i;
+        if (h == "step_us_median") c_med = i;
+        if (h == "step_us_p99") c_p99 = i;
+        if (h == "error") c_err = i;
+        if (h == "kernel") c_kernel = i;
+      }
+      if (c_model < 0 || c_integ < 0 || c_level < 0 || c_dt < 0 || c_med < 0 || c_p99 < 0 ||
+          c_err < 0) {
+        throw ConfigError(where +
+                          ": the header must name the columns model, integrator, level, dt_s, "
+                          "step_us_median, step_us_p99, error (and optionally kernel), as "
+                          "`teleop_bench deformable` writes them");
+      }
+      continue;
+    }
+    if (cells.size() < header.size()) {
+      throw ConfigError(where + ": " + std::to_string(cells.size()) + " cells, the header has " +
+                        std::to_string(header.size()));
+    }
+    TableEntry e;
+    try {
+      e.model = parse_model_kind(cells[static_cast<std::size_t>(c_model)]);
+      e.integrator = parse_integrator_kind(cells[static_cast<std::size_t>(c_integ)]);
+    } catch (const ConfigError& err) {
+      throw ConfigError(where + ": " + err.what());
+    }
+    if (c_kernel >= 0) {
+      const std::string& k = cells[static_cast<std::size_t>(c_kernel)];
+      if (k == "simd") {
+        e.kernel = KernelKind::kSimd;
+      } else if (k == "scalar" || k.empty()) {
+        e.kernel = KernelKind::kScalar;
+      } else {
+        throw ConfigError(where + ": kernel '" + k + "' is not one of {scalar, simd}");
+      }
+    }
+    const double level = parse_number(cells[static_cast<std::size_t>(c_level)], where);
+    if (level < 0 || level > 6 || level != std::floor(level)) {
+      throw ConfigError(where + ": level " + cells[static_cast<std::size_t>(c_level)] +
+                        " is not an integer in [0, 6]");
+    }
+    e.level = static_cast<int>(level);
+    e.dt_s = parse_number(cells[static_cast<std::size_t>(c_dt)], where);
+    e.step_us_median = parse_number(cells[static_cast<std::size_t>(c_med)], where);
+    e.step_us_p99 = parse_number(cells[static_cast<std::size_t>(c_p99)], where);
+    e.error_m = parse_number(cells[static_cast<std::size_t>(c_err)], where);
+    if (!(e.dt_s > 0.0) || !std::isfinite(e.dt_s) || !(e.step_us_median >= 0.0) ||
+        !std::isfinite(e.step_us_median) || std::isnan(e.error_m) || e.error_m < 0.0) {
+      throw ConfigError(where +
+                        ": dt_s must be > 0, step_us_median finite and >= 0, error >= 0 "
+                        "or inf");
+    }
+    t.entries.push_back(e);
+  }
+  if (t.entries.empty()) throw ConfigError(file + ": the table has no entries");
+  return t;
+}
+
+double icosphere_shape_error_m(int level, double radius_m) {
+  const teleop::mesh::TriMesh m =
+      teleop::mesh::make_icosphere(level, radius_m, Eigen::Vector3d::Zero());
+  double closest = radius_m;
+  for (Eigen::Index t = 0; t < m.triangles.cols(); ++t) {
+    const Eigen::Vector3d a = m.vertices.col(m.triangles(0, t));
+    const Eigen::Vector3d n =
+        (m.vertices.col(m.triangles(1, t)) - a).cross(m.vertices.col(m.triangles(2, t)) - a);
+    closest = std::min(closest, std::fabs(n.normalized().dot(a)));
+  }
+  return radius_m - closest;
+}
+
+std::string default_model_table_file() {
+#ifdef TELEOP_SOURCE_DIR
+  return std::string(TELEOP_SOURCE_DIR) + "/deploy/data/deformable.csv";
+#else
+  return "deploy/data/deformable.csv";
+#endif
+}
+
+ModelTable load_model_table(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) {
+    throw ConfigError(file +
+                      ": cannot read the speed-accuracy table; measure it with `teleop_bench "
+                      "deformable --out deploy/data --no-chart` (docs/deformable.md, \"Automatic "
+                      "model\")");
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_model_table(text.str(), file);
+}
+
+SelectResult select_model(const ModelTable& table, const ModelRequest& r) {
+  SelectResult out;
+  bool have_accurate = false, have_cheapest_accurate = false, have_choice = false;
+  for (const TableEntry& e : table.entries) {
+    ModelChoice c;
+    if (!matches(e, r) || !as_candidate(e, r, c)) continue;
+    ++out.matching;
+    if (!have_accurate || c.error_mm < out.most_accurate.error_mm ||
+        (c.error_mm == out.most_accurate.error_mm && cheaper(c, out.most_accurate))) {
+      out.most_accurate = c;
+      have_accurate = true;
+    }
+    if (!(c.error_mm <= r.tolerance_mm * (1.0 + 1e-9))) continue;  // inclusive, despite rounding
+    ++out.within_tolerance;
+    if (!have_cheapest_accurate || cheaper(c, out.cheapest_accurate)) {
+      out.cheapest_accurate = c;
+      have_cheapest_accurate = true;
+    }
+    if (!(c.cost_us_median <= r.budget_us * (1.0 + 1e-9))) continue;
+    if (!have_choice || cheaper(c, out.choice)) {
+      out.choice = c;
+      have_choice = true;
+    }
+  }
+  if (have_choice) {
+    out.outcome = SelectOutcome::kChosen;
+  } else if (out.matching == 0) {
+    out.outcome = SelectOutcome::kNoEntry;
+  } else if (out.within_tolerance == 0) {
+    out.outcome = SelectOutcome::kTolerance;
+  } else {
+    out.outcome = SelectOutcome::kBudget;
+  }
+  return out;
+}
+
+std::string AutoBody::summary() const {
+  if (!choice) return "";
+  char buf[200];
+  std::snprintf(buf, sizeof(buf), "auto: %s; predicted %.1f us/step (p99 %.0f), error %.3g mm%s",
+                choice->name().c_str(), choice->cost_us_median * stability_substeps,
+                choice->cost_us_p99 * stability_substeps, choice->error_mm,
+                differs_from_table.empty() ? "" : " (other material)");
+  std::string s = buf;
+  if (s.size() > 127) s.resize(127);
+  return s;
+}
+
+std::string AutoBody::report() const {
+  if (!choice) return "";
+  std::ostringstream o;
+  o << "deformable auto: " << choice->name() << " (tolerance " << tolerance_mm << " mm, budget "
+    << budget_us << " us, table " << table_file << ")\n";
+  o << "  predicted cost " << fmt1(choice->cost_us_median * stability_substeps)
+    << " us per world step (median; p99 " << fmt1(choice->cost_us_p99 * stability_substeps)
+    << " us), error " << fmt4(choice->error_mm) << " mm = " << fmt4(choice->dynamic_error_mm)
+    << " dynamic (RMS displacement of a released bump against the model's level-6 reference, "
+       "teleop_bench deformable) + "
+    << fmt4(choice->shape_error_mm) << " shape (flat triangles against the sphere)";
+  if (stability_substeps > 1) {
+    o << "\n  this body needs " << stability_substeps
+      << " stability sub-steps per table step (cost included)";
+  }
+  if (!differs_from_table.empty()) {
+    o << "\n  warning: the table was measured with the default material; this body differs in";
+    for (const std::string& d : differs_from_table) o << " " << d;
+    o << ": the predicted error is an extrapolation";
+  }
+  return o.str();
+}
+
+AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
+                              const std::vector<Plane>& planes) {
+  AutoBody out;
+  const bool any_auto = node.is_map() && (is_auto(node, "model") || is_auto(node, "integrator") ||
+                                          is_auto(node, "level") || is_auto(node, "kernel"));
+  if (!any_auto) {
+    if (node.is_map()) {
+      for (const char* key : {"tolerance_mm", "budget_us", "model_table"}) {
+        if (node.has(key)) {
+          node.fail(key,
+                    "is used only when model, integrator, level or kernel is auto (automatic "
+                    "model selection); remove it or set one of them to auto");
+        }
+      }
+    }
+    const DeformableParams params = load_deformable_params(node);
+    out.model = make_model(make_mesh_for(params), params, planes);
+    return out;
+  }
+  if (node.has("mesh_file")) {
+    node.fail("mesh_file",
+              "cannot be combined with model, integrator, level or kernel: auto (the speed-"
+              "accuracy table is measured on icospheres); give the model explicitly");
+  }
+  ModelRequest req;
+  req.physics_dt_s = physics_dt_s;
+  req.tolerance_mm = positive_number(node, "tolerance_mm", kToleranceMaxMm);
+  req.budget_us = positive_number(node, "budget_us", kBudgetMaxUs);
+  // the fixed fields, validated as load_deformable_params would
+  if (!is_auto(node, "model") && node.has("model")) {
+    req.model = parse_model_kind(
+        node.choice("model", {"auto", "mass_spring", "navier_linear", "navier_corotational"}));
+  } else if (!node.has("model")) {
+    req.model = ModelKind::kMassSpring;
+  }
+  if (!is_auto(node, "integrator") && node.has("integrator")) {
+    req.integrator = parse_integrator_kind(node.choice(
+        "integrator", {"auto", "explicit_euler", "symplectic_euler", "implicit_euler"}));
+  } else if (!node.has("integrator")) {
+    req.integrator = IntegratorKind::kSymplecticEuler;
+  }
+  if (!is_auto(node, "level")) {
+    req.level = static_cast<int>(node.integer_or("level", 4, 0, 6));
+  }
+  if (!is_auto(node, "kernel") && node.has("kernel")) {
+    req.kernel = node.choice("kernel", {"auto", "scalar", "simd"}) == "simd" ? KernelKind::kSimd
+                                                                             : KernelKind::kScalar;
+  }  // not given: chosen too (an automatic selection may take the simd kernel)
+  const double radius_m = node.number_or("radius_m", DeformableParams{}.radius_m, 1e-3, 100.0);
+  // the shape error scales with the radius: computed once per level for the unit sphere
+  static const std::array<double, 7> unit_shape_error = [] {
+    std::array<double, 7> e{};
+    for (int l = 0; l <= 6; ++l) e[static_cast<std::size_t>(l)] = icosphere_shape_error_m(l, 1.0);
+    return e;
+  }();
+  for (std::size_t l = 0; l < unit_shape_error.size(); ++l) {
+    req.shape_error_mm[l] = 1e3 * radius_m * unit_shape_error[l];
+  }
+  out.tolerance_mm = req.tolerance_mm;
+  out.budget_us = req.budget_us;
+  std::string table_file = default_model_table_file();
+  if (node.has("model_table")) {
+    std::filesystem::path p = node.string("model_table");
+    if (p.is_relative()) p = std::filesystem::path(node.file()).parent_path() / p;
+    table_file = p.string();
+  }
+  out.table_file = table_file;
+  ModelTable table = load_model_table(table_file);
+  const std::string dt_text = ms_text(physics_dt_s);
+
+  // a body whose own stability needs extra sub-steps (a stiffer material than the table's) costs
+  // more than predicted: drop that entry and select again while the real cost is over budget
+  for (std::size_t attempt = 0; attempt <= table.entries.size(); ++attempt) {
+    const SelectResult r = select_model(table, req);
+    switch (r.outcome) {
+      case SelectOutcome::kChosen:
+        break;
+      case SelectOutcome::kNoEntry:
+        node.fail(is_auto(node, "level")        ? "level"
+                  : is_auto(node, "model")      ? "model"
+                  : is_auto(node, "integrator") ? "integrator"
+                                                : "kernel",
+                  "auto: no entry of " + table_file +
+                      " matches the fixed fields at a step dividing the world step " + dt_text +
+                      " (or every matching entry blew up)");
+      case SelectOutcome::kTolerance:
+        node.fail("tolerance_mm", "value " + fmtg(req.tolerance_mm) +
+                                      " is below the smallest error in the table for this body (" +
+                                      fmt4(r.most_accurate.error_mm) +
+                                      " mm: " + r.most_accurate.name() + "); allowed range [" +
+                                      fmt4(r.most_accurate.error_mm) + ", " +
+                                      fmtg(kToleranceMaxMm) + "]");
+      case SelectOutcome::kBudget:
+        node.fail("budget_us", "value " + fmtg(req.budget_us) +
+                                   " is below the cheapest entry within tolerance " +
+                                   fmtg(req.tolerance_mm) + " mm (" + r.cheapest_accurate.name() +
+                                   ": " + fmt1(r.cheapest_accurate.cost_us_median) +
+                                   " us per world step of " + dt_text + "); allowed range [" +
+                                   fmt1(r.cheapest_accurate.cost_us_median) + ", " +
+                                   fmtg(kBudgetMaxUs) + "]");
+    }
+    const ModelChoice& c = r.choice;
+    YAML::Node y = YAML::Clone(node.raw());
+    y.remove("tolerance_mm");
+    y.remove("budget_us");
+    y.remove("model_table");
+    y["model"] = to_string(c.entry.model);
+    y["integrator"] = to_string(c.entry.integrator);
+    y["level"] = c.entry.level;
+    y["kernel"] = to_string(c.entry.kernel);
+    if (c.substeps > 1) y["min_substeps"] = c.substeps;
+    const DeformableParams params =
+        load_deformable_params(config::Node(y, node.file(), node.path()));
+    DeformableModel m = make_model(make_mesh_for(params), params, planes);
+    const int stab = m.substeps_needed(c.entry.dt_s);
+    if (stab > 1 && c.cost_us_median * stab > req.budget_us) {
+      // remove this entry and try the next cheapest
+      const TableEntry& e = c.entry;
+      table.entries.erase(std::remove_if(table.entries.begin(), table.entries.end(),
+                                         [&](const TableEntry& x) {
+                                           return x.model == e.model &&
+                                                  x.integrator == e.integrator &&
+                                                  x.kernel == e.kernel && x.level == e.level &&
+                                                  x.dt_s == e.dt_s;
+                                         }),
+                          table.entries.end());
+      if (!table.entries.empty()) continue;
+      node.fail("budget_us", "value " + fmtg(req.budget_us) +
+                                 " is below what this body costs with the sub-steps its "
+                                 "stiffness needs (" +
+                                 c.name() + ": " + fmt1(c.cost_us_median * stab) + " us)");
+    }
+    out.model = std::move(m);
+    out.choice = c;
+    out.stability_substeps = stab;
+    out.differs_from_table = differences_from_table(params);
+    return out;
+  }
+  node.fail("budget_us",
+            "no entry of " + table_file + " fits the budget with this body's stiffness");
+}
+
+}  // namespace teleop::sim::deformable
