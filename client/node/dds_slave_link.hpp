@@ -9,6 +9,7 @@
 
 #include "client/cycle/slave_link.hpp"
 #include "client/node/rtt.hpp"
+#include "client/node/server_health.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
@@ -27,8 +28,13 @@ class DdsSlaveLink final : public SlaveLink {
   DdsSlaveLink(dds::Writer<MasterCommandPubSubType>& writer, dds::Mailbox<ReceivedState>& mailbox)
       : writer_(writer), mailbox_(mailbox), rtt_(1 << 20) {}
 
-  /// Takes the newest state already waiting (before the session starts).
-  bool take_newest() { return mailbox_.take_if_newer(rx_, seen_); }
+  /// Takes the newest state already waiting (before the session starts): the baseline of the
+  /// server's command count.
+  bool take_newest() {
+    if (!mailbox_.take_if_newer(rx_, seen_)) return false;
+    count_received();
+    return true;
+  }
 
   void send(const SlaveCommand& command) override {
     // send time = DDS write time: the echo gives the network round trip
@@ -53,6 +59,10 @@ class DdsSlaveLink final : public SlaveLink {
   const RttTracker& rtt() const { return rtt_; }
   /// Round trip of the newest new echo [ms] (NaN before the first).
   double last_rtt_ms() const { return last_rtt_ms_; }
+  /// Commands the server received during this session, across server restarts.
+  std::uint64_t received_in_session() const { return received_.total(); }
+  /// Server restarts seen on SlaveState (its step counter went back).
+  std::uint64_t restarts() const { return restarts_; }
 
  private:
   bool take_echo() {
@@ -60,7 +70,16 @@ class DdsSlaveLink final : public SlaveLink {
     const double r = rtt_.on_echo(rx_.state.command_seq(), rx_.state.command_send_time_ns(),
                                   rx_.receive_ns, newest_sent_seq_);
     if (r >= 0) last_rtt_ms_ = r;
+    count_received();
     return true;
+  }
+
+  void count_received() {
+    const bool restarted = any_state_ && rx_.state.seq() < last_state_seq_;
+    if (restarted) ++restarts_;
+    received_.feed(rx_.state.commands_received(), restarted);
+    last_state_seq_ = rx_.state.seq();
+    any_state_ = true;
   }
 
   dds::Writer<MasterCommandPubSubType>& writer_;
@@ -72,6 +91,10 @@ class DdsSlaveLink final : public SlaveLink {
   std::uint64_t sent_ = 0;
   std::uint64_t newest_sent_seq_ = 0;
   double last_rtt_ms_ = std::numeric_limits<double>::quiet_NaN();
+  SessionCounter received_;
+  std::uint64_t last_state_seq_ = 0;
+  std::uint64_t restarts_ = 0;
+  bool any_state_ = false;
 };
 
 }  // namespace teleop::master

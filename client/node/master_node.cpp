@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <thread>
 
 #include "client/cycle/master_cycle.hpp"
@@ -17,6 +18,7 @@
 #include "client/metrics/session_metrics.hpp"
 #include "client/net/delay_channel.hpp"
 #include "client/node/dds_slave_link.hpp"
+#include "client/node/server_health.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
@@ -44,6 +46,12 @@ std::array<double, kCsvColumns> csv_row(T... v) {
   static_assert(sizeof...(T) == kCsvColumns, "log row and header differ in length");
   return {static_cast<double>(v)...};
 }
+/// Force error RMS relative to the mean contact force (NaN without contact).
+double relative_force_error(const SessionMetrics& m) {
+  const double f = m.mean_contact_force_n();
+  return f > 1e-9 ? m.force_error_rms_n() / f : std::nan("");
+}
+
 /// Commands whose entry time is remembered for the loop-delay measurement.
 constexpr std::uint64_t kEntryRing = 1 << 16;
 
@@ -54,8 +62,10 @@ struct SessionReport {
   double elapsed_s = 0.0;
   double session_s = 0.0;
   double wait_s = 0.0;
-  std::uint64_t sent = 0;
-  std::uint64_t received = 0;
+  std::uint64_t issued = 0;   // commands the cycle issued (into the injected forward channel)
+  std::uint64_t dropped = 0;  // of them, dropped by the injected channel (loss, burst, overflow)
+  std::uint64_t sent = 0;     // written to DDS
+  std::uint64_t received = 0; // received by the server (across its restarts)
   std::uint64_t echoed = 0;
   std::uint64_t states_received = 0;
   std::uint64_t overruns = 0;
@@ -65,6 +75,12 @@ struct SessionReport {
   Summary jitter_us;
   ChannelReport forward;
   ChannelReport backward;
+  // the server's side of the session (ServerStats and fault events, across restarts)
+  std::uint64_t server_faults = 0;
+  std::uint64_t server_watchdog_trips = 0;
+  std::uint64_t server_overruns = 0;
+  std::uint64_t server_rejected = 0;
+  std::uint64_t server_restarts = 0;
 };
 
 struct MasterNode::Impl {
@@ -84,6 +100,14 @@ struct MasterNode::Impl {
   dds::Mailbox<DeviceState> device_box;
   std::uint64_t event_seq = 0;
   std::unique_ptr<CsvWriter> log;
+  // the server's health: ServerStats counters and fault events received during the session
+  std::unique_ptr<dds::Reader<ServerStatsPubSubType>> stats_reader;
+  std::unique_ptr<dds::Reader<EventPubSubType>> events_reader;
+  dds::Mailbox<ServerStats> stats_box;
+  std::atomic<std::int64_t> session_start_ns{std::numeric_limits<std::int64_t>::max()};
+  std::atomic<std::uint64_t> server_fault_events{0};
+  ServerHealth health;
+  std::uint64_t stats_seen = 0;
 
   explicit Impl(const MasterOptions& o)
       : options(o),
@@ -101,6 +125,21 @@ struct MasterNode::Impl {
         participant, dds::topics::kScene, dds::TopicQos::kLatched,
         [this](const SceneDescription& s, const eprosima::fastdds::dds::SampleInfo&) {
           scene_box.put(s);
+        });
+    stats_reader = std::make_unique<dds::Reader<ServerStatsPubSubType>>(
+        participant, dds::topics::kServerStats, dds::TopicQos::kReliableStream,
+        [this](const ServerStats& s, const eprosima::fastdds::dds::SampleInfo&) {
+          stats_box.put(s);
+        });
+    events_reader = std::make_unique<dds::Reader<EventPubSubType>>(
+        participant, dds::topics::kEvents, dds::TopicQos::kEventLog,
+        [this](const Event& e, const eprosima::fastdds::dds::SampleInfo&) {
+          // a fault on the server during this session (the event log's history from before
+          // the session arrives earlier and is not counted)
+          if (e.source() == "server" && e.kind() == static_cast<std::uint8_t>(sim::EventKind::kFault) &&
+              now_ns() >= session_start_ns.load()) {
+            server_fault_events.fetch_add(1);
+          }
         });
     if (o.device == "external") {
       device_command_writer = std::make_unique<dds::Writer<DeviceCommandPubSubType>>(
@@ -265,7 +304,6 @@ struct MasterNode::Impl {
     if (const int status = wait_for_server(wait_s); status >= 0) return status;
     DdsSlaveLink link(command_writer, mailbox);
     link.take_newest();
-    const std::uint64_t server_received_at_start = link.newest_state().commands_received();
     SceneDescription scene;
     std::uint64_t scene_seen = 0;
     const bool have_scene = scene_box.take_if_newer(scene, scene_seen);
@@ -315,11 +353,21 @@ struct MasterNode::Impl {
     }
     state_reader->stop();
 
-    const std::uint64_t server_now = link.newest_state().commands_received();
-    const std::uint64_t server_received =
-        server_now >= server_received_at_start ? server_now - server_received_at_start : 0;
+    rep.issued = cycle.command_seq();
+    {
+      const ChannelCounters& fw = cycle.forward().counters();
+      rep.dropped = fw.lost_random + fw.lost_burst + fw.lost_overflow;
+    }
     rep.sent = link.sent();
-    rep.received = std::min(server_received, rep.sent);
+    rep.received = std::min(link.received_in_session(), rep.sent);
+    rep.server_faults = update_health();
+    if (rep.server_faults > 0) {
+      cycle.metrics().mark_unstable("the slave faulted on the server", rep.elapsed_s);
+    }
+    rep.server_watchdog_trips = health.watchdog_trips.total();
+    rep.server_overruns = health.overruns.total();
+    rep.server_rejected = health.rejected.total();
+    rep.server_restarts = std::max(health.restarts, link.restarts());
     rep.echoed = link.rtt().unique_echoes();
     rep.states_received = states_received.load();
     rep.overruns = loop.overruns();
@@ -330,6 +378,17 @@ struct MasterNode::Impl {
     if (!options.summary_json.empty()) write_summary_json(cycle, rep);
     if (!options.quiet) print_summary(cycle, rep);
     return 0;
+  }
+
+  /// Takes the newest ServerStats into the health counters. Returns the faults so far.
+  std::uint64_t update_health() {
+    ServerStats st;
+    if (stats_box.take_if_newer(st, stats_seen)) {
+      health.feed(st.steps(), st.faults(), st.watchdog_trips(), st.overruns(),
+                  st.commands_rejected_nan() + st.commands_rejected_workspace() +
+                      st.commands_rejected_stale() + st.commands_rejected_passivity());
+    }
+    return std::max<std::uint64_t>(health.faults.total(), server_fault_events.load());
   }
 
   /// The haptic loop until the session length, the sample limit or a stop signal.
@@ -353,7 +412,10 @@ struct MasterNode::Impl {
     std::uint64_t device_seen = 0;
     const std::int64_t t0 = now_ns();
     const double t0_s = static_cast<double>(t0) * 1e-9;
+    update_health();  // the baseline: the server's counts from before this session
+    session_start_ns.store(t0);
     cycle.start_homing(t0_s, tip0, options.homing_s);
+    std::uint64_t faults_seen = 0;
 
     while (!stop_requested()) {
       const std::int64_t now = now_ns();
@@ -382,6 +444,11 @@ struct MasterNode::Impl {
         device_command_writer->write(dc);
       }
       cycle.finish(now_s);
+      // a session whose slave faulted is never stable
+      if (const std::uint64_t faults = update_health(); faults > faults_seen) {
+        faults_seen = faults;
+        cycle.metrics().mark_unstable("the slave faulted on the server", now_s - t0_s);
+      }
       if (cycle.safety().link_lost() && !was_link_lost) ++rep.link_losses;
       was_link_lost = cycle.safety().link_lost();
       sim::SimEvent se;
@@ -413,9 +480,16 @@ struct MasterNode::Impl {
         << "  \"scheme\": \"" << cycle.config().controller.scheme << "\",\n"
         << "  \"device\": \"" << options.device << "\",\n"
         << "  \"script\": \"" << options.script << "\",\n"
+        << "  \"issued\": " << rep.issued << ",\n"
+        << "  \"dropped_by_channel\": " << rep.dropped << ",\n"
         << "  \"sent\": " << rep.sent << ",\n"
         << "  \"received\": " << rep.received << ",\n"
-        << "  \"lost\": " << (rep.sent - rep.received) << ",\n"
+        << "  \"lost\": " << (rep.issued - std::min(rep.received, rep.issued)) << ",\n"
+        << "  \"server\": {\"faults\": " << rep.server_faults
+        << ", \"watchdog_trips\": " << rep.server_watchdog_trips
+        << ", \"overruns\": " << rep.server_overruns << ", \"rejected\": " << rep.server_rejected
+        << ", \"restarts\": " << rep.server_restarts << "},\n"
+        << "  \"force_error_relative\": " << json_number(relative_force_error(metrics)) << ",\n"
         << "  \"echoed\": " << rep.echoed << ",\n"
         << "  \"states_received\": " << rep.states_received << ",\n"
         << "  \"rtt_ms\": {\"p50\": " << json_number(r.p50) << ", \"p90\": " << json_number(r.p90)
@@ -448,36 +522,50 @@ struct MasterNode::Impl {
     const Summary& r = rep.rtt_ms;
     const Summary& ld = rep.loop_delay_ms;
     const Summary& j = rep.jitter_us;
-    const std::uint64_t lost = rep.sent - rep.received;
+    const std::uint64_t lost = rep.issued - std::min(rep.received, rep.issued);
+    const double rel = relative_force_error(metrics);
+    char rel_buf[32];
+    std::snprintf(rel_buf, sizeof(rel_buf), "%.0f%%", 100.0 * rel);
+    const std::string relative = std::isfinite(rel) ? rel_buf : "no contact: -";
     std::fprintf(
         stdout,
         "session summary (%s, %s, script %s)\n"
         "  duration        %.2f s (%.2f s of session after homing) at %.0f Hz\n"
-        "  commands        %llu sent, %llu received by the server, %llu lost (%.2f%%)\n"
+        "  commands        %llu issued, %llu received by the server, %llu lost (%.2f%%; "
+        "%llu dropped by the injected channel, %llu sent)\n"
         "  injected delay  forward %s; measured mean %.2f ms, p99 %.2f ms, lost %.2f%%\n"
         "                  backward %s; measured mean %.2f ms, p99 %.2f ms, lost %.2f%%\n"
         "  round trip      p50 %.3f ms  p99 %.3f ms  max %.3f ms  (%zu echoes, network)\n"
         "  loop delay      p50 %.3f ms  p99 %.3f ms  (command in -> its echo used)\n"
         "  loop jitter     p50 %.1f us  p99 %.1f us  (%llu overruns)\n"
         "  tracking        position error RMS %.2f mm, max %.2f mm\n"
-        "  force           max rendered %.2f N, force error RMS %.3f N, contact %.2f s, "
-        "mean contact force %.2f N\n"
+        "  force           max rendered %.2f N, force error RMS %.3f N (%s of the mean "
+        "contact force), contact %.2f s, mean contact force %.2f N\n"
         "  passivity       energy at the master port %.4f J (min %.4f J)\n"
         "  safety          %s%s, link losses %llu\n"
+        "  server          %llu faults, %llu watchdog trips, %llu overruns, %llu commands "
+        "rejected, %llu restarts\n"
         "  verdict         %s%s%s\n",
         cycle.config().controller.scheme.c_str(), options.device.c_str(), options.script.c_str(),
-        rep.elapsed_s, rep.session_s, options.rate_hz, static_cast<unsigned long long>(rep.sent),
+        rep.elapsed_s, rep.session_s, options.rate_hz, static_cast<unsigned long long>(rep.issued),
         static_cast<unsigned long long>(rep.received), static_cast<unsigned long long>(lost),
-        rep.sent ? 100.0 * static_cast<double>(lost) / static_cast<double>(rep.sent) : 0.0,
+        rep.issued ? 100.0 * static_cast<double>(lost) / static_cast<double>(rep.issued) : 0.0,
+        static_cast<unsigned long long>(rep.dropped), static_cast<unsigned long long>(rep.sent),
         options.forward.describe().c_str(), fwd.delay_mean_ms, fwd.delay_p99_ms,
         100.0 * fwd.loss_fraction, options.backward.describe().c_str(), bwd.delay_mean_ms,
         bwd.delay_p99_ms, 100.0 * bwd.loss_fraction, r.p50, r.p99, r.max, r.count, ld.p50,
         ld.p99, j.p50, j.p99, static_cast<unsigned long long>(rep.overruns),
         metrics.position_error_rms_m() * 1e3, metrics.position_error_max_m() * 1e3,
-        metrics.max_device_force_n(), metrics.force_error_rms_n(), metrics.contact_time_s(),
+        metrics.max_device_force_n(), metrics.force_error_rms_n(),
+        relative.c_str(), metrics.contact_time_s(),
         metrics.mean_contact_force_n(), metrics.energy_j(), metrics.energy_min_j(),
         safety.cut() ? "CUT: " : "ok", safety.cut() ? safety.cut_reason() : "",
-        static_cast<unsigned long long>(rep.link_losses), verdict_name(metrics.verdict()),
+        static_cast<unsigned long long>(rep.link_losses),
+        static_cast<unsigned long long>(rep.server_faults),
+        static_cast<unsigned long long>(rep.server_watchdog_trips),
+        static_cast<unsigned long long>(rep.server_overruns),
+        static_cast<unsigned long long>(rep.server_rejected),
+        static_cast<unsigned long long>(rep.server_restarts), verdict_name(metrics.verdict()),
         *metrics.verdict_reason() ? " - " : "", metrics.verdict_reason());
   }
 };

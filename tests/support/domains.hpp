@@ -37,6 +37,8 @@ inline constexpr int kSecureStranger = 109;    // security_test: identity of ano
 // 110, 111: tests/bench/security_rtt.sh (plain, secure); 112: teleop_bench rtt in docs
 inline constexpr int kMultiHostSecureLanUnicast = 113;  // multi_host_test, secure_lan_unicast
 inline constexpr int kMultiHostSecureWanTcp = 114;      // multi_host_test, secure_wan_tcp_*
+inline constexpr int kServerFaultVerdict = 130;  // server_health_test: a fault on the server
+inline constexpr int kServerRestart = 131;       // server_health_test: kill -9 and restart
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains

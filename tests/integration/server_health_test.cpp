@@ -1,0 +1,96 @@
+// The master's summary and verdict account for the server's side of the session: a fault on
+// the server makes the verdict unstable and is counted; a server killed and restarted mid-session
+// is counted as a restart, and the commands it received are summed over both server lives.
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <thread>
+
+#include "common/dds/endpoint.hpp"
+#include "common/sim/events.hpp"
+#include "common/util/clock.hpp"
+#include "teleop/idl/TeleopPubSubTypes.h"
+#include "tests/support/domains.hpp"
+#include "tests/support/integration.hpp"
+#include "tests/support/process.hpp"
+
+namespace teleop::test {
+namespace {
+
+const std::string kToolScene = scene_file("tool_only.yaml");
+
+std::string tmp(const std::string& name) { return temp_path("health", name); }
+
+/// Waits until the file exists and is non-empty (the master's summary), or the timeout.
+std::string wait_text(const std::string& path, Process& p, double timeout_s) {
+  p.wait_for(timeout_s);
+  return Process::slurp(path);
+}
+
+TEST(ServerHealth, AFaultOnTheServerMakesTheVerdictUnstableAndIsCounted) {
+  const int domain = domains::kServerFaultVerdict;
+  const std::string d = std::to_string(domain);
+  const std::string master_json = tmp("fault_master.json");
+  Process server(kServerBinary, {"--domain", d, "--duration", "60", "--scene", kToolScene},
+                 "fault_server");
+  Process master(kMasterBinary,
+                 {"--domain", d, "--duration", "3", "--homing", "0.5", "--script", "hold",
+                  "--summary-json", master_json},
+                 "fault_master");
+  // the server reports a fault on its event log 1.5 s into the master's session (as the world
+  // does when a body blows up); this participant speaks for it
+  dds::Participant p(dds::ParticipantOptions{"loopback", domain, "fault_source"});
+  dds::Writer<EventPubSubType> events(p, dds::topics::kEvents, dds::TopicQos::kEventLog);
+  std::this_thread::sleep_for(std::chrono::milliseconds(3500));
+  Event e;
+  e.seq(1);
+  e.time_ns(now_ns());
+  e.source("server");
+  e.kind(static_cast<std::uint8_t>(sim::EventKind::kFault));
+  e.severity(2);
+  e.message("deformable: blow-up (injected by the test); reset to rest shape");
+  events.write(e);
+  const std::string m = wait_text(master_json, master, 60.0);
+  server.signal(SIGTERM);
+  server.wait_for(20.0);
+  ASSERT_FALSE(m.empty()) << master.err();
+  EXPECT_NE(m.find("\"verdict\": \"unstable\""), std::string::npos) << m;
+  EXPECT_NE(m.find("the slave faulted on the server"), std::string::npos) << m;
+  EXPECT_GE(json_nested(m, "server", "faults"), 1.0) << m;
+  EXPECT_GE(json_value(m, "received"), 0.99 * json_value(m, "issued")) << m;
+}
+
+TEST(ServerHealth, CountsAreRightAcrossAServerRestart) {
+  const std::string d = std::to_string(domains::kServerRestart);
+  const std::string master_json = tmp("restart_master.json");
+  auto server = std::make_unique<Process>(
+      kServerBinary, std::vector<std::string>{"--domain", d, "--duration", "60", "--scene",
+                                              kToolScene},
+      "restart_server1");
+  Process master(kMasterBinary,
+                 {"--domain", d, "--duration", "8", "--homing", "0.5", "--script", "hold",
+                  "--summary-json", master_json},
+                 "restart_master");
+  std::this_thread::sleep_for(std::chrono::milliseconds(4000));
+  server->signal(SIGKILL);  // kill -9 mid-session
+  server->wait_for(10.0);
+  server = std::make_unique<Process>(
+      kServerBinary, std::vector<std::string>{"--domain", d, "--duration", "60", "--scene",
+                                              kToolScene},
+      "restart_server2");
+  const std::string m = wait_text(master_json, master, 60.0);
+  server->signal(SIGTERM);
+  server->wait_for(20.0);
+  ASSERT_FALSE(m.empty()) << master.err();
+  EXPECT_EQ(json_nested(m, "server", "restarts"), 1.0) << m;
+  // both server lives received commands: the total is far more than the second life alone
+  // (about 4 s of 1 kHz before the kill, the rest after the restart; some lost in between)
+  const double issued = json_value(m, "issued"), received = json_value(m, "received");
+  EXPECT_GT(received, 0.6 * issued) << m;
+  EXPECT_LE(received, issued) << m;
+  EXPECT_EQ(json_value(m, "lost"), issued - received) << m;
+  EXPECT_GE(json_value(m, "link_losses"), 1.0) << m;
+}
+
+}  // namespace
+}  // namespace teleop::test
