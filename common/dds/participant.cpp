@@ -426,6 +426,12 @@ void apply(Qos& q, TopicQos qos) {
       q.history().kind = KEEP_LAST_HISTORY_QOS;
       q.history().depth = 10;
       break;
+    case TopicQos::kLatest:
+      q.reliability().kind = RELIABLE_RELIABILITY_QOS;
+      q.durability().kind = TRANSIENT_LOCAL_DURABILITY_QOS;
+      q.history().kind = KEEP_LAST_HISTORY_QOS;
+      q.history().depth = 1;
+      break;
   }
 }
 }  // namespace
