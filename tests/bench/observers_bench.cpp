@@ -150,8 +150,15 @@ struct SessionResult {
   std::string verdict = "?";
   double watchdog_trips = NAN, server_step_p99_us = NAN, server_overruns = NAN;
   int observers_with_scene = 0;
-  double observer_state_hz = NAN;  ///< median over observers of the slave_state rate
+  double monitor_state_hz = NAN;  ///< median over the monitors of their slave_state rate
+  double view_state_hz = NAN;     ///< median over the view probes of their slave_state rate
 };
+
+double median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
 
 /// The count of `topic` in the last JSON object of an observer's output that has it.
 double last_count(const std::string& out, const std::string& topic) {
@@ -201,7 +208,7 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   const int mst = master.wait_for(duration_s + 60.0);
   const double stopped_s = seconds_between(t0, now_ns());
   for (auto& o : obs) o->signal(SIGINT);
-  std::vector<double> rates;
+  std::vector<double> monitor_rates, view_rates;
   for (std::size_t i = 0; i < obs.size(); ++i) {
     if (obs[i]->wait_for(20.0) < 0) obs[i]->signal(SIGKILL);
     const std::string out = obs[i]->out();
@@ -209,7 +216,9 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
       ++r.observers_with_scene;
     }
     const double alive = stopped_s - started_s[i];
-    if (alive > 0) rates.push_back(last_count(out, "slave_state") / alive);
+    if (alive > 0) {
+      (i % 2 == 0 ? monitor_rates : view_rates).push_back(last_count(out, "slave_state") / alive);
+    }
   }
   server.signal(SIGTERM);
   server.wait_for(20.0);
@@ -232,10 +241,8 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   r.watchdog_trips = std::isnan(trips) ? NAN : std::max(0.0, trips - 1.0);
   r.server_step_p99_us = json_nested(s, "step_us", "p99");
   r.server_overruns = json_value(s, "overruns");
-  if (!rates.empty()) {
-    std::sort(rates.begin(), rates.end());
-    r.observer_state_hz = rates[rates.size() / 2];
-  }
+  r.monitor_state_hz = median(monitor_rates);
+  r.view_state_hz = median(view_rates);
   return r;
 }
 
@@ -300,7 +307,8 @@ int observers_bench(const CommandArgs& args) {
                            "server_step_us_p99",
                            "server_overruns",
                            "observers_with_scene",
-                           "observer_state_hz"});
+                           "monitor_state_hz",
+                           "view_state_hz"});
   auto run = [&](const char* mode, int n, int round) {
     const SessionResult r = run_session(bin, n, std::string(mode) == "full_rate",
                                         static_cast<int>(domain), duration_s, work);
@@ -310,15 +318,15 @@ int observers_bench(const CommandArgs& args) {
                   format_number(r.sent), format_number(r.received), r.verdict,
                   format_number(r.watchdog_trips), format_number(r.server_step_p99_us),
                   format_number(r.server_overruns), std::to_string(r.observers_with_scene),
-                  format_number(r.observer_state_hz)});
+                  format_number(r.monitor_state_hz), format_number(r.view_state_hz)});
     csv.flush();
     std::printf(
         "%-12s %3d observers round %d  load %.2f  rtt p50 %.3f p99 %.3f ms  master overruns "
         "%.0f  link losses %.0f  received %.0f/%.0f  %s  watchdog %.0f  server step p99 %.1f "
-        "us overruns %.0f  scene %d/%d  observer state %.1f Hz\n",
+        "us overruns %.0f  scene %d/%d  state at monitors %.1f Hz, views %.1f Hz\n",
         mode, n, round, r.load1, r.rtt_p50, r.rtt_p99, r.master_overruns, r.link_losses,
         r.received, r.sent, r.verdict.c_str(), r.watchdog_trips, r.server_step_p99_us,
-        r.server_overruns, r.observers_with_scene, n, r.observer_state_hz);
+        r.server_overruns, r.observers_with_scene, n, r.monitor_state_hz, r.view_state_hz);
     std::fflush(stdout);
   };
   for (int round = 1; round <= static_cast<int>(rounds); ++round) {
