@@ -32,7 +32,8 @@ inline constexpr int kMonitorJson = 76;        // monitor_tui_test: teleop_monit
 inline constexpr int kObserverRates = 115;    // observers_test: monitor on the 10 Hz topics
 inline constexpr int kObserverSession = 116;  // observers_test: 8 observers, default scene
 inline constexpr int kObserverLate = 117;     // observers_test: a late observer
-// 118-124: reserved for observers_test
+inline constexpr int kRateLimitedUnit = 118;  // rate_limited_publisher_test: 118, 119, 120
+// 121-124: reserved for observer tests
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
