@@ -153,8 +153,8 @@ int main(int argc, char** argv) {
     snap.domain = opts.domain;
     snap.profile = opts.profile;
     snap.full_rate = full_rate;
-    const teleop::dds::ObserverTopics topics = teleop::dds::observer_topics(teleop::dds::ObserverKind::kMonitor,
-                                                              full_rate);
+    const teleop::dds::ObserverTopics topics =
+        teleop::dds::observer_topics(teleop::dds::ObserverKind::kMonitor, full_rate);
     struct TopicDef {
       const char* name;
       bool latched;

@@ -12,7 +12,8 @@ MeshPublisher::MeshPublisher(const sim::WorldModel& model, const sim::WorldData&
                              double monitor_rate_hz)
     : model_(model), writer_(writer), monitor_writer_(monitor_writer) {
   if (monitor_rate_hz > 0.0 && model.visual_rate_hz > monitor_rate_hz) {
-    monitor_every_ = static_cast<std::uint64_t>(std::llround(model.visual_rate_hz / monitor_rate_hz));
+    monitor_every_ =
+        static_cast<std::uint64_t>(std::llround(model.visual_rate_hz / monitor_rate_hz));
   }
   if (data.bodies.empty()) return;
   for (const sim::DeformableBodyData& b : data.bodies) back_.push_back(b.state.x);

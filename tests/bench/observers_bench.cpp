@@ -193,8 +193,14 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
       if (full_rate) a.push_back("--full-rate");
       obs.push_back(std::make_unique<Process>(bin.monitor, a, "obs_bench_mon" + std::to_string(i)));
     } else {
-      a = {"observer-probe", "--out",       work.string(), "--kind",
-           "view",           "--domain",    d,             "--full-rate",
+      a = {"observer-probe",
+           "--out",
+           work.string(),
+           "--kind",
+           "view",
+           "--domain",
+           d,
+           "--full-rate",
            full_rate ? "1" : "0"};
       obs.push_back(std::make_unique<Process>(bin.self, a, "obs_bench_view" + std::to_string(i)));
     }
@@ -202,8 +208,9 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   }
   // let every observer discover the server before the session starts
   std::this_thread::sleep_for(std::chrono::milliseconds(1500 + 60 * observers));
-  Process master(bin.master, {"--domain", d, "--duration", std::to_string(duration_s),
-                              "--summary-json", master_json, "--quiet"},
+  Process master(bin.master,
+                 {"--domain", d, "--duration", std::to_string(duration_s), "--summary-json",
+                  master_json, "--quiet"},
                  "obs_bench_master");
   const int mst = master.wait_for(duration_s + 60.0);
   const double stopped_s = seconds_between(t0, now_ns());
@@ -266,8 +273,8 @@ std::vector<int> parse_counts(const std::string& flag, const std::string& text) 
 int observers_bench(const CommandArgs& args) {
   const std::vector<int> counts =
       parse_counts("--counts", args.option("--counts", args.quick ? "0,2" : "0,8,16,32"));
-  const std::vector<int> full_counts = parse_counts(
-      "--full-rate-counts", args.option("--full-rate-counts", args.quick ? "" : "32"));
+  const std::vector<int> full_counts =
+      parse_counts("--full-rate-counts", args.option("--full-rate-counts", args.quick ? "" : "32"));
   const double rounds = std::stod(args.option("--rounds", args.quick ? "1" : "3"));
   config::check_flag("--rounds", rounds, 1.0, 100.0);
   const double duration_s = std::stod(args.option("--duration", args.quick ? "3" : "10"));
@@ -275,9 +282,8 @@ int observers_bench(const CommandArgs& args) {
   const double domain = std::stod(args.option("--domain", "110"));
   config::check_flag("--domain", domain, 0.0, 232.0);
   const fs::path self = self_exe();
-  const fs::path build = fs::path(args.option("--bin-dir", self.parent_path().parent_path()
-                                                               .parent_path()
-                                                               .string()));
+  const fs::path build =
+      fs::path(args.option("--bin-dir", self.parent_path().parent_path().parent_path().string()));
   const Binaries bin{(build / "server/teleop_server").string(),
                      (build / "client/teleop_master").string(),
                      (build / "client/teleop_monitor").string(), self.string()};
@@ -291,24 +297,11 @@ int observers_bench(const CommandArgs& args) {
   const fs::path work = args.out_dir / "observers_work";
   fs::create_directories(work);
   const std::string csv_path = (args.out_dir / "observers.csv").string();
-  CsvWriter csv(csv_path, {"mode",
-                           "observers",
-                           "round",
-                           "load1",
-                           "rtt_ms_p50",
-                           "rtt_ms_p99",
-                           "rtt_ms_p999",
-                           "master_overruns",
-                           "link_losses",
-                           "commands_sent",
-                           "commands_received",
-                           "verdict",
-                           "server_watchdog_trips",
-                           "server_step_us_p99",
-                           "server_overruns",
-                           "observers_with_scene",
-                           "monitor_state_hz",
-                           "view_state_hz"});
+  CsvWriter csv(csv_path,
+                {"mode", "observers", "round", "load1", "rtt_ms_p50", "rtt_ms_p99", "rtt_ms_p999",
+                 "master_overruns", "link_losses", "commands_sent", "commands_received", "verdict",
+                 "server_watchdog_trips", "server_step_us_p99", "server_overruns",
+                 "observers_with_scene", "monitor_state_hz", "view_state_hz"});
   auto run = [&](const char* mode, int n, int round) {
     const SessionResult r = run_session(bin, n, std::string(mode) == "full_rate",
                                         static_cast<int>(domain), duration_s, work);
@@ -324,9 +317,9 @@ int observers_bench(const CommandArgs& args) {
         "%-12s %3d observers round %d  load %.2f  rtt p50 %.3f p99 %.3f ms  master overruns "
         "%.0f  link losses %.0f  received %.0f/%.0f  %s  watchdog %.0f  server step p99 %.1f "
         "us overruns %.0f  scene %d/%d  state at monitors %.1f Hz, views %.1f Hz\n",
-        mode, n, round, r.load1, r.rtt_p50, r.rtt_p99, r.master_overruns, r.link_losses,
-        r.received, r.sent, r.verdict.c_str(), r.watchdog_trips, r.server_step_p99_us,
-        r.server_overruns, r.observers_with_scene, n, r.monitor_state_hz, r.view_state_hz);
+        mode, n, round, r.load1, r.rtt_p50, r.rtt_p99, r.master_overruns, r.link_losses, r.received,
+        r.sent, r.verdict.c_str(), r.watchdog_trips, r.server_step_p99_us, r.server_overruns,
+        r.observers_with_scene, n, r.monitor_state_hz, r.view_state_hz);
     std::fflush(stdout);
   };
   for (int round = 1; round <= static_cast<int>(rounds); ++round) {

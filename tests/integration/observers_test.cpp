@@ -116,8 +116,8 @@ TEST(Observers, MonitorReadsTheTenHertzTopicsByDefault) {
   const std::uint64_t view_slave_0 = view.slave_count();
   const auto t_view_0 = now_ns();
   std::this_thread::sleep_for(std::chrono::milliseconds(2000));
-  const double view_slave_hz = static_cast<double>(view.slave_count() - view_slave_0) /
-                               seconds_between(t_view_0, now_ns());
+  const double view_slave_hz =
+      static_cast<double>(view.slave_count() - view_slave_0) / seconds_between(t_view_0, now_ns());
   ASSERT_EQ(mon1.wait_for(30.0), 0) << mon1.err();
   ASSERT_EQ(mon2.wait_for(30.0), 0) << mon2.err();
   Process full(kMonitorBinary,
@@ -181,9 +181,10 @@ TEST(Observers, LateObserverGetsSceneAndNewestStateAtOnce) {
   // and the newest state arrive together, well before a slow period would bring them
   const double scene_s = seconds_between(t0, late.scene_ns());
   const double state_s = seconds_between(t0, late.slave_ns());
-  std::printf("late observer: scene after %.3f s, slave_state_view after %.3f s, "
-              "master_state_view after %.3f s\n",
-              scene_s, state_s, seconds_between(t0, late.master_ns()));
+  std::printf(
+      "late observer: scene after %.3f s, slave_state_view after %.3f s, "
+      "master_state_view after %.3f s\n",
+      scene_s, state_s, seconds_between(t0, late.master_ns()));
   EXPECT_LT(scene_s, 3.0);
   EXPECT_LT(state_s, 3.0);
   master.signal(SIGTERM);
@@ -227,11 +228,11 @@ TEST(Observers, EightObserverProcessesKeepCommandsAndVerdict) {
   ASSERT_EQ(server.wait_for(20.0), 0) << server.err();
   EXPECT_EQ(with_scene, 8);
   const std::string m = Process::slurp(master_json);
-  std::printf("8 observers: sent %.0f received %.0f, rtt p50 %.3f p99 %.3f ms, overruns %.0f, "
-              "link losses %.0f\n",
-              json_value(m, "sent"), json_value(m, "received"), json_nested(m, "rtt_ms", "p50"),
-              json_nested(m, "rtt_ms", "p99"), json_value(m, "overruns"),
-              json_value(m, "link_losses"));
+  std::printf(
+      "8 observers: sent %.0f received %.0f, rtt p50 %.3f p99 %.3f ms, overruns %.0f, "
+      "link losses %.0f\n",
+      json_value(m, "sent"), json_value(m, "received"), json_nested(m, "rtt_ms", "p50"),
+      json_nested(m, "rtt_ms", "p99"), json_value(m, "overruns"), json_value(m, "link_losses"));
   EXPECT_GE(json_value(m, "received"), 0.99 * json_value(m, "sent")) << m;
   EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;
   EXPECT_EQ(json_value(m, "link_losses"), 0.0) << m;

@@ -29,10 +29,10 @@ inline constexpr int kRecordSession = 73;      // record_play_test: session unde
 inline constexpr int kPlayback = 74;           // record_play_test: teleop_play to a subscriber
 inline constexpr int kMonitorTui = 75;         // monitor_tui_test: teleop_monitor under tmux
 inline constexpr int kMonitorJson = 76;        // monitor_tui_test: teleop_monitor --json
-inline constexpr int kObserverRates = 115;    // observers_test: monitor on the 10 Hz topics
-inline constexpr int kObserverSession = 116;  // observers_test: 8 observers, default scene
-inline constexpr int kObserverLate = 117;     // observers_test: a late observer
-inline constexpr int kRateLimitedUnit = 118;  // rate_limited_publisher_test: 118, 119, 120
+inline constexpr int kObserverRates = 115;     // observers_test: monitor on the 10 Hz topics
+inline constexpr int kObserverSession = 116;   // observers_test: 8 observers, default scene
+inline constexpr int kObserverLate = 117;      // observers_test: a late observer
+inline constexpr int kRateLimitedUnit = 118;   // rate_limited_publisher_test: 118, 119, 120
 // 121-124: reserved for observer tests
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks

@@ -74,10 +74,9 @@ TEST(RateLimitedPublisher, OfferAllocatesNothingAndCopiesComeAtTheirRate) {
   // a late reader gets the newest sample of the slow copy at once, without waiting a period
   std::atomic<std::uint64_t> late_seq{0};
   const auto t_late = now_ns();
-  Reader<SlaveStatePubSubType> late(p, "test/state_slow", TopicQos::kLatest,
-                                    [&](const SlaveState& x, const Info&) {
-                                      late_seq.store(x.seq());
-                                    });
+  Reader<SlaveStatePubSubType> late(
+      p, "test/state_slow", TopicQos::kLatest,
+      [&](const SlaveState& x, const Info&) { late_seq.store(x.seq()); });
   while (seconds_between(t_late, now_ns()) < 5.0 && late_seq.load() == 0) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
