@@ -2,12 +2,14 @@
 // writes), so any number may join or leave without disturbing the loop.
 //
 //   teleop_monitor [--domain D] [--profile P] [--period S] [--duration S] [--stale S]
-//                  [--json | --lines | --tui] [--full-rate]
+//                  [--json | --lines | --tui] [--full-rate] [--nice 19]
 //
 // By default it reads the 10 Hz copies of the hot topics (teleop/*_monitor, written off the
 // loops' threads), so any number of monitors costs the 1 kHz loops nothing; the command rate is
 // then the server's count of commands received (SlaveState.commands_received). --full-rate reads
-// the 1 kHz topics themselves (and teleop/master_command), as earlier versions did.
+// the 1 kHz topics themselves (and teleop/master_command), as earlier versions did. Like the
+// viewer, it lowers its own priority (--nice, 19 by default) before any thread starts: on a
+// machine shared with the server and the master, observers take only the CPU the loops leave.
 //
 // On a terminal it draws one screen refreshed in place (ANSI; q or Ctrl-C quits): the status
 // (waiting for a server on domain D, live, or stale), every topic's rate, age and sample count,
@@ -17,6 +19,7 @@
 // period; --json prints one JSON object per line (status every period, events and the scene as
 // they arrive) for scripts. The monitor's rendering lives in client/monitor/.
 #include <poll.h>
+#include <sys/resource.h>
 #include <signal.h>
 #include <sys/ioctl.h>
 #include <termios.h>
@@ -99,6 +102,7 @@ int main(int argc, char** argv) {
   double stale_s = 0.5;
   bool json = false, lines = false, tui = false;
   bool full_rate = false;
+  int nice = 19;
   app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", profile, "Fast DDS profile (default: loopback)");
   teleop::dds::NetworkFlags net_flags;
@@ -116,6 +120,10 @@ int main(int argc, char** argv) {
   app.add_flag("--full-rate", full_rate,
                "read the full-rate topics (slave_state 1 kHz, master_command, master_state, "
                "mesh_frame) instead of the 10 Hz *_monitor copies; loads the loops");
+  app.add_option("--nice", nice,
+                 "scheduling niceness of the monitor, 0-19: it yields the CPU to the server and "
+                 "master on the same machine")
+      ->capture_default_str();
   json_opt->excludes(lines_opt)->excludes(tui_opt);
   lines_opt->excludes(tui_opt);
   try {
@@ -136,6 +144,11 @@ int main(int argc, char** argv) {
     config::check_flag("--period", period_s, 0.05, 60.0);
     config::check_flag("--duration", duration_s, 0.0, 1e7);
     config::check_flag("--stale", stale_s, 0.05, 3600.0);
+    config::check_flag("--nice", nice, 0, 19);
+    // before the participant: every DDS thread inherits the priority
+    if (nice > 0 && setpriority(PRIO_PROCESS, 0, nice) != 0) {
+      std::cerr << "teleop_monitor: warning: cannot lower the priority (--nice " << nice << ")\n";
+    }
     const auto opts =
         teleop::dds::resolve_participant_options(profile, domain, "teleop_monitor", net_flags);
     teleop::dds::profile_file(opts.profile);
@@ -270,7 +283,10 @@ int main(int argc, char** argv) {
       next += static_cast<std::int64_t>(period_s * 1e9);
       while (!stop_requested() && now_ns() < next) {
         if (keys.quit_pressed()) request_stop();
-        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        // the screen polls the keyboard; the other modes only wait for the next period
+        const std::int64_t step_ns = mode == Mode::kTui ? 20'000'000 : 100'000'000;
+        std::this_thread::sleep_for(
+            std::chrono::nanoseconds(std::max<std::int64_t>(0, std::min(step_ns, next - now_ns()))));
       }
       if (stop_requested()) break;
       const auto now = now_ns();

@@ -427,7 +427,8 @@ void apply(Qos& q, TopicQos qos) {
       q.history().depth = 10;
       break;
     case TopicQos::kLatest:
-      q.reliability().kind = RELIABLE_RELIABILITY_QOS;
+      // best effort: no acknowledgements from every observer back to the writer's process
+      q.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
       q.durability().kind = TRANSIENT_LOCAL_DURABILITY_QOS;
       q.history().kind = KEEP_LAST_HISTORY_QOS;
       q.history().depth = 1;

@@ -107,8 +107,8 @@ enum class TopicQos {
   kLatched,         ///< reliable, transient local, keep last 1: scene, mesh topology
   kEventLog,        ///< reliable, transient local, keep last 100: events
   kReliableStream,  ///< reliable, volatile, keep last 10: stats
-  kLatest,          ///< reliable, transient local, keep last 1: rate-limited observer topics
-                    ///< (a late observer gets the newest sample at once)
+  kLatest,          ///< best effort, transient local, keep last 1: rate-limited observer
+                    ///< topics (a late observer gets the newest sample when it matches)
 };
 
 /// A participant with one publisher and one subscriber. Deletes all contained entities on

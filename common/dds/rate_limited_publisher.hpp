@@ -16,7 +16,16 @@
 //
 // An output with rate 0 writes every offered sample that the thread sees; such samples are
 // offered with wake = true (a condition-variable notify: for slow topics such as 1 Hz stats).
+//
+// The thread lowers its own priority (`thread_nice`, default 10): on a machine the loop shares
+// with other processes, sending to observers takes only the CPU the loop leaves. (On loopback
+// the kernel delivers a datagram into each receiving socket in the sender's system call, so this
+// thread pays for every observer's receive path too.)
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
@@ -30,6 +39,17 @@
 
 namespace teleop::dds {
 
+/// Raises the calling thread's niceness by `nice` (Linux: a thread's own priority); 0 or a
+/// refusal leaves it unchanged. Lowering needs no privilege.
+inline void lower_this_thread_priority(int nice) {
+  if (nice <= 0) return;
+  const int tid = static_cast<int>(gettid());
+  errno = 0;
+  const int now = getpriority(PRIO_PROCESS, static_cast<id_t>(tid));
+  if (errno != 0) return;
+  setpriority(PRIO_PROCESS, static_cast<id_t>(tid), std::min(19, now + nice));
+}
+
 template <class PubSub>
 class RateLimitedPublisher {
  public:
@@ -42,7 +62,8 @@ class RateLimitedPublisher {
   };
 
   RateLimitedPublisher(Participant& participant, const std::vector<Output>& outputs,
-                       TopicQos qos = TopicQos::kLatest) {
+                       TopicQos qos = TopicQos::kLatest, int thread_nice = 10)
+      : thread_nice_(thread_nice) {
     for (const Output& o : outputs) {
       if (!(o.rate_hz >= 0.0 && o.rate_hz <= 1e4)) {
         throw DdsError("rate of " + o.topic + " must be in [0, 1e4] Hz, got " +
@@ -115,6 +136,7 @@ class RateLimitedPublisher {
   }
 
   void run() {
+    lower_this_thread_priority(thread_nice_);
     Sample front;
     std::uint64_t front_version = 0;
     const std::int64_t start = steady_ns();
@@ -156,6 +178,7 @@ class RateLimitedPublisher {
     }
   }
 
+  int thread_nice_ = 10;
   std::vector<Out> outs_;
   std::mutex mutex_;
   std::condition_variable cv_;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "common/dds/rate_limited_publisher.hpp"
 #include "server/node/state_message.hpp"
 
 namespace teleop::server {
@@ -43,6 +44,8 @@ void MeshPublisher::offer(const sim::WorldData& data, double sim_time_s) {
 }
 
 void MeshPublisher::run() {
+  // observers' data: only the CPU the physics leaves (rate_limited_publisher.hpp)
+  dds::lower_this_thread_priority(10);
   MeshFrame frame;
   std::uint64_t monitor_block = ~0ULL;
   while (true) {

@@ -30,7 +30,8 @@ def main(path, out):
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.8))
     ax_rtt, ax_over, ax_loss = axes
     styles = {"rate_limited": ("C0", "o", "rate-limited topics (default)"),
-              "full_rate": ("C3", "s", "--full-rate observers")}
+              "full_rate": ("C3", "s", "--full-rate observers"),
+              "rate_limited_nice0": ("C2", "^", "rate-limited, observers at nice 0")}
     base = None
     for mode, (color, marker, label) in styles.items():
         ns = sorted(n for (m, n) in by if m == mode)
