@@ -107,8 +107,8 @@ enum class TopicQos {
   kLatched,         ///< reliable, transient local, keep last 1: scene, mesh topology
   kEventLog,        ///< reliable, transient local, keep last 100: events
   kReliableStream,  ///< reliable, volatile, keep last 10: stats
-  kLatest,          ///< best effort, transient local, keep last 1: rate-limited observer
-                    ///< topics (a late observer gets the newest sample when it matches)
+  kLatest,          ///< best effort, volatile, keep last 1: the rate-limited observer copies
+                    ///< (a late observer gets the next copy, within one period)
 };
 
 /// A participant with one publisher and one subscriber. Deletes all contained entities on
