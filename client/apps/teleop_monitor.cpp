@@ -19,9 +19,9 @@
 // period; --json prints one JSON object per line (status every period, events and the scene as
 // they arrive) for scripts. The monitor's rendering lives in client/monitor/.
 #include <poll.h>
-#include <sys/resource.h>
 #include <signal.h>
 #include <sys/ioctl.h>
+#include <sys/resource.h>
 #include <termios.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
@@ -285,8 +285,8 @@ int main(int argc, char** argv) {
         if (keys.quit_pressed()) request_stop();
         // the screen polls the keyboard; the other modes only wait for the next period
         const std::int64_t step_ns = mode == Mode::kTui ? 20'000'000 : 100'000'000;
-        std::this_thread::sleep_for(
-            std::chrono::nanoseconds(std::max<std::int64_t>(0, std::min(step_ns, next - now_ns()))));
+        std::this_thread::sleep_for(std::chrono::nanoseconds(
+            std::max<std::int64_t>(0, std::min(step_ns, next - now_ns()))));
       }
       if (stop_requested()) break;
       const auto now = now_ns();

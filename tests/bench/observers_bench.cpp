@@ -22,8 +22,8 @@
 //
 // Writes DIR/observers.csv and DIR/observers.png (tests/charts/observers.py).
 #include <signal.h>
-#include <sys/resource.h>
 #include <stdlib.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -177,8 +177,8 @@ double last_count(const std::string& out, const std::string& topic) {
   return std::atof(out.c_str() + pos + key.size());
 }
 
-SessionResult run_session(const Binaries& bin, int observers, bool full_rate, int nice,
-                          int domain, double duration_s, const fs::path& work) {
+SessionResult run_session(const Binaries& bin, int observers, bool full_rate, int nice, int domain,
+                          double duration_s, const fs::path& work) {
   SessionResult r;
   double load[3] = {0, 0, 0};
   if (getloadavg(load, 3) > 0) r.load1 = load[0];
@@ -211,7 +211,9 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
            "--domain",
            d,
            "--full-rate",
-           full_rate ? "1" : "0", "--nice", std::to_string(nice)};
+           full_rate ? "1" : "0",
+           "--nice",
+           std::to_string(nice)};
       obs.push_back(std::make_unique<Process>(bin.self, a, "obs_bench_view" + std::to_string(i)));
     }
     started_s.push_back(seconds_between(t0, now_ns()));
@@ -317,8 +319,9 @@ int observers_bench(const CommandArgs& args) {
                  "observers_with_scene", "monitor_state_hz", "view_state_hz"});
   auto run = [&](const char* mode, int n, int round) {
     const std::string m = mode;
-    const SessionResult r = run_session(bin, n, m == "full_rate", m == "rate_limited_nice0" ? 0 : 19,
-                                        static_cast<int>(domain), duration_s, work);
+    const SessionResult r =
+        run_session(bin, n, m == "full_rate", m == "rate_limited_nice0" ? 0 : 19,
+                    static_cast<int>(domain), duration_s, work);
     csv.row_text({mode, std::to_string(n), std::to_string(round), format_number(r.load1),
                   format_number(r.rtt_p50), format_number(r.rtt_p99), format_number(r.rtt_p999),
                   format_number(r.master_overruns), format_number(r.link_losses),

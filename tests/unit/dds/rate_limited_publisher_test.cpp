@@ -74,8 +74,9 @@ TEST(RateLimitedPublisher, OfferAllocatesNothingAndCopiesComeAtTheirRate) {
   // a late reader: Fast DDS 2.9's best-effort writer keeps no history for it (why kLatest is
   // volatile); it gets the next copy within one period once the loop offers again
   std::atomic<std::uint64_t> late_seq{0};
-  Reader<SlaveStatePubSubType> late(p, "test/state_slow", TopicQos::kLatest,
-                                    [&](const SlaveState& x, const Info&) { late_seq.store(x.seq()); });
+  Reader<SlaveStatePubSubType> late(
+      p, "test/state_slow", TopicQos::kLatest,
+      [&](const SlaveState& x, const Info&) { late_seq.store(x.seq()); });
   const auto t_match = now_ns();
   while (seconds_between(t_match, now_ns()) < 10.0 && pub.matched(1) < 2) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
