@@ -2,7 +2,14 @@
 // writes), so any number may join or leave without disturbing the loop.
 //
 //   teleop_monitor [--domain D] [--profile P] [--period S] [--duration S] [--stale S]
-//                  [--json | --lines | --tui]
+//                  [--json | --lines | --tui] [--full-rate] [--nice 19]
+//
+// By default it reads the 10 Hz copies of the hot topics (teleop/*_monitor, written off the
+// loops' threads), so any number of monitors costs the 1 kHz loops nothing; the command rate is
+// then the server's count of commands received (SlaveState.commands_received). --full-rate reads
+// the 1 kHz topics themselves (and teleop/master_command), as earlier versions did. Like the
+// viewer, it lowers its own priority (--nice, 19 by default) before any thread starts: on a
+// machine shared with the server and the master, observers take only the CPU the loops leave.
 //
 // On a terminal it draws one screen refreshed in place (ANSI; q or Ctrl-C quits): the status
 // (waiting for a server on domain D, live, or stale), every topic's rate, age and sample count,
@@ -14,6 +21,7 @@
 #include <poll.h>
 #include <signal.h>
 #include <sys/ioctl.h>
+#include <sys/resource.h>
 #include <termios.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
@@ -30,6 +38,7 @@
 #include "common/config/config.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/dds/network_flags.hpp"
+#include "common/dds/observer_topics.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/signals.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
@@ -92,6 +101,8 @@ int main(int argc, char** argv) {
   double duration_s = 0.0;
   double stale_s = 0.5;
   bool json = false, lines = false, tui = false;
+  bool full_rate = false;
+  int nice = 19;
   app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", profile, "Fast DDS profile (default: loopback)");
   teleop::dds::NetworkFlags net_flags;
@@ -106,6 +117,13 @@ int main(int argc, char** argv) {
   auto* json_opt = app.add_flag("--json", json, "one JSON object per line, for scripts");
   auto* lines_opt = app.add_flag("--lines", lines, "scrolling text log (default off a terminal)");
   auto* tui_opt = app.add_flag("--tui", tui, "screen refreshed in place (default on a terminal)");
+  app.add_flag("--full-rate", full_rate,
+               "read the full-rate topics (slave_state 1 kHz, master_command, master_state, "
+               "mesh_frame) instead of the 10 Hz *_monitor copies; loads the loops");
+  app.add_option("--nice", nice,
+                 "scheduling niceness of the monitor, 0-19: it yields the CPU to the server and "
+                 "master on the same machine")
+      ->capture_default_str();
   json_opt->excludes(lines_opt)->excludes(tui_opt);
   lines_opt->excludes(tui_opt);
   try {
@@ -126,6 +144,11 @@ int main(int argc, char** argv) {
     config::check_flag("--period", period_s, 0.05, 60.0);
     config::check_flag("--duration", duration_s, 0.0, 1e7);
     config::check_flag("--stale", stale_s, 0.05, 3600.0);
+    config::check_flag("--nice", nice, 0, 19);
+    // before the participant: every DDS thread inherits the priority
+    if (nice > 0 && setpriority(PRIO_PROCESS, 0, nice) != 0) {
+      std::cerr << "teleop_monitor: warning: cannot lower the priority (--nice " << nice << ")\n";
+    }
     const auto opts =
         teleop::dds::resolve_participant_options(profile, domain, "teleop_monitor", net_flags);
     teleop::dds::profile_file(opts.profile);
@@ -142,6 +165,9 @@ int main(int argc, char** argv) {
     Snapshot snap;
     snap.domain = opts.domain;
     snap.profile = opts.profile;
+    snap.full_rate = full_rate;
+    const teleop::dds::ObserverTopics topics =
+        teleop::dds::observer_topics(teleop::dds::ObserverKind::kMonitor, full_rate);
     struct TopicDef {
       const char* name;
       bool latched;
@@ -172,19 +198,36 @@ int main(int argc, char** argv) {
 
     namespace tdds = teleop::dds;
     using Info = eprosima::fastdds::dds::SampleInfo;
-    tdds::Reader<SlaveStatePubSubType> r_slave(p, tdds::topics::kSlaveState,
-                                               tdds::TopicQos::kStream,
-                                               [&](const SlaveState& s, const Info&) {
-                                                 std::lock_guard<std::mutex> l(m);
-                                                 snap.slave = s;
-                                                 snap.have_slave = true;
-                                                 counter("slave_state").hit();
-                                               });
-    tdds::Reader<MasterCommandPubSubType> r_cmd(
-        p, tdds::topics::kMasterCommand, tdds::TopicQos::kStream,
-        [&](const MasterCommand&, const Info&) { counter("master_command").hit(); });
-    tdds::Reader<MasterStatePubSubType> r_master(p, tdds::topics::kMasterState,
-                                                 tdds::TopicQos::kStream,
+    // without --full-rate, master_command's row is the server's count of commands received
+    bool have_commands_base = false;
+    std::uint64_t commands_seen = 0;
+    tdds::Reader<SlaveStatePubSubType> r_slave(
+        p, topics.slave_state.name, topics.slave_state.qos, [&](const SlaveState& s, const Info&) {
+          std::lock_guard<std::mutex> l(m);
+          snap.slave = s;
+          snap.have_slave = true;
+          counter("slave_state").hit();
+          if (topics.master_command) return;
+          const std::uint64_t c = s.commands_received();
+          if (!have_commands_base || c < commands_seen) {  // first sample, or a new server
+            have_commands_base = true;
+            commands_seen = c;
+            return;
+          }
+          if (c > commands_seen) {
+            Counter& cmd = counter("master_command");
+            cmd.last_ns.store(teleop::now_ns());
+            cmd.count.fetch_add(c - commands_seen);
+            commands_seen = c;
+          }
+        });
+    std::optional<tdds::Reader<MasterCommandPubSubType>> r_cmd;
+    if (topics.master_command) {
+      r_cmd.emplace(p, tdds::topics::kMasterCommand, tdds::TopicQos::kStream,
+                    [&](const MasterCommand&, const Info&) { counter("master_command").hit(); });
+    }
+    tdds::Reader<MasterStatePubSubType> r_master(p, topics.master_state.name,
+                                                 topics.master_state.qos,
                                                  [&](const MasterState& s, const Info&) {
                                                    std::lock_guard<std::mutex> l(m);
                                                    snap.master = s;
@@ -215,7 +258,7 @@ int main(int argc, char** argv) {
         p, tdds::topics::kMeshTopology, tdds::TopicQos::kLatched,
         [&](const MeshTopology&, const Info&) { counter("mesh_topology").hit(); });
     tdds::Reader<MeshFramePubSubType> r_frames(
-        p, tdds::topics::kMeshFrame, tdds::TopicQos::kStream,
+        p, topics.mesh_frame.name, topics.mesh_frame.qos,
         [&](const MeshFrame&, const Info&) { counter("mesh_frame").hit(); });
     tdds::Reader<EventPubSubType> r_events(
         p, tdds::topics::kEvents, tdds::TopicQos::kEventLog, [&](const Event& e, const Info&) {
@@ -240,7 +283,10 @@ int main(int argc, char** argv) {
       next += static_cast<std::int64_t>(period_s * 1e9);
       while (!stop_requested() && now_ns() < next) {
         if (keys.quit_pressed()) request_stop();
-        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        // the screen polls the keyboard; the other modes only wait for the next period
+        const std::int64_t step_ns = mode == Mode::kTui ? 20'000'000 : 100'000'000;
+        std::this_thread::sleep_for(std::chrono::nanoseconds(
+            std::max<std::int64_t>(0, std::min(step_ns, next - now_ns()))));
       }
       if (stop_requested()) break;
       const auto now = now_ns();

@@ -3,7 +3,7 @@
 // late joiner up to date.
 //
 //   teleop_viewer [--domain D] [--profile P] [--width 1280] [--height 720] [--fps 0]
-//                 [--history 10] [--duration S]
+//                 [--history 10] [--duration S] [--full-rate]
 //   teleop_viewer --domain D --snapshot out.png [--after 2.0] [--timeout 30]     (headless)
 //
 // Window: the scene (planes, deformable meshes, robot skeleton, tip, contact force arrow) on the
@@ -11,6 +11,10 @@
 // framebuffer; once the scene, a slave state and every mesh have arrived it waits --after seconds
 // of live data, renders, writes a PNG and exits. Needs an X display: under Xvfb for tests and
 // documentation (xvfb-run -a -s "-screen 0 1280x720x24" teleop_viewer ...).
+//
+// Topics: by default the 60 Hz copies of the state (teleop/slave_state_view,
+// teleop/master_state_view, written off the loops' threads) and the mesh frames (60 Hz), so any
+// number of viewers costs the 1 kHz loops nothing; --full-rate reads the 1 kHz topics.
 //
 // Threads: one DDS reader thread per topic copies each sample into ViewerData (short mutex, no
 // allocation after warm-up); the render loop copies what changed once per frame and draws at the
@@ -50,6 +54,7 @@
 #include "common/config/config.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/dds/network_flags.hpp"
+#include "common/dds/observer_topics.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/signals.hpp"
 #include "common/util/stats.hpp"
@@ -83,6 +88,7 @@ struct Options {
   bool hide_panel = false;
   bool wireframe = false;
   bool displacement = false;
+  bool full_rate = false;  ///< read the 1 kHz topics instead of the 60 Hz *_view copies
 };
 
 /// Checks the flags that CLI11 cannot; throws config::ConfigError naming flag, value and range.
@@ -216,14 +222,16 @@ class ViewerApp {
     r_topology_ = std::make_unique<teleop::dds::Reader<MeshTopologyPubSubType>>(
         p, teleop::dds::topics::kMeshTopology, teleop::dds::TopicQos::kLatched,
         [this](const MeshTopology& t, const SampleInfo&) { data_.on_topology(t); });
+    const teleop::dds::ObserverTopics topics =
+        teleop::dds::observer_topics(teleop::dds::ObserverKind::kView, options_.full_rate);
     r_frames_ = std::make_unique<teleop::dds::Reader<MeshFramePubSubType>>(
-        p, teleop::dds::topics::kMeshFrame, teleop::dds::TopicQos::kStream,
+        p, topics.mesh_frame.name, topics.mesh_frame.qos,
         [this](const MeshFrame& f, const SampleInfo&) { data_.on_mesh_frame(f); });
     r_slave_ = std::make_unique<teleop::dds::Reader<SlaveStatePubSubType>>(
-        p, teleop::dds::topics::kSlaveState, teleop::dds::TopicQos::kStream,
+        p, topics.slave_state.name, topics.slave_state.qos,
         [this](const SlaveState& s, const SampleInfo&) { data_.on_slave_state(s, now_ns()); });
     r_master_ = std::make_unique<teleop::dds::Reader<MasterStatePubSubType>>(
-        p, teleop::dds::topics::kMasterState, teleop::dds::TopicQos::kStream,
+        p, topics.master_state.name, topics.master_state.qos,
         [this](const MasterState& s, const SampleInfo&) { data_.on_master_state(s, now_ns()); });
     r_stats_ = std::make_unique<teleop::dds::Reader<ServerStatsPubSubType>>(
         p, teleop::dds::topics::kServerStats, teleop::dds::TopicQos::kReliableStream,
@@ -596,6 +604,8 @@ int main(int argc, char** argv) {
                  "scheduling niceness of the viewer, 0-19: it yields the CPU to the server and "
                  "master on the same machine")
       ->capture_default_str();
+  app.add_flag("--full-rate", o.full_rate,
+               "read the 1 kHz state topics instead of the 60 Hz *_view copies; loads the loops");
   app.add_flag("--hide-panel", o.hide_panel, "start without the plot panel (key H)");
   app.add_flag("--wireframe", o.wireframe, "start with wireframe meshes (key W)");
   app.add_flag("--displacement", o.displacement,

@@ -163,6 +163,9 @@ std::vector<std::string> render_screen(const Snapshot& s, int rows, int cols) {
   out.push_back(fmt("teleop_monitor  domain %d  profile %s  up %.1f s   (q: quit)", s.domain,
                     s.profile.c_str(), s.t_s));
   out.push_back("status  " + s.status());
+  out.push_back(s.full_rate ? "topics  full rate (--full-rate): every sample"
+                            : "topics  10 Hz monitor copies (*_monitor); master_command counted "
+                              "by the server; --full-rate for every sample");
   out.push_back(s.have_scene ? scene_line(s.scene) : "scene   (none yet)");
   out.push_back("");
   out.push_back(fmt("%-22s %10s %12s %10s", "topic", "rate Hz", "age", "samples"));
@@ -222,6 +225,7 @@ std::string render_json(const Snapshot& s) {
   std::string o = "{\"type\": \"status\", \"t\": " + num(s.t_s) +
                   ", \"domain\": " + std::to_string(s.domain) +
                   ", \"profile\": " + json_string(s.profile) +
+                  ", \"full_rate\": " + (s.full_rate ? "true" : "false") +
                   ", \"waiting\": " + (s.waiting() ? "true" : "false") +
                   ", \"status\": " + json_string(s.status()) + ", \"topics\": {";
   bool first = true;
@@ -259,7 +263,8 @@ std::string render_json(const Snapshot& s) {
          ", \"step_us_p99\": " + num(s.stats.step_us_p99()) +
          ", \"overruns\": " + std::to_string(s.stats.overruns()) +
          ", \"rejected\": " + std::to_string(rejected(s.stats)) +
-         ", \"watchdog_trips\": " + std::to_string(s.stats.watchdog_trips()) + "}";
+         ", \"watchdog_trips\": " + std::to_string(s.stats.watchdog_trips()) +
+         ", \"matched_state_readers\": " + std::to_string(s.stats.matched_state_readers()) + "}";
   } else {
     o += ", \"server\": null";
   }

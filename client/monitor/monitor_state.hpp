@@ -34,6 +34,9 @@ struct Snapshot {
   double t_s = 0.0;  ///< since the monitor started [s]
   int domain = 0;
   std::string profile;
+  /// Reading the full-rate topics (--full-rate) instead of the 10 Hz `_monitor` copies; then
+  /// master_command is the master's own topic, else the server's count of commands received.
+  bool full_rate = false;
   std::vector<TopicView> topics;  ///< in display order
   bool have_scene = false;
   SceneDescription scene;

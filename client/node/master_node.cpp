@@ -20,6 +20,7 @@
 #include "client/node/dds_slave_link.hpp"
 #include "client/node/server_health.hpp"
 #include "common/dds/endpoint.hpp"
+#include "common/dds/rate_limited_publisher.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/csv.hpp"
@@ -89,6 +90,9 @@ struct MasterNode::Impl {
   dds::Writer<MasterCommandPubSubType> command_writer;
   dds::Writer<MasterStatePubSubType> state_writer;
   dds::Writer<EventPubSubType> event_writer;
+  // observers' rate-limited copies of MasterState, written from their own thread: the haptic
+  // loop's cost does not grow with the number of observers (docs/topics.md)
+  dds::RateLimitedPublisher<MasterStatePubSubType> state_views;
   dds::Mailbox<ReceivedState> mailbox;
   dds::Mailbox<SceneDescription> scene_box;
   std::atomic<std::uint64_t> states_received{0};
@@ -114,7 +118,10 @@ struct MasterNode::Impl {
         participant(o.dds),
         command_writer(participant, dds::topics::kMasterCommand, dds::TopicQos::kStream),
         state_writer(participant, dds::topics::kMasterState, dds::TopicQos::kStream),
-        event_writer(participant, dds::topics::kEvents, dds::TopicQos::kEventLog) {
+        event_writer(participant, dds::topics::kEvents, dds::TopicQos::kEventLog),
+        state_views(participant,
+                    {{dds::topics::kMasterStateView, dds::topics::kViewRateHz},
+                     {dds::topics::kMasterStateMonitor, dds::topics::kMonitorRateHz}}) {
     state_reader = std::make_unique<dds::Reader<SlaveStatePubSubType>>(
         participant, dds::topics::kSlaveState, dds::TopicQos::kStream,
         [this](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo&) {
@@ -277,6 +284,7 @@ struct MasterNode::Impl {
     ms.passivity_observer_j(ps.observer_j);
     ms.passivity_dissipated_j(ps.dissipated_j);
     state_writer.write(ms);
+    state_views.offer(ms);  // a copy under a try-lock; the views are written elsewhere
   }
 
   void log_row(const MasterCycle& cycle, double t_s, double rtt_ms, double loop_delay_ms) {

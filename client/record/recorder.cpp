@@ -61,7 +61,7 @@ Recorder::Recorder(dds::Participant& participant, const RecorderOptions& options
     t->id = file_->add_topic(e.name, e.type, qos_name(e.qos));
     auto* topic = participant.topic(e.name, fdds::TypeSupport(new RawPubSubType(e.make_type())));
     fdds::DataReaderQos q = dds::reader_qos(participant.subscriber(), e.qos);
-    if (e.qos == dds::TopicQos::kStream) {
+    if (e.qos == dds::TopicQos::kStream || e.qos == dds::TopicQos::kLatest) {
       // a recorder takes every sample: a deeper reader history absorbs bursts while its
       // thread is descheduled (writers are best effort, so this never slows them)
       q.history().depth = 64;

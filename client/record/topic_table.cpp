@@ -27,6 +27,13 @@ const std::vector<TopicEntry>& known_topics() {
       {t::kMeshFrame, "", TopicQos::kStream, &make<MeshFramePubSubType>},
       {t::kEvents, "", TopicQos::kEventLog, &make<EventPubSubType>},
       {t::kServerStats, "", TopicQos::kReliableStream, &make<ServerStatsPubSubType>},
+      // the observers' rate-limited copies: recorded too, so that a played session reaches
+      // monitors and viewers on their default (rate-limited) topics
+      {t::kSlaveStateView, "", TopicQos::kLatest, &make<SlaveStatePubSubType>},
+      {t::kSlaveStateMonitor, "", TopicQos::kLatest, &make<SlaveStatePubSubType>},
+      {t::kMasterStateView, "", TopicQos::kLatest, &make<MasterStatePubSubType>},
+      {t::kMasterStateMonitor, "", TopicQos::kLatest, &make<MasterStatePubSubType>},
+      {t::kMeshFrameMonitor, "", TopicQos::kLatest, &make<MeshFramePubSubType>},
       {"teleop/device_state", "", TopicQos::kStream, &make<DeviceStatePubSubType>},
       {"teleop/device_command", "", TopicQos::kStream, &make<DeviceCommandPubSubType>},
   };
@@ -58,6 +65,8 @@ std::string qos_name(dds::TopicQos qos) {
       return "event_log";
     case dds::TopicQos::kReliableStream:
       return "reliable_stream";
+    case dds::TopicQos::kLatest:
+      return "latest";
   }
   return "stream";
 }
@@ -67,6 +76,7 @@ dds::TopicQos qos_from_name(const std::string& name) {
   if (name == "latched") return dds::TopicQos::kLatched;
   if (name == "event_log") return dds::TopicQos::kEventLog;
   if (name == "reliable_stream") return dds::TopicQos::kReliableStream;
+  if (name == "latest") return dds::TopicQos::kLatest;
   throw std::invalid_argument("unknown QoS class '" + name + "'");
 }
 

@@ -607,6 +607,16 @@ void apply(Qos& q, TopicQos qos) {
       q.history().kind = KEEP_LAST_HISTORY_QOS;
       q.history().depth = 10;
       break;
+    case TopicQos::kLatest:
+      // best effort: no acknowledgements from every observer back to the writer's process.
+      // Volatile: a Fast DDS 2.9 best-effort writer does not send its history to a late reader
+      // (rate_limited_publisher_test), so transient local would promise nothing; a late
+      // observer gets the next copy, at most one period (17 / 100 ms) after it matched.
+      q.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+      q.durability().kind = VOLATILE_DURABILITY_QOS;
+      q.history().kind = KEEP_LAST_HISTORY_QOS;
+      q.history().depth = 1;
+      break;
   }
 }
 }  // namespace

@@ -143,6 +143,8 @@ enum class TopicQos {
   kLatched,         ///< reliable, transient local, keep last 1: scene, mesh topology
   kEventLog,        ///< reliable, transient local, keep last 100: events
   kReliableStream,  ///< reliable, volatile, keep last 10: stats
+  kLatest,          ///< best effort, volatile, keep last 1: the rate-limited observer copies
+                    ///< (a late observer gets the next copy, within one period)
 };
 
 /// A participant with one publisher and one subscriber. Deletes all contained entities on
@@ -188,6 +190,16 @@ inline constexpr const char* kMeshTopology = "teleop/mesh_topology";
 inline constexpr const char* kMeshFrame = "teleop/mesh_frame";
 inline constexpr const char* kEvents = "teleop/events";
 inline constexpr const char* kServerStats = "teleop/server_stats";
+// Rate-limited copies for observers (docs/topics.md): written off the loops' threads, so the
+// number of observers does not load the 1 kHz path. `_view` at kViewRateHz for windows,
+// `_monitor` at kMonitorRateHz for terminals and services.
+inline constexpr const char* kSlaveStateView = "teleop/slave_state_view";
+inline constexpr const char* kSlaveStateMonitor = "teleop/slave_state_monitor";
+inline constexpr const char* kMasterStateView = "teleop/master_state_view";
+inline constexpr const char* kMasterStateMonitor = "teleop/master_state_monitor";
+inline constexpr const char* kMeshFrameMonitor = "teleop/mesh_frame_monitor";
+inline constexpr double kViewRateHz = 60.0;     ///< rate of the `_view` topics [Hz]
+inline constexpr double kMonitorRateHz = 10.0;  ///< rate of the `_monitor` topics [Hz]
 }  // namespace topics
 
 }  // namespace teleop::dds

@@ -1,12 +1,21 @@
 #include "server/node/mesh_publisher.hpp"
 
+#include <cmath>
+
+#include "common/dds/rate_limited_publisher.hpp"
 #include "server/node/state_message.hpp"
 
 namespace teleop::server {
 
 MeshPublisher::MeshPublisher(const sim::WorldModel& model, const sim::WorldData& data,
-                             dds::Writer<MeshFramePubSubType>& writer)
-    : model_(model), writer_(writer) {
+                             dds::Writer<MeshFramePubSubType>& writer,
+                             dds::Writer<MeshFramePubSubType>* monitor_writer,
+                             double monitor_rate_hz)
+    : model_(model), writer_(writer), monitor_writer_(monitor_writer) {
+  if (monitor_rate_hz > 0.0 && model.visual_rate_hz > monitor_rate_hz) {
+    monitor_every_ =
+        static_cast<std::uint64_t>(std::llround(model.visual_rate_hz / monitor_rate_hz));
+  }
   if (data.bodies.empty()) return;
   for (const sim::DeformableBodyData& b : data.bodies) back_.push_back(b.state.x);
   front_ = back_;
@@ -35,7 +44,10 @@ void MeshPublisher::offer(const sim::WorldData& data, double sim_time_s) {
 }
 
 void MeshPublisher::run() {
+  // observers' data: only the CPU the physics leaves (rate_limited_publisher.hpp)
+  dds::lower_this_thread_priority(10);
   MeshFrame frame;
+  std::uint64_t monitor_block = ~0ULL;
   while (true) {
     std::uint64_t no = 0;
     double t = 0.0;
@@ -48,9 +60,14 @@ void MeshPublisher::run() {
       no = frame_no_;
       t = time_s_;
     }
+    // the monitors' copy: the first frame of each block of monitor_every_ frames that we see
+    // (frames skipped under the try-lock do not make the monitors miss a block)
+    const bool to_monitor = monitor_writer_ && no / monitor_every_ != monitor_block;
+    if (to_monitor) monitor_block = no / monitor_every_;
     for (std::size_t i = 0; i < front_.size(); ++i) {
       pack_mesh_frame(model_.bodies[i].object_id, front_[i], no, t, frame);
       writer_.write(frame);
+      if (to_monitor) monitor_writer_->write(frame);
     }
   }
 }

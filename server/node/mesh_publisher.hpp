@@ -18,8 +18,12 @@ namespace teleop::server {
 class MeshPublisher {
  public:
   /// Starts the thread when the scene has deformable bodies (none: offer() does nothing).
+  /// `monitor_writer` (optional) gets every frame whose number is a multiple of
+  /// round(visual rate / monitor_rate_hz): the monitors' rate-limited copy.
   MeshPublisher(const sim::WorldModel& model, const sim::WorldData& data,
-                dds::Writer<MeshFramePubSubType>& writer);
+                dds::Writer<MeshFramePubSubType>& writer,
+                dds::Writer<MeshFramePubSubType>* monitor_writer = nullptr,
+                double monitor_rate_hz = 10.0);
   ~MeshPublisher();
   MeshPublisher(const MeshPublisher&) = delete;
   MeshPublisher& operator=(const MeshPublisher&) = delete;
@@ -33,6 +37,8 @@ class MeshPublisher {
 
   const sim::WorldModel& model_;
   dds::Writer<MeshFramePubSubType>& writer_;
+  dds::Writer<MeshFramePubSubType>* monitor_writer_;
+  std::uint64_t monitor_every_ = 1;
   std::mutex mutex_;
   std::condition_variable cv_;
   std::vector<Eigen::Matrix3Xd> back_, front_;  // same sizes from the start: no allocation

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "common/dds/endpoint.hpp"
+#include "common/dds/rate_limited_publisher.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/rate_loop.hpp"
@@ -45,9 +46,13 @@ struct ServerNode::Impl {
   dds::Writer<SlaveStatePubSubType> state_writer;
   dds::Writer<SceneDescriptionPubSubType> scene_writer;
   dds::Writer<EventPubSubType> event_writer;
-  dds::Writer<ServerStatsPubSubType> stats_writer;
   dds::Writer<MeshTopologyPubSubType> topology_writer;
   dds::Writer<MeshFramePubSubType> frame_writer;
+  dds::Writer<MeshFramePubSubType> frame_monitor_writer;
+  // observers' rate-limited copies of the state and the 1 Hz stats: written from their own
+  // threads, so the loop's cost does not grow with the number of observers (docs/topics.md)
+  dds::RateLimitedPublisher<SlaveStatePubSubType> state_views;
+  dds::RateLimitedPublisher<ServerStatsPubSubType> stats_publisher;
   CommandCounters counters;
   dds::Mailbox<ReceivedCommand> mailbox;
   // reader-thread state
@@ -76,9 +81,13 @@ struct ServerNode::Impl {
         state_writer(participant, dds::topics::kSlaveState, dds::TopicQos::kStream),
         scene_writer(participant, dds::topics::kScene, dds::TopicQos::kLatched),
         event_writer(participant, dds::topics::kEvents, dds::TopicQos::kEventLog),
-        stats_writer(participant, dds::topics::kServerStats, dds::TopicQos::kReliableStream),
         topology_writer(participant, dds::topics::kMeshTopology, dds::TopicQos::kLatched),
-        frame_writer(participant, dds::topics::kMeshFrame, dds::TopicQos::kStream) {
+        frame_writer(participant, dds::topics::kMeshFrame, dds::TopicQos::kStream),
+        frame_monitor_writer(participant, dds::topics::kMeshFrameMonitor, dds::TopicQos::kLatest),
+        state_views(participant, {{dds::topics::kSlaveStateView, dds::topics::kViewRateHz},
+                                  {dds::topics::kSlaveStateMonitor, dds::topics::kMonitorRateHz}}),
+        stats_publisher(participant, {{dds::topics::kServerStats, 0.0}},
+                        dds::TopicQos::kReliableStream) {
     scratch.reserve(step_us.capacity());
     command_reader = std::make_unique<dds::Reader<MasterCommandPubSubType>>(
         participant, dds::topics::kMasterCommand, dds::TopicQos::kStream,
@@ -215,7 +224,7 @@ struct ServerNode::Impl {
     st.matched_state_readers(state_writer.matched());
     st.matched_command_writers(command_reader->matched());
     st.commands_rejected_passivity(counters.rejected_passivity.load());
-    stats_writer.write(st);
+    stats_publisher.offer(st, /*wake=*/true);  // written by the publisher's thread
     last_stats_ns = t_ns;
     last_stats_steps = cycle.steps();
   }
@@ -223,7 +232,8 @@ struct ServerNode::Impl {
   int run() {
     install_stop_signal_handlers();
     publish_scene();
-    MeshPublisher meshes(model, cycle.data(), frame_writer);
+    MeshPublisher meshes(model, cycle.data(), frame_writer, &frame_monitor_writer,
+                         dds::topics::kMonitorRateHz);
     const auto visual_every = std::max<std::uint64_t>(
         1, static_cast<std::uint64_t>(std::llround(options.rate_hz / model.visual_rate_hz)));
     const std::int64_t t_start = now_ns();
@@ -243,6 +253,7 @@ struct ServerNode::Impl {
       step_us_all.record(cycle.step_time_us());
       pack_slave_state(cycle, counters.received.load(), now_ns(), state);
       state_writer.write(state);
+      state_views.offer(state);  // a copy under a try-lock; the views are written elsewhere
       if (cycle.steps() % visual_every == 0) meshes.offer(cycle.data(), cycle.output().sim_time_s);
       report_rejections(t0);
       drain_events();

@@ -268,8 +268,12 @@ TEST(Loopback, ObserversJoinAndLeaveWithoutDisturbingTheLoop) {
   Process master(kMasterBinary, {"--domain", d, "--samples", "4000", "--summary-json", master_json},
                  "obs_master");
   std::this_thread::sleep_for(std::chrono::milliseconds(700));
-  Process mon1(monitor, {"--domain", d, "--duration", "2", "--period", "0.5"}, "obs_mon1");
-  Process mon2(monitor, {"--domain", d, "--duration", "1.5", "--period", "0.5"}, "obs_mon2");
+  // full-rate observers (the 1 kHz topics), the heaviest kind; observers_test.cpp covers the
+  // default, rate-limited ones
+  Process mon1(monitor, {"--domain", d, "--duration", "2", "--period", "0.5", "--full-rate"},
+               "obs_mon1");
+  Process mon2(monitor, {"--domain", d, "--duration", "1.5", "--period", "0.5", "--full-rate"},
+               "obs_mon2");
   ASSERT_EQ(mon1.wait_for(30.0), 0) << mon1.err();
   ASSERT_EQ(mon2.wait_for(30.0), 0) << mon2.err();
   ASSERT_EQ(master.wait_for(60.0), 0) << master.err();

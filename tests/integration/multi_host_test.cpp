@@ -163,7 +163,8 @@ class MultiHost : public ::testing::Test {
     for (auto& o : observers) {
       const std::string out = o->out();
       EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos) << name << "\n" << out;
-      EXPECT_GT(max_rate(out, "slave_state"), 100.0) << name << "\n" << out;
+      // the monitor's default topics: the 10 Hz copies (teleop/slave_state_monitor)
+      EXPECT_GT(max_rate(out, "slave_state"), 4.0) << name << "\n" << out;
     }
     if (ds0) ds0->signal(SIGTERM);
     if (ds1) ds1->signal(SIGTERM);

@@ -39,6 +39,11 @@ inline constexpr int kMultiHostSecureLanUnicast = 113;  // multi_host_test, secu
 inline constexpr int kMultiHostSecureWanTcp = 114;      // multi_host_test, secure_wan_tcp_*
 inline constexpr int kServerFaultVerdict = 130;  // server_health_test: a fault on the server
 inline constexpr int kServerRestart = 131;       // server_health_test: kill -9 and restart
+inline constexpr int kObserverRates = 115;     // observers_test: monitor on the 10 Hz topics
+inline constexpr int kObserverSession = 116;   // observers_test: 8 observers, default scene
+inline constexpr int kObserverLate = 117;      // observers_test: a late observer
+inline constexpr int kRateLimitedUnit = 118;   // rate_limited_publisher_test: 118, 119, 120
+// 121-124: reserved for observer tests
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains

@@ -118,8 +118,14 @@ TEST(RawType, KeyOfAKeyedTopicMatchesTheGeneratedOne) {
 }
 
 TEST(TopicTable, EveryDesignTopicWithItsQos) {
-  EXPECT_EQ(known_topics().size(), 10u);
+  EXPECT_EQ(known_topics().size(), 15u);
   ASSERT_NE(find_topic("teleop/events"), nullptr);
+  // the observers' rate-limited copies are recorded (and played) with their own QoS class
+  ASSERT_NE(find_topic("teleop/slave_state_monitor"), nullptr);
+  EXPECT_EQ(find_topic("teleop/slave_state_monitor")->qos, dds::TopicQos::kLatest);
+  EXPECT_EQ(find_topic("teleop/slave_state_view")->type, "teleop::SlaveState");
+  EXPECT_EQ(find_topic("teleop/mesh_frame_monitor")->type, "teleop::MeshFrame");
+  EXPECT_FALSE(is_latched(dds::TopicQos::kLatest));  // --seek does not replay them first
   EXPECT_EQ(find_topic("teleop/events")->qos, dds::TopicQos::kEventLog);
   EXPECT_EQ(find_topic("teleop/scene")->type, "teleop::SceneDescription");
   for (const auto& e : known_topics()) {

@@ -1,0 +1,363 @@
+// teleop_bench observers --out DIR [--quick] [--no-chart] [--counts 0,8,16,32] [--rounds 3]
+//                        [--duration 10] [--full-rate-counts 32] [--domain 110] [--bin-dir DIR]
+//
+// Do observers load the loop? A real session per row: teleop_server (default scene) and
+// teleop_master (simulated device, --duration S after homing) as separate processes on the
+// loopback profile and a domain of its own, with N observers as separate processes started
+// before the master and stopped after it. Half of them (rounded up) are real `teleop_monitor
+// --json` processes, the other half `teleop_bench observer-probe --kind view`: a headless
+// subscriber that reads exactly the topics teleop_viewer reads (common/dds/observer_topics.hpp),
+// without drawing. Both use the observers' defaults (the rate-limited topics); the full-rate
+// rows (--full-rate-counts, one session each, after the rounds) pass --full-rate to every
+// observer, as earlier versions subscribed. Every observer runs at nice 19 (the viewer's and the
+// monitor's default --nice); the rate_limited_nice0 rows (--nice0-counts) run the default
+// topics at nice 0, to separate what the topics and what the priority each bring.
+//
+// The observer counts are interleaved within each round (0, 8, 16, 32, 0, 8, ...), so a change
+// of the machine's load spreads over all of them. Per session: the master's round trip p50 /
+// p99 / p99.9, overruns, link losses, commands sent / received and verdict; the server's
+// watchdog trips during the session (the one trip when the master stops is not counted), step
+// p99 and overruns; the 1-minute load average at the start; how many observers got the scene
+// and their median slave_state rate.
+//
+// Writes DIR/observers.csv and DIR/observers.png (tests/charts/observers.py).
+#include <signal.h>
+#include <stdlib.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/config/config.hpp"
+#include "common/dds/endpoint.hpp"
+#include "common/dds/observer_topics.hpp"
+#include "common/util/clock.hpp"
+#include "common/util/csv.hpp"
+#include "common/util/registry.hpp"
+#include "common/util/signals.hpp"
+#include "common/util/stats.hpp"
+#include "teleop/idl/TeleopPubSubTypes.h"
+#include "tests/support/process.hpp"
+
+namespace teleop::bench {
+namespace {
+
+namespace fs = std::filesystem;
+using teleop::test::json_nested;
+using teleop::test::json_value;
+using teleop::test::Process;
+
+std::string self_exe() {
+  char self[4096];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  if (n <= 0) throw std::runtime_error("cannot find /proc/self/exe");
+  self[n] = '\0';
+  return self;
+}
+
+// ---------------------------------------------------------------------------------------------
+// observer-probe: what teleop_viewer subscribes to, without a window
+
+int observer_probe(const CommandArgs& args) {
+  const std::string kind_text = args.option("--kind", "view");
+  if (kind_text != "view" && kind_text != "monitor") {
+    throw config::ConfigError("--kind '" + kind_text + "': expected view or monitor");
+  }
+  const bool full_rate = args.option("--full-rate", "0") == "1";
+  const int domain = std::stoi(args.option("--domain", "110"));
+  config::check_flag("--domain", static_cast<double>(domain), 0.0, 232.0);
+  const double duration_s = std::stod(args.option("--duration", "0"));
+  config::check_flag("--duration", duration_s, 0.0, 1e6);
+  // as teleop_viewer does by default (--nice 19), before any DDS thread starts
+  const double nice = std::stod(args.option("--nice", "19"));
+  config::check_flag("--nice", nice, 0.0, 19.0);
+  if (nice > 0 && setpriority(PRIO_PROCESS, 0, static_cast<int>(nice)) != 0) {
+    std::fprintf(stderr, "observer-probe: cannot lower the priority (--nice %.0f)\n", nice);
+  }
+  const dds::ObserverTopics t = dds::observer_topics(
+      kind_text == "view" ? dds::ObserverKind::kView : dds::ObserverKind::kMonitor, full_rate);
+  dds::Participant p(dds::ParticipantOptions{"loopback", domain, "observer-probe"});
+  install_stop_signal_handlers();
+  std::atomic<std::uint64_t> slave{0}, master{0}, frames{0}, commands{0}, scene{0}, stats{0};
+  using Info = eprosima::fastdds::dds::SampleInfo;
+  // the viewer copies each sample into its store; a copy here costs about the same
+  SlaveState last_slave;
+  MasterState last_master;
+  MeshFrame last_frame;
+  dds::Reader<SceneDescriptionPubSubType> r_scene(
+      p, dds::topics::kScene, dds::TopicQos::kLatched,
+      [&](const SceneDescription&, const Info&) { scene.fetch_add(1); });
+  dds::Reader<MeshTopologyPubSubType> r_topology(p, dds::topics::kMeshTopology,
+                                                 dds::TopicQos::kLatched,
+                                                 [&](const MeshTopology&, const Info&) {});
+  dds::Reader<MeshFramePubSubType> r_frames(p, t.mesh_frame.name, t.mesh_frame.qos,
+                                            [&](const MeshFrame& f, const Info&) {
+                                              last_frame = f;
+                                              frames.fetch_add(1);
+                                            });
+  dds::Reader<SlaveStatePubSubType> r_slave(p, t.slave_state.name, t.slave_state.qos,
+                                            [&](const SlaveState& s, const Info&) {
+                                              last_slave = s;
+                                              slave.fetch_add(1);
+                                            });
+  dds::Reader<MasterStatePubSubType> r_master(p, t.master_state.name, t.master_state.qos,
+                                              [&](const MasterState& s, const Info&) {
+                                                last_master = s;
+                                                master.fetch_add(1);
+                                              });
+  dds::Reader<ServerStatsPubSubType> r_stats(
+      p, dds::topics::kServerStats, dds::TopicQos::kReliableStream,
+      [&](const ServerStats&, const Info&) { stats.fetch_add(1); });
+  dds::Reader<EventPubSubType> r_events(p, dds::topics::kEvents, dds::TopicQos::kEventLog,
+                                        [&](const Event&, const Info&) {});
+  std::unique_ptr<dds::Reader<MasterCommandPubSubType>> r_cmd;
+  if (t.master_command) {
+    r_cmd = std::make_unique<dds::Reader<MasterCommandPubSubType>>(
+        p, dds::topics::kMasterCommand, dds::TopicQos::kStream,
+        [&](const MasterCommand&, const Info&) { commands.fetch_add(1); });
+  }
+  const auto t0 = now_ns();
+  while (!stop_requested() && (duration_s <= 0 || seconds_between(t0, now_ns()) < duration_s)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  const double elapsed = seconds_between(t0, now_ns());
+  std::printf(
+      "{\"type\": \"probe\", \"kind\": \"%s\", \"full_rate\": %s, \"elapsed_s\": %.3f, "
+      "\"topics\": {\"slave_state\": {\"count\": %llu}, \"master_state\": {\"count\": %llu}, "
+      "\"mesh_frame\": {\"count\": %llu}, \"master_command\": {\"count\": %llu}, "
+      "\"server_stats\": {\"count\": %llu}, \"scene\": {\"count\": %llu}}}\n",
+      kind_text.c_str(), full_rate ? "true" : "false", elapsed,
+      static_cast<unsigned long long>(slave.load()), static_cast<unsigned long long>(master.load()),
+      static_cast<unsigned long long>(frames.load()),
+      static_cast<unsigned long long>(commands.load()),
+      static_cast<unsigned long long>(stats.load()), static_cast<unsigned long long>(scene.load()));
+  std::fflush(stdout);
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// observers: the sweep
+
+struct Binaries {
+  std::string server, master, monitor, self;
+};
+
+struct SessionResult {
+  double load1 = 0;
+  double rtt_p50 = NAN, rtt_p99 = NAN, rtt_p999 = NAN;
+  double master_overruns = NAN, link_losses = NAN, sent = NAN, received = NAN;
+  std::string verdict = "?";
+  double watchdog_trips = NAN, server_step_p99_us = NAN, server_overruns = NAN;
+  int observers_with_scene = 0;
+  double monitor_state_hz = NAN;  ///< median over the monitors of their slave_state rate
+  double view_state_hz = NAN;     ///< median over the view probes of their slave_state rate
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+/// The count of `topic` in the last JSON object of an observer's output that has it.
+double last_count(const std::string& out, const std::string& topic) {
+  const std::string key = "\"" + topic + "\": {\"count\": ";
+  const auto pos = out.rfind(key);
+  if (pos == std::string::npos) return 0.0;
+  return std::atof(out.c_str() + pos + key.size());
+}
+
+SessionResult run_session(const Binaries& bin, int observers, bool full_rate, int nice, int domain,
+                          double duration_s, const fs::path& work) {
+  SessionResult r;
+  double load[3] = {0, 0, 0};
+  if (getloadavg(load, 3) > 0) r.load1 = load[0];
+  const std::string d = std::to_string(domain);
+  const std::string tag =
+      std::to_string(observers) + (full_rate ? "f" : "r") + "n" + std::to_string(nice);
+  const std::string server_json = (work / ("server_" + tag + ".json")).string();
+  const std::string master_json = (work / ("master_" + tag + ".json")).string();
+  fs::remove(server_json);
+  fs::remove(master_json);
+  Process server(bin.server, {"--domain", d, "--summary-json", server_json, "--quiet"},
+                 "obs_bench_server");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  std::vector<std::unique_ptr<Process>> obs;
+  std::vector<double> started_s;
+  const auto t0 = now_ns();
+  for (int i = 0; i < observers; ++i) {
+    const bool monitor = i % 2 == 0;
+    std::vector<std::string> a;
+    if (monitor) {
+      a = {"--domain", d, "--json", "--period", "1", "--nice", std::to_string(nice)};
+      if (full_rate) a.push_back("--full-rate");
+      obs.push_back(std::make_unique<Process>(bin.monitor, a, "obs_bench_mon" + std::to_string(i)));
+    } else {
+      a = {"observer-probe",
+           "--out",
+           work.string(),
+           "--kind",
+           "view",
+           "--domain",
+           d,
+           "--full-rate",
+           full_rate ? "1" : "0",
+           "--nice",
+           std::to_string(nice)};
+      obs.push_back(std::make_unique<Process>(bin.self, a, "obs_bench_view" + std::to_string(i)));
+    }
+    started_s.push_back(seconds_between(t0, now_ns()));
+  }
+  // let every observer start and discover the others before the session starts: the steady
+  // state is measured (32 participants starting at once on 2 cores take a few seconds of CPU)
+  std::this_thread::sleep_for(std::chrono::milliseconds(2000 + 150 * observers));
+  Process master(bin.master,
+                 {"--domain", d, "--duration", std::to_string(duration_s), "--summary-json",
+                  master_json, "--quiet"},
+                 "obs_bench_master");
+  const int mst = master.wait_for(duration_s + 60.0);
+  const double stopped_s = seconds_between(t0, now_ns());
+  for (auto& o : obs) o->signal(SIGINT);
+  std::vector<double> monitor_rates, view_rates;
+  for (std::size_t i = 0; i < obs.size(); ++i) {
+    if (obs[i]->wait_for(20.0) < 0) obs[i]->signal(SIGKILL);
+    const std::string out = obs[i]->out();
+    if (last_count(out, "scene") > 0 || out.find("\"type\": \"scene\"") != std::string::npos) {
+      ++r.observers_with_scene;
+    }
+    const double alive = stopped_s - started_s[i];
+    if (alive > 0) {
+      (i % 2 == 0 ? monitor_rates : view_rates).push_back(last_count(out, "slave_state") / alive);
+    }
+  }
+  server.signal(SIGTERM);
+  server.wait_for(20.0);
+  if (mst != 0) {
+    std::fprintf(stderr, "observers: master exited with %d: %s\n", mst, master.err().c_str());
+  }
+  const std::string m = Process::slurp(master_json);
+  const std::string s = Process::slurp(server_json);
+  r.rtt_p50 = json_nested(m, "rtt_ms", "p50");
+  r.rtt_p99 = json_nested(m, "rtt_ms", "p99");
+  r.rtt_p999 = json_nested(m, "rtt_ms", "p999");
+  r.master_overruns = json_value(m, "overruns");  // the first "overruns" key is the loop's
+  r.link_losses = json_value(m, "link_losses");
+  r.sent = json_value(m, "sent");
+  r.received = json_value(m, "received");
+  const auto v = m.find("\"verdict\": \"");
+  if (v != std::string::npos) r.verdict = m.substr(v + 12, m.find('"', v + 12) - (v + 12));
+  // the master's end stops the commands: the server's watchdog trips once then, by design
+  const double trips = json_value(s, "watchdog_trips");
+  r.watchdog_trips = std::isnan(trips) ? NAN : std::max(0.0, trips - 1.0);
+  r.server_step_p99_us = json_nested(s, "step_us", "p99");
+  r.server_overruns = json_value(s, "overruns");
+  r.monitor_state_hz = median(monitor_rates);
+  r.view_state_hz = median(view_rates);
+  return r;
+}
+
+std::vector<int> parse_counts(const std::string& flag, const std::string& text) {
+  std::vector<int> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (item.empty()) continue;
+    char* end = nullptr;
+    const long v = std::strtol(item.c_str(), &end, 10);
+    if (*end != '\0' || v < 0 || v > 128) {
+      throw config::ConfigError(flag + " '" + text + "': '" + item +
+                                "' is not an observer count in [0, 128]");
+    }
+    out.push_back(static_cast<int>(v));
+  }
+  return out;
+}
+
+int observers_bench(const CommandArgs& args) {
+  const std::vector<int> counts =
+      parse_counts("--counts", args.option("--counts", args.quick ? "0,2" : "0,8,16,32"));
+  const std::vector<int> full_counts =
+      parse_counts("--full-rate-counts", args.option("--full-rate-counts", args.quick ? "" : "32"));
+  const std::vector<int> nice0_counts =
+      parse_counts("--nice0-counts", args.option("--nice0-counts", args.quick ? "" : "32"));
+  const double rounds = std::stod(args.option("--rounds", args.quick ? "1" : "3"));
+  config::check_flag("--rounds", rounds, 1.0, 100.0);
+  const double duration_s = std::stod(args.option("--duration", args.quick ? "3" : "10"));
+  config::check_flag("--duration", duration_s, 1.0, 600.0);
+  const double domain = std::stod(args.option("--domain", "110"));
+  config::check_flag("--domain", domain, 0.0, 232.0);
+  const fs::path self = self_exe();
+  const fs::path build =
+      fs::path(args.option("--bin-dir", self.parent_path().parent_path().parent_path().string()));
+  const Binaries bin{(build / "server/teleop_server").string(),
+                     (build / "client/teleop_master").string(),
+                     (build / "client/teleop_monitor").string(), self.string()};
+  for (const std::string& b : {bin.server, bin.master, bin.monitor}) {
+    if (!fs::exists(b)) {
+      throw config::ConfigError("--bin-dir '" + build.string() + "': " + b +
+                                " does not exist (build teleop_server, teleop_master and "
+                                "teleop_monitor)");
+    }
+  }
+  const fs::path work = args.out_dir / "observers_work";
+  fs::create_directories(work);
+  const std::string csv_path = (args.out_dir / "observers.csv").string();
+  CsvWriter csv(csv_path,
+                {"mode", "observers", "round", "load1", "rtt_ms_p50", "rtt_ms_p99", "rtt_ms_p999",
+                 "master_overruns", "link_losses", "commands_sent", "commands_received", "verdict",
+                 "server_watchdog_trips", "server_step_us_p99", "server_overruns",
+                 "observers_with_scene", "monitor_state_hz", "view_state_hz"});
+  auto run = [&](const char* mode, int n, int round) {
+    const std::string m = mode;
+    const SessionResult r =
+        run_session(bin, n, m == "full_rate", m == "rate_limited_nice0" ? 0 : 19,
+                    static_cast<int>(domain), duration_s, work);
+    csv.row_text({mode, std::to_string(n), std::to_string(round), format_number(r.load1),
+                  format_number(r.rtt_p50), format_number(r.rtt_p99), format_number(r.rtt_p999),
+                  format_number(r.master_overruns), format_number(r.link_losses),
+                  format_number(r.sent), format_number(r.received), r.verdict,
+                  format_number(r.watchdog_trips), format_number(r.server_step_p99_us),
+                  format_number(r.server_overruns), std::to_string(r.observers_with_scene),
+                  format_number(r.monitor_state_hz), format_number(r.view_state_hz)});
+    csv.flush();
+    std::printf(
+        "%-12s %3d observers round %d  load %.2f  rtt p50 %.3f p99 %.3f ms  master overruns "
+        "%.0f  link losses %.0f  received %.0f/%.0f  %s  watchdog %.0f  server step p99 %.1f "
+        "us overruns %.0f  scene %d/%d  state at monitors %.1f Hz, views %.1f Hz\n",
+        mode, n, round, r.load1, r.rtt_p50, r.rtt_p99, r.master_overruns, r.link_losses, r.received,
+        r.sent, r.verdict.c_str(), r.watchdog_trips, r.server_step_p99_us, r.server_overruns,
+        r.observers_with_scene, n, r.monitor_state_hz, r.view_state_hz);
+    std::fflush(stdout);
+  };
+  for (int round = 1; round <= static_cast<int>(rounds); ++round) {
+    for (const int n : counts) run("rate_limited", n, round);
+  }
+  for (const int n : full_counts) run("full_rate", n, 1);
+  for (const int n : nice0_counts) run("rate_limited_nice0", n, 1);
+  csv.flush();
+  if (!args.no_chart) {
+    run_chart_script("observers.py", {csv_path, (args.out_dir / "observers.png").string()});
+  }
+  return 0;
+}
+
+TELEOP_REGISTER_COMMAND(bench, "observers",
+                        "server + master with 0-32 observer processes: round trip, overruns, "
+                        "link losses, watchdog trips",
+                        observers_bench);
+TELEOP_REGISTER_COMMAND(bench, "observer-probe",
+                        "(internal) a headless observer reading what teleop_viewer reads",
+                        observer_probe);
+
+}  // namespace
+}  // namespace teleop::bench
