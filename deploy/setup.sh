@@ -16,6 +16,7 @@ packages=(
   libsqlite3-dev libzstd-dev libevdev-dev tmux
   python3-matplotlib python3-numpy
   clang-format
+  clang libclang-rt-dev   # libFuzzer + sanitizers of the fuzz targets (tests/fuzz, deploy/fuzz.sh)
 )
 if [ "${TELEOP_SETUP_VIEWER:-1}" = "1" ]; then
   packages+=(libglfw3-dev libgl-dev libimgui-dev zlib1g-dev xvfb xauth)

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <optional>
+#include <sstream>
 
 #include "common/config/config.hpp"
 #include "common/dds/network_flags.hpp"
@@ -58,8 +59,9 @@ int main(int argc, char** argv) {
     if (rate_hz) {  // the scene's own rate was checked at load
       const std::string problem = teleop::sim::physics_rate_problem(scene, o.rate_hz);
       if (!problem.empty()) {
-        throw teleop::config::ConfigError("command line: --rate " + std::to_string(o.rate_hz) +
-                                          " " + problem);
+        std::ostringstream os;
+        os << "command line: --rate " << o.rate_hz << " " << problem;
+        throw teleop::config::ConfigError(os.str());
       }
     }
     if (!quiet) {

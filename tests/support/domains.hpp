@@ -29,6 +29,9 @@ inline constexpr int kRecordSession = 73;      // record_play_test: session unde
 inline constexpr int kPlayback = 74;           // record_play_test: teleop_play to a subscriber
 inline constexpr int kMonitorTui = 75;         // monitor_tui_test: teleop_monitor under tmux
 inline constexpr int kMonitorJson = 76;        // monitor_tui_test: teleop_monitor --json
+inline constexpr int kBadScenes = 101;          // bad_scene_test: refused scenes (exit before DDS)
+inline constexpr int kSubstepScene = 102;       // bad_scene_test: a scene that sub-steps runs
+inline constexpr int kMalformedCommands = 103;  // bad_scene_test: malformed command payloads
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
