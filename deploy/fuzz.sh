@@ -33,10 +33,13 @@ for name in "${names[@]}"; do
   [ -f "$root/tests/fuzz/$name.dict" ] && dict=(-dict="$root/tests/fuzz/$name.dict")
   echo "== fuzz_$name: $seconds s, $jobs job(s)"
   log="$work/last_run.log"
+  parallel=()
+  [ "$jobs" -gt 1 ] && parallel=(-jobs="$jobs" -workers="$jobs")
   set +e
-  "$build/tests/fuzz/fuzz_$name" -max_total_time="$seconds" -max_len=8192 -timeout=10 \
-    -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/crashes/" "${dict[@]}" \
-    -jobs="$jobs" -workers="$jobs" "$work/corpus" "$root/tests/fuzz/corpus/$name" >"$log" 2>&1
+  # from the work folder: with -jobs libFuzzer writes fuzz-N.log into the current folder
+  (cd "$work" && "$build/tests/fuzz/fuzz_$name" -max_total_time="$seconds" -max_len=8192 \
+    -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$work/crashes/" \
+    "${dict[@]}" "${parallel[@]}" "$work/corpus" "$root/tests/fuzz/corpus/$name") >"$log" 2>&1
   rc=$?
   set -e
   grep -E "stat::number_of_executed_units|stat::average_exec_per_sec|stat::new_units_added" "$log" |
