@@ -84,8 +84,8 @@ void check_tree(const YAML::Node& n, const std::string& file, const std::string&
   std::map<std::string, YAML::Mark> seen;
   for (const auto& kv : n) {
     if (!kv.first.IsScalar()) {
-      throw ConfigError(file + ": field '" + where(path) + "' (line " +
-                        line_text(kv.first.Mark()) + "): key " + scalar_text(kv.first) +
+      throw ConfigError(file + ": field '" + where(path) + "' (line " + line_text(kv.first.Mark()) +
+                        "): key " + scalar_text(kv.first) +
                         " is not a plain name; keys are field names such as 'radius_m'");
     }
     const std::string key = kv.first.Scalar();
@@ -93,8 +93,8 @@ void check_tree(const YAML::Node& n, const std::string& file, const std::string&
     const auto [it, fresh] = seen.emplace(key, kv.first.Mark());
     if (!fresh) {
       throw ConfigError(file + ": field '" + field + "' is given twice (lines " +
-                        line_text(it->second) + " and " + line_text(kv.first.Mark()) +
-                        "; value " + scalar_text(n[key]) + " and " + scalar_text(kv.second) +
+                        line_text(it->second) + " and " + line_text(kv.first.Mark()) + "; value " +
+                        scalar_text(n[key]) + " and " + scalar_text(kv.second) +
                         "): YAML would silently keep one of them; remove the other");
     }
     if (!kv.second.IsDefined() || kv.second.IsNull()) {

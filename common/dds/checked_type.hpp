@@ -12,10 +12,10 @@
 // CheckedType<PubSub> is PubSub whose deserialize() never throws: on a malformed payload it
 // returns false and counts it in malformed_samples() of the calling thread, which the Reader
 // (common/dds/endpoint.hpp) compares around take_next_sample() to drop that sample.
-#include <cstdint>
-#include <exception>
 #include <fastcdr/exceptions/Exception.h>
 #include <fastdds/rtps/common/SerializedPayload.h>
+#include <cstdint>
+#include <exception>
 
 namespace teleop::dds {
 

@@ -36,7 +36,8 @@ class Writer {
 
   Writer(Participant& participant, const std::string& topic_name, TopicQos qos)
       : participant_(participant) {
-    auto* topic = participant.topic(topic_name, eprosima::fastdds::dds::TypeSupport(new CheckedType<PubSub>()));
+    auto* topic = participant.topic(topic_name,
+                                    eprosima::fastdds::dds::TypeSupport(new CheckedType<PubSub>()));
     writer_ =
         participant.publisher()->create_datawriter(topic, writer_qos(participant.publisher(), qos));
     if (!writer_) throw DdsError("cannot create a DataWriter on " + topic_name);
@@ -82,7 +83,8 @@ class Reader {
 
   Reader(Participant& participant, const std::string& topic_name, TopicQos qos, Callback cb)
       : participant_(participant), callback_(std::move(cb)) {
-    auto* topic = participant.topic(topic_name, eprosima::fastdds::dds::TypeSupport(new CheckedType<PubSub>()));
+    auto* topic = participant.topic(topic_name,
+                                    eprosima::fastdds::dds::TypeSupport(new CheckedType<PubSub>()));
     reader_ = participant.subscriber()->create_datareader(
         topic, reader_qos(participant.subscriber(), qos));
     if (!reader_) throw DdsError("cannot create a DataReader on " + topic_name);

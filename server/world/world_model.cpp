@@ -161,17 +161,17 @@ std::string physics_rate_problem(const WorldModel& s, double rate_hz) {
     std::string why;
     const double h = tool_limit_step_s(s, &why);
     if (dt > kRateSafety * h) {
-      return asks + "the tool slave (semi-implicit Euler): " + why + ", i.e. dt <= " +
-             ms(kRateSafety * h) + " with the safety factor " + num(kRateSafety) + ": " +
-             at_least + ", or lower the stiffness, or raise tool.mass_kg";
+      return asks + "the tool slave (semi-implicit Euler): " + why +
+             ", i.e. dt <= " + ms(kRateSafety * h) + " with the safety factor " + num(kRateSafety) +
+             ": " + at_least + ", or lower the stiffness, or raise tool.mass_kg";
     }
   }
   for (std::size_t i = 0; i < s.bodies.size(); ++i) {
     const deformable::DeformableModel& m = s.bodies[i].body;
     const int need = m.substeps_needed(dt);
     if (need > m.params.max_substeps) {
-      return asks + body_name(s, i) + ": its largest stable step is " + ms(m.stable_step_s) +
-             " " + body_shape(m) + " (" + deformable::to_string(m.params.integrator) + ", w_max " +
+      return asks + body_name(s, i) + ": its largest stable step is " + ms(m.stable_step_s) + " " +
+             body_shape(m) + " (" + deformable::to_string(m.params.integrator) + ", w_max " +
              num(m.omega_max_rad_per_s) + " rad/s, zeta " + num(m.damping_ratio_top) +
              "), the scene asks " + ms(dt) + ": that needs " + std::to_string(need) +
              " sub-steps, more than its max_substeps " + std::to_string(m.params.max_substeps) +
@@ -256,12 +256,12 @@ WorldModel parse_world_model(const config::Node& root) {
   }
   for (int i = 0; i < 3; ++i) {
     if (s.workspace_min_m[i] < s.world_min_m[i]) {
-      root.fail("command.workspace_min_m", "value " + vec_text(s.workspace_min_m) +
-                                               " reaches outside " + world_text(s));
+      root.fail("command.workspace_min_m",
+                "value " + vec_text(s.workspace_min_m) + " reaches outside " + world_text(s));
     }
     if (s.workspace_max_m[i] > s.world_max_m[i]) {
-      root.fail("command.workspace_max_m", "value " + vec_text(s.workspace_max_m) +
-                                               " reaches outside " + world_text(s));
+      root.fail("command.workspace_max_m",
+                "value " + vec_text(s.workspace_max_m) + " reaches outside " + world_text(s));
     }
   }
   s.tool.gravity_mps2 = s.gravity_mps2;
@@ -356,8 +356,8 @@ WorldModel parse_world_model(const config::Node& root) {
     const Eigen::Vector3d base = s.robot->base.translation();
     if ((base.array() < s.world_min_m.array()).any() ||
         (base.array() > s.world_max_m.array()).any()) {
-      root.fail("robot", "base position " + vec_text(base) + " (robot.base.position_m) is outside " +
-                             world_text(s));
+      root.fail("robot", "base position " + vec_text(base) +
+                             " (robot.base.position_m) is outside " + world_text(s));
     }
   }
   if (root.has("deformables")) {
@@ -450,11 +450,11 @@ WorldModel parse_world_model(const config::Node& root) {
       const Plane& pl = s.planes[j];
       const double d = pl.normal.dot(s.tool_start_m) - pl.offset_m - s.tool.radius_m;
       if (d < -kStartPenetrationM) {
-        root.fail("tool.start_position_m",
-                  "value " + vec_text(s.tool_start_m) + ": the tool (radius " +
-                      num(s.tool.radius_m) + " m) starts " + num(-d) + " m behind plane '" +
-                      pl.name + "' (planes[" + std::to_string(j) +
-                      "]); it must start in free space");
+        root.fail("tool.start_position_m", "value " + vec_text(s.tool_start_m) +
+                                               ": the tool (radius " + num(s.tool.radius_m) +
+                                               " m) starts " + num(-d) + " m behind plane '" +
+                                               pl.name + "' (planes[" + std::to_string(j) +
+                                               "]); it must start in free space");
       }
     }
   }

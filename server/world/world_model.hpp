@@ -48,8 +48,8 @@ struct WorldModel {
   /// command workspace lies inside it [m].
   Eigen::Vector3d world_min_m{-10.0, -10.0, -10.0};
   Eigen::Vector3d world_max_m{10.0, 10.0, 10.0};
-  ToolModel tool;                               ///< the tool slave (planes as its obstacles)
-  std::optional<robot::RobotModel> robot;       ///< the robot slave (kind: robot)
+  ToolModel tool;                          ///< the tool slave (planes as its obstacles)
+  std::optional<robot::RobotModel> robot;  ///< the robot slave (kind: robot)
   std::vector<Plane> planes;
   std::vector<DeformableBodyModel> bodies;
 

@@ -6,11 +6,11 @@
 //   - a command validate_command() accepts converts to a SlaveCommand whose every field is
 //     finite, whose quaternion is a unit quaternion, and whose position lies in the workspace;
 //   - one step of the tool slave law driven by an accepted command stays finite.
+#include <fastdds/rtps/common/SerializedPayload.h>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
-#include <fastdds/rtps/common/SerializedPayload.h>
 
 #include "common/dds/checked_type.hpp"
 #include "common/dds/teleop_idl.hpp"

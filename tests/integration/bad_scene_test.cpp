@@ -5,6 +5,7 @@
 // std::terminate: tests/fuzz/fuzz_command.cpp, common/dds/checked_type.hpp).
 #include <gtest/gtest.h>
 
+#include <signal.h>
 #include <atomic>
 #include <chrono>
 #include <cstring>
@@ -13,7 +14,6 @@
 #include <fastdds/dds/topic/TopicDataType.hpp>
 #include <filesystem>
 #include <fstream>
-#include <signal.h>
 #include <string>
 #include <thread>
 #include <vector>
@@ -43,7 +43,8 @@ TEST(BadScene, ServerExits2NamingFileFieldAndValue) {
   const std::string robot = scene_file("robot_puma560.yaml");
   const std::vector<Case> cases = {
       {"empty", "", {"the scene is empty"}},
-      {"dup_keys", "physics:\n  rate_hz: 1000\n  rate_hz: 10\n",
+      {"dup_keys",
+       "physics:\n  rate_hz: 1000\n  rate_hz: 10\n",
        {"'physics.rate_hz' is given twice", "'1000'", "'10'"}},
       {"null_physics", "physics: ~\n", {"'physics'", "empty (null)"}},
       {"dup_ids",
@@ -53,16 +54,22 @@ TEST(BadScene, ServerExits2NamingFileFieldAndValue) {
       {"far_sphere",
        "deformables:\n  - {body: {level: 1, radius_m: 0.25, centre_m: [9000, 0, 0.25]}}\n",
        {"'deformables[0].body.centre_m'", "'[9000, 0, 0.25]'", "outside the world box"}},
-      {"radius_100", "deformables:\n  - {body: {level: 1, radius_m: 100}}\n",
+      {"radius_100",
+       "deformables:\n  - {body: {level: 1, radius_m: 100}}\n",
        {"'deformables[0].body.radius_m'", "'100'"}},
-      {"rate_10", "kind: robot\nphysics: {rate_hz: 10}\nrobot: {include: " + robot + "}\n",
+      {"rate_10",
+       "kind: robot\nphysics: {rate_hz: 10}\nrobot: {include: " + robot + "}\n",
        {"'physics.rate_hz'", "'10'", "robot.ik.gain_per_s"}},
-      {"missing_mesh", "deformables:\n  - {body: {mesh_file: nothere.obj}}\n",
+      {"missing_mesh",
+       "deformables:\n  - {body: {mesh_file: nothere.obj}}\n",
        {"'deformables[0].body.mesh_file'", "'nothere.obj'", "no such file"}},
-      {"missing_include", "kind: robot\nrobot: {include: nothere.yaml}\n",
+      {"missing_include",
+       "kind: robot\nrobot: {include: nothere.yaml}\n",
        {"'robot.include'", "'nothere.yaml'"}},
-      {"cli_rate", "kind: robot\nrobot: {include: " + robot + "}\n",
-       {"--rate 10", "robot.ik.gain_per_s"}, {"--rate", "10"}},
+      {"cli_rate",
+       "kind: robot\nrobot: {include: " + robot + "}\n",
+       {"--rate 10", "robot.ik.gain_per_s"},
+       {"--rate", "10"}},
   };
   const std::string d = std::to_string(domains::kBadScenes);
   int k = 0;
@@ -93,10 +100,10 @@ TEST(BadScene, BodyThatSubStepsRunsAndSaysSo) {
   std::ofstream(file) << "planes:\n  - {name: floor, normal: [0, 0, 1]}\n"
                          "deformables:\n  - body: {level: 1, radius_m: 0.25, centre_m: [0.6, 0, "
                          "0.25], edge_stiffness_n_per_m: 50000}\n";
-  Process s(kServerBinary,
-            {"--scene", file, "--domain", std::to_string(domains::kSubstepScene), "--duration",
-             "0.5"},
-            "substep_scene");
+  Process s(
+      kServerBinary,
+      {"--scene", file, "--domain", std::to_string(domains::kSubstepScene), "--duration", "0.5"},
+      "substep_scene");
   EXPECT_EQ(s.wait_for(60.0), 0) << s.err();
   const std::string out = s.out();
   EXPECT_NE(out.find("deformables[0] (id 10): dt 1 ms > largest stable step"), std::string::npos)
@@ -125,11 +132,10 @@ class RawCommandType : public eprosima::fastdds::dds::TopicDataType {
     p->length = static_cast<std::uint32_t>(b.size());
     return true;
   }
-  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t*, void*) override {
-    return false;
-  }
+  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t*, void*) override { return false; }
   std::function<std::uint32_t()> getSerializedSizeProvider(void* data) override {
-    return [data] { return static_cast<std::uint32_t>(static_cast<RawBytes*>(data)->bytes.size()); };
+    return
+        [data] { return static_cast<std::uint32_t>(static_cast<RawBytes*>(data)->bytes.size()); };
   }
   void* createData() override { return new RawBytes(); }
   void deleteData(void* data) override { delete static_cast<RawBytes*>(data); }
@@ -167,8 +173,8 @@ TEST(BadScene, MalformedCommandPayloadIsDroppedAndTheServerRuns) {
   const auto t0 = now_ns();
   eprosima::fastdds::dds::PublicationMatchedStatus st;
   while (seconds_between(t0, now_ns()) < 20.0 &&
-         (states.load() == 0 || writer->get_publication_matched_status(st) !=
-                                    ReturnCode_t::RETCODE_OK ||
+         (states.load() == 0 ||
+          writer->get_publication_matched_status(st) != ReturnCode_t::RETCODE_OK ||
           st.current_count == 0)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }

@@ -36,8 +36,7 @@ class SceneDir : public ::testing::Test {
     write("blank.yaml", "# nothing here\n");
     write("robot_ok.yaml", "robot:\n  include: " + kRobotFile + "\n");
     // a closed tetrahedron, counter-clockwise seen from outside
-    write("tet.obj",
-          "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    write("tet.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
   }
   void TearDown() override {
     std::error_code ec;
@@ -109,8 +108,9 @@ TEST_F(SceneDir, EveryBadSceneIsRefusedNamingFileFieldAndValue) {
        tool_scene("", "  - id: 10\n    body: {level: 1, radius_m: 0.1, centre_m: [0, 0.5, 0.1]}\n"),
        {"'deformables[1].id'", "'10'", "already the id of deformables[0]"}},
       {"dup_auto_id",
-       tool_scene("", "  - body: {level: 1, radius_m: 0.1, centre_m: [0, 0.5, 0.1]}\n"
-                      "  - id: 11\n    body: {level: 1, radius_m: 0.1, centre_m: [0, -0.5, 0.1]}\n"),
+       tool_scene("",
+                  "  - body: {level: 1, radius_m: 0.1, centre_m: [0, 0.5, 0.1]}\n"
+                  "  - id: 11\n    body: {level: 1, radius_m: 0.1, centre_m: [0, -0.5, 0.1]}\n"),
        {"'deformables[2].id'", "'11'", "already the id of deformables[1]"}},
       {"dup_plane_names",
        "planes:\n  - {name: floor, normal: [0, 0, 1]}\n  - {name: floor, normal: [1, 0, 0]}\n",
@@ -204,8 +204,9 @@ TEST_F(SceneDir, SpecialFilesAreRefused) {
 }
 
 TEST_F(SceneDir, ParsedTextNamesItsFileToo) {
-  const std::string msg = test::config_error_of(
-      [] { parse_world_model(config::Node::parse("physics: {rate_hz: 10, rate_hz: 20}", "s.yaml")); });
+  const std::string msg = test::config_error_of([] {
+    parse_world_model(config::Node::parse("physics: {rate_hz: 10, rate_hz: 20}", "s.yaml"));
+  });
   EXPECT_NE(msg.find("s.yaml: field 'physics.rate_hz' is given twice"), std::string::npos) << msg;
 }
 
@@ -217,7 +218,8 @@ TEST_F(SceneDir, RobotLinkMeshErrorsNameTheIncludingSceneAndTheIncludedField) {
   ASSERT_NE(at, std::string::npos);
   robot.insert(at, "      mesh: {file: nothere.stl}\n");
   write("robot_mesh.yaml", robot);
-  const std::string scene = write("with_mesh.yaml", "kind: robot\nrobot: {include: robot_mesh.yaml}\n");
+  const std::string scene =
+      write("with_mesh.yaml", "kind: robot\nrobot: {include: robot_mesh.yaml}\n");
   const std::string msg = load_error(scene);
   EXPECT_NE(msg.find(scene + ": field 'robot.include'"), std::string::npos) << msg;
   EXPECT_NE(msg.find("robot.links[0].mesh.file"), std::string::npos) << msg;
@@ -243,11 +245,11 @@ TEST_F(SceneDir, StiffBodyThatSubStepsLoadsAndSaysSo) {
 }
 
 TEST_F(SceneDir, MeshBodiesLoadRelativeToTheSceneFile) {
-  const std::string file = write(
-      "tet_scene.yaml",
-      "planes:\n  - {name: floor, normal: [0, 0, 1]}\ndeformables:\n"
-      "  - body: {mesh_file: tet.obj, mesh_scale: 0.2, centre_m: [0.5, 0, 0], "
-      "integrator: implicit_euler}\n");
+  const std::string file =
+      write("tet_scene.yaml",
+            "planes:\n  - {name: floor, normal: [0, 0, 1]}\ndeformables:\n"
+            "  - body: {mesh_file: tet.obj, mesh_scale: 0.2, centre_m: [0.5, 0, 0], "
+            "integrator: implicit_euler}\n");
   const WorldModel m = load_world_model(file);
   ASSERT_EQ(m.bodies.size(), 1u);
   EXPECT_EQ(m.bodies[0].body.mesh.vertex_count(), 4);
