@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <assimp/Importer.hpp>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -323,6 +324,18 @@ TriMesh make_mesh(Eigen::Matrix3Xd vertices, Eigen::Matrix3Xi triangles) {
   return m;
 }
 
+void check_mesh_format(const std::string& extension) {
+  std::string e = extension;
+  if (!e.empty() && e[0] == '.') e.erase(0, 1);
+  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (e != "obj" && e != "stl" && e != "ply") {
+    throw MeshError("mesh format '" + extension +
+                    "' is not supported: use OBJ, STL or PLY (the importers that are checked; "
+                    "Debian's assimp 5.2.5 aborts the whole process on some malformed files of "
+                    "other formats, e.g. OFF)");
+  }
+}
+
 void check_mesh_file(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -332,6 +345,7 @@ void check_mesh_file(const std::string& path) {
   if (!fs::is_regular_file(path, ec)) {
     throw MeshError(path + ": is not a regular file (a device, pipe or socket)");
   }
+  check_mesh_format(fs::path(path).extension().string());
   const std::uintmax_t size = fs::file_size(path, ec);
   if (ec) throw MeshError(path + ": cannot read the file size: " + ec.message());
   if (size == 0) throw MeshError(path + ": the file is empty");
@@ -362,6 +376,11 @@ TriMesh load_mesh(const std::string& path, const LoadOptions& options) {
 TriMesh load_mesh_from_memory(const void* data, std::size_t size, const std::string& format_hint,
                               const std::string& name, const LoadOptions& options) {
   if (size == 0) throw MeshError(name + ": the mesh is empty");
+  try {
+    check_mesh_format(format_hint);
+  } catch (const MeshError& e) {
+    throw MeshError(name + ": " + e.what());
+  }
   Assimp::Importer importer;
   const aiScene* scene = importer.ReadFileFromMemory(data, size, kImportFlags, format_hint.c_str());
   if (scene == nullptr) {
