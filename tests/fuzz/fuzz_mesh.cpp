@@ -1,8 +1,9 @@
 // libFuzzer target: the mesh loader (common/mesh: assimp import, triangulation, welding, the
 // closed-manifold checks) and the deformable model built from what it accepts (the path of a
 // scene's `mesh_file`). The first byte picks the format (OBJ, STL, PLY: skipped, see below; OFF:
-// refused by check_mesh_format), the rest is the file. A mesh::MeshError or config::ConfigError is the answer to bad input; anything else that
-// escapes (another exception, a crash, a sanitizer report) is a bug.
+// refused by check_mesh_format), the rest is the file. A mesh::MeshError or config::ConfigError is
+// the answer to bad input; anything else that escapes (another exception, a crash, a sanitizer
+// report) is a bug.
 #include <cstddef>
 #include <cstdint>
 #include <string>

@@ -43,7 +43,8 @@ TEST(MeshFileChecks, FromMemoryLoadsAndRefusesLikeTheFileLoader) {
   EXPECT_GT(enclosed_volume(m), 0.0);
   const std::string open = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
   EXPECT_THROW(load_mesh_from_memory(open.data(), open.size(), "obj", "open.obj"), MeshError);
-  const std::string nan = "v nan 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+  const std::string nan =
+      "v nan 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
   try {
     load_mesh_from_memory(nan.data(), nan.size(), "obj", "nan.obj");
   } catch (const MeshError& e) {
