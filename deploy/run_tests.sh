@@ -1,8 +1,29 @@
 #!/usr/bin/env bash
-# Set up, build, and run the whole test suite with ctest (2 jobs). Exit status is ctest's.
+# Set up, build, and run the whole test suite with ctest (2 jobs), then the short fuzz runs
+# (build-fuzz, clang; TELEOP_FUZZ=0 skips them). Exit status: non-zero if either failed.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/deploy/build.sh"
 build_dir="${BUILD_DIR:-$root/build}"
 cd "$build_dir"
-ctest -j2 --output-on-failure --timeout 600 "$@"
+status=0
+ctest -j2 --output-on-failure --timeout 600 "$@" || status=$?
+# The short fuzz runs (tests/fuzz: replay the committed corpus, then ~25 s per fuzzer) live in a
+# clang build folder of their own (build-fuzz: only the fuzz targets and the sources they use).
+# TELEOP_FUZZ=0 skips them; without clang they are skipped with a message.
+if [ "${TELEOP_FUZZ:-1}" != "0" ]; then
+  if command -v clang++ >/dev/null 2>&1; then
+    fuzz_dir="${FUZZ_BUILD_DIR:-$root/build-fuzz}"
+    if [ ! -f "$fuzz_dir/CMakeCache.txt" ]; then
+      # shellcheck disable=SC2086
+      cmake -S "$root" -B "$fuzz_dir" -G Ninja ${CMAKE_ARGS:-} -DCMAKE_C_COMPILER=clang \
+        -DCMAKE_CXX_COMPILER=clang++ -DTELEOP_BUILD_FUZZERS=ON -DTELEOP_BUILD_TESTS=OFF \
+        -DTELEOP_BUILD_BENCHMARKS=OFF -DTELEOP_BUILD_VIEWER=OFF
+    fi
+    cmake --build "$fuzz_dir" -j2 --target fuzzers
+    (cd "$fuzz_dir" && ctest -j2 --output-on-failure --timeout 300 -L fuzz) || status=$?
+  else
+    echo "run_tests.sh: clang++ not found: the fuzz runs are skipped (apt-get install clang)"
+  fi
+fi
+exit $status

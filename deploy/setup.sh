@@ -19,6 +19,7 @@ packages=(
   openssl libssl-dev  # DDS Security: deploy/make_security.sh; common/dds/security_check.cpp
   python3-matplotlib python3-numpy
   clang-format
+  clang libclang-rt-dev   # libFuzzer + sanitizers of the fuzz targets (tests/fuzz, deploy/fuzz.sh)
 )
 if [ "${TELEOP_SETUP_VIEWER:-1}" = "1" ]; then
   packages+=(libglfw3-dev libgl-dev libimgui-dev zlib1g-dev xvfb xauth)

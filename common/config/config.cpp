@@ -1,6 +1,8 @@
 #include "common/config/config.hpp"
 
+#include <filesystem>
 #include <fstream>
+#include <map>
 
 namespace teleop::config {
 
@@ -9,12 +11,118 @@ std::string join(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
 }
 
+std::string where(const std::string& path) { return path.empty() ? "<root>" : path; }
+
+// A short, bounded rendering of a node for messages. yaml-cpp's own emitter follows aliases
+// without a limit (a self-referencing alias never ends), so this one stops at a depth and a
+// length.
+void short_text(const YAML::Node& n, int depth, std::string& out) {
+  constexpr std::size_t kMaxChars = 80;
+  if (out.size() > kMaxChars) return;
+  if (!n.IsDefined() || n.IsNull()) {
+    out += "~";
+  } else if (n.IsScalar()) {
+    out += n.Scalar();
+  } else if (depth >= 3) {
+    out += n.IsSequence() ? "[...]" : "{...}";
+  } else if (n.IsSequence()) {
+    out += "[";
+    std::size_t i = 0;
+    for (const auto& e : n) {
+      if (i++ > 0) out += ", ";
+      if (out.size() > kMaxChars) break;
+      short_text(e, depth + 1, out);
+    }
+    out += "]";
+  } else if (n.IsMap()) {
+    out += "{";
+    std::size_t i = 0;
+    for (const auto& kv : n) {
+      if (i++ > 0) out += ", ";
+      if (out.size() > kMaxChars) break;
+      short_text(kv.first, depth + 1, out);
+      out += ": ";
+      short_text(kv.second, depth + 1, out);
+    }
+    out += "}";
+  }
+  if (depth == 0 && out.size() > kMaxChars) out = out.substr(0, kMaxChars) + "...";
+}
+
 std::string scalar_text(const YAML::Node& n) {
   if (!n.IsDefined() || n.IsNull()) return "<missing>";
-  if (n.IsScalar()) return "'" + n.Scalar() + "'";
-  std::ostringstream os;
-  os << n;
-  return "'" + os.str() + "'";
+  std::string s;
+  short_text(n, 0, s);
+  return "'" + s + "'";
+}
+
+std::string line_text(const YAML::Mark& m) {
+  return m.is_null() ? std::string("?") : std::to_string(m.line + 1);
+}
+
+// The checks yaml-cpp does not make, over the whole parsed tree: every mapping key is a plain
+// scalar given once (yaml-cpp keeps duplicates and node[key] silently returns the first), no
+// mapping value is empty (`physics: ~` or `physics:` would otherwise mean "use the defaults"),
+// and nesting stays shallow. Each collection is visited once (aliases share nodes; a
+// self-referencing alias or a "billion laughs" document would otherwise never finish).
+void check_tree(const YAML::Node& n, const std::string& file, const std::string& path, int depth,
+                std::set<std::size_t>& visited) {
+  constexpr int kMaxDepth = 64;
+  if (!n.IsMap() && !n.IsSequence()) return;
+  if (!visited.insert(static_cast<std::size_t>(n.Mark().pos)).second) return;
+  if (depth > kMaxDepth) {
+    throw ConfigError(file + ": field '" + where(path) + "' (line " + line_text(n.Mark()) +
+                      "): nested deeper than " + std::to_string(kMaxDepth) + " levels");
+  }
+  if (n.IsSequence()) {
+    std::size_t i = 0;
+    for (const auto& e : n) {
+      check_tree(e, file, path + "[" + std::to_string(i++) + "]", depth + 1, visited);
+    }
+    return;
+  }
+  std::map<std::string, YAML::Mark> seen;
+  for (const auto& kv : n) {
+    if (!kv.first.IsScalar()) {
+      throw ConfigError(file + ": field '" + where(path) + "' (line " + line_text(kv.first.Mark()) +
+                        "): key " + scalar_text(kv.first) +
+                        " is not a plain name; keys are field names such as 'radius_m'");
+    }
+    const std::string key = kv.first.Scalar();
+    const std::string field = join(path, key);
+    const auto [it, fresh] = seen.emplace(key, kv.first.Mark());
+    if (!fresh) {
+      throw ConfigError(file + ": field '" + field + "' is given twice (lines " +
+                        line_text(it->second) + " and " + line_text(kv.first.Mark()) + "; value " +
+                        scalar_text(n[key]) + " and " + scalar_text(kv.second) +
+                        "): YAML would silently keep one of them; remove the other");
+    }
+    if (!kv.second.IsDefined() || kv.second.IsNull()) {
+      throw ConfigError(file + ": field '" + field + "' (line " + line_text(kv.first.Mark()) +
+                        "): value is empty (null); give a value or remove the key to use the "
+                        "default");
+    }
+    check_tree(kv.second, file, field, depth + 1, visited);
+  }
+}
+
+// Parses one YAML document from `text`; refuses several documents and the tree checks above.
+YAML::Node parse_checked(const std::string& text, const std::string& file) {
+  std::vector<YAML::Node> docs;
+  try {
+    docs = YAML::LoadAll(text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(file + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
+                      ", column " + std::to_string(e.mark.column + 1) + ": " + e.msg);
+  }
+  if (docs.size() > 1) {
+    throw ConfigError(file + ": holds " + std::to_string(docs.size()) +
+                      " YAML documents (separated by '---'); a configuration file is one");
+  }
+  if (docs.empty()) return YAML::Node(YAML::NodeType::Null);
+  std::set<std::size_t> visited;
+  check_tree(docs[0], file, "", 0, visited);
+  return docs[0];
 }
 }  // namespace
 
@@ -28,26 +136,34 @@ Node::Node(YAML::Node node, std::string file, std::string path)
     : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {}
 
 Node Node::load_file(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw ConfigError(file + ": cannot open the file for reading");
-  try {
-    return Node(YAML::LoadFile(file), file, "");
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(file + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
-                      ", column " + std::to_string(e.mark.column + 1) + ": " + e.msg);
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) {
+    throw ConfigError(file + ": is a directory, not a YAML file");
   }
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ConfigError(file + ": cannot open the file for reading");
+  std::string text;
+  char buf[65536];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    text.append(buf, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxFileBytes) {
+      throw ConfigError(file + ": larger than " + std::to_string(kMaxFileBytes >> 20) +
+                        " MB; not a configuration file");
+    }
+  }
+  if (in.bad()) throw ConfigError(file + ": read error");
+  return Node(parse_checked(text, file), file, "");
 }
 
 Node Node::parse(const std::string& text, const std::string& file) {
-  try {
-    return Node(YAML::Load(text), file, "");
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(file + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
-                      ": " + e.msg);
-  }
+  return Node(parse_checked(text, file), file, "");
 }
 
-std::string Node::field(const std::string& key) const { return join(path_, key); }
+bool Node::empty_document() const { return !node_.IsDefined() || node_.IsNull(); }
+
+std::string Node::field(const std::string& key) const {
+  return key.empty() ? where(path_) : join(path_, key);
+}
 
 void Node::fail(const std::string& key, const std::string& what) const {
   throw ConfigError(file_ + ": field '" + field(key) + "': " + what);
@@ -189,9 +305,16 @@ std::vector<double> Node::numbers_or(const std::string& key, const std::vector<d
 }
 
 void Node::reject_unknown_keys(const std::set<std::string>& known) const {
-  if (!node_.IsMap()) return;
+  if (!defined()) return;
+  if (!node_.IsMap()) {
+    std::string list;
+    for (const auto& a : known) list += (list.empty() ? "" : ", ") + a;
+    throw ConfigError(file_ + ": field '" + where(path_) + "': value " + scalar_text(node_) +
+                      " must be a mapping of the fields {" + list + "}");
+  }
   for (const auto& kv : node_) {
-    const std::string k = kv.first.as<std::string>();
+    if (!kv.first.IsScalar()) fail("", "key " + scalar_text(kv.first) + " is not a plain name");
+    const std::string k = kv.first.Scalar();
     if (!known.count(k)) {
       std::string list;
       for (const auto& a : known) list += (list.empty() ? "" : ", ") + a;

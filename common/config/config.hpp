@@ -29,10 +29,21 @@ class Node {
  public:
   Node(YAML::Node node, std::string file, std::string path);
 
-  /// Loads a YAML file. @throws ConfigError if it cannot be read or parsed.
+  /// Largest file load_file() reads [bytes].
+  static constexpr std::size_t kMaxFileBytes = std::size_t{16} << 20;
+
+  /// Loads a YAML file. @throws ConfigError if it is a directory, cannot be read, is larger
+  /// than kMaxFileBytes, or does not parse; and for what YAML itself lets pass: a key given
+  /// twice in one mapping, a key that is not a plain scalar, an empty (null) mapping value,
+  /// more than one document, nesting deeper than 64 levels. The message names the file, the
+  /// field path and the line. An empty file (or one with only comments) loads as an empty
+  /// document (empty_document() true): the loader decides whether that is acceptable.
   static Node load_file(const std::string& file);
-  /// Parses YAML text; `file` is used only in messages.
+  /// Parses YAML text with the same checks; `file` is used only in messages.
   static Node parse(const std::string& text, const std::string& file = "<string>");
+
+  /// True when the document holds nothing (empty file, only comments, /dev/null).
+  bool empty_document() const;
 
   bool has(const std::string& key) const;
   /// Child mapping entry; throws if missing.
@@ -71,7 +82,8 @@ class Node {
   std::vector<double> numbers_or(const std::string& key, const std::vector<double>& fallback,
                                  double lo, double hi) const;
 
-  /// Throws if the mapping has keys not in `known` (catches typos such as "radus_m").
+  /// Throws if the mapping has keys not in `known` (catches typos such as "radus_m"), or if the
+  /// node is given but is not a mapping (`physics: 5`). Does nothing for a missing node.
   void reject_unknown_keys(const std::set<std::string>& known) const;
 
   /// Builds "<file>: field '<path>': <what>" for custom checks.

@@ -24,6 +24,7 @@
 #include <string>
 #include <thread>
 
+#include "common/dds/checked_type.hpp"
 #include "common/dds/participant.hpp"
 
 namespace teleop::dds {
@@ -35,7 +36,8 @@ class Writer {
 
   Writer(Participant& participant, const std::string& topic_name, TopicQos qos)
       : participant_(participant) {
-    auto* topic = participant.topic(topic_name, eprosima::fastdds::dds::TypeSupport(new PubSub()));
+    auto* topic = participant.topic(topic_name,
+                                    eprosima::fastdds::dds::TypeSupport(new CheckedType<PubSub>()));
     writer_ =
         participant.publisher()->create_datawriter(topic, writer_qos(participant.publisher(), qos));
     if (!writer_) throw DdsError("cannot create a DataWriter on " + topic_name);
@@ -81,7 +83,8 @@ class Reader {
 
   Reader(Participant& participant, const std::string& topic_name, TopicQos qos, Callback cb)
       : participant_(participant), callback_(std::move(cb)) {
-    auto* topic = participant.topic(topic_name, eprosima::fastdds::dds::TypeSupport(new PubSub()));
+    auto* topic = participant.topic(topic_name,
+                                    eprosima::fastdds::dds::TypeSupport(new CheckedType<PubSub>()));
     reader_ = participant.subscriber()->create_datareader(
         topic, reader_qos(participant.subscriber(), qos));
     if (!reader_) throw DdsError("cannot create a DataReader on " + topic_name);
@@ -112,6 +115,8 @@ class Reader {
     return st.current_count;
   }
   std::uint64_t received() const { return received_.load(); }
+  /// Samples dropped because they could not be deserialized (CheckedType).
+  std::uint64_t malformed() const { return malformed_.load(); }
 
  private:
   void run() {
@@ -125,7 +130,14 @@ class Reader {
     while (!stopping_.load()) {
       waitset.wait(active, timeout);  // timeout or trigger: both fine
       if (stopping_.load()) break;
-      while (reader_->take_next_sample(&sample, &info) == ReturnCode_t::RETCODE_OK) {
+      for (;;) {
+        // a malformed sample (CheckedType) is dropped and counted, never handed on
+        const std::uint64_t malformed_before = malformed_samples();
+        if (reader_->take_next_sample(&sample, &info) != ReturnCode_t::RETCODE_OK) break;
+        if (malformed_samples() != malformed_before) {
+          malformed_.fetch_add(1);
+          continue;
+        }
         if (!info.valid_data) continue;
         received_.fetch_add(1);
         callback_(sample, info);
@@ -141,6 +153,7 @@ class Reader {
   eprosima::fastdds::dds::GuardCondition guard_;
   std::atomic<bool> stopping_{false};
   std::atomic<std::uint64_t> received_{0};
+  std::atomic<std::uint64_t> malformed_{0};
   std::thread thread_;
 };
 

@@ -7,8 +7,10 @@
 #include <algorithm>
 #include <array>
 #include <assimp/Importer.hpp>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <unordered_map>
@@ -322,25 +324,94 @@ TriMesh make_mesh(Eigen::Matrix3Xd vertices, Eigen::Matrix3Xi triangles) {
   return m;
 }
 
+void check_mesh_format(const std::string& extension) {
+  std::string e = extension;
+  if (!e.empty() && e[0] == '.') e.erase(0, 1);
+  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (e != "obj" && e != "stl" && e != "ply") {
+    throw MeshError("mesh format '" + extension +
+                    "' is not supported: use OBJ, STL or PLY (the importers that are checked; "
+                    "Debian's assimp 5.2.5 aborts the whole process on some malformed files of "
+                    "other formats, e.g. OFF)");
+  }
+}
+
+void check_mesh_file(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (path.empty()) throw MeshError("the mesh file name is empty");
+  if (fs::is_directory(path, ec)) throw MeshError(path + ": is a directory, not a mesh file");
+  if (!fs::exists(path, ec)) throw MeshError(path + ": no such file");
+  if (!fs::is_regular_file(path, ec)) {
+    throw MeshError(path + ": is not a regular file (a device, pipe or socket)");
+  }
+  check_mesh_format(fs::path(path).extension().string());
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) throw MeshError(path + ": cannot read the file size: " + ec.message());
+  if (size == 0) throw MeshError(path + ": the file is empty");
+  if (size > kMaxMeshFileBytes) {
+    throw MeshError(path + ": " + std::to_string(size >> 20) + " MB is larger than the " +
+                    std::to_string(kMaxMeshFileBytes >> 20) + " MB a mesh file may have");
+  }
+}
+
+namespace {
+// The importer's flags: triangulate polygons and bake node transforms; no welding or clean-up
+// by assimp, so that defects are reported rather than silently repaired.
+constexpr unsigned kImportFlags = aiProcess_Triangulate | aiProcess_PreTransformVertices;
+
+TriMesh mesh_from_scene(const aiScene* scene, const std::string& path, const LoadOptions& options);
+}  // namespace
+
 TriMesh load_mesh(const std::string& path, const LoadOptions& options) {
+  check_mesh_file(path);
   Assimp::Importer importer;
-  // triangulate polygons and bake node transforms; no welding or clean-up by assimp, so that
-  // defects are reported rather than silently repaired
-  const aiScene* scene =
-      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_PreTransformVertices);
+  const aiScene* scene = importer.ReadFile(path, kImportFlags);
   if (scene == nullptr) {
     throw MeshError(path + ": cannot read mesh: " + importer.GetErrorString());
+  }
+  return mesh_from_scene(scene, path, options);
+}
+
+TriMesh load_mesh_from_memory(const void* data, std::size_t size, const std::string& format_hint,
+                              const std::string& name, const LoadOptions& options) {
+  if (size == 0) throw MeshError(name + ": the mesh is empty");
+  try {
+    check_mesh_format(format_hint);
+  } catch (const MeshError& e) {
+    throw MeshError(name + ": " + e.what());
+  }
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFileFromMemory(data, size, kImportFlags, format_hint.c_str());
+  if (scene == nullptr) {
+    throw MeshError(name + ": cannot read mesh: " + importer.GetErrorString());
+  }
+  return mesh_from_scene(scene, name, options);
+}
+
+namespace {
+TriMesh mesh_from_scene(const aiScene* scene, const std::string& path, const LoadOptions& options) {
+  if (!std::isfinite(options.scale) || options.scale <= 0.0) {
+    throw MeshError(path + ": the scale must be a finite number > 0");
   }
   std::vector<Eigen::Vector3d> raw;
   std::vector<std::array<int, 3>> tris;
   for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
     const aiMesh* am = scene->mMeshes[mi];
     const int base = static_cast<int>(raw.size());
+    if (raw.size() + am->mNumVertices > static_cast<std::size_t>(kMaxMeshVertices)) {
+      throw MeshError(path + ": more than " + std::to_string(kMaxMeshVertices) + " vertices");
+    }
     for (unsigned v = 0; v < am->mNumVertices; ++v) {
       const aiVector3D& p = am->mVertices[v];
-      raw.emplace_back(options.scale * static_cast<double>(p.x),
-                       options.scale * static_cast<double>(p.y),
-                       options.scale * static_cast<double>(p.z));
+      const Eigen::Vector3d q(options.scale * static_cast<double>(p.x),
+                              options.scale * static_cast<double>(p.y),
+                              options.scale * static_cast<double>(p.z));
+      if (!q.allFinite()) {
+        throw MeshError(path + ": mesh " + std::to_string(mi) + " vertex " + std::to_string(v) +
+                        " has a coordinate that is not a finite number");
+      }
+      raw.push_back(q);
     }
     for (unsigned f = 0; f < am->mNumFaces; ++f) {
       const aiFace& face = am->mFaces[f];
@@ -348,6 +419,13 @@ TriMesh load_mesh(const std::string& path, const LoadOptions& options) {
         throw MeshError(path + ": mesh " + std::to_string(mi) + " face " + std::to_string(f) +
                         " has " + std::to_string(face.mNumIndices) +
                         " indices: points and lines are not a surface");
+      }
+      for (unsigned k = 0; k < 3; ++k) {
+        if (face.mIndices[k] >= am->mNumVertices) {
+          throw MeshError(path + ": mesh " + std::to_string(mi) + " face " + std::to_string(f) +
+                          " refers to vertex " + std::to_string(face.mIndices[k]) + " of " +
+                          std::to_string(am->mNumVertices));
+        }
       }
       tris.push_back({base + static_cast<int>(face.mIndices[0]),
                       base + static_cast<int>(face.mIndices[1]),
@@ -432,6 +510,7 @@ TriMesh load_mesh(const std::string& path, const LoadOptions& options) {
   }
   return m;
 }
+}  // namespace
 
 void save_obj(const TriMesh& m, const std::string& path) {
   std::ofstream out(path);

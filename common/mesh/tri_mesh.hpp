@@ -12,6 +12,7 @@
 //   for (int k = m.vertex_neighbour_offsets[i]; k < m.vertex_neighbour_offsets[i + 1]; ++k)
 //     use(m.vertex_neighbours[k]);
 #include <Eigen/Core>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -68,12 +69,33 @@ struct LoadOptions {
   bool fix_inward_orientation = true;
 };
 
-/// Loads a closed triangle mesh (OBJ, STL, PLY, or any format assimp reads): polygons are
+/// Largest mesh file load_mesh() reads [bytes] and most vertices it accepts.
+constexpr std::uintmax_t kMaxMeshFileBytes = std::uintmax_t{512} << 20;
+constexpr int kMaxMeshVertices = 1 << 24;
+
+/// Refuses a format other than OBJ, STL and PLY (`extension` with or without the dot, any case):
+/// Debian's assimp 5.2.5 aborts the process (ai_assert in TriangulateProcess) on some malformed
+/// OFF files (found by tests/fuzz/fuzz_mesh.cpp), so only the importers we test are used.
+/// @throws MeshError.
+void check_mesh_format(const std::string& extension);
+
+/// Refuses what is not a readable mesh file before assimp sees it: an empty name, a missing
+/// file, a directory, a device or pipe, a format check_mesh_format() refuses, an empty file, a
+/// file larger than kMaxMeshFileBytes.
+/// @throws MeshError naming the path and the reason.
+void check_mesh_file(const std::string& path);
+
+/// Loads a closed triangle mesh (OBJ, STL or PLY: check_mesh_file()): polygons are
 /// triangulated, all sub-meshes are merged, duplicate vertices welded, unused vertices dropped,
 /// an inward-facing surface flipped, adjacency built, then validate_closed_manifold() runs.
 /// @throws MeshError naming the file and the defect (unreadable, no triangles, open edge,
 /// non-manifold edge or vertex, degenerate triangle, inconsistent orientation).
 TriMesh load_mesh(const std::string& path, const LoadOptions& options = {});
+
+/// load_mesh() from bytes in memory (`format_hint`: the file extension, e.g. "obj", "stl",
+/// "ply"; `name` is used in messages). The same checks and the same errors.
+TriMesh load_mesh_from_memory(const void* data, std::size_t size, const std::string& format_hint,
+                              const std::string& name, const LoadOptions& options = {});
 
 /// Builds a mesh from raw tables (welding nothing): computes edges and adjacency and validates.
 /// @throws MeshError as load_mesh.

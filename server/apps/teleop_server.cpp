@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <optional>
+#include <sstream>
 
 #include "common/config/config.hpp"
 #include "common/dds/network_flags.hpp"
@@ -55,6 +56,19 @@ int main(int argc, char** argv) {
     teleop::dds::profile_file(o.dds.profile);  // fail early with the list of profiles
     o.rate_hz = teleop::config::check_flag("--rate", rate_hz.value_or(scene.physics_rate_hz), 10.0,
                                            20000.0);
+    if (rate_hz) {  // the scene's own rate was checked at load
+      const std::string problem = teleop::sim::physics_rate_problem(scene, o.rate_hz);
+      if (!problem.empty()) {
+        std::ostringstream os;
+        os << "command line: --rate " << o.rate_hz << " " << problem;
+        throw teleop::config::ConfigError(os.str());
+      }
+    }
+    if (!quiet) {
+      for (const std::string& note : teleop::sim::physics_rate_notes(scene, o.rate_hz)) {
+        std::cout << "teleop_server: " << scene_file << ": " << note << "\n";
+      }
+    }
     o.command_timeout_s = teleop::config::check_flag(
         "--command-timeout", command_timeout_s.value_or(scene.command_timeout_s), 0.001, 10.0);
     o.duration_s = teleop::config::check_flag("--duration", duration_s, 0.0, 1e7);

@@ -338,6 +338,11 @@ std::string AutoBody::report() const {
   return o.str();
 }
 
+bool has_auto_field(const config::Node& node) {
+  return node.is_map() && (is_auto(node, "model") || is_auto(node, "integrator") ||
+                           is_auto(node, "level") || is_auto(node, "kernel"));
+}
+
 AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
                               const std::vector<Plane>& planes) {
   AutoBody out;

@@ -134,6 +134,9 @@ struct AutoBody {
 /// tolerance_mm <= 0, budget_us below the cheapest entry within tolerance (named with its
 /// cost), a tolerance no entry meets (the smallest error named), auto with mesh_file,
 /// tolerance_mm / budget_us without auto, a missing or malformed table.
+/// True if any of model, integrator, level or kernel is `auto` in this body section.
+bool has_auto_field(const teleop::config::Node& node);
+
 AutoBody load_deformable_body(const teleop::config::Node& node, double physics_dt_s,
                               const std::vector<Plane>& planes);
 

@@ -47,6 +47,14 @@ CommandVerdict validate_command(const MasterCommand& cmd, const Eigen::Vector3d&
       !std::isfinite(cmd.tdpa_energy_in_j())) {
     return CommandVerdict::kNonFinite;
   }
+  auto norm3 = [](const std::array<double, 3>& a) {
+    return std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);  // inf when it overflows
+  };
+  if (!(norm3(cmd.linear_velocity_mps()) <= kMaxCommandSpeedMps) ||
+      !(norm3(cmd.angular_velocity_radps()) <= kMaxCommandAngularSpeedRadps) ||
+      !(norm3(cmd.master_force_n()) <= kMaxCommandForceN)) {
+    return CommandVerdict::kNonFinite;
+  }
   const auto& q = cmd.orientation_wxyz();
   const double qn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
   if (qn < 0.5 || qn > 2.0) return CommandVerdict::kBadOrientation;

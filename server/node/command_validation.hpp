@@ -13,7 +13,7 @@ namespace teleop::server {
 
 enum class CommandVerdict {
   kAccepted,
-  kNonFinite,         ///< a NaN or Inf in any numeric field
+  kNonFinite,         ///< a NaN or Inf in any numeric field, or an absurd velocity / force
   kBadOrientation,    ///< quaternion norm outside [0.5, 2]
   kOutsideWorkspace,  ///< position outside the scene's command workspace
   kBadGain,           ///< negative or absurd position gain override
@@ -22,6 +22,13 @@ enum class CommandVerdict {
 };
 
 const char* to_string(CommandVerdict v);
+
+/// Magnitudes beyond which a finite command field is malformed (rejected as kNonFinite): far
+/// above anything a device or the slave can do, low enough that one step of the slave law on
+/// them stays finite (fuzz_command found velocities of 1e219 m/s that made the tool's state NaN).
+constexpr double kMaxCommandSpeedMps = 100.0;            ///< |linear_velocity_mps|
+constexpr double kMaxCommandAngularSpeedRadps = 1000.0;  ///< |angular_velocity_radps|
+constexpr double kMaxCommandForceN = 1e5;                ///< |master_force_n|
 
 /// Checks one command. `last_seq`/`have_last`: newest accepted seq from the same writer.
 CommandVerdict validate_command(const MasterCommand& cmd, const Eigen::Vector3d& workspace_min_m,

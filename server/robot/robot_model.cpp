@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <limits>
 
+#include "common/mesh/tri_mesh.hpp"
+
 namespace teleop::sim::robot {
 
 namespace {
@@ -72,6 +74,12 @@ Eigen::Matrix3d inertia(const config::Node& n, const std::string& key) {
 // Axis-aligned bounding box of every vertex of a mesh file, scaled [m].
 bool mesh_bounds(const std::string& file, double scale, Eigen::Vector3d& lo, Eigen::Vector3d& hi,
                  std::string& error) {
+  try {
+    mesh::check_mesh_file(file);
+  } catch (const mesh::MeshError& e) {
+    error = e.what();
+    return false;
+  }
   Assimp::Importer importer;
   const aiScene* scene = importer.ReadFile(file, aiProcess_Triangulate);
   if (!scene || !scene->mRootNode) {
@@ -85,6 +93,10 @@ bool mesh_bounds(const std::string& file, double scale, Eigen::Vector3d& lo, Eig
     const aiMesh* mesh = scene->mMeshes[m];
     for (unsigned k = 0; k < mesh->mNumVertices; ++k) {
       const Eigen::Vector3d p(mesh->mVertices[k].x, mesh->mVertices[k].y, mesh->mVertices[k].z);
+      if (!p.allFinite()) {
+        error = "vertex " + std::to_string(k) + " has a coordinate that is not a finite number";
+        return false;
+      }
       lo = lo.cwiseMin(scale * p);
       hi = hi.cwiseMax(scale * p);
       ++count;

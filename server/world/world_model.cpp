@@ -1,6 +1,11 @@
 #include "server/world/world_model.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <iomanip>
+#include <limits>
+#include <sstream>
 
 namespace teleop::sim {
 
@@ -35,17 +40,199 @@ Eigen::Vector3d vec3(const config::Node& n, const std::string& key, const Eigen:
   const auto v = n.numbers_or(key, {def.x(), def.y(), def.z()}, lo, hi);
   return {v[0], v[1], v[2]};
 }
+
+/// Free space of a plane may be entered by at most this much at the start (a body resting on
+/// the floor touches it; one that starts inside a wall explodes) [m].
+constexpr double kStartPenetrationM = 1e-3;
+
+std::string num(double v) {
+  std::ostringstream os;
+  os << std::setprecision(4) << v;
+  return os.str();
+}
+
+std::string vec_text(const Eigen::Vector3d& v) {
+  return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]";
+}
+
+std::string ms(double s) { return num(s * 1e3) + " ms"; }
+
+std::string world_text(const WorldModel& s) {
+  return "the world box " + vec_text(s.world_min_m) + " .. " + vec_text(s.world_max_m) +
+         " m (world.min_m, world.max_m)";
+}
+
+std::filesystem::path relative_to(const std::string& file, const std::string& given) {
+  std::filesystem::path p = given;
+  if (p.is_relative()) p = std::filesystem::path(file).parent_path() / p;
+  return p;
+}
+
+std::string body_name(const WorldModel& s, std::size_t i) {
+  return "deformables[" + std::to_string(i) + "] (id " + std::to_string(s.bodies[i].object_id) +
+         ")";
+}
+
+std::string body_shape(const deformable::DeformableModel& m) {
+  return m.params.mesh_file.empty() ? "at level " + std::to_string(m.params.level)
+                                    : "for mesh '" + m.params.mesh_file + "'";
+}
+
+/// Largest stable step of the tool slave's law [s] (see physics_rate_problem); `why` says which
+/// mode limits it.
+double tool_limit_step_s(const WorldModel& s, std::string* why) {
+  const ToolModel& t = s.tool;
+  const double c = t.kd_ns_per_m + t.linear_damping_ns_per_m;
+  double h = std::numeric_limits<double>::infinity();
+  if (t.kp_n_per_m > 0.0) {
+    const double w = std::sqrt(t.kp_n_per_m / t.mass_kg);
+    const double zeta = c / (2.0 * std::sqrt(t.kp_n_per_m * t.mass_kg));
+    h = 2.0 * (std::sqrt(1.0 + zeta * zeta) - zeta) / w;
+    *why = "its PD (tool.kp_n_per_m " + num(t.kp_n_per_m) + ", damping " + num(c) +
+           " N s/m, tool.mass_kg " + num(t.mass_kg) + ": w " + num(w) + " rad/s, zeta " +
+           num(zeta) + ") is stable for h w <= 2 (sqrt(1 + zeta^2) - zeta)";
+  } else if (c > 0.0) {
+    h = 2.0 * t.mass_kg / c;
+    *why = "its damping (" + num(c) + " N s/m on tool.mass_kg " + num(t.mass_kg) +
+           ") is stable for h c / m <= 2";
+  }
+  double kc = 0.0;
+  std::string contact;
+  for (std::size_t i = 0; i < s.planes.size(); ++i) {
+    if (s.planes[i].stiffness_n_per_m > kc) {
+      kc = s.planes[i].stiffness_n_per_m;
+      contact = "planes[" + std::to_string(i) + "].stiffness_n_per_m";
+    }
+  }
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    if (s.bodies[i].contact.stiffness_n_per_m > kc) {
+      kc = s.bodies[i].contact.stiffness_n_per_m;
+      contact = "deformables[" + std::to_string(i) + "].contact.stiffness_n_per_m";
+    }
+  }
+  if (kc > 0.0) {
+    const double w = std::sqrt((t.kp_n_per_m + kc) / t.mass_kg);
+    const double hc = 2.0 / w;
+    if (hc < h) {
+      h = hc;
+      *why = "in contact, its PD plus the stiffest contact (" + contact + " " + num(kc) +
+             " N/m, tool.mass_kg " + num(t.mass_kg) + ": w " + num(w) +
+             " rad/s) is stable for h w <= 2";
+    }
+  }
+  return h;
+}
 }  // namespace
+
+double min_physics_rate_hz(const WorldModel& s) {
+  double rate = 0.0;
+  if (s.has_robot()) {
+    rate = std::max(rate, s.robot->ik.gain_per_s / (2.0 * kRateSafety));
+  } else {
+    std::string why;
+    const double h = tool_limit_step_s(s, &why);
+    if (std::isfinite(h)) rate = std::max(rate, 1.0 / (kRateSafety * h));
+  }
+  for (const auto& b : s.bodies) {
+    const double h = b.body.stable_step_s;
+    if (std::isfinite(h) && h > 0.0) {
+      rate = std::max(rate, 1.0 / (h * static_cast<double>(b.body.params.max_substeps)));
+    }
+  }
+  return rate;
+}
+
+std::string physics_rate_problem(const WorldModel& s, double rate_hz) {
+  if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) return "is not a positive rate";
+  const double dt = 1.0 / rate_hz;
+  const std::string at_least =
+      "raise the rate to at least " + num(std::ceil(min_physics_rate_hz(s))) + " Hz";
+  const std::string asks = "(dt " + ms(dt) + ") is too coarse for ";
+  if (s.has_robot()) {
+    const double g = s.robot->ik.gain_per_s;
+    if (dt * g > 2.0 * kRateSafety) {
+      return asks + "the robot: its resolved-rate IK (robot.ik.gain_per_s " + num(g) +
+             " 1/s) integrates the task error as e <- (1 - h g) e, which diverges for h g > 2 "
+             "(here h g = " +
+             num(dt * g) + ", allowed " + num(2.0 * kRateSafety) + "): " + at_least +
+             " or lower robot.ik.gain_per_s";
+    }
+  } else {
+    std::string why;
+    const double h = tool_limit_step_s(s, &why);
+    if (dt > kRateSafety * h) {
+      return asks + "the tool slave (semi-implicit Euler): " + why +
+             ", i.e. dt <= " + ms(kRateSafety * h) + " with the safety factor " + num(kRateSafety) +
+             ": " + at_least + ", or lower the stiffness, or raise tool.mass_kg";
+    }
+  }
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    const deformable::DeformableModel& m = s.bodies[i].body;
+    const int need = m.substeps_needed(dt);
+    if (need > m.params.max_substeps) {
+      return asks + body_name(s, i) + ": its largest stable step is " + ms(m.stable_step_s) + " " +
+             body_shape(m) + " (" + deformable::to_string(m.params.integrator) + ", w_max " +
+             num(m.omega_max_rad_per_s) + " rad/s, zeta " + num(m.damping_ratio_top) +
+             "), the scene asks " + ms(dt) + ": that needs " + std::to_string(need) +
+             " sub-steps, more than its max_substeps " + std::to_string(m.params.max_substeps) +
+             ": lower dt (" + at_least + "), raise damping, use implicit_euler or raise " +
+             "max_substeps";
+    }
+  }
+  return "";
+}
+
+std::vector<std::string> physics_rate_notes(const WorldModel& s, double rate_hz) {
+  std::vector<std::string> notes;
+  if (!(rate_hz > 0.0)) return notes;
+  const double dt = 1.0 / rate_hz;
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    const deformable::DeformableModel& m = s.bodies[i].body;
+    const int n = m.substeps_for(dt);
+    if (n <= 1) continue;
+    notes.push_back(body_name(s, i) + ": dt " + ms(dt) + " > largest stable step " +
+                    ms(m.stable_step_s) + " " + body_shape(m) + " (" +
+                    deformable::to_string(m.params.integrator) + ", w_max " +
+                    num(m.omega_max_rad_per_s) + " rad/s): " + std::to_string(n) +
+                    " sub-steps of " + ms(dt / n) + " per physics step");
+  }
+  return notes;
+}
 
 WorldModel parse_world_model(const config::Node& root) {
   WorldModel s;
   s.file = root.file();
+  if (root.empty_document()) {
+    throw config::ConfigError(root.file() +
+                              ": the scene is empty (an empty file, /dev/null or only comments): "
+                              "a scene is a YAML mapping with at least 'kind' (tool or robot); "
+                              "see deploy/scenes/default.yaml");
+  }
+  if (!root.is_map()) {
+    throw config::ConfigError(root.file() + ": field '<root>': value '" +
+                              (root.raw().IsScalar() ? root.raw().Scalar() : "a list") +
+                              "' is not a scene: a scene is a YAML mapping of fields such as "
+                              "'kind', 'physics', 'planes'");
+  }
   root.reject_unknown_keys(
-      {"name", "kind", "physics", "command", "tool", "planes", "robot", "deformables"});
+      {"name", "kind", "world", "physics", "command", "tool", "planes", "robot", "deformables"});
   s.name = root.string_or("name", s.name);
   const std::string kind = root.choice_or("kind", "tool", {"tool", "robot"});
   s.slave = kind == "robot" ? SlaveKind::kRobot : SlaveKind::kTool;
 
+  if (root.has("world")) {
+    const auto w = root.at("world");
+    w.reject_unknown_keys({"min_m", "max_m"});
+    s.world_min_m = vec3(w, "min_m", s.world_min_m, -1000.0, 1000.0);
+    s.world_max_m = vec3(w, "max_m", s.world_max_m, -1000.0, 1000.0);
+    for (int i = 0; i < 3; ++i) {
+      if (s.world_min_m[i] >= s.world_max_m[i]) {
+        w.fail("min_m", "value " + vec_text(s.world_min_m) + ": element " + std::to_string(i) +
+                            " must be below world.max_m's (" + num(s.world_max_m[i]) + ")");
+      }
+    }
+  }
+  const bool rate_given = root.has("physics") && root.at("physics").has("rate_hz");
   if (root.has("physics")) {
     const auto p = root.at("physics");
     p.reject_unknown_keys({"rate_hz", "visual_rate_hz", "gravity_mps2"});
@@ -65,6 +252,16 @@ WorldModel parse_world_model(const config::Node& root) {
                                       "workspace_max_m's (" + std::to_string(s.workspace_max_m[i]) +
                                       ")");
       }
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (s.workspace_min_m[i] < s.world_min_m[i]) {
+      root.fail("command.workspace_min_m",
+                "value " + vec_text(s.workspace_min_m) + " reaches outside " + world_text(s));
+    }
+    if (s.workspace_max_m[i] > s.world_max_m[i]) {
+      root.fail("command.workspace_max_m",
+                "value " + vec_text(s.workspace_max_m) + " reaches outside " + world_text(s));
     }
   }
   s.tool.gravity_mps2 = s.gravity_mps2;
@@ -95,11 +292,18 @@ WorldModel parse_world_model(const config::Node& root) {
     }
     for (std::size_t i = 0; i < ps.size(); ++i) {
       const auto p = ps.at(i);
+      if (!p.is_map()) p.fail("", "must be a mapping with at least 'normal'");
       p.reject_unknown_keys(
           {"name", "normal", "offset_m", "stiffness_n_per_m", "damping_ns_per_m", "friction"});
       Plane pl;
       pl.id = static_cast<int>(100 + i);
       pl.name = p.string_or("name", "plane" + std::to_string(i));
+      for (std::size_t j = 0; j < s.planes.size(); ++j) {
+        if (s.planes[j].name == pl.name) {
+          p.fail("name", "value '" + pl.name + "' is already the name of planes[" +
+                             std::to_string(j) + "]; plane names must be unique");
+        }
+      }
       const auto n = p.numbers("normal", 3, -1e3, 1e3);
       pl.normal = Eigen::Vector3d(n[0], n[1], n[2]);
       if (pl.normal.norm() < 1e-6) p.fail("normal", "must not be the zero vector");
@@ -113,40 +317,146 @@ WorldModel parse_world_model(const config::Node& root) {
   }
   for (const Plane& pl : s.planes) s.tool.add(Obstacle::of(pl));
 
-  std::optional<config::Node> robot_node;
   if (root.has("robot")) {
     // `robot: {include: FILE}` takes the `robot` mapping of another file (relative paths are
-    // relative to this scene file), so one robot description serves several scenes
+    // relative to this scene file), so one robot description serves several scenes. The robot
+    // is validated in every scene that has one; only a robot scene drives it.
     const config::Node r = root.at("robot");
+    std::optional<robot::RobotModel> rm;
     if (r.is_map() && r.has("include")) {
       r.reject_unknown_keys({"include"});
-      std::filesystem::path inc = r.string("include");
-      if (inc.is_relative()) inc = std::filesystem::path(root.file()).parent_path() / inc;
-      robot_node = config::Node::load_file(inc.string()).at("robot");
+      const std::string given = r.string("include");
+      const std::string inc = relative_to(root.file(), given).string();
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(inc, ec)) {
+        r.fail("include", "value '" + given + "': '" + inc + "' " +
+                              (std::filesystem::is_directory(inc, ec) ? "is a directory"
+                               : std::filesystem::exists(inc, ec)     ? "is not a regular file"
+                                                                      : "does not exist") +
+                              "; relative paths are relative to the scene file");
+      }
+      try {
+        const config::Node inc_root = config::Node::load_file(inc);
+        if (inc_root.empty_document()) {
+          throw config::ConfigError(inc + ": the file is empty; it must hold a 'robot' mapping");
+        }
+        rm = robot::load_robot_model(inc_root.at("robot"));
+      } catch (const config::ConfigError& e) {
+        r.fail("include", "value '" + given + "': " + e.what());
+      }
     } else {
-      robot_node = r;
+      rm = robot::load_robot_model(r);
     }
+    if (s.slave == SlaveKind::kRobot) s.robot = std::move(rm);
   }
-  if (s.slave == SlaveKind::kRobot && !robot_node) {
+  if (s.slave == SlaveKind::kRobot && !s.robot) {
     root.fail("robot", "is required when kind is 'robot'");
   }
-  if (s.slave == SlaveKind::kRobot) s.robot = robot::load_robot_model(*robot_node);
+  if (s.has_robot()) {
+    const Eigen::Vector3d base = s.robot->base.translation();
+    if ((base.array() < s.world_min_m.array()).any() ||
+        (base.array() > s.world_max_m.array()).any()) {
+      root.fail("robot", "base position " + vec_text(base) +
+                             " (robot.base.position_m) is outside " + world_text(s));
+    }
+  }
   if (root.has("deformables")) {
     const auto ds = root.at("deformables");
     if (!ds.is_sequence()) ds.fail("", "must be a list of deformable bodies");
     int next_id = 10;
     for (std::size_t i = 0; i < ds.size(); ++i) {
       const config::Node n = ds.at(i);
+      if (!n.is_map()) n.fail("", "must be a mapping with at least 'body'");
       n.reject_unknown_keys({"id", "body", "contact"});
       DeformableBodyModel b;
       b.object_id = static_cast<int>(n.integer_or("id", next_id, 10, 99));
+      if (b.object_id > 99) {
+        n.fail("id", "value '" + std::to_string(b.object_id) +
+                         "' (assigned automatically: the previous id + 1) is out of the allowed "
+                         "range [10, 99]; give the ids explicitly");
+      }
+      for (std::size_t j = 0; j < s.bodies.size(); ++j) {
+        if (s.bodies[j].object_id == b.object_id) {
+          n.fail("id", "value '" + std::to_string(b.object_id) + "'" +
+                           (n.has("id") ? "" : " (assigned automatically: the previous id + 1)") +
+                           " is already the id of deformables[" + std::to_string(j) +
+                           "]; ids must be unique");
+        }
+      }
       next_id = b.object_id + 1;
-      // `auto` fields pick the model from the measured table (server/deformable/model_select)
-      deformable::AutoBody ab =
-          deformable::load_deformable_body(n.at("body"), 1.0 / s.physics_rate_hz, s.planes);
-      b.body = std::move(ab.model);
-      b.auto_summary = ab.summary();
-      b.auto_report = ab.report();
+      const config::Node body = n.at("body");
+      std::string mesh_given;
+      if (deformable::has_auto_field(body)) {
+        // `auto` fields pick the model from the measured table (server/deformable/model_select)
+        deformable::AutoBody ab =
+            deformable::load_deformable_body(body, 1.0 / s.physics_rate_hz, s.planes);
+        b.body = std::move(ab.model);
+        b.auto_summary = ab.summary();
+        b.auto_report = ab.report();
+      } else {
+        for (const char* key : {"tolerance_mm", "budget_us", "model_table"}) {
+          if (body.has(key)) {
+            body.fail(key,
+                      "is used only when model, integrator, level or kernel is auto (automatic "
+                      "model selection); remove it or set one of them to auto");
+          }
+        }
+        deformable::DeformableParams explicit_params = deformable::load_deformable_params(body);
+        mesh_given = explicit_params.mesh_file;
+        if (!mesh_given.empty()) {
+          explicit_params.mesh_file = relative_to(root.file(), mesh_given).string();
+        }
+        try {
+          b.body = deformable::make_model(deformable::make_mesh_for(explicit_params),
+                                          explicit_params, s.planes);
+        } catch (const mesh::MeshError& e) {
+          if (mesh_given.empty()) body.fail("", e.what());
+          body.fail("mesh_file", "value '" + mesh_given + "': " + e.what());
+        } catch (const config::ConfigError& e) {
+          body.fail("", e.what());
+        }
+      }
+      const deformable::DeformableParams& params = b.body.params;
+      if (!(b.body.stable_step_s > 0.0)) {
+        body.fail("integrator",
+                  "value 'explicit_euler' without stiffness damping (stiffness_damping_s " +
+                      num(params.stiffness_damping_s) + ", radial_damping_s " +
+                      num(params.radial_damping_s) +
+                      ") is unstable at any step: give both dampings > 0, or use "
+                      "symplectic_euler or implicit_euler");
+      }
+      // the body must start inside the world box and in the free space of every plane
+      const Eigen::Matrix3Xd& x = b.body.mesh.vertices;
+      const Eigen::Vector3d lo = x.rowwise().minCoeff();
+      const Eigen::Vector3d hi = x.rowwise().maxCoeff();
+      const Eigen::Vector3d size = hi - lo;
+      const std::string size_field = mesh_given.empty() ? "radius_m" : "mesh_scale";
+      const std::string size_value =
+          mesh_given.empty() ? num(params.radius_m) : num(params.mesh_scale);
+      if ((size.array() > (s.world_max_m - s.world_min_m).array()).any()) {
+        body.fail(size_field, "value '" + size_value + "': the body is " + num(size.x()) + " x " +
+                                  num(size.y()) + " x " + num(size.z()) +
+                                  " m and does not fit in " + world_text(s));
+      }
+      const std::string centre_value = "value '" + vec_text(params.centre_m) + "'";
+      if ((lo.array() < s.world_min_m.array()).any() ||
+          (hi.array() > s.world_max_m.array()).any()) {
+        body.fail("centre_m", centre_value + ": the body spans " + vec_text(lo) + " .. " +
+                                  vec_text(hi) + " m, outside " + world_text(s) +
+                                  ": move centre_m or widen the world box");
+      }
+      for (std::size_t j = 0; j < s.planes.size(); ++j) {
+        const Plane& pl = s.planes[j];
+        const double d = (pl.normal.transpose() * x).minCoeff() - pl.offset_m;
+        if (d < -kStartPenetrationM) {
+          body.fail("centre_m", centre_value + ": the body (" + size_field + " " + size_value +
+                                    ") starts " + num(-d) + " m behind plane '" + pl.name +
+                                    "' (planes[" + std::to_string(j) +
+                                    "]); every node must start in free space (at most " +
+                                    num(kStartPenetrationM * 1e3) +
+                                    " mm inside a plane): move centre_m or shrink the body");
+        }
+      }
       b.contact = load_tip_contact_params(n.child("contact"));
       s.bodies.push_back(std::move(b));
     }
@@ -155,6 +465,24 @@ WorldModel parse_world_model(const config::Node& root) {
     if (s.tool_start_m[i] < s.workspace_min_m[i] || s.tool_start_m[i] > s.workspace_max_m[i]) {
       root.fail("tool.start_position_m", "must lie inside the command workspace");
     }
+  }
+  if (!s.has_robot()) {
+    for (std::size_t j = 0; j < s.planes.size(); ++j) {
+      const Plane& pl = s.planes[j];
+      const double d = pl.normal.dot(s.tool_start_m) - pl.offset_m - s.tool.radius_m;
+      if (d < -kStartPenetrationM) {
+        root.fail("tool.start_position_m", "value " + vec_text(s.tool_start_m) +
+                                               ": the tool (radius " + num(s.tool.radius_m) +
+                                               " m) starts " + num(-d) + " m behind plane '" +
+                                               pl.name + "' (planes[" + std::to_string(j) +
+                                               "]); it must start in free space");
+      }
+    }
+  }
+  const std::string problem = physics_rate_problem(s, s.physics_rate_hz);
+  if (!problem.empty()) {
+    root.fail("physics.rate_hz", "value '" + num(s.physics_rate_hz) + "'" +
+                                     (rate_given ? "" : " (the default)") + " " + problem);
   }
   return s;
 }

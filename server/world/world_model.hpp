@@ -48,8 +48,12 @@ struct WorldModel {
   Eigen::Vector3d workspace_min_m{-1.5, -1.5, -0.1};  ///< commands outside are rejected [m]
   Eigen::Vector3d workspace_max_m{1.5, 1.5, 1.5};
   Eigen::Vector3d tool_start_m{0.6, 0.0, 0.7};  ///< initial tool position (tool slave) [m]
-  ToolModel tool;                               ///< the tool slave (planes as its obstacles)
-  std::optional<robot::RobotModel> robot;       ///< the robot slave (kind: robot)
+  /// The world box (`world.min_m`, `world.max_m`): every object starts inside it and the
+  /// command workspace lies inside it [m].
+  Eigen::Vector3d world_min_m{-10.0, -10.0, -10.0};
+  Eigen::Vector3d world_max_m{10.0, 10.0, 10.0};
+  ToolModel tool;                          ///< the tool slave (planes as its obstacles)
+  std::optional<robot::RobotModel> robot;  ///< the robot slave (kind: robot)
   std::vector<Plane> planes;
   std::vector<DeformableBodyModel> bodies;
 
@@ -66,11 +70,36 @@ struct WorldModel {
 };
 
 /// Loads and validates a scene file: every field, the robot (with `include`), every
-/// deformable body (mesh built, model checked). @throws config::ConfigError naming the file,
-/// the field, the value and the allowed range.
+/// deformable body (mesh built, model checked), and that the scene can run: it is not empty,
+/// ids are unique, every object starts inside the world box and in the free space of every
+/// plane, and the physics rate is one at which every part is stable (physics_rate_problem).
+/// Mesh and include errors name the scene file and the field that referenced the file.
+/// @throws config::ConfigError naming the file, the field, the value and the allowed range or
+/// the reason (docs/configuration.md, "What a scene may not do").
 WorldModel load_world_model(const std::string& file);
-/// The same from parsed YAML (`root.file()` used in messages). @throws config::ConfigError.
+/// The same from parsed YAML (`root.file()` used in messages and to resolve relative paths).
+/// @throws config::ConfigError.
 WorldModel parse_world_model(const config::Node& root);
+
+/// Safety factor on every stability limit the rate check uses (as the deformable body's
+/// automatic step, deformable::kStableStepSafety).
+constexpr double kRateSafety = 0.95;
+
+/// Why the scene cannot run at `rate_hz` (dt = 1 / rate_hz), or "" when it can:
+///  - tool slave: its PD and the stiffest contact it meets, integrated by semi-implicit Euler,
+///    are stable iff h w <= 2 (sqrt(1 + zeta^2) - zeta) for w^2 = kp / m (damped by kd) and
+///    h w <= 2 for w^2 = (kp + k_contact) / m (contact damping is compression-only);
+///  - robot slave: the resolved-rate IK integrates its task error as e <- (1 - h g) e, which
+///    diverges for h g > 2 (g = robot.ik.gain_per_s); the joint PD is implicit in ODE;
+///  - each deformable body: the sub-steps its automatic step needs (dt / largest stable step)
+///    must not exceed its max_substeps.
+/// Each limit is taken with the factor kRateSafety.
+std::string physics_rate_problem(const WorldModel& model, double rate_hz);
+/// The lowest physics rate at which physics_rate_problem() finds nothing [Hz].
+double min_physics_rate_hz(const WorldModel& model);
+/// One line for each deformable body that sub-steps at `rate_hz`: its largest stable step,
+/// the sub-step count and length (the load prints them).
+std::vector<std::string> physics_rate_notes(const WorldModel& model, double rate_hz);
 /// Reads a `deformables[i].contact` mapping. @throws config::ConfigError.
 collision::TipContactParams load_tip_contact_params(const config::Node& node);
 

@@ -44,6 +44,9 @@ inline constexpr int kObserverSession = 116;   // observers_test: 8 observers, d
 inline constexpr int kObserverLate = 117;      // observers_test: a late observer
 inline constexpr int kRateLimitedUnit = 118;   // rate_limited_publisher_test: 118, 119, 120
 // 121-124: reserved for observer tests
+inline constexpr int kBadScenes = 101;          // bad_scene_test: refused scenes (exit before DDS)
+inline constexpr int kSubstepScene = 102;       // bad_scene_test: a scene that sub-steps runs
+inline constexpr int kMalformedCommands = 103;  // bad_scene_test: malformed command payloads
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains

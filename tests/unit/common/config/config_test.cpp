@@ -90,3 +90,51 @@ TEST(Config, DurationsAndProbabilities) {
 }
 
 }  // namespace
+
+namespace {
+
+// What yaml-cpp lets pass is refused for every configuration file (issue 12): duplicate keys at
+// any level, null values, keys that are not names, several documents, self-referencing aliases.
+TEST(ConfigChecks, DuplicateKeysAreRefusedAtAnyLevel) {
+  std::string msg = error_of([] { Node::parse("a: 1\nb: 2\na: 3\n", "c.yaml"); });
+  EXPECT_NE(msg.find("c.yaml: field 'a' is given twice (lines 1 and 3; value '1' and '3')"),
+            std::string::npos)
+      << msg;
+  msg = error_of([] { Node::parse("x:\n  - {k: 1, k: 2}\n", "c.yaml"); });
+  EXPECT_NE(msg.find("field 'x[0].k' is given twice"), std::string::npos) << msg;
+}
+
+TEST(ConfigChecks, NullValuesKeysThatAreNotNamesAndSeveralDocumentsAreRefused) {
+  std::string msg = error_of([] { Node::parse("delay:\ncontroller: {}\n", "m.yaml"); });
+  EXPECT_NE(msg.find("m.yaml: field 'delay' (line 1): value is empty (null)"), std::string::npos)
+      << msg;
+  msg = error_of([] { Node::parse("? {a: 1}\n: 2\n", "m.yaml"); });
+  EXPECT_NE(msg.find("not a plain name"), std::string::npos) << msg;
+  msg = error_of([] { Node::parse("a: 1\n---\na: 2\n", "m.yaml"); });
+  EXPECT_NE(msg.find("2 YAML documents"), std::string::npos) << msg;
+}
+
+TEST(ConfigChecks, SelfReferencingAliasEndsWithABoundedMessage) {
+  const Node n = Node::parse("k: &a [*a]\n", "a.yaml");
+  const std::string msg = error_of([&] { n.number("k", 0, 1); });
+  EXPECT_NE(msg.find("a.yaml: field 'k'"), std::string::npos) << msg;
+  EXPECT_LT(msg.size(), 400u) << msg;
+}
+
+TEST(ConfigChecks, ASectionThatIsNotAMappingIsRefused) {
+  const Node n = Node::parse("physics: 5\n", "s.yaml");
+  const std::string msg = error_of([&] { n.at("physics").reject_unknown_keys({"rate_hz"}); });
+  EXPECT_NE(msg.find("field 'physics': value '5' must be a mapping of the fields {rate_hz}"),
+            std::string::npos)
+      << msg;
+}
+
+TEST(ConfigChecks, EmptyDocumentsAndDirectories) {
+  EXPECT_TRUE(Node::parse("", "e.yaml").empty_document());
+  EXPECT_TRUE(Node::parse("# only a comment\n", "e.yaml").empty_document());
+  EXPECT_TRUE(Node::load_file("/dev/null").empty_document());
+  const std::string msg = error_of([] { Node::load_file("/tmp"); });
+  EXPECT_NE(msg.find("/tmp: is a directory"), std::string::npos) << msg;
+}
+
+}  // namespace

@@ -1,0 +1,19 @@
+#!/bin/sh
+# One fuzzer's ctest run: replay every file of the committed corpus (each a regression: it must
+# not crash), then fuzz for SECONDS starting from it into a scratch corpus, with the dictionary
+# when there is one. Crashing inputs are written into WORK/crashes/. Prints libFuzzer's stats.
+#   run_fuzzer.sh FUZZER CORPUS WORK SECONDS
+set -eu
+fuzzer=$1 corpus=$2 work=$3 seconds=$4
+name=$(basename "$fuzzer")
+dict=$(dirname "$corpus")/../${name#fuzz_}.dict
+rm -rf "$work/corpus"
+mkdir -p "$work/corpus" "$work/crashes"
+dict_flag=""
+[ -f "$dict" ] && dict_flag="-dict=$dict"
+echo "== $name: replaying $(ls "$corpus" | wc -l) corpus files"
+"$fuzzer" -runs=0 $dict_flag "$corpus"
+echo "== $name: fuzzing for $seconds s"
+# -max_len: scene files and meshes are small; -timeout: one input taking 10 s is a hang
+"$fuzzer" -max_total_time="$seconds" -max_len=8192 -timeout=10 -rss_limit_mb=2048 \
+  -print_final_stats=1 -artifact_prefix="$work/crashes/" $dict_flag "$work/corpus" "$corpus"
