@@ -28,8 +28,10 @@
 #
 # Roles (permissions; default DENY for everything not listed):
 #   server    publishes teleop/slave_state, scene, mesh_topology, mesh_frame, events,
-#             server_stats; subscribes teleop/*
-#   master    publishes teleop/master_command, master_state, events; subscribes teleop/*
+#             server_stats and the observers' copies slave_state_view, slave_state_monitor,
+#             mesh_frame_monitor; subscribes teleop/*
+#   master    publishes teleop/master_command, master_state, events and the observers'
+#             copies master_state_view, master_state_monitor; subscribes teleop/*
 #   observer  subscribes teleop/*; publishes nothing
 #   bench     publishes and subscribes bench/* (teleop_bench rtt); no teleop topic
 # Keys are ECDSA P-256 (prime256v1), signatures SHA-256: both supported by Fast DDS 2.9's
@@ -143,8 +145,8 @@ EOF
 # topics each role may publish (subscribing: teleop/* for every role)
 publish_topics() {
   case "$1" in
-    server) echo "teleop/slave_state teleop/scene teleop/mesh_topology teleop/mesh_frame teleop/events teleop/server_stats" ;;
-    master) echo "teleop/master_command teleop/master_state teleop/events" ;;
+    server) echo "teleop/slave_state teleop/scene teleop/mesh_topology teleop/mesh_frame teleop/events teleop/server_stats teleop/slave_state_view teleop/slave_state_monitor teleop/mesh_frame_monitor" ;;
+    master) echo "teleop/master_command teleop/master_state teleop/events teleop/master_state_view teleop/master_state_monitor" ;;
     observer) echo "" ;;
     bench) echo "bench/*" ;;
   esac

@@ -10,7 +10,7 @@ namespace teleop::sim::robot::testing {
 /// deploy/scenes/robot_puma560.yaml of this source tree.
 inline std::string puma_path() {
   return (std::filesystem::path(__FILE__).parent_path() /
-          "../../../deploy/scenes/robot_puma560.yaml")
+          "../../../../deploy/scenes/robot_puma560.yaml")
       .lexically_normal()
       .string();
 }
