@@ -1,5 +1,8 @@
 #include "common/config/config.hpp"
 
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -106,8 +109,62 @@ void check_tree(const YAML::Node& n, const std::string& file, const std::string&
   }
 }
 
+// Byte offset of the first byte that is not part of valid UTF-8 (or a control character other
+// than tab, newline and carriage return), or npos. YAML files are UTF-8 text; Debian's
+// yaml-cpp 0.7 can spin on some invalid byte sequences (found by tests/fuzz: 9 bytes hung it
+// for more than 13 s), so such files are refused before the parser sees them.
+std::size_t first_invalid_byte(const std::string& text) {
+  const auto* p = reinterpret_cast<const unsigned char*>(text.data());
+  const std::size_t n = text.size();
+  std::size_t i = 0;
+  while (i < n) {
+    const unsigned char c = p[i];
+    if (c < 0x80) {
+      if (c < 0x20 && c != '\t' && c != '\n' && c != '\r') return i;
+      if (c == 0x7f) return i;
+      ++i;
+      continue;
+    }
+    int len = 0;
+    std::uint32_t cp = 0;
+    if ((c & 0xe0) == 0xc0) {
+      len = 2;
+      cp = c & 0x1f;
+    } else if ((c & 0xf0) == 0xe0) {
+      len = 3;
+      cp = c & 0x0f;
+    } else if ((c & 0xf8) == 0xf0) {
+      len = 4;
+      cp = c & 0x07;
+    } else {
+      return i;
+    }
+    if (i + len > n) return i;
+    for (int k = 1; k < len; ++k) {
+      if ((p[i + k] & 0xc0) != 0x80) return i;
+      cp = (cp << 6) | (p[i + k] & 0x3f);
+    }
+    // overlong forms, surrogates and code points beyond U+10FFFF are not UTF-8
+    if ((len == 2 && cp < 0x80) || (len == 3 && cp < 0x800) || (len == 4 && cp < 0x10000) ||
+        (cp >= 0xd800 && cp <= 0xdfff) || cp > 0x10ffff) {
+      return i;
+    }
+    i += len;
+  }
+  return std::string::npos;
+}
+
 // Parses one YAML document from `text`; refuses several documents and the tree checks above.
 YAML::Node parse_checked(const std::string& text, const std::string& file) {
+  if (const std::size_t bad = first_invalid_byte(text); bad != std::string::npos) {
+    const std::size_t line = 1 + static_cast<std::size_t>(
+                                     std::count(text.begin(), text.begin() + bad, '\n'));
+    char byte[8];
+    std::snprintf(byte, sizeof(byte), "0x%02x", static_cast<unsigned char>(text[bad]));
+    throw ConfigError(file + ": byte " + std::to_string(bad) + " (line " + std::to_string(line) +
+                      ") is " + byte + ", not valid UTF-8 text or a control character; a "
+                      "configuration file is UTF-8 YAML");
+  }
   std::vector<YAML::Node> docs;
   try {
     docs = YAML::LoadAll(text);

@@ -138,3 +138,27 @@ TEST(ConfigChecks, EmptyDocumentsAndDirectories) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string parse_error(const std::string& text) {
+  try {
+    Node::parse(text, "s.yaml");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, InvalidUtf8IsRefusedBeforeTheParserWithByteAndLine) {
+  // the fuzzer's input that kept yaml-cpp 0.7 busy for more than 13 s
+  const std::string hang("\x2c\xc7\xff\xff\xff\x62\x20\xff\x2a", 9);
+  const std::string e = parse_error(hang);
+  EXPECT_NE(e.find("s.yaml: byte 1 (line 1) is 0xc7, not valid UTF-8"), std::string::npos) << e;
+  EXPECT_NE(parse_error("a: 1\nb: \xff\n").find("byte 8 (line 2) is 0xff"), std::string::npos);
+  EXPECT_NE(parse_error(std::string("a: 1\n\0b: 2\n", 10)).find("byte 5"), std::string::npos);
+  // valid UTF-8 (a BOM, accents, tabs in comments) still parses
+  EXPECT_EQ(parse_error("\xef\xbb\xbfname: d\xc3\xa9\x66\x61ut  #\tcomment\n"), "");
+}
+
+}  // namespace
