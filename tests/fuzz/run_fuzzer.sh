@@ -4,7 +4,7 @@
 # when there is one. Crashing inputs are written into WORK/crashes/. Prints libFuzzer's stats.
 #   run_fuzzer.sh FUZZER CORPUS WORK SECONDS
 set -eu
-fuzzer=$1 corpus=$2 work=$3 seconds=$4
+fuzzer=$1 corpus=$2 work=$3 seconds=$4 runs=${5:--1}
 name=$(basename "$fuzzer")
 dict=$(dirname "$corpus")/../${name#fuzz_}.dict
 rm -rf "$work/corpus"

@@ -161,4 +161,12 @@ TEST(Config, InvalidUtf8IsRefusedBeforeTheParserWithByteAndLine) {
   EXPECT_EQ(parse_error("\xef\xbb\xbfname: d\xc3\xa9\x66\x61ut  #\tcomment\n"), "");
 }
 
+TEST(Config, YamlTagsAreRefusedQuotedOrInnerBangsAreNot) {
+  // the fuzzer's input that made yaml-cpp 0.7 allocate without end
+  EXPECT_NE(parse_error("!visual_ra,e_hz").find("line 1 (byte 0) has a YAML tag"),
+            std::string::npos);
+  EXPECT_NE(parse_error("a: 1\nb: !!str 5\n").find("line 2"), std::string::npos);
+  EXPECT_EQ(parse_error("name: 'wow!'\nother: \"!x\"\nthird: a!b  # !comment\n"), "");
+}
+
 }  // namespace
