@@ -155,11 +155,13 @@ std::size_t first_invalid_byte(const std::string& text) {
   return std::string::npos;
 }
 
-// Byte offset of the first YAML tag ('!' starting a token outside quotes and comments), or
-// npos. Configuration files need no tags, and Debian's yaml-cpp 0.7 allocates nodes without
-// end on some malformed ones (tests/fuzz found "!visual_ra,e_hz"), so they are refused.
+// Byte offset of the first YAML tag ('!' starting a token outside quotes and comments) or
+// token-starting ',' outside a flow collection, or npos. Configuration files need neither, and
+// Debian's yaml-cpp 0.7 allocates nodes without end on some such inputs (tests/fuzz found
+// "!visual_ra,e_hz" and a file starting with ", a"), so they are refused before it parses.
 std::size_t first_tag(const std::string& text) {
   bool single = false, dbl = false, comment = false;
+  int flow = 0;  // depth of [ ] and { }
   char prev = '\n';
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
@@ -179,6 +181,12 @@ std::size_t first_tag(const std::string& text) {
       if (std::strchr(" \t\n\r[{,:-", prev)) (c == '\'' ? single : dbl) = true;
     } else if (c == '!' && std::strchr(" \t\n\r[{,:-", prev)) {
       return i;
+    } else if (c == '[' || c == '{') {
+      ++flow;
+    } else if ((c == ']' || c == '}') && flow > 0) {
+      --flow;
+    } else if (c == ',' && flow == 0 && std::strchr(" \t\n\r:-", prev)) {
+      return i;  // a flow separator outside [ ] and { }
     }
     prev = c;
   }
@@ -200,8 +208,8 @@ YAML::Node parse_checked(const std::string& text, const std::string& file) {
     const std::size_t line = 1 + static_cast<std::size_t>(
                                      std::count(text.begin(), text.begin() + tag, '\n'));
     throw ConfigError(file + ": line " + std::to_string(line) + " (byte " + std::to_string(tag) +
-                      ") has a YAML tag ('!'); configuration files use none: quote the value if "
-                      "the '!' is meant literally");
+                      ") has a YAML tag ('!') or a ',' outside [ ] or { }; configuration files use "
+                      "neither: quote the value if the character is meant literally");
   }
   std::vector<YAML::Node> docs;
   try {

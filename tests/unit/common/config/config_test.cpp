@@ -167,6 +167,9 @@ TEST(Config, YamlTagsAreRefusedQuotedOrInnerBangsAreNot) {
             std::string::npos);
   EXPECT_NE(parse_error("a: 1\nb: !!str 5\n").find("line 2"), std::string::npos);
   EXPECT_EQ(parse_error("name: 'wow!'\nother: \"!x\"\nthird: a!b  # !comment\n"), "");
+  // a ',' starting a token outside [ ] / { } (a fuzz input that hung yaml-cpp started ", a")
+  EXPECT_NE(parse_error(", a sphere\nname: x\n").find("outside [ ] or { }"), std::string::npos);
+  EXPECT_EQ(parse_error("v: [1, 2, 3]\nm: {a: 1, b: [4, 5]}\ns: a, b\n"), "");
 }
 
 }  // namespace
