@@ -6,9 +6,9 @@
 // height, k = 2e4 N/m). Used by the tests and by `teleop_bench delay`.
 #include <string>
 
-#include "client/sim/loopback_session.hpp"
 #include "client/analysis/stability_analysis.hpp"
 #include "client/device/simulated_device.hpp"
+#include "client/sim/loopback_session.hpp"
 
 namespace teleop::master {
 

@@ -127,7 +127,8 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
 /// @throws teleop::config::ConfigError naming the flag or file, the value and the range.
 void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOptions& o) {
   using teleop::config::check_flag;
-  o.dds = teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_master", f.net_flags);
+  o.dds =
+      teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_master", f.net_flags);
   teleop::dds::profile_file(o.dds.profile);
   check_flag("--duration", o.duration_s, 0.0, 1e6);
   check_flag("--rate", o.rate_hz, 10.0, 20000.0);

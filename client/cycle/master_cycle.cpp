@@ -55,8 +55,8 @@ void MasterCycle::start(double now_s) {
   session_start_s_ = now_s;
 }
 
-void MasterCycle::start_homing(double now_s, const Eigen::Vector3d& slave_tip_m,
-                               double duration_s, double tolerance_m, double timeout_s) {
+void MasterCycle::start_homing(double now_s, const Eigen::Vector3d& slave_tip_m, double duration_s,
+                               double tolerance_m, double timeout_s) {
   if (duration_s <= 0.0) {
     start(now_s);
     return;

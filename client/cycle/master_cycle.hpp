@@ -109,12 +109,12 @@ class MasterCycle {
   SessionMetrics metrics_;
 
   DeviceReading reading_;
-  SlaveSample newest_;     // newest sample at the master
-  MetricsSample sample_;   // this cycle's metrics sample
-  SlaveCommand command_;   // this cycle's command
+  SlaveSample newest_;    // newest sample at the master
+  MetricsSample sample_;  // this cycle's metrics sample
+  SlaveCommand command_;  // this cycle's command
   Eigen::Vector3d force_n_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d controller_force_n_ = Eigen::Vector3d::Zero();
-  double origin_s_ = 0.0;   // metrics time zero
+  double origin_s_ = 0.0;    // metrics time zero
   double last_rx_s_ = -1.0;  // when the controller last got a new sample
   std::uint64_t seq_ = 0;
   bool sample_arrived_ = false;

@@ -63,10 +63,10 @@ struct SessionReport {
   double elapsed_s = 0.0;
   double session_s = 0.0;
   double wait_s = 0.0;
-  std::uint64_t issued = 0;   // commands the cycle issued (into the injected forward channel)
-  std::uint64_t dropped = 0;  // of them, dropped by the injected channel (loss, burst, overflow)
-  std::uint64_t sent = 0;     // written to DDS
-  std::uint64_t received = 0; // received by the server (across its restarts)
+  std::uint64_t issued = 0;    // commands the cycle issued (into the injected forward channel)
+  std::uint64_t dropped = 0;   // of them, dropped by the injected channel (loss, burst, overflow)
+  std::uint64_t sent = 0;      // written to DDS
+  std::uint64_t received = 0;  // received by the server (across its restarts)
   std::uint64_t echoed = 0;
   std::uint64_t states_received = 0;
   std::uint64_t overruns = 0;
@@ -143,7 +143,8 @@ struct MasterNode::Impl {
         [this](const Event& e, const eprosima::fastdds::dds::SampleInfo&) {
           // a fault on the server during this session (the event log's history from before
           // the session arrives earlier and is not counted)
-          if (e.source() == "server" && e.kind() == static_cast<std::uint8_t>(sim::EventKind::kFault) &&
+          if (e.source() == "server" &&
+              e.kind() == static_cast<std::uint8_t>(sim::EventKind::kFault) &&
               now_ns() >= session_start_ns.load()) {
             server_fault_events.fetch_add(1);
           }
@@ -249,18 +250,34 @@ struct MasterNode::Impl {
 
   void open_log() {
     if (options.log_csv.empty()) return;
-    log = std::make_unique<CsvWriter>(
-        options.log_csv,
-        std::vector<std::string>{"t_s",          "phase",          "seq",
-                                 "xm_x",         "xm_y",           "xm_z",
-                                 "xs_x",         "xs_y",           "xs_z",
-                                 "fe_x",         "fe_y",           "fe_z",
-                                 "fm_x",         "fm_y",           "fm_z",
-                                 "rtt_ms",       "link_ok",        "in_contact",
-                                 "penetration_m", "energy_j",      "safety_scale",
-                                 "position_error_m", "deformation_m", "loop_delay_ms",
-                                 "delay_injected_ms", "passivity_observer_j",
-                                 "passivity_dissipated_j"});
+    log = std::make_unique<CsvWriter>(options.log_csv,
+                                      std::vector<std::string>{"t_s",
+                                                               "phase",
+                                                               "seq",
+                                                               "xm_x",
+                                                               "xm_y",
+                                                               "xm_z",
+                                                               "xs_x",
+                                                               "xs_y",
+                                                               "xs_z",
+                                                               "fe_x",
+                                                               "fe_y",
+                                                               "fe_z",
+                                                               "fm_x",
+                                                               "fm_y",
+                                                               "fm_z",
+                                                               "rtt_ms",
+                                                               "link_ok",
+                                                               "in_contact",
+                                                               "penetration_m",
+                                                               "energy_j",
+                                                               "safety_scale",
+                                                               "position_error_m",
+                                                               "deformation_m",
+                                                               "loop_delay_ms",
+                                                               "delay_injected_ms",
+                                                               "passivity_observer_j",
+                                                               "passivity_dissipated_j"});
   }
 
   /// MasterState for observers (every state_every cycles).
@@ -300,8 +317,7 @@ struct MasterNode::Impl {
         fe.z(), f.x(), f.y(), f.z(), rtt_ms, cycle.safety().link_lost() ? 0.0 : 1.0,
         xs.in_contact ? 1.0 : 0.0, xs.penetration_m, cycle.metrics().energy_j(),
         cycle.safety().scale(), (xm - xs.position_m).norm(), xs.deformation_m, loop_delay_ms,
-        (options.forward.delay_s + options.backward.delay_s) * 1e3, ps.observer_j,
-        ps.dissipated_j);
+        (options.forward.delay_s + options.backward.delay_s) * 1e3, ps.observer_j, ps.dissipated_j);
     log->row(vals.data(), vals.size());
   }
 
@@ -561,14 +577,13 @@ struct MasterNode::Impl {
         static_cast<unsigned long long>(rep.dropped), static_cast<unsigned long long>(rep.sent),
         options.forward.describe().c_str(), fwd.delay_mean_ms, fwd.delay_p99_ms,
         100.0 * fwd.loss_fraction, options.backward.describe().c_str(), bwd.delay_mean_ms,
-        bwd.delay_p99_ms, 100.0 * bwd.loss_fraction, r.p50, r.p99, r.max, r.count, ld.p50,
-        ld.p99, j.p50, j.p99, static_cast<unsigned long long>(rep.overruns),
+        bwd.delay_p99_ms, 100.0 * bwd.loss_fraction, r.p50, r.p99, r.max, r.count, ld.p50, ld.p99,
+        j.p50, j.p99, static_cast<unsigned long long>(rep.overruns),
         metrics.position_error_rms_m() * 1e3, metrics.position_error_max_m() * 1e3,
-        metrics.max_device_force_n(), metrics.force_error_rms_n(),
-        relative.c_str(), metrics.contact_time_s(),
-        metrics.mean_contact_force_n(), metrics.energy_j(), metrics.energy_min_j(),
-        safety.cut() ? "CUT: " : "ok", safety.cut() ? safety.cut_reason() : "",
-        static_cast<unsigned long long>(rep.link_losses),
+        metrics.max_device_force_n(), metrics.force_error_rms_n(), relative.c_str(),
+        metrics.contact_time_s(), metrics.mean_contact_force_n(), metrics.energy_j(),
+        metrics.energy_min_j(), safety.cut() ? "CUT: " : "ok",
+        safety.cut() ? safety.cut_reason() : "", static_cast<unsigned long long>(rep.link_losses),
         static_cast<unsigned long long>(rep.server_faults),
         static_cast<unsigned long long>(rep.server_watchdog_trips),
         static_cast<unsigned long long>(rep.server_overruns),

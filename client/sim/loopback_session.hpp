@@ -89,5 +89,4 @@ class LoopbackSession {
   bool started_ = false;
 };
 
-
 }  // namespace teleop::master

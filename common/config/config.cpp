@@ -196,17 +196,18 @@ std::size_t first_tag(const std::string& text) {
 // Parses one YAML document from `text`; refuses several documents and the tree checks above.
 YAML::Node parse_checked(const std::string& text, const std::string& file) {
   if (const std::size_t bad = first_invalid_byte(text); bad != std::string::npos) {
-    const std::size_t line = 1 + static_cast<std::size_t>(
-                                     std::count(text.begin(), text.begin() + bad, '\n'));
+    const std::size_t line =
+        1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + bad, '\n'));
     char byte[8];
     std::snprintf(byte, sizeof(byte), "0x%02x", static_cast<unsigned char>(text[bad]));
     throw ConfigError(file + ": byte " + std::to_string(bad) + " (line " + std::to_string(line) +
-                      ") is " + byte + ", not valid UTF-8 text or a control character; a "
+                      ") is " + byte +
+                      ", not valid UTF-8 text or a control character; a "
                       "configuration file is UTF-8 YAML");
   }
   if (const std::size_t tag = first_tag(text); tag != std::string::npos) {
-    const std::size_t line = 1 + static_cast<std::size_t>(
-                                     std::count(text.begin(), text.begin() + tag, '\n'));
+    const std::size_t line =
+        1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + tag, '\n'));
     throw ConfigError(file + ": line " + std::to_string(line) + " (byte " + std::to_string(tag) +
                       ") has a YAML tag ('!') or a ',' outside [ ] or { }; configuration files use "
                       "neither: quote the value if the character is meant literally");

@@ -138,8 +138,8 @@ class MultiHost : public ::testing::Test {
     auto master = on(2, kMasterBinary, margs, name + "_master");
     std::vector<std::unique_ptr<Process>> observers;
     for (int k = 0; k < 2; ++k) {
-      std::vector<std::string> oargs = {"--domain",   d,   "--profile", r.profile_client,
-                                        "--duration", "12", "--period", "0.5"};
+      std::vector<std::string> oargs = {"--domain",   d,    "--profile", r.profile_client,
+                                        "--duration", "12", "--period",  "0.5"};
       oargs.insert(oargs.end(), r.observer.begin(), r.observer.end());
       observers.push_back(on(3, kMonitorBinary, oargs, name + "_obs" + std::to_string(k)));
     }

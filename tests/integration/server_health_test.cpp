@@ -64,8 +64,8 @@ TEST(ServerHealth, CountsAreRightAcrossAServerRestart) {
   const std::string d = std::to_string(domains::kServerRestart);
   const std::string master_json = tmp("restart_master.json");
   auto server = std::make_unique<Process>(
-      kServerBinary, std::vector<std::string>{"--domain", d, "--duration", "60", "--scene",
-                                              kToolScene},
+      kServerBinary,
+      std::vector<std::string>{"--domain", d, "--duration", "60", "--scene", kToolScene},
       "restart_server1");
   Process master(kMasterBinary,
                  {"--domain", d, "--duration", "8", "--homing", "0.5", "--script", "hold",
@@ -75,8 +75,8 @@ TEST(ServerHealth, CountsAreRightAcrossAServerRestart) {
   server->signal(SIGKILL);  // kill -9 mid-session
   server->wait_for(10.0);
   server = std::make_unique<Process>(
-      kServerBinary, std::vector<std::string>{"--domain", d, "--duration", "60", "--scene",
-                                              kToolScene},
+      kServerBinary,
+      std::vector<std::string>{"--domain", d, "--duration", "60", "--scene", kToolScene},
       "restart_server2");
   const std::string m = wait_text(master_json, master, 60.0);
   server->signal(SIGTERM);

@@ -37,12 +37,12 @@ inline constexpr int kSecureStranger = 109;    // security_test: identity of ano
 // 110, 111: tests/bench/security_rtt.sh (plain, secure); 112: teleop_bench rtt in docs
 inline constexpr int kMultiHostSecureLanUnicast = 113;  // multi_host_test, secure_lan_unicast
 inline constexpr int kMultiHostSecureWanTcp = 114;      // multi_host_test, secure_wan_tcp_*
-inline constexpr int kServerFaultVerdict = 130;  // server_health_test: a fault on the server
-inline constexpr int kServerRestart = 131;       // server_health_test: kill -9 and restart
-inline constexpr int kObserverRates = 115;     // observers_test: monitor on the 10 Hz topics
-inline constexpr int kObserverSession = 116;   // observers_test: 8 observers, default scene
-inline constexpr int kObserverLate = 117;      // observers_test: a late observer
-inline constexpr int kRateLimitedUnit = 118;   // rate_limited_publisher_test: 118, 119, 120
+inline constexpr int kServerFaultVerdict = 130;         // server_health_test: a fault on the server
+inline constexpr int kServerRestart = 131;              // server_health_test: kill -9 and restart
+inline constexpr int kObserverRates = 115;    // observers_test: monitor on the 10 Hz topics
+inline constexpr int kObserverSession = 116;  // observers_test: 8 observers, default scene
+inline constexpr int kObserverLate = 117;     // observers_test: a late observer
+inline constexpr int kRateLimitedUnit = 118;  // rate_limited_publisher_test: 118, 119, 120
 // 121-124: reserved for observer tests
 inline constexpr int kBadScenes = 101;          // bad_scene_test: refused scenes (exit before DDS)
 inline constexpr int kSubstepScene = 102;       // bad_scene_test: a scene that sub-steps runs

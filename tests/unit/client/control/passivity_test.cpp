@@ -6,12 +6,12 @@
 #include <random>
 #include <vector>
 
-#include "client/control/bilateral_controller.hpp"
-#include "client/sim/loopback_session.hpp"
 #include "client/analysis/press_scenario.hpp"
-#include "client/sim/slave_model.hpp"
 #include "client/analysis/stability_analysis.hpp"
+#include "client/control/bilateral_controller.hpp"
 #include "client/device/simulated_device.hpp"
+#include "client/sim/loopback_session.hpp"
+#include "client/sim/slave_model.hpp"
 #include "common/control/slave_port.hpp"
 #include "common/control/time_domain_passivity.hpp"
 #include "common/control/wave_variables.hpp"

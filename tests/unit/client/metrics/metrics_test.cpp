@@ -6,13 +6,13 @@
 #include <cmath>
 #include <functional>
 
-#include "client/control/bilateral_controller.hpp"
-#include "client/sim/loopback_session.hpp"
 #include "client/analysis/press_scenario.hpp"
-#include "client/sim/slave_model.hpp"
 #include "client/analysis/stability_analysis.hpp"
-#include "client/device/simulated_device.hpp"
+#include "client/control/bilateral_controller.hpp"
 #include "client/control/safety.hpp"
+#include "client/device/simulated_device.hpp"
+#include "client/sim/loopback_session.hpp"
+#include "client/sim/slave_model.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/sim/tool.hpp"
 #include "tests/support/alloc_counter.hpp"
@@ -25,7 +25,9 @@ using teleop::test::scenario;
 
 namespace {
 
-[[maybe_unused]] std::string error_of(const std::function<void()>& fn) { return teleop::test::config_error_of(fn); }
+[[maybe_unused]] std::string error_of(const std::function<void()>& fn) {
+  return teleop::test::config_error_of(fn);
+}
 
 /// A press scenario whose operator steps down into the object and holds (steady contact).
 struct SteadyContact {

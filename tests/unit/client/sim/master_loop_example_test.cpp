@@ -6,11 +6,11 @@
 #include <gtest/gtest.h>
 
 #include "client/control/bilateral_controller.hpp"
-#include "client/sim/slave_model.hpp"
-#include "client/device/simulated_device.hpp"
 #include "client/control/safety.hpp"
+#include "client/device/simulated_device.hpp"
 #include "client/metrics/session_metrics.hpp"
 #include "client/net/delay_channel.hpp"
+#include "client/sim/slave_model.hpp"
 #include "tests/support/alloc_counter.hpp"
 
 using namespace teleop::master;

@@ -4,8 +4,8 @@
 // FCL rigid-contact module agrees with the plane's analytic distance for the deepest node.
 #include <gtest/gtest.h>
 
-#include "tests/unit/server/collision/fcl_rigid_contacts.hpp"
 #include "server/deformable/deformable.hpp"
+#include "tests/unit/server/collision/fcl_rigid_contacts.hpp"
 
 namespace tc = teleop::sim::collision;
 namespace df = teleop::sim::deformable;

@@ -6,7 +6,6 @@
 
 #include <random>
 
-
 namespace tc = teleop::sim::collision;
 using Eigen::Vector3d;
 
