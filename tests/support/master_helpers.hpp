@@ -23,6 +23,20 @@ inline teleop::master::PressScenario scenario(const std::string& scheme,
   return s;
 }
 
+/// A press scenario whose operator steps down into the object and holds (steady contact).
+struct SteadyContact {
+  teleop::master::PressSetup setup;
+  explicit SteadyContact(const teleop::master::PressScenario& s)
+      : setup(teleop::master::build_press_setup(s)) {
+    setup.device.script.kind = teleop::master::ScriptKind::kStep;
+    setup.device.script.start_m = Eigen::Vector3d(0.0, 0.0, 0.02);
+    setup.device.script.step_m = Eigen::Vector3d(0.0, 0.0, -0.035);  // 1.5 cm below the top
+    setup.device.script.step_time_s = 0.2;
+    setup.device.script.tremor_amplitude_m = 0.0;
+    setup.loop.duration_s = 3.0;
+  }
+};
+
 /// A wall at z = 0.5 m seen by both slaves the master side runs against: the in-process
 /// PointSlave and the server's tool scene, with the same stiffness and damping, so tests can
 /// drive them with the same commands and require the same motion.

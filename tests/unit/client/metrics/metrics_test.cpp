@@ -22,25 +22,9 @@ using namespace teleop::master;
 using namespace teleop;
 using teleop::config::ConfigError;
 using teleop::test::scenario;
+using teleop::test::SteadyContact;
 
 namespace {
-
-[[maybe_unused]] std::string error_of(const std::function<void()>& fn) {
-  return teleop::test::config_error_of(fn);
-}
-
-/// A press scenario whose operator steps down into the object and holds (steady contact).
-struct SteadyContact {
-  PressSetup setup;
-  explicit SteadyContact(const PressScenario& s) : setup(build_press_setup(s)) {
-    setup.device.script.kind = ScriptKind::kStep;
-    setup.device.script.start_m = Eigen::Vector3d(0.0, 0.0, 0.02);
-    setup.device.script.step_m = Eigen::Vector3d(0.0, 0.0, -0.035);  // 1.5 cm below the top
-    setup.device.script.step_time_s = 0.2;
-    setup.device.script.tremor_amplitude_m = 0.0;
-    setup.loop.duration_s = 3.0;
-  }
-};
 
 TEST(Verdict, TheoryUnstableConfigurationIsReportedUnstableAndForceStaysInSpec) {
   // position-position, high gain, stiff wall, 100 ms each way
