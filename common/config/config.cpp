@@ -185,7 +185,7 @@ std::size_t first_tag(const std::string& text) {
       ++flow;
     } else if ((c == ']' || c == '}') && flow > 0) {
       --flow;
-    } else if (c == ',' && flow == 0 && std::strchr(" \t\n\r:-", prev)) {
+    } else if (c == ',' && flow == 0 && std::strchr(" \t\n\r:-\"'", prev)) {
       return i;  // a flow separator outside [ ] and { }
     }
     prev = c;
