@@ -155,42 +155,82 @@ std::size_t first_invalid_byte(const std::string& text) {
   return std::string::npos;
 }
 
-// Byte offset of the first YAML tag ('!' starting a token outside quotes and comments) or
-// token-starting ',' outside a flow collection, or npos. Configuration files need neither, and
-// Debian's yaml-cpp 0.7 allocates nodes without end on some such inputs (tests/fuzz found
-// "!visual_ra,e_hz" and a file starting with ", a"), so they are refused before it parses.
-std::size_t first_tag(const std::string& text) {
-  bool single = false, dbl = false, comment = false;
-  int flow = 0;  // depth of [ ] and { }
-  char prev = '\n';
+// Where a text leaves the YAML subset configuration files use, and why (offset npos: it does
+// not). Debian's yaml-cpp 0.7 spins or allocates without end on some malformed inputs that
+// tests/fuzz keeps finding ("!visual_ra,e_hz", a file starting with ", a", '""&?ra"?"ar"kd,us_l'),
+// so rather than chase them one by one, the parser only sees text within this subset:
+//   block mappings and sequences, flow [ ] and { } on one line, plain scalars, quoted scalars
+//   closed on the line they open and followed only by ':', ',', ']', '}', a comment or the end
+//   of the line, comments; no tags (!), anchors (&), aliases (*), complex keys (?), block
+//   scalars (| >), directives (%), reserved indicators (@ `) and no ',' outside [ ] / { }.
+struct SubsetError {
+  std::size_t offset = std::string::npos;
+  const char* why = "";
+};
+
+SubsetError first_outside_subset(const std::string& text) {
+  constexpr std::size_t kMaxFlowDepth = 8;
+  std::size_t flow = 0;  // depth of [ ] and { } on this line
+  char prev = '\n';      // the previous character outside quotes ('\n' at a line start)
+  bool prev_starts = true;  // whether `prev` itself started a token (a "- " sequence entry)
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
-    if (comment) {
-      if (c == '\n') comment = false;
-    } else if (single) {
-      if (c == '\'') single = false;
-    } else if (dbl) {
-      if (c == '\\') {
-        ++i;  // an escaped character
-      } else if (c == '"') {
-        dbl = false;
+    const bool token_start =
+        std::strchr(" \t\n\r[{,:", prev) != nullptr || (prev == '-' && prev_starts);
+    prev_starts = token_start;
+    if (c == '\n') {
+      if (flow > 0) return {i, "a [ ] or { } collection spans lines; keep it on one line"};
+      prev = c;
+      continue;
+    }
+    if (c == '#' && (prev == ' ' || prev == '\t' || prev == '\n')) {
+      while (i + 1 < text.size() && text[i + 1] != '\n') ++i;  // a comment runs to the line end
+      prev = ' ';
+      prev_starts = true;
+      continue;
+    }
+    if ((c == '\'' || c == '"') && token_start) {
+      const std::size_t open = i;
+      bool closed = false;
+      for (++i; i < text.size() && text[i] != '\n'; ++i) {
+        if (c == '"' && text[i] == '\\') {
+          ++i;  // an escaped character
+        } else if (text[i] == c) {
+          if (c == '\'' && i + 1 < text.size() && text[i + 1] == '\'') {
+            ++i;  // '' inside single quotes is one quote
+          } else {
+            closed = true;
+            break;
+          }
+        }
       }
-    } else if (c == '#' && (prev == ' ' || prev == '\t' || prev == '\n')) {
-      comment = true;
-    } else if (c == '\'' || c == '"') {
-      if (std::strchr(" \t\n\r[{,:-", prev)) (c == '\'' ? single : dbl) = true;
-    } else if (c == '!' && std::strchr(" \t\n\r[{,:-", prev)) {
-      return i;
-    } else if (c == '[' || c == '{') {
-      ++flow;
-    } else if ((c == ']' || c == '}') && flow > 0) {
+      if (!closed) return {open, "a quoted value is not closed on its line"};
+      std::size_t j = i + 1;
+      while (j < text.size() && (text[j] == ' ' || text[j] == '\t')) ++j;
+      if (j < text.size() && !std::strchr(":,]}\r\n", text[j]) &&
+          !(text[j] == '#' && j > i + 1)) {
+        return {j, "a quoted value is followed by more text; quote the whole value"};
+      }
+      prev = c;
+      continue;
+    }
+    if (token_start && std::strchr("!&*?|>%@`", c) && c != '\0') {
+      return {i, "a YAML tag, anchor, alias, complex key, block scalar or directive; quote the "
+                 "value if the character is meant literally"};
+    }
+    if (c == ',' && flow == 0 && (token_start || prev == '"' || prev == '\'')) {
+      return {i, "a ',' outside [ ] or { }; quote the value if it is meant literally"};
+    }
+    if (c == '[' || c == '{') {
+      if (++flow > kMaxFlowDepth) return {i, "[ ] / { } nested more than 8 deep"};
+    } else if (c == ']' || c == '}') {
+      if (flow == 0) return {i, "a closing ']' or '}' without its opening one"};
       --flow;
-    } else if (c == ',' && flow == 0 && std::strchr(" \t\n\r:-\"'", prev)) {
-      return i;  // a flow separator outside [ ] and { }
     }
     prev = c;
   }
-  return std::string::npos;
+  if (flow > 0) return {text.size(), "a [ ] or { } collection is not closed"};
+  return {};
 }
 
 // Parses one YAML document from `text`; refuses several documents and the tree checks above.
@@ -205,12 +245,12 @@ YAML::Node parse_checked(const std::string& text, const std::string& file) {
                       ", not valid UTF-8 text or a control character; a "
                       "configuration file is UTF-8 YAML");
   }
-  if (const std::size_t tag = first_tag(text); tag != std::string::npos) {
+  if (const SubsetError bad = first_outside_subset(text); bad.offset != std::string::npos) {
     const std::size_t line =
-        1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + tag, '\n'));
-    throw ConfigError(file + ": line " + std::to_string(line) + " (byte " + std::to_string(tag) +
-                      ") has a YAML tag ('!') or a ',' outside [ ] or { }; configuration files use "
-                      "neither: quote the value if the character is meant literally");
+        1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + bad.offset, '\n'));
+    throw ConfigError(file + ": line " + std::to_string(line) + " (byte " +
+                      std::to_string(bad.offset) + ") is outside the YAML subset configuration "
+                      "files use: " + bad.why);
   }
   std::vector<YAML::Node> docs;
   try {
