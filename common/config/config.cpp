@@ -159,7 +159,7 @@ std::size_t first_invalid_byte(const std::string& text) {
 // not). Debian's yaml-cpp 0.7 spins or allocates without end on some malformed inputs that
 // tests/fuzz keeps finding ("!visual_ra,e_hz", a file starting with ", a", '""&?ra"?"ar"kd,us_l'),
 // so rather than chase them one by one, the parser only sees text within this subset:
-//   block mappings and sequences, flow [ ] and { } on one line, plain scalars, quoted scalars
+//   block mappings and sequences, flow [ ] and { } (balanced), plain scalars, quoted scalars
 //   closed on the line they open and followed only by ':', ',', ']', '}', a comment or the end
 //   of the line, comments; no tags (!), anchors (&), aliases (*), complex keys (?), block
 //   scalars (| >), directives (%), reserved indicators (@ `) and no ',' outside [ ] / { }.
@@ -170,8 +170,8 @@ struct SubsetError {
 
 SubsetError first_outside_subset(const std::string& text) {
   constexpr std::size_t kMaxFlowDepth = 8;
-  std::size_t flow = 0;  // depth of [ ] and { } on this line
-  char prev = '\n';      // the previous character outside quotes ('\n' at a line start)
+  std::size_t flow = 0;     // depth of [ ] and { }
+  char prev = '\n';         // the previous character outside quotes ('\n' at a line start)
   bool prev_starts = true;  // whether `prev` itself started a token (a "- " sequence entry)
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
@@ -179,7 +179,6 @@ SubsetError first_outside_subset(const std::string& text) {
         std::strchr(" \t\n\r[{,:", prev) != nullptr || (prev == '-' && prev_starts);
     prev_starts = token_start;
     if (c == '\n') {
-      if (flow > 0) return {i, "a [ ] or { } collection spans lines; keep it on one line"};
       prev = c;
       continue;
     }
@@ -207,16 +206,16 @@ SubsetError first_outside_subset(const std::string& text) {
       if (!closed) return {open, "a quoted value is not closed on its line"};
       std::size_t j = i + 1;
       while (j < text.size() && (text[j] == ' ' || text[j] == '\t')) ++j;
-      if (j < text.size() && !std::strchr(":,]}\r\n", text[j]) &&
-          !(text[j] == '#' && j > i + 1)) {
+      if (j < text.size() && !std::strchr(":,]}\r\n", text[j]) && !(text[j] == '#' && j > i + 1)) {
         return {j, "a quoted value is followed by more text; quote the whole value"};
       }
       prev = c;
       continue;
     }
     if (token_start && std::strchr("!&*?|>%@`", c) && c != '\0') {
-      return {i, "a YAML tag, anchor, alias, complex key, block scalar or directive; quote the "
-                 "value if the character is meant literally"};
+      return {i,
+              "a YAML tag, anchor, alias, complex key, block scalar or directive; quote the "
+              "value if the character is meant literally"};
     }
     if (c == ',' && flow == 0 && (token_start || prev == '"' || prev == '\'')) {
       return {i, "a ',' outside [ ] or { }; quote the value if it is meant literally"};
@@ -249,8 +248,10 @@ YAML::Node parse_checked(const std::string& text, const std::string& file) {
     const std::size_t line =
         1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + bad.offset, '\n'));
     throw ConfigError(file + ": line " + std::to_string(line) + " (byte " +
-                      std::to_string(bad.offset) + ") is outside the YAML subset configuration "
-                      "files use: " + bad.why);
+                      std::to_string(bad.offset) +
+                      ") is outside the YAML subset configuration "
+                      "files use: " +
+                      bad.why);
   }
   std::vector<YAML::Node> docs;
   try {

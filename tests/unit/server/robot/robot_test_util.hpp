@@ -8,11 +8,10 @@
 namespace teleop::sim::robot::testing {
 
 /// deploy/scenes/robot_puma560.yaml of this source tree.
+/// (TELEOP_SOURCE_DIR, not __FILE__: Ninja may name the header relative to the build folder,
+/// which is not where ctest runs the test.)
 inline std::string puma_path() {
-  return (std::filesystem::path(__FILE__).parent_path() /
-          "../../../../deploy/scenes/robot_puma560.yaml")
-      .lexically_normal()
-      .string();
+  return (std::filesystem::path(TELEOP_SOURCE_DIR) / "deploy/scenes/robot_puma560.yaml").string();
 }
 
 inline RobotModel puma() { return load_robot_model_file(puma_path()); }
