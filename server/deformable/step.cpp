@@ -18,6 +18,14 @@
 #define TELEOP_HOT_CLONES
 #endif
 
+// For the helpers of the hot functions: inlined into every clone, so each one keeps the
+// instruction set of its caller (a call to a separate baseline copy would lose AVX2 and FMA).
+#if defined(__GNUC__)
+#define TELEOP_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define TELEOP_ALWAYS_INLINE inline
+#endif
+
 namespace teleop::sim::deformable {
 
 namespace {
@@ -101,254 +109,306 @@ void update_rotations(const DeformableModel& m, DeformableState& s, int max_iter
   }
 }
 
-// Total force on every node (and the centre node, column N) into s.work_f at (s.x, s.v).
-// Compiled twice, for x86-64-v3 (AVX2, FMA) and for the baseline; the loader picks the one the
-// CPU supports (GCC function multi-versioning), so the binary still runs on any x86-64.
-TELEOP_HOT_CLONES
-void compute_forces(const DeformableModel& m, DeformableState& s, double h, ForceFlags flags) {
+// Gravity, drag and the caller's loads into s.work_f (every node; column N too if there is a
+// centre node). The drag is relative to the mean velocity: it damps deformation, keeps momentum.
+TELEOP_ALWAYS_INLINE void set_external_forces(const DeformableModel& m, DeformableState& s) {
   const int n = m.node_count;
   const DeformableParams& p = m.params;
   Eigen::Matrix3Xd& F = s.work_f;
-  if (!flags.external) F.setZero();
-  F.col(n).setZero();
+  const Eigen::Matrix3Xd& v = s.v;
+  const double alpha = p.mass_damping_per_s;
+  Vec3 vcm = Vec3::Zero();
+  if (alpha > 0.0) vcm = (v * m.mass_kg + m.centre_mass_kg * s.centre_v) / m.total_mass_kg;
+  for (int i = 0; i < n; ++i) {
+    F.col(i) = m.mass_kg(i) * (p.gravity_mps2 - alpha * (v.col(i) - vcm)) + s.f_ext.col(i);
+  }
+  if (m.has_centre) F.col(n) = m.centre_mass_kg * (p.gravity_mps2 - alpha * (s.centre_v - vcm));
+}
+
+// Mass-spring edge forces into s.edge_force (the force on each edge's first node), and with
+// flags.jacobian the blocks for the implicit solve.
+TELEOP_ALWAYS_INLINE void mass_spring_edge_forces(const DeformableModel& m, DeformableState& s,
+                                                  ForceFlags flags) {
+  const int ne = static_cast<int>(m.edges.cols());
+  const Eigen::Matrix3Xd& x = s.x;
+  const Eigen::Matrix3Xd& v = s.v;
+  const double beta = m.params.stiffness_damping_s;
+  Eigen::Matrix3Xd& Fe = s.edge_force;
+  // 1 / length of every edge first, in a separate pass the compiler vectorises (sqrt and
+  // division two at a time, off the critical path of the force loop)
+  Eigen::VectorXd& inv_len = s.edge_scratch;
+  for (int e = 0; e < ne; ++e) {
+    s.edge_length2(e) = (x.col(m.edges(1, e)) - x.col(m.edges(0, e))).squaredNorm();
+  }
+  inverse_sqrt(s.edge_length2.data(), inv_len.data(), ne);
+  if (!flags.jacobian) {
+    // the explicit/symplectic hot path in plain scalar arithmetic on the raw 3 x N arrays:
+    // Eigen's 2+1-lane handling of 3-vectors (shuffles for every dot product) cost more
+    // than it saved here
+    const double* xp = x.data();
+    const double* vp = v.data();
+    const int* ep = m.edges.data();
+    const double* kp = m.edge_k_iso.data();
+    const double* l0 = m.rest_length_m.data();
+    const double* il = inv_len.data();
+    double* fp = Fe.data();
+    for (int e = 0; e < ne; ++e) {
+      const int i = 3 * ep[2 * e], j = 3 * ep[2 * e + 1];
+      const double dx = xp[j] - xp[i], dy = xp[j + 1] - xp[i + 1], dz = xp[j + 2] - xp[i + 2];
+      const double inv_l = il[e];
+      const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+      const double rate =
+          (vp[j] - vp[i]) * ux + (vp[j + 1] - vp[i + 1]) * uy + (vp[j + 2] - vp[i + 2]) * uz;
+      const double k = kp[e];
+      const double fs = k * ((dx * dx + dy * dy + dz * dz) * inv_l - l0[e]) + beta * k * rate;
+      fp[3 * e] = fs * ux;
+      fp[3 * e + 1] = fs * uy;
+      fp[3 * e + 2] = fs * uz;
+    }
+    return;
+  }
+  for (int e = 0; e < ne; ++e) {
+    const int i = m.edges(0, e), j = m.edges(1, e);
+    const Vec3 d = x.col(j) - x.col(i);
+    const double inv_l = inv_len(e);
+    const Vec3 u = d * inv_l;
+    const double k = m.edge_k_iso(e);
+    const double c = beta * k;
+    const double fs =
+        k * (d.squaredNorm() * inv_l - m.rest_length_m(e)) + c * (v.col(j) - v.col(i)).dot(u);
+    const Vec3 f = fs * u;
+    Fe.col(e) = f;
+    if (flags.jacobian) {
+      // clamped spring Jacobian: the transverse term only when stretched (keeps it SPD)
+      const double kt = k * std::max(0.0, 1.0 - m.rest_length_m(e) * inv_l);
+      s.edge_dir.col(e) = u;
+      s.edge_coef.col(e) << kt, k - kt, 0.0, c;
+    }
+  }
+}
+
+// Linear Navier edge forces into s.edge_force, and with flags.jacobian the implicit blocks.
+TELEOP_ALWAYS_INLINE void navier_linear_edge_forces(const DeformableModel& m, DeformableState& s,
+                                                    ForceFlags flags) {
+  const int ne = static_cast<int>(m.edges.cols());
   const Eigen::Matrix3Xd& x = s.x;
   const Eigen::Matrix3Xd& v = s.v;
   const Eigen::Matrix3Xd& X = m.mesh.vertices;
-  const double beta = p.stiffness_damping_s;
-
-  // gravity, drag and the caller's loads
-  if (flags.external) {
-    // drag relative to the mean velocity: damps deformation, keeps momentum
-    const double alpha = p.mass_damping_per_s;
-    Vec3 vcm = Vec3::Zero();
-    if (alpha > 0.0) vcm = (v * m.mass_kg + m.centre_mass_kg * s.centre_v) / m.total_mass_kg;
-    for (int i = 0; i < n; ++i) {
-      F.col(i) = m.mass_kg(i) * (p.gravity_mps2 - alpha * (v.col(i) - vcm)) + s.f_ext.col(i);
+  const double beta = m.params.stiffness_damping_s;
+  for (int e = 0; e < ne; ++e) {
+    const int i = m.edges(0, e), j = m.edges(1, e);
+    const Vec3 u0 = m.rest_dir.col(e);
+    const Vec3 strain = (x.col(j) - x.col(i)) - (X.col(j) - X.col(i));
+    const Vec3 g = strain + beta * (v.col(j) - v.col(i));
+    const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
+    const Vec3 f = a * g + (b * g.dot(u0)) * u0;
+    s.edge_force.col(e) = f;
+    if (flags.jacobian) {
+      s.edge_dir.col(e) = u0;
+      s.edge_coef.col(e) << a, b, beta * a, beta * b;
     }
-    if (m.has_centre) F.col(n) = m.centre_mass_kg * (p.gravity_mps2 - alpha * (s.centre_v - vcm));
   }
+}
+
+// Co-rotational Navier edge forces into s.edge_force (the frames updated first), and with
+// flags.jacobian the implicit blocks.
+TELEOP_ALWAYS_INLINE void navier_corotational_edge_forces(const DeformableModel& m,
+                                                          DeformableState& s, ForceFlags flags) {
+  const int ne = static_cast<int>(m.edges.cols());
+  const Eigen::Matrix3Xd& x = s.x;
+  const Eigen::Matrix3Xd& v = s.v;
+  const Eigen::Matrix3Xd& X = m.mesh.vertices;
+  const double beta = m.params.stiffness_damping_s;
+  // warm-started: a few iterations per step track the motion; a cold query converges
+  update_rotations(m, s, flags.rotation_iterations, flags.rotation_tolerance_rad);
+  for (int e = 0; e < ne; ++e) {
+    const int i = m.edges(0, e), j = m.edges(1, e);
+    const Mat3 r =
+        0.5 * (s.rotation[static_cast<std::size_t>(i)] + s.rotation[static_cast<std::size_t>(j)]);
+    const Vec3 u0 = m.rest_dir.col(e);
+    // hand-written 3x3 products (Eigen does not inline these mixed expressions here)
+    const Vec3 q = (x.col(j) - x.col(i)) + beta * (v.col(j) - v.col(i));
+    const Vec3 g = Vec3(r.col(0).dot(q), r.col(1).dot(q), r.col(2).dot(q)) - (X.col(j) - X.col(i));
+    const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
+    const Vec3 loc = a * g + (b * g.dot(u0)) * u0;
+    const Vec3 f = r.col(0) * loc.x() + r.col(1) * loc.y() + r.col(2) * loc.z();
+    s.edge_force.col(e) = f;
+    if (flags.jacobian) {
+      s.edge_dir.col(e) = (r * u0).normalized();
+      s.edge_coef.col(e) << a, b, beta * a, beta * b;
+    }
+  }
+}
+
+// Adds to s.work_f, per node, the forces of its incident edges from s.edge_force (+ on an
+// edge's first node, - on its second): a gather per node instead of a scatter per edge.
+TELEOP_ALWAYS_INLINE void gather_edge_forces(const DeformableModel& m, DeformableState& s) {
+  const int n = m.node_count;
+  const auto& off = m.node_edge_offsets;
+  const auto& inc = m.node_edges;
+  const double* fe = s.edge_force.data();
+  double* fp = s.work_f.data();
+  for (int i = 0; i < n; ++i) {
+    double sx = 0.0, sy = 0.0, sz = 0.0;
+    for (int k = off[static_cast<std::size_t>(i)]; k < off[static_cast<std::size_t>(i) + 1]; ++k) {
+      const int code = inc[static_cast<std::size_t>(k)];  // e (first node) or ~e (second)
+      const int c = 3 * (code >= 0 ? code : ~code);
+      const double sign = code >= 0 ? 1.0 : -1.0;
+      sx += sign * fe[c];
+      sy += sign * fe[c + 1];
+      sz += sign * fe[c + 2];
+    }
+    fp[3 * i] += sx;
+    fp[3 * i + 1] += sy;
+    fp[3 * i + 2] += sz;
+  }
+}
+
+// Adds the radial springs between the nodes and the centre node to s.work_f (the reactions to
+// column N), and with flags.jacobian stores their implicit blocks. Needs m.has_centre.
+TELEOP_ALWAYS_INLINE void add_radial_forces(const DeformableModel& m, DeformableState& s,
+                                            ForceFlags flags) {
+  const int n = m.node_count;
+  const DeformableParams& p = m.params;
+  Eigen::Matrix3Xd& F = s.work_f;
+  const Eigen::Matrix3Xd& x = s.x;
+  const Eigen::Matrix3Xd& v = s.v;
+  Vec3 fc = Vec3::Zero();
+  Eigen::VectorXd& inv_len = s.node_scratch;
+  for (int i = 0; i < n; ++i) s.node_length2(i) = (x.col(i) - s.centre_x).squaredNorm();
+  inverse_sqrt(s.node_length2.data(), inv_len.data(), n);
+  if (!flags.jacobian) {
+    const double* xp = x.data();
+    const double* vp = v.data();
+    double* fp = F.data();
+    const double cx = s.centre_x.x(), cy = s.centre_x.y(), cz = s.centre_x.z();
+    const double cvx = s.centre_v.x(), cvy = s.centre_v.y(), cvz = s.centre_v.z();
+    const double* kr = m.radial_k.data();
+    const double* r0 = m.radial_rest_m.data();
+    const double* il = inv_len.data();
+    const double rd = p.radial_damping_s;
+    double fcx = 0.0, fcy = 0.0, fcz = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const int a = 3 * i;
+      const double dx = xp[a] - cx, dy = xp[a + 1] - cy, dz = xp[a + 2] - cz;
+      const double inv_l = il[i];
+      const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+      const double l = (dx * dx + dy * dy + dz * dz) * inv_l;
+      const double rate = (vp[a] - cvx) * ux + (vp[a + 1] - cvy) * uy + (vp[a + 2] - cvz) * uz;
+      const double k = kr[i];
+      const double fs = -k * (l - r0[i]) - rd * k * rate;
+      fp[a] += fs * ux;
+      fp[a + 1] += fs * uy;
+      fp[a + 2] += fs * uz;
+      fcx -= fs * ux;
+      fcy -= fs * uy;
+      fcz -= fs * uz;
+    }
+    F.col(n) += Vec3(fcx, fcy, fcz);
+    return;
+  }
+  for (int i = 0; i < n; ++i) {
+    const Vec3 d = x.col(i) - s.centre_x;
+    const double inv_l = inv_len(i);
+    const Vec3 u = d * inv_l;
+    const double l = d.squaredNorm() * inv_l;
+    const double k = m.radial_k(i);
+    const double c = p.radial_damping_s * k;
+    const double fs = -k * (l - m.radial_rest_m(i)) - c * (v.col(i) - s.centre_v).dot(u);
+    F.col(i) += fs * u;
+    fc -= fs * u;
+    if (flags.jacobian) {
+      const double kt = k * std::max(0.0, 1.0 - m.radial_rest_m(i) * inv_l);
+      s.radial_dir.col(i) = u;
+      s.radial_coef.col(i) << kt, k - kt, 0.0, c;
+    }
+  }
+  F.col(n) += fc;
+}
+
+// Node-plane penalty contact: records every contact (s.contact_*) and adds its force to
+// s.work_f. Implicit Euler (flags.jacobian): spring, damping and (rate-limited) Coulomb
+// friction as forces here, damping also in its matrix. Explicit/symplectic Euler: only the
+// spring here; damping and friction are applied implicitly per node in apply_contact_impulses()
+// (an explicit damper on a light node next to the stability limit of the membrane would not be
+// stable).
+TELEOP_ALWAYS_INLINE void add_plane_contacts(const DeformableModel& m, DeformableState& s, double h,
+                                             ForceFlags flags) {
+  const int n = m.node_count;
+  const DeformableParams& p = m.params;
+  Eigen::Matrix3Xd& F = s.work_f;
+  const Eigen::Matrix3Xd& x = s.x;
+  const Eigen::Matrix3Xd& v = s.v;
+  int nc = 0;
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < m.plane_count; ++k) {
+      const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+      const double dist = pl.normal.dot(x.col(i)) - pl.offset_m;
+      if (dist >= 0.0) continue;
+      const double spring = -m.contact_k(i) * dist;
+      s.contact_node[static_cast<std::size_t>(nc)] = i;
+      s.contact_normal.col(nc) = pl.normal;
+      s.contact_coef.col(nc) << m.contact_k(i), m.contact_c(i), spring,
+          p.friction ? pl.friction : 0.0;
+      ++nc;
+      if (!flags.jacobian) {
+        F.col(i) += spring * pl.normal;
+        continue;
+      }
+      const Vec3 vi = v.col(i);
+      const double vn = pl.normal.dot(vi);
+      double fn = spring - m.contact_c(i) * vn;
+      if (fn < 0.0) fn = 0.0;  // a wall pushes, never pulls
+      Vec3 f = fn * pl.normal;
+      if (p.friction && pl.friction > 0.0) {
+        const Vec3 vt = vi - vn * pl.normal;
+        const double st = vt.norm();
+        if (st > 1e-12) {
+          const double ft = std::min(pl.friction * fn, 0.5 * m.mass_kg(i) * st / h);
+          f -= (ft / st) * vt;
+        }
+      }
+      F.col(i) += f;
+      s.plane_force_n += f;
+    }
+  }
+  s.contact_count = nc;
+}
+
+// Total force on every node (and the centre node, column N) into s.work_f at (s.x, s.v).
+// Compiled twice, for x86-64-v3 (AVX2, FMA) and for the baseline; the loader picks the one the
+// CPU supports (GCC function multi-versioning), so the binary still runs on any x86-64. The
+// helpers above are always inlined, so each copy has its own.
+TELEOP_HOT_CLONES
+void compute_forces(const DeformableModel& m, DeformableState& s, double h, ForceFlags flags) {
+  const int n = m.node_count;
+  if (!flags.external) s.work_f.setZero();
+  s.work_f.col(n).setZero();
+  if (flags.external) set_external_forces(m, s);  // gravity, drag and the caller's loads
 
   // edges, in two passes: the force of each edge (on its first node; the second node gets
   // the opposite), then a gather per node over its incident edges. Independent iterations
   // instead of a scatter whose read-modify-write chains serialise the loop.
-  const int ne = static_cast<int>(m.edges.cols());
-  Eigen::Matrix3Xd& Fe = s.edge_force;
-  switch (p.model) {
-    case ModelKind::kMassSpring: {
-      // 1 / length of every edge first, in a separate pass the compiler vectorises (sqrt and
-      // division two at a time, off the critical path of the force loop)
-      Eigen::VectorXd& inv_len = s.edge_scratch;
-      for (int e = 0; e < ne; ++e) {
-        s.edge_length2(e) = (x.col(m.edges(1, e)) - x.col(m.edges(0, e))).squaredNorm();
-      }
-      inverse_sqrt(s.edge_length2.data(), inv_len.data(), ne);
-      if (!flags.jacobian) {
-        // the explicit/symplectic hot path in plain scalar arithmetic on the raw 3 x N arrays:
-        // Eigen's 2+1-lane handling of 3-vectors (shuffles for every dot product) cost more
-        // than it saved here
-        const double* xp = x.data();
-        const double* vp = v.data();
-        const int* ep = m.edges.data();
-        const double* kp = m.edge_k_iso.data();
-        const double* l0 = m.rest_length_m.data();
-        const double* il = inv_len.data();
-        double* fp = Fe.data();
-        for (int e = 0; e < ne; ++e) {
-          const int i = 3 * ep[2 * e], j = 3 * ep[2 * e + 1];
-          const double dx = xp[j] - xp[i], dy = xp[j + 1] - xp[i + 1], dz = xp[j + 2] - xp[i + 2];
-          const double inv_l = il[e];
-          const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
-          const double rate =
-              (vp[j] - vp[i]) * ux + (vp[j + 1] - vp[i + 1]) * uy + (vp[j + 2] - vp[i + 2]) * uz;
-          const double k = kp[e];
-          const double fs = k * ((dx * dx + dy * dy + dz * dz) * inv_l - l0[e]) + beta * k * rate;
-          fp[3 * e] = fs * ux;
-          fp[3 * e + 1] = fs * uy;
-          fp[3 * e + 2] = fs * uz;
-        }
-        break;
-      }
-      for (int e = 0; e < ne; ++e) {
-        const int i = m.edges(0, e), j = m.edges(1, e);
-        const Vec3 d = x.col(j) - x.col(i);
-        const double inv_l = inv_len(e);
-        const Vec3 u = d * inv_l;
-        const double k = m.edge_k_iso(e);
-        const double c = beta * k;
-        const double fs =
-            k * (d.squaredNorm() * inv_l - m.rest_length_m(e)) + c * (v.col(j) - v.col(i)).dot(u);
-        const Vec3 f = fs * u;
-        Fe.col(e) = f;
-        if (flags.jacobian) {
-          // clamped spring Jacobian: the transverse term only when stretched (keeps it SPD)
-          const double kt = k * std::max(0.0, 1.0 - m.rest_length_m(e) * inv_l);
-          s.edge_dir.col(e) = u;
-          s.edge_coef.col(e) << kt, k - kt, 0.0, c;
-        }
-      }
+  switch (m.params.model) {
+    case ModelKind::kMassSpring:
+      mass_spring_edge_forces(m, s, flags);
       break;
-    }
-    case ModelKind::kNavierLinear: {
-      for (int e = 0; e < ne; ++e) {
-        const int i = m.edges(0, e), j = m.edges(1, e);
-        const Vec3 u0 = m.rest_dir.col(e);
-        const Vec3 strain = (x.col(j) - x.col(i)) - (X.col(j) - X.col(i));
-        const Vec3 g = strain + beta * (v.col(j) - v.col(i));
-        const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
-        const Vec3 f = a * g + (b * g.dot(u0)) * u0;
-        Fe.col(e) = f;
-        if (flags.jacobian) {
-          s.edge_dir.col(e) = u0;
-          s.edge_coef.col(e) << a, b, beta * a, beta * b;
-        }
-      }
+    case ModelKind::kNavierLinear:
+      navier_linear_edge_forces(m, s, flags);
       break;
-    }
-    case ModelKind::kNavierCorotational: {
-      // warm-started: a few iterations per step track the motion; a cold query converges
-      update_rotations(m, s, flags.rotation_iterations, flags.rotation_tolerance_rad);
-      for (int e = 0; e < ne; ++e) {
-        const int i = m.edges(0, e), j = m.edges(1, e);
-        const Mat3 r = 0.5 * (s.rotation[static_cast<std::size_t>(i)] +
-                              s.rotation[static_cast<std::size_t>(j)]);
-        const Vec3 u0 = m.rest_dir.col(e);
-        // hand-written 3x3 products (Eigen does not inline these mixed expressions here)
-        const Vec3 q = (x.col(j) - x.col(i)) + beta * (v.col(j) - v.col(i));
-        const Vec3 g =
-            Vec3(r.col(0).dot(q), r.col(1).dot(q), r.col(2).dot(q)) - (X.col(j) - X.col(i));
-        const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
-        const Vec3 loc = a * g + (b * g.dot(u0)) * u0;
-        const Vec3 f = r.col(0) * loc.x() + r.col(1) * loc.y() + r.col(2) * loc.z();
-        Fe.col(e) = f;
-        if (flags.jacobian) {
-          s.edge_dir.col(e) = (r * u0).normalized();
-          s.edge_coef.col(e) << a, b, beta * a, beta * b;
-        }
-      }
+    case ModelKind::kNavierCorotational:
+      navier_corotational_edge_forces(m, s, flags);
       break;
-    }
   }
-
-  {
-    const auto& off = m.node_edge_offsets;
-    const auto& inc = m.node_edges;
-    const double* fe = Fe.data();
-    double* fp = F.data();
-    for (int i = 0; i < n; ++i) {
-      double sx = 0.0, sy = 0.0, sz = 0.0;
-      for (int k = off[static_cast<std::size_t>(i)]; k < off[static_cast<std::size_t>(i) + 1];
-           ++k) {
-        const int code = inc[static_cast<std::size_t>(k)];  // e (first node) or ~e (second)
-        const int c = 3 * (code >= 0 ? code : ~code);
-        const double sign = code >= 0 ? 1.0 : -1.0;
-        sx += sign * fe[c];
-        sy += sign * fe[c + 1];
-        sz += sign * fe[c + 2];
-      }
-      fp[3 * i] += sx;
-      fp[3 * i + 1] += sy;
-      fp[3 * i + 2] += sz;
-    }
-  }
+  gather_edge_forces(m, s);
 
   // radial springs to the centre node
-  if (m.has_centre) {
-    Vec3 fc = Vec3::Zero();
-    Eigen::VectorXd& inv_len = s.node_scratch;
-    for (int i = 0; i < n; ++i) s.node_length2(i) = (x.col(i) - s.centre_x).squaredNorm();
-    inverse_sqrt(s.node_length2.data(), inv_len.data(), n);
-    if (!flags.jacobian) {
-      const double* xp = x.data();
-      const double* vp = v.data();
-      double* fp = F.data();
-      const double cx = s.centre_x.x(), cy = s.centre_x.y(), cz = s.centre_x.z();
-      const double cvx = s.centre_v.x(), cvy = s.centre_v.y(), cvz = s.centre_v.z();
-      const double* kr = m.radial_k.data();
-      const double* r0 = m.radial_rest_m.data();
-      const double* il = inv_len.data();
-      const double rd = p.radial_damping_s;
-      double fcx = 0.0, fcy = 0.0, fcz = 0.0;
-      for (int i = 0; i < n; ++i) {
-        const int a = 3 * i;
-        const double dx = xp[a] - cx, dy = xp[a + 1] - cy, dz = xp[a + 2] - cz;
-        const double inv_l = il[i];
-        const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
-        const double l = (dx * dx + dy * dy + dz * dz) * inv_l;
-        const double rate = (vp[a] - cvx) * ux + (vp[a + 1] - cvy) * uy + (vp[a + 2] - cvz) * uz;
-        const double k = kr[i];
-        const double fs = -k * (l - r0[i]) - rd * k * rate;
-        fp[a] += fs * ux;
-        fp[a + 1] += fs * uy;
-        fp[a + 2] += fs * uz;
-        fcx -= fs * ux;
-        fcy -= fs * uy;
-        fcz -= fs * uz;
-      }
-      F.col(n) += Vec3(fcx, fcy, fcz);
-    } else {
-      for (int i = 0; i < n; ++i) {
-        const Vec3 d = x.col(i) - s.centre_x;
-        const double inv_l = inv_len(i);
-        const Vec3 u = d * inv_l;
-        const double l = d.squaredNorm() * inv_l;
-        const double k = m.radial_k(i);
-        const double c = p.radial_damping_s * k;
-        const double fs = -k * (l - m.radial_rest_m(i)) - c * (v.col(i) - s.centre_v).dot(u);
-        F.col(i) += fs * u;
-        fc -= fs * u;
-        if (flags.jacobian) {
-          const double kt = k * std::max(0.0, 1.0 - m.radial_rest_m(i) * inv_l);
-          s.radial_dir.col(i) = u;
-          s.radial_coef.col(i) << kt, k - kt, 0.0, c;
-        }
-      }
-      F.col(n) += fc;
-    }
-  }
+  if (m.has_centre) add_radial_forces(m, s, flags);
 
-  // node-plane penalty contact. Implicit Euler: spring, damping and (rate-limited) Coulomb
-  // friction as forces here, damping also in its matrix. Explicit/symplectic Euler: only the
-  // spring here; damping and friction are applied implicitly per node in apply_contact_impulses()
-  // (an explicit damper on a light node next to the stability limit of the membrane would not be
-  // stable).
+  // node-plane penalty contact
   s.contact_count = 0;
   s.plane_force_n.setZero();
-  if (flags.contact && m.plane_count > 0) {
-    int nc = 0;
-    for (int i = 0; i < n; ++i) {
-      for (int k = 0; k < m.plane_count; ++k) {
-        const Plane& pl = m.planes[static_cast<std::size_t>(k)];
-        const double dist = pl.normal.dot(x.col(i)) - pl.offset_m;
-        if (dist >= 0.0) continue;
-        const double spring = -m.contact_k(i) * dist;
-        s.contact_node[static_cast<std::size_t>(nc)] = i;
-        s.contact_normal.col(nc) = pl.normal;
-        s.contact_coef.col(nc) << m.contact_k(i), m.contact_c(i), spring,
-            p.friction ? pl.friction : 0.0;
-        ++nc;
-        if (!flags.jacobian) {
-          F.col(i) += spring * pl.normal;
-          continue;
-        }
-        const Vec3 vi = v.col(i);
-        const double vn = pl.normal.dot(vi);
-        double fn = spring - m.contact_c(i) * vn;
-        if (fn < 0.0) fn = 0.0;  // a wall pushes, never pulls
-        Vec3 f = fn * pl.normal;
-        if (p.friction && pl.friction > 0.0) {
-          const Vec3 vt = vi - vn * pl.normal;
-          const double st = vt.norm();
-          if (st > 1e-12) {
-            const double ft = std::min(pl.friction * fn, 0.5 * m.mass_kg(i) * st / h);
-            f -= (ft / st) * vt;
-          }
-        }
-        F.col(i) += f;
-        s.plane_force_n += f;
-      }
-    }
-    s.contact_count = nc;
-  }
+  if (flags.contact && m.plane_count > 0) add_plane_contacts(m, s, h, flags);
 }
 
 // Explicit and symplectic Euler: contact damping and Coulomb friction as velocity impulses,
@@ -400,6 +460,153 @@ struct NodeSums {
   Vec3 mx = Vec3::Zero();  ///< sum of m_i x_i over the surface nodes
 };
 
+// Mean velocity of the body, centre node included, into vm (x, y, z) for the drag (relative to
+// it: damps deformation, keeps momentum); left at zero without drag.
+TELEOP_ALWAYS_INLINE void drag_mean_velocity(const DeformableModel& m, const DeformableState& s,
+                                             double vm[3]) {
+  const int n = m.node_count;
+  const double* __restrict v = s.v.data();
+  const double* __restrict mp = m.mass_kg.data();
+  double vmx = 0.0, vmy = 0.0, vmz = 0.0;
+  if (m.params.mass_damping_per_s > 0.0) {
+    for (int i = 0; i < n; ++i) {
+      vmx += mp[i] * v[3 * i];
+      vmy += mp[i] * v[3 * i + 1];
+      vmz += mp[i] * v[3 * i + 2];
+    }
+    const double inv_total = 1.0 / m.total_mass_kg;
+    vmx = (vmx + m.centre_mass_kg * s.centre_v.x()) * inv_total;
+    vmy = (vmy + m.centre_mass_kg * s.centre_v.y()) * inv_total;
+    vmz = (vmz + m.centre_mass_kg * s.centre_v.z()) * inv_total;
+  }
+  vm[0] = vmx;
+  vm[1] = vmy;
+  vm[2] = vmz;
+}
+
+// For the nodes b0..b1-1: the squared lengths of their edges (into s.edge_length2) and of their
+// radial springs (s.node_length2), then 1 / length of all (s.edge_scratch, s.node_scratch;
+// vectorised), while the positions are still the old ones.
+TELEOP_ALWAYS_INLINE void fused_block_lengths(const DeformableModel& m, DeformableState& s, int b0,
+                                              int b1) {
+  const double* __restrict x = s.x.data();
+  const int* __restrict j3 = m.second_node3.data();
+  const int* __restrict first = m.first_edge_offsets.data();
+  double* __restrict l2 = s.edge_length2.data();
+  double* __restrict rl2 = s.node_length2.data();
+  const double cx = s.centre_x.x(), cy = s.centre_x.y(), cz = s.centre_x.z();
+  for (int i = b0; i < b1; ++i) {
+    const double xx = x[3 * i], xy = x[3 * i + 1], xz = x[3 * i + 2];
+    for (int e = first[i]; e < first[i + 1]; ++e) {
+      const int j = j3[e];
+      const double dx = x[j] - xx, dy = x[j + 1] - xy, dz = x[j + 2] - xz;
+      l2[e] = dx * dx + dy * dy + dz * dz;
+    }
+    const double dx = xx - cx, dy = xy - cy, dz = xz - cz;
+    rl2[i] = dx * dx + dy * dy + dz * dz;
+  }
+  inverse_sqrt(l2 + first[b0], s.edge_scratch.data() + first[b0], first[b1] - first[b0]);
+  if (m.has_centre) inverse_sqrt(rl2 + b0, s.node_scratch.data() + b0, b1 - b0);
+}
+
+// The edge springs (i, j), j > i, of node i at (xx, xy, xz) moving at (vx, vy, vz): their force
+// on i added to (fx, fy, fz), their reactions onto the nodes j in f.
+TELEOP_ALWAYS_INLINE void fused_node_edges(const DeformableModel& m, const DeformableState& s,
+                                           int i, const double* __restrict x,
+                                           const double* __restrict v, double* __restrict f,
+                                           double xx, double xy, double xz, double vx, double vy,
+                                           double vz, double& fx, double& fy, double& fz) {
+  const int* __restrict j3 = m.second_node3.data();
+  const int* __restrict first = m.first_edge_offsets.data();
+  const double* __restrict kp = m.edge_k_iso.data();
+  const double* __restrict l0 = m.rest_length_m.data();
+  const double* __restrict l2 = s.edge_length2.data();
+  const double* __restrict il = s.edge_scratch.data();
+  const double beta = m.params.stiffness_damping_s;
+  for (int e = first[i]; e < first[i + 1]; ++e) {
+    const int j = j3[e];
+    const double dx = x[j] - xx, dy = x[j + 1] - xy, dz = x[j + 2] - xz;
+    const double inv_l = il[e];
+    const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+    const double rate = (v[j] - vx) * ux + (v[j + 1] - vy) * uy + (v[j + 2] - vz) * uz;
+    const double k = kp[e];
+    const double fs = k * (l2[e] * inv_l - l0[e]) + beta * k * rate;
+    const double ex = fs * ux, ey = fs * uy, ez = fs * uz;
+    fx += ex;
+    fy += ey;
+    fz += ez;
+    f[j] -= ex;
+    f[j + 1] -= ey;
+    f[j + 2] -= ez;
+  }
+}
+
+// The radial spring of node i at (xx, xy, xz) moving at (vx, vy, vz) to the centre node at c
+// moving at cv: its force added to (fx, fy, fz), the reaction to fc.
+TELEOP_ALWAYS_INLINE void fused_node_radial(const DeformableModel& m, const DeformableState& s,
+                                            int i, const double c[3], const double cv[3], double xx,
+                                            double xy, double xz, double vx, double vy, double vz,
+                                            double& fx, double& fy, double& fz, double fc[3]) {
+  const double* __restrict kr = m.radial_k.data();
+  const double* __restrict r0 = m.radial_rest_m.data();
+  const double* __restrict rl2 = s.node_length2.data();
+  const double* __restrict rl = s.node_scratch.data();
+  const double rd = m.params.radial_damping_s;
+  const double dx = xx - c[0], dy = xy - c[1], dz = xz - c[2];
+  const double inv_l = rl[i];
+  const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+  const double rate = (vx - cv[0]) * ux + (vy - cv[1]) * uy + (vz - cv[2]) * uz;
+  const double fs = -kr[i] * (rl2[i] * inv_l - r0[i]) - rd * kr[i] * rate;
+  fx += fs * ux;
+  fy += fs * uy;
+  fz += fs * uz;
+  fc[0] -= fs * ux;
+  fc[1] -= fs * uy;
+  fc[2] -= fs * uz;
+}
+
+// The plane penalty springs of node i at (xx, xy, xz): their force added to (fx, fy, fz), each
+// spring force into spring_of[k], the count into nc; returns the planes touched (bit k: inside
+// plane k).
+TELEOP_ALWAYS_INLINE unsigned fused_node_plane_springs(const DeformableModel& m, int i, double xx,
+                                                       double xy, double xz, double spring_of[8],
+                                                       double& fx, double& fy, double& fz,
+                                                       int& nc) {
+  const double* __restrict ck = m.contact_k.data();
+  unsigned touched = 0;
+  for (int k = 0; k < m.plane_count; ++k) {
+    const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+    const double dist = pl.normal.x() * xx + pl.normal.y() * xy + pl.normal.z() * xz - pl.offset_m;
+    if (dist >= 0.0) continue;
+    spring_of[k] = -ck[i] * dist;
+    fx += spring_of[k] * pl.normal.x();
+    fy += spring_of[k] * pl.normal.y();
+    fz += spring_of[k] * pl.normal.z();
+    touched |= 1u << k;
+    ++nc;
+  }
+  return touched;
+}
+
+// The contact impulses of node i (mass mi) on the planes it touches, applied to (vx, vy, vz) in
+// plane order; the planes' forces added to plane_force.
+TELEOP_ALWAYS_INLINE void fused_node_impulses(const DeformableModel& m, int i, double mi, double h,
+                                              unsigned touched, const double spring_of[8],
+                                              double& vx, double& vy, double& vz,
+                                              Vec3& plane_force) {
+  const double* __restrict cc = m.contact_c.data();
+  for (int k = 0; touched != 0 && k < m.plane_count; ++k) {
+    if ((touched & (1u << k)) == 0) continue;
+    const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+    const Vec3 vi =
+        contact_impulse(pl.normal, mi, cc[i], h * spring_of[k],
+                        m.params.friction ? pl.friction : 0.0, h, Vec3(vx, vy, vz), plane_force);
+    vx = vi.x();
+    vy = vi.y();
+    vz = vi.z();
+  }
+}
+
 // The hot path of the default body: mass-spring with symplectic Euler in one pass over the
 // nodes. Equivalent to compute_forces() + integrate(): the same forces, and per node the same
 // velocity update, contact impulses and position update. It relies on the edges being sorted by
@@ -407,80 +614,41 @@ struct NodeSums {
 // reactions are added to the later nodes j, whose edges to earlier nodes are then complete. So
 // when node i is reached its force is complete, and no later edge reads x_i or v_i: node i can
 // be advanced at once. 1 / length of the edges of a block of nodes is computed first, in a
-// vectorised loop, while those positions are still the old ones.
+// vectorised loop, while those positions are still the old ones. The helpers above are always
+// inlined, so each clone keeps its own instruction set.
 TELEOP_HOT_CLONES
 void step_mass_spring_symplectic(const DeformableModel& m, DeformableState& s, double h,
                                  NodeSums& sums) {
   const int n = m.node_count;
   const DeformableParams& p = m.params;
-  const double beta = p.stiffness_damping_s;
   double* __restrict x = s.x.data();
   double* __restrict v = s.v.data();
   double* __restrict f = s.force.data();  // edge reactions from earlier nodes, then the total
-  const int* __restrict j3 = m.second_node3.data();
-  const int* __restrict first = m.first_edge_offsets.data();
-  const double* __restrict kp = m.edge_k_iso.data();
-  const double* __restrict l0 = m.rest_length_m.data();
   const double* __restrict mp = m.mass_kg.data();
   const double* __restrict imp = m.inv_mass.data();
-  const double* __restrict kr = m.radial_k.data();
-  const double* __restrict r0 = m.radial_rest_m.data();
-  const double* __restrict ck = m.contact_k.data();
-  const double* __restrict cc = m.contact_c.data();
   const double* __restrict fext = s.f_ext.data();
   const double* __restrict tgt = s.pin_target.data();
   const std::uint8_t* __restrict pin = s.pinned.data();
   std::fill(f, f + 3 * n, 0.0);
 
-  // mean velocity for the drag (relative to it: damps deformation, keeps momentum)
+  double vm[3];
+  drag_mean_velocity(m, s, vm);
+  const double vmx = vm[0], vmy = vm[1], vmz = vm[2];
   const double alpha = p.mass_damping_per_s;
-  const double cx = s.centre_x.x(), cy = s.centre_x.y(), cz = s.centre_x.z();
-  const double cvx = s.centre_v.x(), cvy = s.centre_v.y(), cvz = s.centre_v.z();
-  double vmx = 0.0, vmy = 0.0, vmz = 0.0;
-  if (alpha > 0.0) {
-    for (int i = 0; i < n; ++i) {
-      vmx += mp[i] * v[3 * i];
-      vmy += mp[i] * v[3 * i + 1];
-      vmz += mp[i] * v[3 * i + 2];
-    }
-    const double inv_total = 1.0 / m.total_mass_kg;
-    vmx = (vmx + m.centre_mass_kg * cvx) * inv_total;
-    vmy = (vmy + m.centre_mass_kg * cvy) * inv_total;
-    vmz = (vmz + m.centre_mass_kg * cvz) * inv_total;
-  }
-
+  const double c[3] = {s.centre_x.x(), s.centre_x.y(), s.centre_x.z()};
+  const double cv[3] = {s.centre_v.x(), s.centre_v.y(), s.centre_v.z()};
   const double gx = p.gravity_mps2.x(), gy = p.gravity_mps2.y(), gz = p.gravity_mps2.z();
-  const double rd = p.radial_damping_s;
   const bool centre = m.has_centre;
   const bool any_pinned = s.pinned_count > 0;
-  const int planes = m.plane_count;
-  double fcx = 0.0, fcy = 0.0, fcz = 0.0;
-  double spring_of[8] = {};  // spring force of each plane; valid where `touched` has its bit
+  double fc[3] = {0.0, 0.0, 0.0};  // the radial springs' reaction on the centre node
+  double spring_of[8] = {};        // spring force of each plane; valid where `touched` has its bit
   int nc = 0;
   Vec3 plane_force = Vec3::Zero();
   double fastest2 = 0.0, sum_x = 0.0, sum_v = 0.0, mxx = 0.0, mxy = 0.0, mxz = 0.0;
 
-  double* __restrict l2 = s.edge_length2.data();
-  double* __restrict il = s.edge_scratch.data();
-  double* __restrict rl2 = s.node_length2.data();
-  double* __restrict rl = s.node_scratch.data();
   for (int b0 = 0; b0 < n; b0 += kFusedNodeBlock) {
-    // a block of nodes: squared lengths of their edges and radial springs, 1 / length of all
-    // (vectorised), while the positions are still the old ones
     const int b1 = std::min(n, b0 + kFusedNodeBlock);
-    for (int i = b0; i < b1; ++i) {
-      const double xx = x[3 * i], xy = x[3 * i + 1], xz = x[3 * i + 2];
-      for (int e = first[i]; e < first[i + 1]; ++e) {
-        const int j = j3[e];
-        const double dx = x[j] - xx, dy = x[j + 1] - xy, dz = x[j + 2] - xz;
-        l2[e] = dx * dx + dy * dy + dz * dz;
-      }
-      const double dx = xx - cx, dy = xy - cy, dz = xz - cz;
-      rl2[i] = dx * dx + dy * dy + dz * dz;
-    }
-    inverse_sqrt(l2 + first[b0], il + first[b0], first[b1] - first[b0]);
-    if (centre) inverse_sqrt(rl2 + b0, rl + b0, b1 - b0);
-
+    fused_block_lengths(m, s, b0, b1);
     for (int i = b0; i < b1; ++i) {
       const int a = 3 * i;
       const double mi = mp[i];
@@ -488,54 +656,16 @@ void step_mass_spring_symplectic(const DeformableModel& m, DeformableState& s, d
       double vx = v[a], vy = v[a + 1], vz = v[a + 2];
       // edge springs (i, j), j > i: the force on i here, the reaction onto j
       double fx = 0.0, fy = 0.0, fz = 0.0;
-      for (int e = first[i]; e < first[i + 1]; ++e) {
-        const int j = j3[e];
-        const double dx = x[j] - xx, dy = x[j + 1] - xy, dz = x[j + 2] - xz;
-        const double inv_l = il[e];
-        const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
-        const double rate = (v[j] - vx) * ux + (v[j + 1] - vy) * uy + (v[j + 2] - vz) * uz;
-        const double k = kp[e];
-        const double fs = k * (l2[e] * inv_l - l0[e]) + beta * k * rate;
-        const double ex = fs * ux, ey = fs * uy, ez = fs * uz;
-        fx += ex;
-        fy += ey;
-        fz += ez;
-        f[j] -= ex;
-        f[j + 1] -= ey;
-        f[j + 2] -= ez;
-      }
+      fused_node_edges(m, s, i, x, v, f, xx, xy, xz, vx, vy, vz, fx, fy, fz);
       // gravity, drag and the caller's load
       fx += f[a] + mi * (gx - alpha * (vx - vmx)) + fext[a];
       fy += f[a + 1] + mi * (gy - alpha * (vy - vmy)) + fext[a + 1];
       fz += f[a + 2] + mi * (gz - alpha * (vz - vmz)) + fext[a + 2];
       // radial spring to the centre node
-      if (centre) {
-        const double dx = xx - cx, dy = xy - cy, dz = xz - cz;
-        const double inv_l = rl[i];
-        const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
-        const double rate = (vx - cvx) * ux + (vy - cvy) * uy + (vz - cvz) * uz;
-        const double fs = -kr[i] * (rl2[i] * inv_l - r0[i]) - rd * kr[i] * rate;
-        fx += fs * ux;
-        fy += fs * uy;
-        fz += fs * uz;
-        fcx -= fs * ux;
-        fcy -= fs * uy;
-        fcz -= fs * uz;
-      }
+      if (centre) fused_node_radial(m, s, i, c, cv, xx, xy, xz, vx, vy, vz, fx, fy, fz, fc);
       // plane penalty springs (damping and friction below, as impulses)
-      unsigned touched = 0;  // bit k: the node is inside plane k
-      for (int k = 0; k < planes; ++k) {
-        const Plane& pl = m.planes[static_cast<std::size_t>(k)];
-        const double dist =
-            pl.normal.x() * xx + pl.normal.y() * xy + pl.normal.z() * xz - pl.offset_m;
-        if (dist >= 0.0) continue;
-        spring_of[k] = -ck[i] * dist;
-        fx += spring_of[k] * pl.normal.x();
-        fy += spring_of[k] * pl.normal.y();
-        fz += spring_of[k] * pl.normal.z();
-        touched |= 1u << k;
-        ++nc;
-      }
+      const unsigned touched =
+          fused_node_plane_springs(m, i, xx, xy, xz, spring_of, fx, fy, fz, nc);
       f[a] = fx;
       f[a + 1] = fy;
       f[a + 2] = fz;
@@ -546,16 +676,7 @@ void step_mass_spring_symplectic(const DeformableModel& m, DeformableState& s, d
         vx += hm * fx;
         vy += hm * fy;
         vz += hm * fz;
-        for (int k = 0; touched != 0 && k < planes; ++k) {
-          if ((touched & (1u << k)) == 0) continue;
-          const Plane& pl = m.planes[static_cast<std::size_t>(k)];
-          const Vec3 vi =
-              contact_impulse(pl.normal, mi, cc[i], h * spring_of[k],
-                              p.friction ? pl.friction : 0.0, h, Vec3(vx, vy, vz), plane_force);
-          vx = vi.x();
-          vy = vi.y();
-          vz = vi.z();
-        }
+        fused_node_impulses(m, i, mi, h, touched, spring_of, vx, vy, vz, plane_force);
       }
       double px = xx + h * vx, py = xy + h * vy, pz = xz + h * vz;
       if (held) {
@@ -582,9 +703,9 @@ void step_mass_spring_symplectic(const DeformableModel& m, DeformableState& s, d
   s.plane_force_n = plane_force;
   if (centre) {
     const double hm = h / m.centre_mass_kg, mc = m.centre_mass_kg;
-    s.centre_v.x() += hm * (mc * (gx - alpha * (cvx - vmx)) + fcx);
-    s.centre_v.y() += hm * (mc * (gy - alpha * (cvy - vmy)) + fcy);
-    s.centre_v.z() += hm * (mc * (gz - alpha * (cvz - vmz)) + fcz);
+    s.centre_v.x() += hm * (mc * (gx - alpha * (cv[0] - vmx)) + fc[0]);
+    s.centre_v.y() += hm * (mc * (gy - alpha * (cv[1] - vmy)) + fc[1]);
+    s.centre_v.z() += hm * (mc * (gz - alpha * (cv[2] - vmz)) + fc[2]);
     s.centre_x += h * s.centre_v;
   }
   sums.fastest2 = fastest2;
@@ -820,6 +941,46 @@ void internal_forces(const DeformableModel& m, DeformableState& s, Eigen::Matrix
 
 namespace {
 
+// Held nodes: sets the velocity that takes each one to its target in this step (a non-finite
+// target releases the node) and counts them (s.pinned_count, the released ones included).
+// Returns whether any held node moves.
+TELEOP_ALWAYS_INLINE bool drive_held_nodes(const DeformableModel& m, DeformableState& s, double h) {
+  bool pin_moving = false;
+  s.pinned_count = 0;
+  for (int i = 0; i < m.node_count; ++i) {
+    if (!s.pinned[static_cast<std::size_t>(i)]) continue;
+    ++s.pinned_count;
+    if (!s.pin_target.col(i).allFinite()) {
+      s.pinned[static_cast<std::size_t>(i)] = 0;  // a bad target releases the node
+      continue;
+    }
+    s.v.col(i) = (s.pin_target.col(i) - s.x.col(i)) / h;
+    pin_moving = pin_moving || s.pin_target.col(i) != s.x.col(i);
+  }
+  return pin_moving;
+}
+
+// The fault event of a blow-up: names the first non-finite node, else the fastest one (largest
+// squared speed fastest2 [m^2/s^2]).
+void report_blow_up(const DeformableModel& m, const DeformableState& s, double fastest2,
+                    bool finite, teleop::sim::EventQueue& events) {
+  int fastest = 0;
+  for (int i = 0; i < m.node_count; ++i) {
+    const double sp2 = s.v.col(i).squaredNorm();
+    if (!std::isfinite(sp2) || !s.x.col(i).allFinite()) {
+      fastest = i;
+      fastest2 = sp2;
+      break;
+    }
+    if (sp2 >= fastest2) fastest = i;
+  }
+  char msg[128];
+  std::snprintf(msg, sizeof(msg),
+                "deformable: blow-up (node %d speed %.3g m/s%s); reset to rest shape", fastest,
+                std::sqrt(fastest2), finite ? "" : ", NaN");
+  events.push(EventKind::kFault, Severity::kError, s.sim_time_s, std::sqrt(fastest2), msg);
+}
+
 TELEOP_HOT_CLONES
 StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
                      teleop::sim::EventQueue* events, bool allow_fused) {
@@ -844,18 +1005,7 @@ StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
   s.wake_request = false;
 
   // held nodes: the velocity that takes them to their target in this step
-  bool pin_moving = false;
-  s.pinned_count = 0;
-  for (int i = 0; i < n; ++i) {
-    if (!s.pinned[static_cast<std::size_t>(i)]) continue;
-    ++s.pinned_count;
-    if (!s.pin_target.col(i).allFinite()) {
-      s.pinned[static_cast<std::size_t>(i)] = 0;  // a bad target releases the node
-      continue;
-    }
-    s.v.col(i) = (s.pin_target.col(i) - s.x.col(i)) / h;
-    pin_moving = pin_moving || s.pin_target.col(i) != s.x.col(i);
-  }
+  const bool pin_moving = drive_held_nodes(m, s, h);
 
   NodeSums sums;
   if (allow_fused && m.params.kernel == KernelKind::kSimd) {
@@ -889,30 +1039,14 @@ StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
   s.sim_time_s += h;
   ++s.steps;
   const double vmax2 = m.params.max_speed_mps * m.params.max_speed_mps;
-  double fastest2 = sums.fastest2;
+  const double fastest2 = sums.fastest2;
   const double sum_x = sums.sum_x, sum_v = sums.sum_v;
   const Vec3 mx = sums.mx + m.centre_mass_kg * s.centre_x;
   const bool finite = std::isfinite(sum_x) && std::isfinite(sum_v) && s.centre_x.allFinite() &&
                       s.centre_v.allFinite();
   if (!finite || !(fastest2 <= vmax2) || !(s.centre_v.squaredNorm() <= vmax2)) {
     ++s.fault_count;
-    if (events) {
-      int fastest = 0;
-      for (int i = 0; i < n; ++i) {
-        const double sp2 = s.v.col(i).squaredNorm();
-        if (!std::isfinite(sp2) || !s.x.col(i).allFinite()) {
-          fastest = i;
-          fastest2 = sp2;
-          break;
-        }
-        if (sp2 >= fastest2) fastest = i;
-      }
-      char msg[128];
-      std::snprintf(msg, sizeof(msg),
-                    "deformable: blow-up (node %d speed %.3g m/s%s); reset to rest shape", fastest,
-                    std::sqrt(fastest2), finite ? "" : ", NaN");
-      events->push(EventKind::kFault, Severity::kError, s.sim_time_s, std::sqrt(fastest2), msg);
-    }
+    if (events) report_blow_up(m, s, fastest2, finite, *events);
     reset_to_rest(m, s);
     return StepStatus::kFaultReset;
   }
