@@ -35,17 +35,9 @@ Eigen::Vector3d vec3(const config::Node& n, const std::string& key, const Eigen:
   const auto v = n.numbers_or(key, {def.x(), def.y(), def.z()}, lo, hi);
   return {v[0], v[1], v[2]};
 }
-}  // namespace
 
-WorldModel parse_world_model(const config::Node& root) {
-  WorldModel s;
-  s.file = root.file();
-  root.reject_unknown_keys(
-      {"name", "kind", "physics", "command", "tool", "planes", "robot", "deformables"});
-  s.name = root.string_or("name", s.name);
-  const std::string kind = root.choice_or("kind", "tool", {"tool", "robot"});
-  s.slave = kind == "robot" ? SlaveKind::kRobot : SlaveKind::kTool;
-
+// `physics` and `command`: rates, gravity, command timeout and workspace.
+void parse_physics_and_command(const config::Node& root, WorldModel& s) {
   if (root.has("physics")) {
     const auto p = root.at("physics");
     p.reject_unknown_keys({"rate_hz", "visual_rate_hz", "gravity_mps2"});
@@ -67,7 +59,10 @@ WorldModel parse_world_model(const config::Node& root) {
       }
     }
   }
-  s.tool.gravity_mps2 = s.gravity_mps2;
+}
+
+// `tool`: the free tool's mass, size, gains and start position.
+void parse_tool(const config::Node& root, WorldModel& s) {
   if (root.has("tool")) {
     const auto t = root.at("tool");
     t.reject_unknown_keys({"mass_kg", "radius_m", "kp_n_per_m", "kd_ns_per_m", "kp_rot_nm_per_rad",
@@ -86,6 +81,10 @@ WorldModel parse_world_model(const config::Node& root) {
     s.tool.gravity_compensation = t.boolean_or("gravity_compensation", true);
     s.tool_start_m = vec3(t, "start_position_m", s.tool_start_m, -100.0, 100.0);
   }
+}
+
+// `planes`: at most kMaxPlanes, ids 100, 101, ... in order, unit normals.
+void parse_planes(const config::Node& root, WorldModel& s) {
   if (root.has("planes")) {
     const auto ps = root.at("planes");
     if (!ps.is_sequence()) ps.fail("", "must be a list of planes");
@@ -111,8 +110,10 @@ WorldModel parse_world_model(const config::Node& root) {
       s.planes.push_back(pl);
     }
   }
-  for (const Plane& pl : s.planes) s.tool.add(Obstacle::of(pl));
+}
 
+// The `robot` mapping, if any: inline or `{include: FILE}`.
+std::optional<config::Node> robot_node_of(const config::Node& root) {
   std::optional<config::Node> robot_node;
   if (root.has("robot")) {
     // `robot: {include: FILE}` takes the `robot` mapping of another file (relative paths are
@@ -127,10 +128,12 @@ WorldModel parse_world_model(const config::Node& root) {
       robot_node = r;
     }
   }
-  if (s.slave == SlaveKind::kRobot && !robot_node) {
-    root.fail("robot", "is required when kind is 'robot'");
-  }
-  if (s.slave == SlaveKind::kRobot) s.robot = robot::load_robot_model(*robot_node);
+  return robot_node;
+}
+
+// `deformables`: each body's id (10..99, by default the previous one's + 1), its model built
+// against the scene's planes, and its tip contact parameters.
+void parse_deformables(const config::Node& root, WorldModel& s) {
   if (root.has("deformables")) {
     const auto ds = root.at("deformables");
     if (!ds.is_sequence()) ds.fail("", "must be a list of deformable bodies");
@@ -147,6 +150,30 @@ WorldModel parse_world_model(const config::Node& root) {
       s.bodies.push_back(std::move(b));
     }
   }
+}
+}  // namespace
+
+WorldModel parse_world_model(const config::Node& root) {
+  WorldModel s;
+  s.file = root.file();
+  root.reject_unknown_keys(
+      {"name", "kind", "physics", "command", "tool", "planes", "robot", "deformables"});
+  s.name = root.string_or("name", s.name);
+  const std::string kind = root.choice_or("kind", "tool", {"tool", "robot"});
+  s.slave = kind == "robot" ? SlaveKind::kRobot : SlaveKind::kTool;
+
+  parse_physics_and_command(root, s);
+  s.tool.gravity_mps2 = s.gravity_mps2;
+  parse_tool(root, s);
+  parse_planes(root, s);
+  for (const Plane& pl : s.planes) s.tool.add(Obstacle::of(pl));
+
+  const std::optional<config::Node> robot_node = robot_node_of(root);
+  if (s.slave == SlaveKind::kRobot && !robot_node) {
+    root.fail("robot", "is required when kind is 'robot'");
+  }
+  if (s.slave == SlaveKind::kRobot) s.robot = robot::load_robot_model(*robot_node);
+  parse_deformables(root, s);
   for (int i = 0; i < 3; ++i) {
     if (s.tool_start_m[i] < s.workspace_min_m[i] || s.tool_start_m[i] > s.workspace_max_m[i]) {
       root.fail("tool.start_position_m", "must lie inside the command workspace");
