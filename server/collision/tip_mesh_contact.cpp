@@ -7,6 +7,14 @@
 
 namespace teleop::sim::collision {
 
+// The parts of update() below are always inlined into it: one function for the compiler, as
+// before the split (the tip contact runs every physics step).
+#if defined(__GNUC__)
+#define TELEOP_TIP_INLINE inline __attribute__((always_inline))
+#else
+#define TELEOP_TIP_INLINE inline
+#endif
+
 TipMeshContact::TipMeshContact(TipContactParams params, AabbTree::Options tree_options)
     : params_(params), tree_(tree_options) {}
 
@@ -191,7 +199,7 @@ struct TipMeshContact::Proxy {
   Eigen::Vector3d dt_vec;  ///< tangential part of d [m]
 };
 
-Eigen::Vector3d TipMeshContact::patch_velocity(const Eigen::Matrix3Xd& v) const {
+TELEOP_TIP_INLINE Eigen::Vector3d TipMeshContact::patch_velocity(const Eigen::Matrix3Xd& v) const {
   Eigen::Vector3d av = Eigen::Vector3d::Zero();
   for (int i = 0; i < patch_size_; ++i) {
     av += patch_w_[static_cast<std::size_t>(i)] * v.col(patch_node_[static_cast<std::size_t>(i)]);
@@ -199,11 +207,10 @@ Eigen::Vector3d TipMeshContact::patch_velocity(const Eigen::Matrix3Xd& v) const 
   return av;
 }
 
-bool TipMeshContact::keep_or_find_contact(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v,
-                                          const Eigen::Vector3d& tip_prev_m,
-                                          const Eigen::Vector3d& tip_now_m, double r, double dt_s,
-                                          bool was_in_contact, TipContactResult& res,
-                                          Eigen::Vector3d& anchor_vel) {
+TELEOP_TIP_INLINE bool TipMeshContact::keep_or_find_contact(
+    const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v, const Eigen::Vector3d& tip_prev_m,
+    const Eigen::Vector3d& tip_now_m, double r, double dt_s, bool was_in_contact,
+    TipContactResult& res, Eigen::Vector3d& anchor_vel) {
   const Eigen::Vector3d& c = tip_now_m;
   if (in_contact_) {
     const Eigen::Vector3d a = anchor_position(x);
@@ -229,7 +236,7 @@ bool TipMeshContact::keep_or_find_contact(const Eigen::Matrix3Xd& x, const Eigen
   return true;
 }
 
-double TipMeshContact::normal_force(double pen_m, double pen_rate) const {
+TELEOP_TIP_INLINE double TipMeshContact::normal_force(double pen_m, double pen_rate) const {
   const double ramp =
       params_.damping_ramp_m > 0.0 ? std::min(1.0, pen_m / params_.damping_ramp_m) : 1.0;
   return std::max(0.0,
@@ -239,11 +246,10 @@ double TipMeshContact::normal_force(double pen_m, double pen_rate) const {
 // Surface nodes inside the tip sphere, on the body side of its centre, are pushed radially out
 // of it (area contact of a large tip on a fine mesh). Only while the centre is outside the
 // surface (pen < r).
-Eigen::Vector3d TipMeshContact::node_penalty(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v,
-                                             const Eigen::Vector3d& c, double r,
-                                             const Eigen::Vector3d& n, double pen,
-                                             const Eigen::Vector3d& tip_velocity_mps,
-                                             double& max_node_depth) {
+TELEOP_TIP_INLINE Eigen::Vector3d TipMeshContact::node_penalty(
+    const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v, const Eigen::Vector3d& c, double r,
+    const Eigen::Vector3d& n, double pen, const Eigen::Vector3d& tip_velocity_mps,
+    double& max_node_depth) {
   Eigen::Vector3d f_nodes_tip = Eigen::Vector3d::Zero();
   node_contacts_ = 0;
   max_node_depth = 0.0;
@@ -283,8 +289,10 @@ Eigen::Vector3d TipMeshContact::node_penalty(const Eigen::Matrix3Xd& x, const Ei
   return f_nodes_tip;
 }
 
-bool TipMeshContact::slide_proxy(const Eigen::Matrix3Xd& x, const Eigen::Vector3d& c, double r,
-                                 double pen_rate, double fn_nodes, double mu_k, Proxy& pr) {
+TELEOP_TIP_INLINE bool TipMeshContact::slide_proxy(const Eigen::Matrix3Xd& x,
+                                                   const Eigen::Vector3d& c, double r,
+                                                   double pen_rate, double fn_nodes, double mu_k,
+                                                   Proxy& pr) {
   const double k = params_.stiffness_n_per_m;
   for (int it = 0; it < 3; ++it) {
     const double len = pr.dt_vec.norm();
@@ -309,8 +317,9 @@ bool TipMeshContact::slide_proxy(const Eigen::Matrix3Xd& x, const Eigen::Vector3
 
 // Equal and opposite: node penalty forces to their nodes, the proxy's share to the patch nodes
 // with the anchor's weights; the node forces sum to exactly -f.
-void TipMeshContact::apply_reaction(const Eigen::Vector3d& f_patch, bool use_nodes, double scale,
-                                    Eigen::Matrix3Xd& node_forces_n) const {
+TELEOP_TIP_INLINE void TipMeshContact::apply_reaction(const Eigen::Vector3d& f_patch,
+                                                      bool use_nodes, double scale,
+                                                      Eigen::Matrix3Xd& node_forces_n) const {
   for (int i = 0; i < patch_size_; ++i) {
     node_forces_n.col(patch_node_[static_cast<std::size_t>(i)]) -=
         patch_w_[static_cast<std::size_t>(i)] * f_patch;
@@ -322,8 +331,8 @@ void TipMeshContact::apply_reaction(const Eigen::Vector3d& f_patch, bool use_nod
   }
 }
 
-void TipMeshContact::set_contact_result(const Eigen::Vector3d& f, const Proxy& pr,
-                                        TipContactResult& res) const {
+TELEOP_TIP_INLINE void TipMeshContact::set_contact_result(const Eigen::Vector3d& f, const Proxy& pr,
+                                                          TipContactResult& res) const {
   res.in_contact = true;
   res.force_on_tip_n = f;
   res.contact_point_m = pr.a;
