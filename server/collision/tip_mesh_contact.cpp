@@ -7,6 +7,14 @@
 
 namespace teleop::sim::collision {
 
+// The parts of update() below are always inlined into it: one function for the compiler, as
+// before the split (the tip contact runs every physics step).
+#if defined(__GNUC__)
+#define TELEOP_TIP_INLINE inline __attribute__((always_inline))
+#else
+#define TELEOP_TIP_INLINE inline
+#endif
+
 TipMeshContact::TipMeshContact(TipContactParams params, AabbTree::Options tree_options)
     : params_(params), tree_(tree_options) {}
 
@@ -181,6 +189,161 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x,
                 node_forces_n);
 }
 
+struct TipMeshContact::Proxy {
+  Eigen::Vector3d a;       ///< anchor [m]
+  Eigen::Vector3d n;       ///< surface normal at the anchor, towards the free side
+  Eigen::Vector3d d;       ///< tip centre - anchor [m]
+  double pen = 0.0;        ///< penetration r - d.n [m]
+  double fn = 0.0;         ///< proxy normal force [N]
+  double fn_eff = 0.0;     ///< max(proxy, node penalty) normal force [N]
+  Eigen::Vector3d dt_vec;  ///< tangential part of d [m]
+};
+
+TELEOP_TIP_INLINE Eigen::Vector3d TipMeshContact::patch_velocity(const Eigen::Matrix3Xd& v) const {
+  Eigen::Vector3d av = Eigen::Vector3d::Zero();
+  for (int i = 0; i < patch_size_; ++i) {
+    av += patch_w_[static_cast<std::size_t>(i)] * v.col(patch_node_[static_cast<std::size_t>(i)]);
+  }
+  return av;
+}
+
+TELEOP_TIP_INLINE bool TipMeshContact::keep_or_find_contact(
+    const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v, const Eigen::Vector3d& tip_prev_m,
+    const Eigen::Vector3d& tip_now_m, double r, double dt_s, bool was_in_contact,
+    TipContactResult& res, Eigen::Vector3d& anchor_vel) {
+  const Eigen::Vector3d& c = tip_now_m;
+  if (in_contact_) {
+    const Eigen::Vector3d a = anchor_position(x);
+    if (v != nullptr) {
+      anchor_vel = patch_velocity(*v);
+    } else if (anchor_velocity_valid_) {
+      anchor_vel = (a - anchor_prev_m_) / dt_s;
+    }
+    const Eigen::Vector3d n = side_ * topo_.smooth_normal(x, tri_, bary_);
+    if (r - (c - a).dot(n) <= 0.0) in_contact_ = false;  // the tip has left the surface
+  }
+  if (!in_contact_) {
+    if (!detect(x, tip_prev_m, tip_now_m, r, res)) {
+      res.ended = was_in_contact;
+      return false;
+    }
+    in_contact_ = true;
+    anchor_velocity_valid_ = false;
+    anchor_vel = v != nullptr ? patch_velocity(*v) : Eigen::Vector3d::Zero();
+    entry_point_m_ = anchor_position(x);
+    res.began = !was_in_contact;
+  }
+  return true;
+}
+
+TELEOP_TIP_INLINE double TipMeshContact::normal_force(double pen_m, double pen_rate) const {
+  const double ramp =
+      params_.damping_ramp_m > 0.0 ? std::min(1.0, pen_m / params_.damping_ramp_m) : 1.0;
+  return std::max(0.0,
+                  params_.stiffness_n_per_m * pen_m + params_.damping_ns_per_m * ramp * pen_rate);
+}
+
+// Surface nodes inside the tip sphere, on the body side of its centre, are pushed radially out
+// of it (area contact of a large tip on a fine mesh). Only while the centre is outside the
+// surface (pen < r).
+TELEOP_TIP_INLINE Eigen::Vector3d TipMeshContact::node_penalty(
+    const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v, const Eigen::Vector3d& c, double r,
+    const Eigen::Vector3d& n, double pen, const Eigen::Vector3d& tip_velocity_mps,
+    double& max_node_depth) {
+  Eigen::Vector3d f_nodes_tip = Eigen::Vector3d::Zero();
+  node_contacts_ = 0;
+  max_node_depth = 0.0;
+  if (!(params_.node_stiffness_n_per_m > 0.0 && pen < r)) return f_nodes_tip;
+  tree_.query_sphere(c, r, x, hit_tris_);
+  if (++stamp_counter_ == 0) {
+    std::fill(stamp_.begin(), stamp_.end(), 0u);
+    stamp_counter_ = 1;
+  }
+  const Eigen::Matrix3Xi& tris = topo_.triangles();
+  for (const int t : hit_tris_) {
+    for (int kk = 0; kk < 3; ++kk) {
+      const int vi = tris(kk, t);
+      if (stamp_[static_cast<std::size_t>(vi)] == stamp_counter_) continue;
+      stamp_[static_cast<std::size_t>(vi)] = stamp_counter_;
+      const Eigen::Vector3d dv = x.col(vi) - c;
+      const double dist = dv.norm();
+      if (dist >= r || dist < 1e-12) continue;
+      const Eigen::Vector3d u = dv / dist;
+      if (u.dot(n) >= 0.0) continue;  // not between the tip centre and the body
+      const double depth = r - dist;
+      double rate = 0.0;  // compression rate
+      if (v != nullptr) rate = -(v->col(vi) - tip_velocity_mps).dot(u);
+      const double ramp =
+          params_.damping_ramp_m > 0.0 ? std::min(1.0, depth / params_.damping_ramp_m) : 1.0;
+      const double mag = std::max(0.0, params_.node_stiffness_n_per_m * depth +
+                                           params_.node_damping_ns_per_m * ramp * rate);
+      if (node_contacts_ < static_cast<int>(node_list_.size())) {
+        node_list_[static_cast<std::size_t>(node_contacts_)] = vi;
+        node_force_.col(node_contacts_) = mag * u;
+        ++node_contacts_;
+        f_nodes_tip -= mag * u;
+        max_node_depth = std::max(max_node_depth, depth);
+      }
+    }
+  }
+  return f_nodes_tip;
+}
+
+TELEOP_TIP_INLINE bool TipMeshContact::slide_proxy(const Eigen::Matrix3Xd& x,
+                                                   const Eigen::Vector3d& c, double r,
+                                                   double pen_rate, double fn_nodes, double mu_k,
+                                                   Proxy& pr) {
+  const double k = params_.stiffness_n_per_m;
+  for (int it = 0; it < 3; ++it) {
+    const double len = pr.dt_vec.norm();
+    const double keep = k > 0.0 ? mu_k * pr.fn_eff / k : 0.0;
+    if (len <= keep + 1e-7) break;
+    const Eigen::Vector3d target = pr.a + pr.dt_vec * (1.0 - keep / len);
+    MeshClosest mc;
+    if (!tree_.closest_point(target, x, std::numeric_limits<double>::infinity(), mc)) break;
+    set_anchor(x, mc.triangle, mc.bary);
+    pr.a = anchor_position(x);
+    pr.n = side_ * topo_.smooth_normal(x, tri_, bary_);
+    pr.d = c - pr.a;
+    pr.pen = r - pr.d.dot(pr.n);
+    if (pr.pen <= 0.0 && node_contacts_ == 0) break;
+    pr.fn = pr.pen > 0.0 ? normal_force(pr.pen, pen_rate) : 0.0;
+    pr.fn_eff = std::max(pr.fn, fn_nodes);
+    pr.dt_vec = pr.d - pr.d.dot(pr.n) * pr.n;
+    if ((pr.a - target).norm() < 1e-9) break;
+  }
+  return !(pr.pen <= 0.0 && node_contacts_ == 0);
+}
+
+// Equal and opposite: node penalty forces to their nodes, the proxy's share to the patch nodes
+// with the anchor's weights; the node forces sum to exactly -f.
+TELEOP_TIP_INLINE void TipMeshContact::apply_reaction(const Eigen::Vector3d& f_patch,
+                                                      bool use_nodes, double scale,
+                                                      Eigen::Matrix3Xd& node_forces_n) const {
+  for (int i = 0; i < patch_size_; ++i) {
+    node_forces_n.col(patch_node_[static_cast<std::size_t>(i)]) -=
+        patch_w_[static_cast<std::size_t>(i)] * f_patch;
+  }
+  if (use_nodes) {
+    for (int i = 0; i < node_contacts_; ++i) {
+      node_forces_n.col(node_list_[static_cast<std::size_t>(i)]) += scale * node_force_.col(i);
+    }
+  }
+}
+
+TELEOP_TIP_INLINE void TipMeshContact::set_contact_result(const Eigen::Vector3d& f, const Proxy& pr,
+                                                          TipContactResult& res) const {
+  res.in_contact = true;
+  res.force_on_tip_n = f;
+  res.contact_point_m = pr.a;
+  res.normal = pr.n;
+  res.entry_point_m = entry_point_m_;
+  res.penetration_m = pr.pen;
+  res.normal_force_n = f.dot(pr.n);
+  res.tangential_force_n = (f - f.dot(pr.n) * pr.n).norm();
+  res.triangle = tri_;
+}
+
 TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v,
                                         const Eigen::Vector3d& tip_prev_m,
                                         const Eigen::Vector3d& tip_now_m, double tip_radius_m,
@@ -204,140 +367,58 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
   const double k = params_.stiffness_n_per_m;
   const Eigen::Vector3d& c = tip_now_m;
   Eigen::Vector3d anchor_vel = Eigen::Vector3d::Zero();
-
   if (v != nullptr && v->cols() != x.cols()) v = nullptr;
-  auto patch_velocity = [&]() {
-    Eigen::Vector3d av = Eigen::Vector3d::Zero();
-    for (int i = 0; i < patch_size_; ++i) {
-      av +=
-          patch_w_[static_cast<std::size_t>(i)] * v->col(patch_node_[static_cast<std::size_t>(i)]);
-    }
-    return av;
-  };
-  if (in_contact_) {
-    const Eigen::Vector3d a = anchor_position(x);
-    if (v != nullptr) {
-      anchor_vel = patch_velocity();
-    } else if (anchor_velocity_valid_) {
-      anchor_vel = (a - anchor_prev_m_) / dt_s;
-    }
-    const Eigen::Vector3d n = side_ * topo_.smooth_normal(x, tri_, bary_);
-    if (r - (c - a).dot(n) <= 0.0) in_contact_ = false;  // the tip has left the surface
-  }
-  if (!in_contact_) {
-    if (!detect(x, tip_prev_m, tip_now_m, r, res)) {
-      res.ended = was_in_contact;
-      return res;
-    }
-    in_contact_ = true;
-    anchor_velocity_valid_ = false;
-    anchor_vel = v != nullptr ? patch_velocity() : Eigen::Vector3d::Zero();
-    entry_point_m_ = anchor_position(x);
-    res.began = !was_in_contact;
+  if (!keep_or_find_contact(x, v, tip_prev_m, tip_now_m, r, dt_s, was_in_contact, res,
+                            anchor_vel)) {
+    return res;
   }
 
   // contact law on the current anchor
-  Eigen::Vector3d a = anchor_position(x);
-  Eigen::Vector3d n = side_ * topo_.smooth_normal(x, tri_, bary_);
-  Eigen::Vector3d d = c - a;
-  double pen = r - d.dot(n);
-  const double pen_rate = -(tip_velocity_mps - anchor_vel).dot(n);
-  auto normal_force = [&](double x_pen) {
-    const double ramp =
-        params_.damping_ramp_m > 0.0 ? std::min(1.0, x_pen / params_.damping_ramp_m) : 1.0;
-    return std::max(0.0, k * x_pen + params_.damping_ns_per_m * ramp * pen_rate);
-  };
-  double fn = pen > 0.0 ? normal_force(pen) : 0.0;
+  Proxy pr;
+  pr.a = anchor_position(x);
+  pr.n = side_ * topo_.smooth_normal(x, tri_, bary_);
+  pr.d = c - pr.a;
+  pr.pen = r - pr.d.dot(pr.n);
+  const double pen_rate = -(tip_velocity_mps - anchor_vel).dot(pr.n);
+  pr.fn = pr.pen > 0.0 ? normal_force(pr.pen, pen_rate) : 0.0;
 
-  // node penalty: surface nodes inside the tip sphere, on the body side of its centre, are
-  // pushed radially out of it (area contact of a large tip on a fine mesh)
-  Eigen::Vector3d f_nodes_tip = Eigen::Vector3d::Zero();
-  node_contacts_ = 0;
+  // node penalty (area contact of a large tip on a fine mesh)
   double max_node_depth = 0.0;
-  if (params_.node_stiffness_n_per_m > 0.0 && pen < r) {  // centre outside the surface
-    tree_.query_sphere(c, r, x, hit_tris_);
-    if (++stamp_counter_ == 0) {
-      std::fill(stamp_.begin(), stamp_.end(), 0u);
-      stamp_counter_ = 1;
-    }
-    const Eigen::Matrix3Xi& tris = topo_.triangles();
-    for (const int t : hit_tris_) {
-      for (int kk = 0; kk < 3; ++kk) {
-        const int vi = tris(kk, t);
-        if (stamp_[static_cast<std::size_t>(vi)] == stamp_counter_) continue;
-        stamp_[static_cast<std::size_t>(vi)] = stamp_counter_;
-        const Eigen::Vector3d dv = x.col(vi) - c;
-        const double dist = dv.norm();
-        if (dist >= r || dist < 1e-12) continue;
-        const Eigen::Vector3d u = dv / dist;
-        if (u.dot(n) >= 0.0) continue;  // not between the tip centre and the body
-        const double depth = r - dist;
-        double rate = 0.0;  // compression rate
-        if (v != nullptr) rate = -(v->col(vi) - tip_velocity_mps).dot(u);
-        const double ramp =
-            params_.damping_ramp_m > 0.0 ? std::min(1.0, depth / params_.damping_ramp_m) : 1.0;
-        const double mag = std::max(0.0, params_.node_stiffness_n_per_m * depth +
-                                             params_.node_damping_ns_per_m * ramp * rate);
-        if (node_contacts_ < static_cast<int>(node_list_.size())) {
-          node_list_[static_cast<std::size_t>(node_contacts_)] = vi;
-          node_force_.col(node_contacts_) = mag * u;
-          ++node_contacts_;
-          f_nodes_tip -= mag * u;
-          max_node_depth = std::max(max_node_depth, depth);
-        }
-      }
-    }
-  }
-  if (pen <= 0.0 && node_contacts_ == 0) {
+  const Eigen::Vector3d f_nodes_tip =
+      node_penalty(x, v, c, r, pr.n, pr.pen, tip_velocity_mps, max_node_depth);
+  if (pr.pen <= 0.0 && node_contacts_ == 0) {
     // touched during the step but already clear of the surface at its end
     in_contact_ = false;
     res.began = false;
     res.ended = was_in_contact;
     return res;
   }
-  const double fn_nodes = f_nodes_tip.dot(n);
-  double fn_eff = std::max(fn, fn_nodes);
+  const double fn_nodes = f_nodes_tip.dot(pr.n);
+  pr.fn_eff = std::max(pr.fn, fn_nodes);
 
-  Eigen::Vector3d dt_vec = d - d.dot(n) * n;
-  Eigen::Vector3d ft = -k * dt_vec;
+  pr.dt_vec = pr.d - pr.d.dot(pr.n) * pr.n;
+  Eigen::Vector3d ft = -k * pr.dt_vec;
   const double mu_s = std::max(0.0, params_.friction_static);
   const double mu_k = std::clamp(params_.friction_kinetic, 0.0, mu_s);
-  if (ft.norm() > mu_s * fn_eff) {
+  if (ft.norm() > mu_s * pr.fn_eff) {
     // kinetic friction: the proxy slides along the surface until |F_t| = mu_k F_n
     res.sliding = true;
-    for (int it = 0; it < 3; ++it) {
-      const double len = dt_vec.norm();
-      const double keep = k > 0.0 ? mu_k * fn_eff / k : 0.0;
-      if (len <= keep + 1e-7) break;
-      const Eigen::Vector3d target = a + dt_vec * (1.0 - keep / len);
-      MeshClosest mc;
-      if (!tree_.closest_point(target, x, std::numeric_limits<double>::infinity(), mc)) break;
-      set_anchor(x, mc.triangle, mc.bary);
-      a = anchor_position(x);
-      n = side_ * topo_.smooth_normal(x, tri_, bary_);
-      d = c - a;
-      pen = r - d.dot(n);
-      if (pen <= 0.0 && node_contacts_ == 0) break;
-      fn = pen > 0.0 ? normal_force(pen) : 0.0;
-      fn_eff = std::max(fn, fn_nodes);
-      dt_vec = d - d.dot(n) * n;
-      if ((a - target).norm() < 1e-9) break;
-    }
-    if (pen <= 0.0 && node_contacts_ == 0) {
+    if (!slide_proxy(x, c, r, pen_rate, fn_nodes, mu_k, pr)) {
       in_contact_ = false;
       res.ended = was_in_contact;
       res.began = false;
       return res;
     }
-    ft = -k * dt_vec;
+    ft = -k * pr.dt_vec;
     const double ftn = ft.norm();
-    if (ftn > mu_k * fn_eff && ftn > 0.0) ft *= mu_k * fn_eff / ftn;
+    if (ftn > mu_k * pr.fn_eff && ftn > 0.0) ft *= mu_k * pr.fn_eff / ftn;
   }
 
   // the larger normal response acts: node penalty (area contact) or the proxy spring (a
   // face touched between nodes, a thin sheet, or a tip through the surface)
-  const bool use_nodes = node_contacts_ > 0 && fn_nodes > fn;
-  Eigen::Vector3d f = use_nodes ? Eigen::Vector3d(f_nodes_tip + ft) : Eigen::Vector3d(fn * n + ft);
+  const bool use_nodes = node_contacts_ > 0 && fn_nodes > pr.fn;
+  Eigen::Vector3d f =
+      use_nodes ? Eigen::Vector3d(f_nodes_tip + ft) : Eigen::Vector3d(pr.fn * pr.n + ft);
   double scale = 1.0;
   if (params_.max_force_n > 0.0) {
     const double fm = f.norm();
@@ -352,32 +433,12 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
     res.ended = was_in_contact;
     return res;
   }
-  // equal and opposite: node penalty forces to their nodes, the proxy's share to the patch
-  // nodes with the anchor's weights; the node forces sum to exactly -f
-  const Eigen::Vector3d f_patch = use_nodes ? Eigen::Vector3d(scale * ft) : f;
-  for (int i = 0; i < patch_size_; ++i) {
-    node_forces_n.col(patch_node_[static_cast<std::size_t>(i)]) -=
-        patch_w_[static_cast<std::size_t>(i)] * f_patch;
-  }
-  if (use_nodes) {
-    for (int i = 0; i < node_contacts_; ++i) {
-      node_forces_n.col(node_list_[static_cast<std::size_t>(i)]) += scale * node_force_.col(i);
-    }
-  }
+  apply_reaction(use_nodes ? Eigen::Vector3d(scale * ft) : f, use_nodes, scale, node_forces_n);
   res.node_contacts = use_nodes ? node_contacts_ : 0;
   res.max_node_depth_m = max_node_depth;
-
-  anchor_prev_m_ = a;
+  anchor_prev_m_ = pr.a;
   anchor_velocity_valid_ = true;
-  res.in_contact = true;
-  res.force_on_tip_n = f;
-  res.contact_point_m = a;
-  res.normal = n;
-  res.entry_point_m = entry_point_m_;
-  res.penetration_m = pen;
-  res.normal_force_n = f.dot(n);
-  res.tangential_force_n = (f - f.dot(n) * n).norm();
-  res.triangle = tri_;
+  set_contact_result(f, pr, res);
   return res;
 }
 

@@ -146,6 +146,35 @@ class TipMeshContact {
               double r, TipContactResult& res);
   void set_anchor(const Eigen::Matrix3Xd& x, int tri, const Eigen::Vector3d& bary);
 
+  /// The proxy contact of one update: anchor, normal, tip offset, penetration, forces.
+  struct Proxy;
+  /// Velocity of the anchor: the patch nodes' velocities `v` with the anchor's weights [m/s].
+  Eigen::Vector3d patch_velocity(const Eigen::Matrix3Xd& v) const;
+  /// Keeps the contact while the tip is still below the anchor's surface, else looks for a new
+  /// one; false (res.ended set) when there is none. anchor_vel: the anchor's velocity [m/s].
+  bool keep_or_find_contact(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v,
+                            const Eigen::Vector3d& tip_prev_m, const Eigen::Vector3d& tip_now_m,
+                            double r, double dt_s, bool was_in_contact, TipContactResult& res,
+                            Eigen::Vector3d& anchor_vel);
+  /// Proxy normal force [N] at penetration pen_m [m] and penetration rate pen_rate [m/s].
+  double normal_force(double pen_m, double pen_rate) const;
+  /// Node penalty: nodes inside the tip sphere (centre c, radius r) on the body side of normal
+  /// n into node_list_ / node_force_; returns their total force on the tip [N].
+  Eigen::Vector3d node_penalty(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v,
+                               const Eigen::Vector3d& c, double r, const Eigen::Vector3d& n,
+                               double pen, const Eigen::Vector3d& tip_velocity_mps,
+                               double& max_node_depth);
+  /// Kinetic friction: slides the proxy along the surface until |F_t| = mu_k F_n; false when the
+  /// tip has left the surface on the way.
+  bool slide_proxy(const Eigen::Matrix3Xd& x, const Eigen::Vector3d& c, double r, double pen_rate,
+                   double fn_nodes, double mu_k, Proxy& pr);
+  /// Applies the reaction of force f on the tip to the nodes (node penalty forces scaled by
+  /// `scale`, the proxy's share f_patch to the patch nodes).
+  void apply_reaction(const Eigen::Vector3d& f_patch, bool use_nodes, double scale,
+                      Eigen::Matrix3Xd& node_forces_n) const;
+  /// The in-contact fields of res for force f [N] on the tip at proxy pr.
+  void set_contact_result(const Eigen::Vector3d& f, const Proxy& pr, TipContactResult& res) const;
+
   TipContactParams params_;
   AabbTree tree_;
   SurfaceTopology topo_;

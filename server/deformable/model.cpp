@@ -77,19 +77,10 @@ void build_simd_tables(DeformableModel& m) {
   }
 }
 
-}  // namespace
-
-teleop::mesh::TriMesh make_mesh_for(const DeformableParams& p) {
-  if (p.mesh_file.empty()) return teleop::mesh::make_icosphere(p.level, p.radius_m, p.centre_m);
-  teleop::mesh::LoadOptions opt;
-  opt.scale = p.mesh_scale;
-  teleop::mesh::TriMesh m = teleop::mesh::load_mesh(p.mesh_file, opt);
-  m.vertices.colwise() += p.centre_m;
-  return m;
-}
-
-DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformableParams& params,
-                           const std::vector<Plane>& planes) {
+// Rejects parameters out of range, a kernel the model and integrator cannot use, more than 8
+// planes and a mesh without adjacency tables or not a closed manifold.
+void check_inputs(const teleop::mesh::TriMesh& mesh, const DeformableParams& params,
+                  const std::vector<Plane>& planes) {
   check_range("mass_kg", params.mass_kg, 1e-6, 1e6);
   check_range("density_kg_per_m3", params.density_kg_per_m3, 0.0, 1e5);
   check_range("centre_mass_fraction", params.centre_mass_fraction, 0.01, 0.9);
@@ -118,15 +109,15 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
     throw teleop::mesh::MeshError("make_model: the mesh has no adjacency tables");
   }
   teleop::mesh::validate_closed_manifold(mesh);
+}
 
-  DeformableModel m;
-  m.params = params;
-  m.mesh = mesh;
-  const int n = mesh.vertex_count();
-  m.node_count = n;
+// Node areas (a third of each adjacent triangle), volume and its centroid, masses (surface
+// nodes by area, the centre node its fraction), and the Lame coefficients from E and nu.
+void set_geometry_and_masses(DeformableModel& m) {
+  const DeformableParams& p = m.params;
+  const teleop::mesh::TriMesh& mesh = m.mesh;
+  const int n = m.node_count;
   const Eigen::Matrix3Xd& X = mesh.vertices;
-
-  // node areas: a third of each adjacent triangle; volume and its centroid
   m.area_m2 = Eigen::VectorXd::Zero(n);
   double vol6 = 0.0;
   Eigen::Vector3d vc = Eigen::Vector3d::Zero();
@@ -142,30 +133,35 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
   }
   m.volume_m3 = vol6 / 6.0;
   m.rest_centre_m = vc / vol6;
-  const double total_area = m.area_m2.sum();
 
   // masses
-  m.total_mass_kg =
-      params.density_kg_per_m3 > 0.0 ? params.density_kg_per_m3 * m.volume_m3 : params.mass_kg;
+  const double total_area = m.area_m2.sum();
+  m.total_mass_kg = p.density_kg_per_m3 > 0.0 ? p.density_kg_per_m3 * m.volume_m3 : p.mass_kg;
   m.density_kg_per_m3 = m.total_mass_kg / m.volume_m3;
-  m.has_centre = params.radial_stiffness_n_per_m3 > 0.0;
-  m.centre_mass_kg = m.has_centre ? params.centre_mass_fraction * m.total_mass_kg : 0.0;
+  m.has_centre = p.radial_stiffness_n_per_m3 > 0.0;
+  m.centre_mass_kg = m.has_centre ? p.centre_mass_fraction * m.total_mass_kg : 0.0;
   const double surface_mass = m.total_mass_kg - m.centre_mass_kg;
   m.mass_kg = surface_mass * m.area_m2 / total_area;
   m.inv_mass = m.mass_kg.cwiseInverse();
 
   // Lame coefficients from E and nu
-  const double E = params.youngs_modulus_pa, nu = params.poisson_ratio;
+  const double E = p.youngs_modulus_pa, nu = p.poisson_ratio;
   m.lame_lambda_pa = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
   m.lame_mu_pa = E / (2.0 * (1.0 + nu));
+}
 
+// Edges, sorted by (first node, second node) with first < second, their rest lengths and
+// directions, and the per-node edge tables of the fused step and of the gather.
+void build_edge_tables(DeformableModel& m) {
+  const int n = m.node_count;
+  const Eigen::Matrix3Xd& X = m.mesh.vertices;
   // edges, sorted by (first node, second node) with first < second: the fused step visits the
   // nodes in order and needs the edges of each node as one range
-  const int ne = mesh.edge_count();
+  const int ne = m.mesh.edge_count();
   {
     std::vector<std::pair<int, int>> sorted(static_cast<std::size_t>(ne));
     for (int e = 0; e < ne; ++e) {
-      const int a = mesh.edges(0, e), b = mesh.edges(1, e);
+      const int a = m.mesh.edges(0, e), b = m.mesh.edges(1, e);
       sorted[static_cast<std::size_t>(e)] = {std::min(a, b), std::max(a, b)};
     }
     std::sort(sorted.begin(), sorted.end());
@@ -211,10 +207,17 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
       m.node_edges[static_cast<std::size_t>(fill[static_cast<std::size_t>(m.edges(1, e))]++)] = ~e;
     }
   }
+}
+
+// Edge stiffness: the spring constant (mass-spring) or the Navier coefficients.
+void set_edge_stiffness(DeformableModel& m) {
+  const DeformableParams& p = m.params;
+  const int n = m.node_count;
+  const int ne = static_cast<int>(m.edges.cols());
   m.edge_k_iso.resize(ne);
   m.edge_k_dir.resize(ne);
-  if (params.model == ModelKind::kMassSpring) {
-    m.edge_k_iso.setConstant(params.edge_stiffness_n_per_m);
+  if (p.model == ModelKind::kMassSpring) {
+    m.edge_k_iso.setConstant(p.edge_stiffness_n_per_m);
     m.edge_k_dir.setZero();
   } else {
     // eq. (2): V_i (mu Lap d + (lambda + mu) grad div d)_i with the finite differences
@@ -227,7 +230,7 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
       s_sum(m.edges(0, e)) += m.rest_length_m(e);
       s_sum(m.edges(1, e)) += m.rest_length_m(e);
     }
-    const Eigen::VectorXd vol_i = m.volume_m3 * m.area_m2 / total_area;
+    const Eigen::VectorXd vol_i = m.volume_m3 * m.area_m2 / m.area_m2.sum();
     for (int e = 0; e < ne; ++e) {
       const int i = m.edges(0, e), j = m.edges(1, e);
       const double w = vol_i(i) / s_sum(i) + vol_i(j) / s_sum(j);
@@ -235,12 +238,19 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
       m.edge_k_dir(e) = (m.lame_lambda_pa + m.lame_mu_pa) * w / m.rest_length_m(e);
     }
   }
+}
 
+// Radial springs to the centre node (if any), the planes (normals made unit length) and the
+// contact spring and damper of every node.
+void set_radial_and_contact(DeformableModel& m, const std::vector<Plane>& planes) {
+  const DeformableParams& p = m.params;
+  const int n = m.node_count;
+  const Eigen::Matrix3Xd& X = m.mesh.vertices;
   // radial springs to the centre node
   m.radial_k = Eigen::VectorXd::Zero(n);
   m.radial_rest_m = Eigen::VectorXd::Zero(n);
   if (m.has_centre) {
-    m.radial_k = params.radial_stiffness_n_per_m3 * m.area_m2;
+    m.radial_k = p.radial_stiffness_n_per_m3 * m.area_m2;
     for (int i = 0; i < n; ++i) m.radial_rest_m(i) = (X.col(i) - m.rest_centre_m).norm();
   }
 
@@ -254,9 +264,33 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
     }
     m.planes[k].normal /= nn;
   }
-  const double w = params.contact_frequency_rad_per_s;
+  const double w = p.contact_frequency_rad_per_s;
   m.contact_k = m.mass_kg * w * w;
-  m.contact_c = m.mass_kg * (2.0 * params.contact_damping_ratio * w);
+  m.contact_c = m.mass_kg * (2.0 * p.contact_damping_ratio * w);
+}
+
+}  // namespace
+
+teleop::mesh::TriMesh make_mesh_for(const DeformableParams& p) {
+  if (p.mesh_file.empty()) return teleop::mesh::make_icosphere(p.level, p.radius_m, p.centre_m);
+  teleop::mesh::LoadOptions opt;
+  opt.scale = p.mesh_scale;
+  teleop::mesh::TriMesh m = teleop::mesh::load_mesh(p.mesh_file, opt);
+  m.vertices.colwise() += p.centre_m;
+  return m;
+}
+
+DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformableParams& params,
+                           const std::vector<Plane>& planes) {
+  check_inputs(mesh, params, planes);
+  DeformableModel m;
+  m.params = params;
+  m.mesh = mesh;
+  m.node_count = mesh.vertex_count();
+  set_geometry_and_masses(m);
+  build_edge_tables(m);
+  set_edge_stiffness(m);
+  set_radial_and_contact(m, planes);
   if (params.kernel == KernelKind::kSimd) build_simd_tables(m);
   update_stable_step(m);
   return m;

@@ -87,6 +87,36 @@ double gershgorin_omega_bound(const DeformableModel& m) {
   return std::sqrt(lambda);
 }
 
+namespace {
+
+// The integrator's stability limit [s] for the top mode (angular frequency wmax [rad/s], damping
+// ratio zeta); infinite without stiffness and for implicit Euler.
+double integrator_step_limit(const DeformableModel& m, double wmax, double zeta) {
+  const DeformableParams& prm = m.params;
+  const double inf = std::numeric_limits<double>::infinity();
+  switch (prm.integrator) {
+    case IntegratorKind::kSymplecticEuler:
+      // v += h (-w^2 x - 2 zeta w v), x += h v: stable iff h w <= 2 (sqrt(1 + zeta^2) - zeta)
+      return wmax > 0.0 ? 2.0 * (std::sqrt(1.0 + zeta * zeta) - zeta) / wmax : inf;
+    case IntegratorKind::kExplicitEuler: {
+      // |1 + h s|^2 = 1 - 2 zeta w h + w^2 h^2 <= 1 iff h <= 2 zeta / w, for every mode. With
+      // C = beta_e K_e + beta_r K_r + alpha M, 2 zeta / w = psi^T C psi / psi^T K psi >=
+      // min(beta_e, beta_r) over the spring kinds present: sufficient for all modes at once.
+      double tau = inf;
+      if (m.edge_k_iso.size() > 0 && m.edge_k_iso.maxCoeff() > 0.0) {
+        tau = std::min(tau, prm.stiffness_damping_s);
+      }
+      if (m.has_centre) tau = std::min(tau, prm.radial_damping_s);
+      return wmax > 0.0 ? tau : inf;
+    }
+    case IntegratorKind::kImplicitEuler:
+      return inf;  // unconditionally stable: never sub-steps
+  }
+  return 0.0;  // not reached: every integrator is handled above
+}
+
+}  // namespace
+
 StabilityEstimate estimate_stability(const DeformableModel& m) {
   StabilityEstimate out;
   const int n = m.node_count;
@@ -177,29 +207,7 @@ StabilityEstimate estimate_stability(const DeformableModel& m) {
                           : 0.0;
 
   // the largest stable step of the integrator for that mode, times the safety factor
-  const double zeta = out.damping_ratio;
-  const double inf = std::numeric_limits<double>::infinity();
-  switch (prm.integrator) {
-    case IntegratorKind::kSymplecticEuler:
-      // v += h (-w^2 x - 2 zeta w v), x += h v: stable iff h w <= 2 (sqrt(1 + zeta^2) - zeta)
-      out.limit_step_s = wmax > 0.0 ? 2.0 * (std::sqrt(1.0 + zeta * zeta) - zeta) / wmax : inf;
-      break;
-    case IntegratorKind::kExplicitEuler: {
-      // |1 + h s|^2 = 1 - 2 zeta w h + w^2 h^2 <= 1 iff h <= 2 zeta / w, for every mode. With
-      // C = beta_e K_e + beta_r K_r + alpha M, 2 zeta / w = psi^T C psi / psi^T K psi >=
-      // min(beta_e, beta_r) over the spring kinds present: sufficient for all modes at once.
-      double tau = inf;
-      if (m.edge_k_iso.size() > 0 && m.edge_k_iso.maxCoeff() > 0.0) {
-        tau = std::min(tau, prm.stiffness_damping_s);
-      }
-      if (m.has_centre) tau = std::min(tau, prm.radial_damping_s);
-      out.limit_step_s = wmax > 0.0 ? tau : inf;
-      break;
-    }
-    case IntegratorKind::kImplicitEuler:
-      out.limit_step_s = inf;  // unconditionally stable: never sub-steps
-      break;
-  }
+  out.limit_step_s = integrator_step_limit(m, out.omega_max_rad_per_s, out.damping_ratio);
   out.stable_step_s = kStableStepSafety * out.limit_step_s;
   return out;
 }

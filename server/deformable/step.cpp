@@ -18,6 +18,14 @@
 #define TELEOP_HOT_CLONES
 #endif
 
+// For the helpers of the hot functions: inlined into every clone, so each one keeps the
+// instruction set of its caller (a call to a separate baseline copy would lose AVX2 and FMA).
+#if defined(__GNUC__)
+#define TELEOP_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define TELEOP_ALWAYS_INLINE inline
+#endif
+
 namespace teleop::sim::deformable {
 
 namespace {
@@ -101,6 +109,9 @@ void update_rotations(const DeformableModel& m, DeformableState& s, int max_iter
   }
 }
 
+// compute_forces stays one function (about 245 lines): split into inlined helpers it gave the
+// same forces to the last bit for every path but the mass-spring implicit one, whose AVX2/FMA
+// clone then rounded differently (1e-15 relative), and its results must not change.
 // Total force on every node (and the centre node, column N) into s.work_f at (s.x, s.v).
 // Compiled twice, for x86-64-v3 (AVX2, FMA) and for the baseline; the loader picks the one the
 // CPU supports (GCC function multi-versioning), so the binary still runs on any x86-64.
@@ -400,6 +411,153 @@ struct NodeSums {
   Vec3 mx = Vec3::Zero();  ///< sum of m_i x_i over the surface nodes
 };
 
+// Mean velocity of the body, centre node included, into vm (x, y, z) for the drag (relative to
+// it: damps deformation, keeps momentum); left at zero without drag.
+TELEOP_ALWAYS_INLINE void drag_mean_velocity(const DeformableModel& m, const DeformableState& s,
+                                             double vm[3]) {
+  const int n = m.node_count;
+  const double* __restrict v = s.v.data();
+  const double* __restrict mp = m.mass_kg.data();
+  double vmx = 0.0, vmy = 0.0, vmz = 0.0;
+  if (m.params.mass_damping_per_s > 0.0) {
+    for (int i = 0; i < n; ++i) {
+      vmx += mp[i] * v[3 * i];
+      vmy += mp[i] * v[3 * i + 1];
+      vmz += mp[i] * v[3 * i + 2];
+    }
+    const double inv_total = 1.0 / m.total_mass_kg;
+    vmx = (vmx + m.centre_mass_kg * s.centre_v.x()) * inv_total;
+    vmy = (vmy + m.centre_mass_kg * s.centre_v.y()) * inv_total;
+    vmz = (vmz + m.centre_mass_kg * s.centre_v.z()) * inv_total;
+  }
+  vm[0] = vmx;
+  vm[1] = vmy;
+  vm[2] = vmz;
+}
+
+// For the nodes b0..b1-1: the squared lengths of their edges (into s.edge_length2) and of their
+// radial springs (s.node_length2), then 1 / length of all (s.edge_scratch, s.node_scratch;
+// vectorised), while the positions are still the old ones.
+TELEOP_ALWAYS_INLINE void fused_block_lengths(const DeformableModel& m, DeformableState& s, int b0,
+                                              int b1) {
+  const double* __restrict x = s.x.data();
+  const int* __restrict j3 = m.second_node3.data();
+  const int* __restrict first = m.first_edge_offsets.data();
+  double* __restrict l2 = s.edge_length2.data();
+  double* __restrict rl2 = s.node_length2.data();
+  const double cx = s.centre_x.x(), cy = s.centre_x.y(), cz = s.centre_x.z();
+  for (int i = b0; i < b1; ++i) {
+    const double xx = x[3 * i], xy = x[3 * i + 1], xz = x[3 * i + 2];
+    for (int e = first[i]; e < first[i + 1]; ++e) {
+      const int j = j3[e];
+      const double dx = x[j] - xx, dy = x[j + 1] - xy, dz = x[j + 2] - xz;
+      l2[e] = dx * dx + dy * dy + dz * dz;
+    }
+    const double dx = xx - cx, dy = xy - cy, dz = xz - cz;
+    rl2[i] = dx * dx + dy * dy + dz * dz;
+  }
+  inverse_sqrt(l2 + first[b0], s.edge_scratch.data() + first[b0], first[b1] - first[b0]);
+  if (m.has_centre) inverse_sqrt(rl2 + b0, s.node_scratch.data() + b0, b1 - b0);
+}
+
+// The edge springs (i, j), j > i, of node i at (xx, xy, xz) moving at (vx, vy, vz): their force
+// on i added to (fx, fy, fz), their reactions onto the nodes j in f.
+TELEOP_ALWAYS_INLINE void fused_node_edges(const DeformableModel& m, const DeformableState& s,
+                                           int i, const double* __restrict x,
+                                           const double* __restrict v, double* __restrict f,
+                                           double xx, double xy, double xz, double vx, double vy,
+                                           double vz, double& fx, double& fy, double& fz) {
+  const int* __restrict j3 = m.second_node3.data();
+  const int* __restrict first = m.first_edge_offsets.data();
+  const double* __restrict kp = m.edge_k_iso.data();
+  const double* __restrict l0 = m.rest_length_m.data();
+  const double* __restrict l2 = s.edge_length2.data();
+  const double* __restrict il = s.edge_scratch.data();
+  const double beta = m.params.stiffness_damping_s;
+  for (int e = first[i]; e < first[i + 1]; ++e) {
+    const int j = j3[e];
+    const double dx = x[j] - xx, dy = x[j + 1] - xy, dz = x[j + 2] - xz;
+    const double inv_l = il[e];
+    const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+    const double rate = (v[j] - vx) * ux + (v[j + 1] - vy) * uy + (v[j + 2] - vz) * uz;
+    const double k = kp[e];
+    const double fs = k * (l2[e] * inv_l - l0[e]) + beta * k * rate;
+    const double ex = fs * ux, ey = fs * uy, ez = fs * uz;
+    fx += ex;
+    fy += ey;
+    fz += ez;
+    f[j] -= ex;
+    f[j + 1] -= ey;
+    f[j + 2] -= ez;
+  }
+}
+
+// The radial spring of node i at (xx, xy, xz) moving at (vx, vy, vz) to the centre node at c
+// moving at cv: its force added to (fx, fy, fz), the reaction to fc.
+TELEOP_ALWAYS_INLINE void fused_node_radial(const DeformableModel& m, const DeformableState& s,
+                                            int i, const double c[3], const double cv[3], double xx,
+                                            double xy, double xz, double vx, double vy, double vz,
+                                            double& fx, double& fy, double& fz, double fc[3]) {
+  const double* __restrict kr = m.radial_k.data();
+  const double* __restrict r0 = m.radial_rest_m.data();
+  const double* __restrict rl2 = s.node_length2.data();
+  const double* __restrict rl = s.node_scratch.data();
+  const double rd = m.params.radial_damping_s;
+  const double dx = xx - c[0], dy = xy - c[1], dz = xz - c[2];
+  const double inv_l = rl[i];
+  const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+  const double rate = (vx - cv[0]) * ux + (vy - cv[1]) * uy + (vz - cv[2]) * uz;
+  const double fs = -kr[i] * (rl2[i] * inv_l - r0[i]) - rd * kr[i] * rate;
+  fx += fs * ux;
+  fy += fs * uy;
+  fz += fs * uz;
+  fc[0] -= fs * ux;
+  fc[1] -= fs * uy;
+  fc[2] -= fs * uz;
+}
+
+// The plane penalty springs of node i at (xx, xy, xz): their force added to (fx, fy, fz), each
+// spring force into spring_of[k], the count into nc; returns the planes touched (bit k: inside
+// plane k).
+TELEOP_ALWAYS_INLINE unsigned fused_node_plane_springs(const DeformableModel& m, int i, double xx,
+                                                       double xy, double xz, double spring_of[8],
+                                                       double& fx, double& fy, double& fz,
+                                                       int& nc) {
+  const double* __restrict ck = m.contact_k.data();
+  unsigned touched = 0;
+  for (int k = 0; k < m.plane_count; ++k) {
+    const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+    const double dist = pl.normal.x() * xx + pl.normal.y() * xy + pl.normal.z() * xz - pl.offset_m;
+    if (dist >= 0.0) continue;
+    spring_of[k] = -ck[i] * dist;
+    fx += spring_of[k] * pl.normal.x();
+    fy += spring_of[k] * pl.normal.y();
+    fz += spring_of[k] * pl.normal.z();
+    touched |= 1u << k;
+    ++nc;
+  }
+  return touched;
+}
+
+// The contact impulses of node i (mass mi) on the planes it touches, applied to (vx, vy, vz) in
+// plane order; the planes' forces added to plane_force.
+TELEOP_ALWAYS_INLINE void fused_node_impulses(const DeformableModel& m, int i, double mi, double h,
+                                              unsigned touched, const double spring_of[8],
+                                              double& vx, double& vy, double& vz,
+                                              Vec3& plane_force) {
+  const double* __restrict cc = m.contact_c.data();
+  for (int k = 0; touched != 0 && k < m.plane_count; ++k) {
+    if ((touched & (1u << k)) == 0) continue;
+    const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+    const Vec3 vi =
+        contact_impulse(pl.normal, mi, cc[i], h * spring_of[k],
+                        m.params.friction ? pl.friction : 0.0, h, Vec3(vx, vy, vz), plane_force);
+    vx = vi.x();
+    vy = vi.y();
+    vz = vi.z();
+  }
+}
+
 // The hot path of the default body: mass-spring with symplectic Euler in one pass over the
 // nodes. Equivalent to compute_forces() + integrate(): the same forces, and per node the same
 // velocity update, contact impulses and position update. It relies on the edges being sorted by
@@ -407,80 +565,41 @@ struct NodeSums {
 // reactions are added to the later nodes j, whose edges to earlier nodes are then complete. So
 // when node i is reached its force is complete, and no later edge reads x_i or v_i: node i can
 // be advanced at once. 1 / length of the edges of a block of nodes is computed first, in a
-// vectorised loop, while those positions are still the old ones.
+// vectorised loop, while those positions are still the old ones. The helpers above are always
+// inlined, so each clone keeps its own instruction set.
 TELEOP_HOT_CLONES
 void step_mass_spring_symplectic(const DeformableModel& m, DeformableState& s, double h,
                                  NodeSums& sums) {
   const int n = m.node_count;
   const DeformableParams& p = m.params;
-  const double beta = p.stiffness_damping_s;
   double* __restrict x = s.x.data();
   double* __restrict v = s.v.data();
   double* __restrict f = s.force.data();  // edge reactions from earlier nodes, then the total
-  const int* __restrict j3 = m.second_node3.data();
-  const int* __restrict first = m.first_edge_offsets.data();
-  const double* __restrict kp = m.edge_k_iso.data();
-  const double* __restrict l0 = m.rest_length_m.data();
   const double* __restrict mp = m.mass_kg.data();
   const double* __restrict imp = m.inv_mass.data();
-  const double* __restrict kr = m.radial_k.data();
-  const double* __restrict r0 = m.radial_rest_m.data();
-  const double* __restrict ck = m.contact_k.data();
-  const double* __restrict cc = m.contact_c.data();
   const double* __restrict fext = s.f_ext.data();
   const double* __restrict tgt = s.pin_target.data();
   const std::uint8_t* __restrict pin = s.pinned.data();
   std::fill(f, f + 3 * n, 0.0);
 
-  // mean velocity for the drag (relative to it: damps deformation, keeps momentum)
+  double vm[3];
+  drag_mean_velocity(m, s, vm);
+  const double vmx = vm[0], vmy = vm[1], vmz = vm[2];
   const double alpha = p.mass_damping_per_s;
-  const double cx = s.centre_x.x(), cy = s.centre_x.y(), cz = s.centre_x.z();
-  const double cvx = s.centre_v.x(), cvy = s.centre_v.y(), cvz = s.centre_v.z();
-  double vmx = 0.0, vmy = 0.0, vmz = 0.0;
-  if (alpha > 0.0) {
-    for (int i = 0; i < n; ++i) {
-      vmx += mp[i] * v[3 * i];
-      vmy += mp[i] * v[3 * i + 1];
-      vmz += mp[i] * v[3 * i + 2];
-    }
-    const double inv_total = 1.0 / m.total_mass_kg;
-    vmx = (vmx + m.centre_mass_kg * cvx) * inv_total;
-    vmy = (vmy + m.centre_mass_kg * cvy) * inv_total;
-    vmz = (vmz + m.centre_mass_kg * cvz) * inv_total;
-  }
-
+  const double c[3] = {s.centre_x.x(), s.centre_x.y(), s.centre_x.z()};
+  const double cv[3] = {s.centre_v.x(), s.centre_v.y(), s.centre_v.z()};
   const double gx = p.gravity_mps2.x(), gy = p.gravity_mps2.y(), gz = p.gravity_mps2.z();
-  const double rd = p.radial_damping_s;
   const bool centre = m.has_centre;
   const bool any_pinned = s.pinned_count > 0;
-  const int planes = m.plane_count;
-  double fcx = 0.0, fcy = 0.0, fcz = 0.0;
-  double spring_of[8] = {};  // spring force of each plane; valid where `touched` has its bit
+  double fc[3] = {0.0, 0.0, 0.0};  // the radial springs' reaction on the centre node
+  double spring_of[8] = {};        // spring force of each plane; valid where `touched` has its bit
   int nc = 0;
   Vec3 plane_force = Vec3::Zero();
   double fastest2 = 0.0, sum_x = 0.0, sum_v = 0.0, mxx = 0.0, mxy = 0.0, mxz = 0.0;
 
-  double* __restrict l2 = s.edge_length2.data();
-  double* __restrict il = s.edge_scratch.data();
-  double* __restrict rl2 = s.node_length2.data();
-  double* __restrict rl = s.node_scratch.data();
   for (int b0 = 0; b0 < n; b0 += kFusedNodeBlock) {
-    // a block of nodes: squared lengths of their edges and radial springs, 1 / length of all
-    // (vectorised), while the positions are still the old ones
     const int b1 = std::min(n, b0 + kFusedNodeBlock);
-    for (int i = b0; i < b1; ++i) {
-      const double xx = x[3 * i], xy = x[3 * i + 1], xz = x[3 * i + 2];
-      for (int e = first[i]; e < first[i + 1]; ++e) {
-        const int j = j3[e];
-        const double dx = x[j] - xx, dy = x[j + 1] - xy, dz = x[j + 2] - xz;
-        l2[e] = dx * dx + dy * dy + dz * dz;
-      }
-      const double dx = xx - cx, dy = xy - cy, dz = xz - cz;
-      rl2[i] = dx * dx + dy * dy + dz * dz;
-    }
-    inverse_sqrt(l2 + first[b0], il + first[b0], first[b1] - first[b0]);
-    if (centre) inverse_sqrt(rl2 + b0, rl + b0, b1 - b0);
-
+    fused_block_lengths(m, s, b0, b1);
     for (int i = b0; i < b1; ++i) {
       const int a = 3 * i;
       const double mi = mp[i];
@@ -488,54 +607,16 @@ void step_mass_spring_symplectic(const DeformableModel& m, DeformableState& s, d
       double vx = v[a], vy = v[a + 1], vz = v[a + 2];
       // edge springs (i, j), j > i: the force on i here, the reaction onto j
       double fx = 0.0, fy = 0.0, fz = 0.0;
-      for (int e = first[i]; e < first[i + 1]; ++e) {
-        const int j = j3[e];
-        const double dx = x[j] - xx, dy = x[j + 1] - xy, dz = x[j + 2] - xz;
-        const double inv_l = il[e];
-        const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
-        const double rate = (v[j] - vx) * ux + (v[j + 1] - vy) * uy + (v[j + 2] - vz) * uz;
-        const double k = kp[e];
-        const double fs = k * (l2[e] * inv_l - l0[e]) + beta * k * rate;
-        const double ex = fs * ux, ey = fs * uy, ez = fs * uz;
-        fx += ex;
-        fy += ey;
-        fz += ez;
-        f[j] -= ex;
-        f[j + 1] -= ey;
-        f[j + 2] -= ez;
-      }
+      fused_node_edges(m, s, i, x, v, f, xx, xy, xz, vx, vy, vz, fx, fy, fz);
       // gravity, drag and the caller's load
       fx += f[a] + mi * (gx - alpha * (vx - vmx)) + fext[a];
       fy += f[a + 1] + mi * (gy - alpha * (vy - vmy)) + fext[a + 1];
       fz += f[a + 2] + mi * (gz - alpha * (vz - vmz)) + fext[a + 2];
       // radial spring to the centre node
-      if (centre) {
-        const double dx = xx - cx, dy = xy - cy, dz = xz - cz;
-        const double inv_l = rl[i];
-        const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
-        const double rate = (vx - cvx) * ux + (vy - cvy) * uy + (vz - cvz) * uz;
-        const double fs = -kr[i] * (rl2[i] * inv_l - r0[i]) - rd * kr[i] * rate;
-        fx += fs * ux;
-        fy += fs * uy;
-        fz += fs * uz;
-        fcx -= fs * ux;
-        fcy -= fs * uy;
-        fcz -= fs * uz;
-      }
+      if (centre) fused_node_radial(m, s, i, c, cv, xx, xy, xz, vx, vy, vz, fx, fy, fz, fc);
       // plane penalty springs (damping and friction below, as impulses)
-      unsigned touched = 0;  // bit k: the node is inside plane k
-      for (int k = 0; k < planes; ++k) {
-        const Plane& pl = m.planes[static_cast<std::size_t>(k)];
-        const double dist =
-            pl.normal.x() * xx + pl.normal.y() * xy + pl.normal.z() * xz - pl.offset_m;
-        if (dist >= 0.0) continue;
-        spring_of[k] = -ck[i] * dist;
-        fx += spring_of[k] * pl.normal.x();
-        fy += spring_of[k] * pl.normal.y();
-        fz += spring_of[k] * pl.normal.z();
-        touched |= 1u << k;
-        ++nc;
-      }
+      const unsigned touched =
+          fused_node_plane_springs(m, i, xx, xy, xz, spring_of, fx, fy, fz, nc);
       f[a] = fx;
       f[a + 1] = fy;
       f[a + 2] = fz;
@@ -546,16 +627,7 @@ void step_mass_spring_symplectic(const DeformableModel& m, DeformableState& s, d
         vx += hm * fx;
         vy += hm * fy;
         vz += hm * fz;
-        for (int k = 0; touched != 0 && k < planes; ++k) {
-          if ((touched & (1u << k)) == 0) continue;
-          const Plane& pl = m.planes[static_cast<std::size_t>(k)];
-          const Vec3 vi =
-              contact_impulse(pl.normal, mi, cc[i], h * spring_of[k],
-                              p.friction ? pl.friction : 0.0, h, Vec3(vx, vy, vz), plane_force);
-          vx = vi.x();
-          vy = vi.y();
-          vz = vi.z();
-        }
+        fused_node_impulses(m, i, mi, h, touched, spring_of, vx, vy, vz, plane_force);
       }
       double px = xx + h * vx, py = xy + h * vy, pz = xz + h * vz;
       if (held) {
@@ -582,9 +654,9 @@ void step_mass_spring_symplectic(const DeformableModel& m, DeformableState& s, d
   s.plane_force_n = plane_force;
   if (centre) {
     const double hm = h / m.centre_mass_kg, mc = m.centre_mass_kg;
-    s.centre_v.x() += hm * (mc * (gx - alpha * (cvx - vmx)) + fcx);
-    s.centre_v.y() += hm * (mc * (gy - alpha * (cvy - vmy)) + fcy);
-    s.centre_v.z() += hm * (mc * (gz - alpha * (cvz - vmz)) + fcz);
+    s.centre_v.x() += hm * (mc * (gx - alpha * (cv[0] - vmx)) + fc[0]);
+    s.centre_v.y() += hm * (mc * (gy - alpha * (cv[1] - vmy)) + fc[1]);
+    s.centre_v.z() += hm * (mc * (gz - alpha * (cv[2] - vmz)) + fc[2]);
     s.centre_x += h * s.centre_v;
   }
   sums.fastest2 = fastest2;
@@ -820,6 +892,47 @@ void internal_forces(const DeformableModel& m, DeformableState& s, Eigen::Matrix
 
 namespace {
 
+// Held nodes: sets the velocity that takes each one to its target in this step (a non-finite
+// target releases the node) and counts them (s.pinned_count, the released ones included).
+// Returns whether any held node moves.
+TELEOP_ALWAYS_INLINE bool drive_held_nodes(const DeformableModel& m, DeformableState& s, double h) {
+  bool pin_moving = false;
+  s.pinned_count = 0;
+  for (int i = 0; i < m.node_count; ++i) {
+    if (!s.pinned[static_cast<std::size_t>(i)]) continue;
+    ++s.pinned_count;
+    if (!s.pin_target.col(i).allFinite()) {
+      s.pinned[static_cast<std::size_t>(i)] = 0;  // a bad target releases the node
+      continue;
+    }
+    s.v.col(i) = (s.pin_target.col(i) - s.x.col(i)) / h;
+    pin_moving = pin_moving || s.pin_target.col(i) != s.x.col(i);
+  }
+  return pin_moving;
+}
+
+// The fault event of a blow-up: names the first non-finite node, else the fastest one (largest
+// squared speed fastest2 [m^2/s^2]).
+TELEOP_ALWAYS_INLINE void report_blow_up(const DeformableModel& m, const DeformableState& s,
+                                         double fastest2, bool finite,
+                                         teleop::sim::EventQueue& events) {
+  int fastest = 0;
+  for (int i = 0; i < m.node_count; ++i) {
+    const double sp2 = s.v.col(i).squaredNorm();
+    if (!std::isfinite(sp2) || !s.x.col(i).allFinite()) {
+      fastest = i;
+      fastest2 = sp2;
+      break;
+    }
+    if (sp2 >= fastest2) fastest = i;
+  }
+  char msg[128];
+  std::snprintf(msg, sizeof(msg),
+                "deformable: blow-up (node %d speed %.3g m/s%s); reset to rest shape", fastest,
+                std::sqrt(fastest2), finite ? "" : ", NaN");
+  events.push(EventKind::kFault, Severity::kError, s.sim_time_s, std::sqrt(fastest2), msg);
+}
+
 TELEOP_HOT_CLONES
 StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
                      teleop::sim::EventQueue* events, bool allow_fused) {
@@ -844,18 +957,7 @@ StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
   s.wake_request = false;
 
   // held nodes: the velocity that takes them to their target in this step
-  bool pin_moving = false;
-  s.pinned_count = 0;
-  for (int i = 0; i < n; ++i) {
-    if (!s.pinned[static_cast<std::size_t>(i)]) continue;
-    ++s.pinned_count;
-    if (!s.pin_target.col(i).allFinite()) {
-      s.pinned[static_cast<std::size_t>(i)] = 0;  // a bad target releases the node
-      continue;
-    }
-    s.v.col(i) = (s.pin_target.col(i) - s.x.col(i)) / h;
-    pin_moving = pin_moving || s.pin_target.col(i) != s.x.col(i);
-  }
+  const bool pin_moving = drive_held_nodes(m, s, h);
 
   NodeSums sums;
   if (allow_fused && m.params.kernel == KernelKind::kSimd) {
@@ -889,30 +991,14 @@ StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
   s.sim_time_s += h;
   ++s.steps;
   const double vmax2 = m.params.max_speed_mps * m.params.max_speed_mps;
-  double fastest2 = sums.fastest2;
+  const double fastest2 = sums.fastest2;
   const double sum_x = sums.sum_x, sum_v = sums.sum_v;
   const Vec3 mx = sums.mx + m.centre_mass_kg * s.centre_x;
   const bool finite = std::isfinite(sum_x) && std::isfinite(sum_v) && s.centre_x.allFinite() &&
                       s.centre_v.allFinite();
   if (!finite || !(fastest2 <= vmax2) || !(s.centre_v.squaredNorm() <= vmax2)) {
     ++s.fault_count;
-    if (events) {
-      int fastest = 0;
-      for (int i = 0; i < n; ++i) {
-        const double sp2 = s.v.col(i).squaredNorm();
-        if (!std::isfinite(sp2) || !s.x.col(i).allFinite()) {
-          fastest = i;
-          fastest2 = sp2;
-          break;
-        }
-        if (sp2 >= fastest2) fastest = i;
-      }
-      char msg[128];
-      std::snprintf(msg, sizeof(msg),
-                    "deformable: blow-up (node %d speed %.3g m/s%s); reset to rest shape", fastest,
-                    std::sqrt(fastest2), finite ? "" : ", NaN");
-      events->push(EventKind::kFault, Severity::kError, s.sim_time_s, std::sqrt(fastest2), msg);
-    }
+    if (events) report_blow_up(m, s, fastest2, finite, *events);
     reset_to_rest(m, s);
     return StepStatus::kFaultReset;
   }

@@ -335,29 +335,15 @@ void integrate_nodes(const DeformableModel& m, DeformableState& s, double h, dou
   sums.mx[2] = mxz;
 }
 
-// Step 3 when no node is held (the usual case), in flat AVX2 passes over the 3N coordinates
-// (blocks of 12 coordinates = 4 nodes = 3 vectors carry the x/y/z pattern):
-//   contacts at the old positions into a list; f = f_int + f_ext + m (g + alpha v_mean - alpha v)
-//   and v += h f / m; the contact springs, then the contact impulses; x += h v with the sums in
-//   per-lane partial sums (a fixed order: deterministic).
-// The same physics as integrate_nodes (the rounding differs: the m g' - alpha m v form).
 #ifdef TELEOP_HAVE_AVX2_PATH
-__attribute__((target("avx2,fma"))) void integrate_flat_avx2(const DeformableModel& m,
-                                                             DeformableState& s, double h,
-                                                             double vmx, double vmy, double vmz,
-                                                             KernelSums& sums) {
-  const int n = m.node_count;
-  const int n3 = 3 * n;
-  const DeformableParams& p = m.params;
-  double* x = s.x.data();
-  double* v = s.v.data();
-  double* f = s.force.data();  // in: the internal forces; out: the total
-  const double* fext = s.f_ext.data();
-  const double* dm = m.simd_dof_mass.data();
-  const double* dim = m.simd_dof_inv_mass.data();
-  const double alpha = p.mass_damping_per_s;
+// The helpers of integrate_flat_avx2, always inlined into it (the same instruction set).
+#define TELEOP_AVX2_INLINE inline __attribute__((target("avx2,fma"), always_inline))
 
-  // contacts at the old positions
+// Flat step 3a: the plane contacts at the old positions into s.contact_node and
+// s.contact_coef (row 0: plane index, row 2: spring force [N]); returns their count.
+TELEOP_AVX2_INLINE int flat_contacts(const DeformableModel& m, DeformableState& s) {
+  const int n = m.node_count;
+  const double* x = s.x.data();
   int nc = 0;
   const int planes = m.plane_count;
   for (int i = 0; i < n && planes > 0; ++i) {
@@ -372,8 +358,21 @@ __attribute__((target("avx2,fma"))) void integrate_flat_avx2(const DeformableMod
       ++nc;
     }
   }
+  return nc;
+}
 
-  // forces and velocities
+// Flat step 3b: f = f_int + f_ext + m (g + alpha v_mean - alpha v), then v += h f / m, over the
+// 3N coordinates (blocks of 12, then the rest one at a time).
+TELEOP_AVX2_INLINE void flat_forces_velocities(const DeformableModel& m, DeformableState& s,
+                                               double h, double vmx, double vmy, double vmz) {
+  const int n3 = 3 * m.node_count;
+  const DeformableParams& p = m.params;
+  double* v = s.v.data();
+  double* f = s.force.data();  // in: the internal forces; out: the total
+  const double* fext = s.f_ext.data();
+  const double* dm = m.simd_dof_mass.data();
+  const double* dim = m.simd_dof_inv_mass.data();
+  const double alpha = p.mass_damping_per_s;
   const double gp[3] = {p.gravity_mps2.x() + alpha * vmx, p.gravity_mps2.y() + alpha * vmy,
                         p.gravity_mps2.z() + alpha * vmz};
   const __m256d g[3] = {_mm256_setr_pd(gp[0], gp[1], gp[2], gp[0]),
@@ -397,8 +396,14 @@ __attribute__((target("avx2,fma"))) void integrate_flat_avx2(const DeformableMod
     f[q] = ft;
     v[q] += h * dim[q] * ft;
   }
+}
 
-  // contacts: every spring first (a node may touch two planes), then the impulses in order
+// Flat step 3c: the nc contacts found by flat_contacts, every spring first (a node may touch two
+// planes), then the impulses in order; sets s.contact_count and s.plane_force_n.
+TELEOP_AVX2_INLINE void flat_contact_impulses(const DeformableModel& m, DeformableState& s,
+                                              double h, int nc) {
+  double* v = s.v.data();
+  double* f = s.force.data();
   Eigen::Vector3d plane_force = Eigen::Vector3d::Zero();
   for (int c = 0; c < nc; ++c) {
     const int i = s.contact_node[static_cast<std::size_t>(c)];
@@ -414,13 +419,24 @@ __attribute__((target("avx2,fma"))) void integrate_flat_avx2(const DeformableMod
     const int i = s.contact_node[static_cast<std::size_t>(c)];
     const Plane& pl = m.planes[static_cast<std::size_t>(s.contact_coef(0, c))];
     contact_impulse(pl.normal, m.mass_kg(i), m.contact_c(i), h * s.contact_coef(2, c),
-                    p.friction ? pl.friction : 0.0, h, v[3 * i], v[3 * i + 1], v[3 * i + 2],
+                    m.params.friction ? pl.friction : 0.0, h, v[3 * i], v[3 * i + 1], v[3 * i + 2],
                     plane_force);
   }
   s.contact_count = nc;
   s.plane_force_n = plane_force;
+}
 
-  // positions and the post-step sums
+// Flat step 3d: x += h v and the post-step sums, in per-lane partial sums over blocks of 12
+// coordinates (a fixed order: deterministic), then the remaining nodes one at a time.
+TELEOP_AVX2_INLINE void flat_positions_sums(const DeformableModel& m, DeformableState& s, double h,
+                                            KernelSums& sums) {
+  const int n = m.node_count;
+  const int n3 = 3 * n;
+  double* x = s.x.data();
+  const double* v = s.v.data();
+  const double* dm = m.simd_dof_mass.data();
+  const __m256d vh = _mm256_set1_pd(h);
+  const int blocks = n3 / 12 * 12;
   __m256d ax[3], av[3], am[3];
   for (int t = 0; t < 3; ++t) ax[t] = av[t] = am[t] = _mm256_setzero_pd();
   double top[4] = {0.0, 0.0, 0.0, 0.0};
@@ -476,6 +492,23 @@ __attribute__((target("avx2,fma"))) void integrate_flat_avx2(const DeformableMod
   sums.mx[1] = mx[1];
   sums.mx[2] = mx[2];
 }
+
+// Step 3 when no node is held (the usual case), in flat AVX2 passes over the 3N coordinates
+// (blocks of 12 coordinates = 4 nodes = 3 vectors carry the x/y/z pattern):
+//   contacts at the old positions into a list; f = f_int + f_ext + m (g + alpha v_mean - alpha v)
+//   and v += h f / m; the contact springs, then the contact impulses; x += h v with the sums in
+//   per-lane partial sums (a fixed order: deterministic).
+// The same physics as integrate_nodes (the rounding differs: the m g' - alpha m v form).
+__attribute__((target("avx2,fma"))) void integrate_flat_avx2(const DeformableModel& m,
+                                                             DeformableState& s, double h,
+                                                             double vmx, double vmy, double vmz,
+                                                             KernelSums& sums) {
+  const int nc = flat_contacts(m, s);  // at the old positions
+  flat_forces_velocities(m, s, h, vmx, vmy, vmz);
+  flat_contact_impulses(m, s, h, nc);
+  flat_positions_sums(m, s, h, sums);
+}
+#undef TELEOP_AVX2_INLINE
 #endif
 
 }  // namespace

@@ -42,6 +42,131 @@ void min_jerk(double u, double& s, double& ds) {
   ds = 30.0 * u * u * (1.0 - u) * (1.0 - u);
 }
 
+/// The commanded path through the default scene, from the arm's home pose (tip radius r [m]).
+std::vector<Waypoint> reach_path(const RobotSim& sim, double r) {
+  // tool pointing down, tilted 0.4 rad away from the robot (keeps the wrist off its singularity)
+  const Eigen::Quaterniond down(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY()) *
+                                Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
+  // tool horizontal, pointing at the wall (+y)
+  const Eigen::Quaterniond side(Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()));
+  const Eigen::Vector3d home = sim.state().tip_pose.translation();
+  const Eigen::Quaterniond home_R(sim.state().tip_pose.linear());
+  return {
+      {home, home_R, 0.0, 0.3, "home"},
+      {Eigen::Vector3d(0.45, 0.05, 0.25), down, 1.5, 0.3, "above floor"},
+      {Eigen::Vector3d(0.45, 0.05, r + 0.002), down, 1.0, 0.2, "floor touch"},
+      {Eigen::Vector3d(0.45, 0.05, r - 0.02), down, 0.8, 0.8, "floor press 2 cm"},
+      {Eigen::Vector3d(0.45, 0.05, 0.25), down, 1.0, 0.2, "lift"},
+      {Eigen::Vector3d(0.30, 0.35, 0.45), side, 1.5, 0.3, "face wall"},
+      {Eigen::Vector3d(0.30, 0.6 - r - 0.002, 0.45), side, 1.0, 0.2, "wall touch"},
+      {Eigen::Vector3d(0.30, 0.6 - r + 0.02, 0.45), side, 0.8, 0.8, "wall press 2 cm"},
+      {Eigen::Vector3d(0.30, 0.35, 0.45), side, 1.0, 0.2, "back off"},
+      {Eigen::Vector3d(0.45, 0.05, 0.45), down, 1.5, 0.2, "tool down"},
+      {home, home_R, 1.0, 0.5, "home"},
+  };
+}
+
+/// The target pose and twist at time tl [s] into the segment a -> b (move time move [s]):
+/// minimum-jerk along the segment, then held at b.
+void set_target(const Waypoint& a, const Waypoint& b, double move, double tl, RobotInput& in) {
+  double s = 1.0, ds = 0.0;
+  if (move > 0.0) min_jerk(tl / move, s, ds);
+  in.target_position_m = a.p + s * (b.p - a.p);
+  in.target_velocity_mps = move > 0.0 && tl < move ? Eigen::Vector3d((ds / move) * (b.p - a.p))
+                                                   : Eigen::Vector3d::Zero();
+  in.target_orientation = a.R.slerp(s, b.R);
+  const Eigen::AngleAxisd dR(b.R * a.R.inverse());
+  in.target_angular_velocity_radps = move > 0.0 && tl < move
+                                         ? Eigen::Vector3d((ds / move) * dR.angle() * dR.axis())
+                                         : Eigen::Vector3d::Zero();
+}
+
+/// The run's extremes, for the summary.
+struct ReachStats {
+  double max_free_error = 0.0, max_floor_force = 0.0, max_wall_force = 0.0;
+  double max_floor_pen = 0.0, max_wall_pen = 0.0;
+  int max_link_contacts = 0;
+};
+
+/// One row of robot_reach.csv: time t [s], segment w, target, tip, errors, contact, joints.
+void write_row(teleop::CsvWriter& csv, double t, std::size_t w, const RobotInput& in,
+               const teleop::sim::robot::RobotState& st, double err, double rot_err, double f) {
+  const Eigen::Vector3d tip = st.tip_pose.translation();
+  std::vector<double> row = {t,
+                             static_cast<double>(w),
+                             in.target_position_m.x(),
+                             in.target_position_m.y(),
+                             in.target_position_m.z(),
+                             tip.x(),
+                             tip.y(),
+                             tip.z(),
+                             err,
+                             rot_err,
+                             st.tip_contact_force_n.x(),
+                             st.tip_contact_force_n.y(),
+                             st.tip_contact_force_n.z(),
+                             f,
+                             st.tip_in_contact ? 1.0 : 0.0,
+                             static_cast<double>(st.tip_contact_plane),
+                             st.tip_penetration_m,
+                             st.controller.sigma_min_m};
+  for (int i = 0; i < 6; ++i) row.push_back(st.q(i));
+  for (int i = 0; i < 6; ++i) row.push_back(st.tau(i));
+  row.push_back(static_cast<double>(st.link_contacts));
+  csv.row(row);
+}
+
+/// Records the state after a step of segment b (target in) into the extremes and the CSV row.
+void record_step(const RobotSim& sim, const std::vector<teleop::sim::Plane>& planes,
+                 const Waypoint& b, const RobotInput& in, double t, std::size_t w,
+                 ReachStats& stats, teleop::CsvWriter& csv) {
+  const auto& st = sim.state();
+  const Eigen::Vector3d tip = st.tip_pose.translation();
+  const double err = (tip - in.target_position_m).norm();
+  const double rot_err =
+      teleop::sim::robot::rotation_vector(in.target_orientation.toRotationMatrix() *
+                                          st.tip_pose.linear().transpose())
+          .norm();
+  const double f = st.tip_contact_force_n.norm();
+  const bool pressing = std::string(b.label).find("press") != std::string::npos ||
+                        std::string(b.label).find("touch") != std::string::npos;
+  if (!pressing && !st.tip_in_contact) stats.max_free_error = std::max(stats.max_free_error, err);
+  if (st.tip_contact_plane == planes[0].id) {
+    stats.max_floor_force = std::max(stats.max_floor_force, f);
+    stats.max_floor_pen = std::max(stats.max_floor_pen, st.tip_penetration_m);
+  }
+  if (st.tip_contact_plane == planes[1].id) {
+    stats.max_wall_force = std::max(stats.max_wall_force, f);
+    stats.max_wall_pen = std::max(stats.max_wall_pen, st.tip_penetration_m);
+  }
+  stats.max_link_contacts = std::max(stats.max_link_contacts, st.link_contacts);
+  write_row(csv, t, w, in, st, err, rot_err, f);
+}
+
+/// robot_reach_summary.csv and the printed summary.
+void write_summary(const teleop::CommandArgs& args, const RobotModel& model,
+                   const std::string& stepper, double t, const ReachStats& stats,
+                   const RobotSim& sim) {
+  teleop::CsvWriter sum((args.out_dir / "robot_reach_summary.csv").string(), {"metric", "value"});
+  auto put = [&](const std::string& k, double v) {
+    sum.row_text({k, teleop::format_number(v)});
+    std::printf("  %-34s %.6g\n", k.c_str(), v);
+  };
+  std::printf("robot-reach (%s, %s):\n", model.name.c_str(),
+              stepper == "quick" ? "dWorldQuickStep" : "dWorldStep");
+  put("duration_s", t);
+  put("max_free_tracking_error_m", stats.max_free_error);
+  put("max_floor_force_n", stats.max_floor_force);
+  put("max_floor_penetration_m", stats.max_floor_pen);
+  put("max_wall_force_n", stats.max_wall_force);
+  put("max_wall_penetration_m", stats.max_wall_pen);
+  put("max_link_contacts", stats.max_link_contacts);
+  put("faults", static_cast<double>(sim.state().faults));
+  put("limit_events", static_cast<double>(sim.state().controller.limit_events));
+  put("singular_events", static_cast<double>(sim.state().controller.singular_events));
+  sum.flush();
+}
+
 int run_robot_reach(const teleop::CommandArgs& args) {
   const std::string scene = args.option("--scene", teleop::sim::robot::default_robot_scene_path());
   const std::string stepper = args.option("--stepper", "step");
@@ -63,27 +188,7 @@ int run_robot_reach(const teleop::CommandArgs& args) {
 
   const double dt = 1e-3;
   const double time_scale = args.quick ? 0.5 : 1.0;
-  const double r = model.tip_radius_m;
-  // tool pointing down, tilted 0.4 rad away from the robot (keeps the wrist off its singularity)
-  const Eigen::Quaterniond down(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY()) *
-                                Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
-  // tool horizontal, pointing at the wall (+y)
-  const Eigen::Quaterniond side(Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()));
-  const Eigen::Vector3d home = sim.state().tip_pose.translation();
-  const Eigen::Quaterniond home_R(sim.state().tip_pose.linear());
-  const std::vector<Waypoint> path = {
-      {home, home_R, 0.0, 0.3, "home"},
-      {Eigen::Vector3d(0.45, 0.05, 0.25), down, 1.5, 0.3, "above floor"},
-      {Eigen::Vector3d(0.45, 0.05, r + 0.002), down, 1.0, 0.2, "floor touch"},
-      {Eigen::Vector3d(0.45, 0.05, r - 0.02), down, 0.8, 0.8, "floor press 2 cm"},
-      {Eigen::Vector3d(0.45, 0.05, 0.25), down, 1.0, 0.2, "lift"},
-      {Eigen::Vector3d(0.30, 0.35, 0.45), side, 1.5, 0.3, "face wall"},
-      {Eigen::Vector3d(0.30, 0.6 - r - 0.002, 0.45), side, 1.0, 0.2, "wall touch"},
-      {Eigen::Vector3d(0.30, 0.6 - r + 0.02, 0.45), side, 0.8, 0.8, "wall press 2 cm"},
-      {Eigen::Vector3d(0.30, 0.35, 0.45), side, 1.0, 0.2, "back off"},
-      {Eigen::Vector3d(0.45, 0.05, 0.45), down, 1.5, 0.2, "tool down"},
-      {home, home_R, 1.0, 0.5, "home"},
-  };
+  const std::vector<Waypoint> path = reach_path(sim, model.tip_radius_m);
 
   teleop::CsvWriter csv(
       (args.out_dir / "robot_reach.csv").string(),
@@ -98,9 +203,7 @@ int run_robot_reach(const teleop::CommandArgs& args) {
                            {"t_s", "kind", "value", "message"});
 
   double t = 0.0;
-  double max_free_error = 0.0, max_floor_force = 0.0, max_wall_force = 0.0;
-  double max_floor_pen = 0.0, max_wall_pen = 0.0;
-  int max_link_contacts = 0;
+  ReachStats stats;
   RobotInput in;
   in.mode = ControlMode::kTrackPose;
   for (std::size_t w = 1; w < path.size(); ++w) {
@@ -110,62 +213,10 @@ int run_robot_reach(const teleop::CommandArgs& args) {
     const double total = move + b.dwell_s * time_scale;
     const int steps = static_cast<int>(std::lround(total / dt));
     for (int k = 0; k < steps; ++k) {
-      const double tl = (k + 1) * dt;
-      double s = 1.0, ds = 0.0;
-      if (move > 0.0) min_jerk(tl / move, s, ds);
-      in.target_position_m = a.p + s * (b.p - a.p);
-      in.target_velocity_mps = move > 0.0 && tl < move ? Eigen::Vector3d((ds / move) * (b.p - a.p))
-                                                       : Eigen::Vector3d::Zero();
-      in.target_orientation = a.R.slerp(s, b.R);
-      const Eigen::AngleAxisd dR(b.R * a.R.inverse());
-      in.target_angular_velocity_radps = move > 0.0 && tl < move
-                                             ? Eigen::Vector3d((ds / move) * dR.angle() * dR.axis())
-                                             : Eigen::Vector3d::Zero();
+      set_target(a, b, move, (k + 1) * dt, in);
       sim.step(in, dt, &events);
       t += dt;
-
-      const auto& st = sim.state();
-      const Eigen::Vector3d tip = st.tip_pose.translation();
-      const double err = (tip - in.target_position_m).norm();
-      const double rot_err =
-          teleop::sim::robot::rotation_vector(in.target_orientation.toRotationMatrix() *
-                                              st.tip_pose.linear().transpose())
-              .norm();
-      const double f = st.tip_contact_force_n.norm();
-      const bool pressing = std::string(b.label).find("press") != std::string::npos ||
-                            std::string(b.label).find("touch") != std::string::npos;
-      if (!pressing && !st.tip_in_contact) max_free_error = std::max(max_free_error, err);
-      if (st.tip_contact_plane == planes[0].id) {
-        max_floor_force = std::max(max_floor_force, f);
-        max_floor_pen = std::max(max_floor_pen, st.tip_penetration_m);
-      }
-      if (st.tip_contact_plane == planes[1].id) {
-        max_wall_force = std::max(max_wall_force, f);
-        max_wall_pen = std::max(max_wall_pen, st.tip_penetration_m);
-      }
-      max_link_contacts = std::max(max_link_contacts, st.link_contacts);
-      std::vector<double> row = {t,
-                                 static_cast<double>(w),
-                                 in.target_position_m.x(),
-                                 in.target_position_m.y(),
-                                 in.target_position_m.z(),
-                                 tip.x(),
-                                 tip.y(),
-                                 tip.z(),
-                                 err,
-                                 rot_err,
-                                 st.tip_contact_force_n.x(),
-                                 st.tip_contact_force_n.y(),
-                                 st.tip_contact_force_n.z(),
-                                 f,
-                                 st.tip_in_contact ? 1.0 : 0.0,
-                                 static_cast<double>(st.tip_contact_plane),
-                                 st.tip_penetration_m,
-                                 st.controller.sigma_min_m};
-      for (int i = 0; i < 6; ++i) row.push_back(st.q(i));
-      for (int i = 0; i < 6; ++i) row.push_back(st.tau(i));
-      row.push_back(static_cast<double>(st.link_contacts));
-      csv.row(row);
+      record_step(sim, planes, b, in, t, w, stats, csv);
       teleop::sim::SimEvent e;
       while (events.pop(e)) {
         ev_csv.row_text({teleop::format_number(e.sim_time_s),
@@ -176,32 +227,14 @@ int run_robot_reach(const teleop::CommandArgs& args) {
   }
   csv.flush();
   ev_csv.flush();
-
-  teleop::CsvWriter sum((args.out_dir / "robot_reach_summary.csv").string(), {"metric", "value"});
-  auto put = [&](const std::string& k, double v) {
-    sum.row_text({k, teleop::format_number(v)});
-    std::printf("  %-34s %.6g\n", k.c_str(), v);
-  };
-  std::printf("robot-reach (%s, %s):\n", model.name.c_str(),
-              stepper == "quick" ? "dWorldQuickStep" : "dWorldStep");
-  put("duration_s", t);
-  put("max_free_tracking_error_m", max_free_error);
-  put("max_floor_force_n", max_floor_force);
-  put("max_floor_penetration_m", max_floor_pen);
-  put("max_wall_force_n", max_wall_force);
-  put("max_wall_penetration_m", max_wall_pen);
-  put("max_link_contacts", max_link_contacts);
-  put("faults", static_cast<double>(sim.state().faults));
-  put("limit_events", static_cast<double>(sim.state().controller.limit_events));
-  put("singular_events", static_cast<double>(sim.state().controller.singular_events));
-  sum.flush();
+  write_summary(args, model, stepper, t, stats, sim);
 
   if (!args.no_chart) {
     teleop::run_chart_script("robot_reach.py", {(args.out_dir / "robot_reach.csv").string(),
                                                 (args.out_dir / "robot_reach.png").string()});
   }
   // the experiment fails if the arm never touched both planes or faulted
-  if (max_floor_force <= 0.0 || max_wall_force <= 0.0 || sim.state().faults != 0) {
+  if (stats.max_floor_force <= 0.0 || stats.max_wall_force <= 0.0 || sim.state().faults != 0) {
     std::cerr << "robot-reach: the tip did not touch both the floor and the wall, or faulted\n";
     return 1;
   }

@@ -325,22 +325,9 @@ void RobotSim::collide(double dt_s) {
   state_.tip_contact_plane = deepest_plane;
 }
 
-void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
-  ode_thread_init();  // the server may step on another thread than the one that built us
+// Step 2: PD + viscous friction in each hinge's motor row, the feed-forward as a torque.
+void RobotSim::actuate(const JointCommand& cmd) {
   const int n = model_.n;
-  const double t = state_.sim_time_s;
-  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) {
-    ++state_.faults;
-    if (ev) ev->push(EventKind::kFault, Severity::kError, t, dt_s, "robot: step with bad dt");
-    return;
-  }
-
-  // 1. controller: joint reference, gains and feed-forward from the measured state
-  controller_update(model_, state_.controller, in, state_.q, state_.frames, dt_s, t, ev,
-                    state_.command);
-  const JointCommand& cmd = state_.command;
-
-  // 2. actuation: PD + viscous friction in the hinge motor row, feed-forward as torque
   for (int i = 0; i < n; ++i) {
     const LinkModel& l = model_.links[i];
     const double lim = l.torque_limit_nm;
@@ -359,8 +346,12 @@ void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
     }
     dJointAddHingeTorque(hinges_[i], ff);
   }
+}
 
-  // 3. external tip wrench (contact with the deformable body, computed elsewhere)
+// Step 3: the external tip wrench (contact with the deformable body, computed elsewhere) on the
+// last body, and its joint torques; a non-finite wrench is dropped.
+void RobotSim::apply_external_wrench(const RobotInput& in) {
+  const int n = model_.n;
   state_.external_wrench.head<3>() = in.external_force_n;
   state_.external_wrench.tail<3>() = in.external_torque_nm;
   if (!state_.external_wrench.allFinite()) state_.external_wrench.setZero();
@@ -372,23 +363,11 @@ void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
     dBodyAddForceAtPos(bodies_[n - 1], F.x(), F.y(), F.z(), p.x(), p.y(), p.z());
     dBodyAddTorque(bodies_[n - 1], M.x(), M.y(), M.z());
   }
+}
 
-  // 4. collision with the planes: contact joints with feedback
-  auto t0 = std::chrono::steady_clock::now();
-  collide(dt_s);
-  last_collision_s_ = seconds_since(t0);
-
-  // 5. dynamics, eq. (3)
-  t0 = std::chrono::steady_clock::now();
-  if (options_.stepper == OdeStepper::kWorldQuickStep) {
-    dWorldQuickStep(world_, dt_s);
-  } else {
-    dWorldStep(world_, dt_s);
-  }
-  last_ode_step_s_ = seconds_since(t0);
-
-  // 6. read back joints, tip and contact forces
-  read_state();
+// Step 6: the plane contacts' forces from their joint feedback, summed for the tip (force and
+// torque about the tip) and for the links.
+void RobotSim::sum_contact_forces() {
   state_.tip_contact_force_n.setZero();
   state_.tip_contact_torque_nm.setZero();
   state_.link_contact_force_n.setZero();
@@ -408,8 +387,12 @@ void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
   }
   state_.tip_in_contact = tip_contacts > 0;
   if (!state_.tip_in_contact) state_.tip_contact_plane = -1;
+}
 
-  // actuator torque actually applied: reconstruct the motor row from the new joint rate
+// Step 6: the actuator torque actually applied (the motor row reconstructed from the new joint
+// rate) and the command's gravity torque, into the state.
+void RobotSim::applied_torque(const JointCommand& cmd) {
+  const int n = model_.n;
   for (int i = 0; i < n; ++i) {
     const LinkModel& l = model_.links[i];
     const double lim = l.torque_limit_nm;
@@ -424,8 +407,12 @@ void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
     state_.tau(i) = ff + pd;
   }
   state_.tau_gravity = cmd.tau_gravity;
+}
 
-  // 7. numerical faults: non-finite or runaway state -> restore the last good pose at rest
+// Step 7: a non-finite or runaway state (joint faster than max_joint_speed_radps) restores the
+// last good pose at rest; otherwise the pose becomes the last good one.
+void RobotSim::handle_faults(double t, EventQueue* ev) {
+  const int n = model_.n;
   bool bad =
       !state_.q.allFinite() || !state_.qd.allFinite() || !state_.tip_pose.translation().allFinite();
   for (int i = 0; i < n && !bad; ++i) {
@@ -446,6 +433,51 @@ void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
   } else {
     last_good_q_ = state_.q;
   }
+}
+
+void RobotSim::step(const RobotInput& in, double dt_s, EventQueue* ev) {
+  ode_thread_init();  // the server may step on another thread than the one that built us
+  const double t = state_.sim_time_s;
+  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) {
+    ++state_.faults;
+    if (ev) ev->push(EventKind::kFault, Severity::kError, t, dt_s, "robot: step with bad dt");
+    return;
+  }
+
+  // 1. controller: joint reference, gains and feed-forward from the measured state
+  controller_update(model_, state_.controller, in, state_.q, state_.frames, dt_s, t, ev,
+                    state_.command);
+  const JointCommand& cmd = state_.command;
+
+  // 2. actuation: PD + viscous friction in the hinge motor row, feed-forward as torque
+  actuate(cmd);
+
+  // 3. external tip wrench (contact with the deformable body, computed elsewhere)
+  apply_external_wrench(in);
+
+  // 4. collision with the planes: contact joints with feedback
+  auto t0 = std::chrono::steady_clock::now();
+  collide(dt_s);
+  last_collision_s_ = seconds_since(t0);
+
+  // 5. dynamics, eq. (3)
+  t0 = std::chrono::steady_clock::now();
+  if (options_.stepper == OdeStepper::kWorldQuickStep) {
+    dWorldQuickStep(world_, dt_s);
+  } else {
+    dWorldStep(world_, dt_s);
+  }
+  last_ode_step_s_ = seconds_since(t0);
+
+  // 6. read back joints, tip and contact forces
+  read_state();
+  sum_contact_forces();
+
+  // actuator torque actually applied: reconstruct the motor row from the new joint rate
+  applied_torque(cmd);
+
+  // 7. numerical faults: non-finite or runaway state -> restore the last good pose at rest
+  handle_faults(t, ev);
 
   // contact begin / end events are the world's (server/world/world.cpp), one place for
   // every slave and object

@@ -117,6 +117,11 @@ class RobotSim {
   void read_state();
   void place_bodies(const JointVector& q, const JointVector& qd);
   void collide(double dt_s);
+  void actuate(const JointCommand& cmd);
+  void apply_external_wrench(const RobotInput& in);
+  void sum_contact_forces();
+  void applied_torque(const JointCommand& cmd);
+  void handle_faults(double t, EventQueue* ev);
 
   RobotModel model_;
   RobotSimOptions options_;
