@@ -93,39 +93,308 @@ class RawKeys {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  CLI::App app{"teleop_monitor: terminal observer of a teleoperation session"};
+namespace {
+
+using namespace teleop;
+namespace tdds = teleop::dds;
+using Info = eprosima::fastdds::dds::SampleInfo;
+
+struct Flags {
   std::optional<int> domain;
   std::optional<std::string> profile;
-  std::optional<double> period_flag;
+  std::optional<double> period;
   double duration_s = 0.0;
   double stale_s = 0.5;
   bool json = false, lines = false, tui = false;
   bool full_rate = false;
   int nice = 19;
-  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
-  app.add_option("--profile", profile, "Fast DDS profile (default: loopback)");
-  teleop::dds::NetworkFlags net_flags;
-  teleop::dds::add_network_flags(app, net_flags);
-  app.add_option("--period", period_flag,
+  tdds::NetworkFlags net;
+};
+
+void add_flags(CLI::App& app, Flags& f) {
+  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
+  app.add_option("--profile", f.profile, "Fast DDS profile (default: loopback)");
+  tdds::add_network_flags(app, f.net);
+  app.add_option("--period", f.period,
                  "refresh / print period [s], 0.05-60 (default: 0.25 on the screen, 1 otherwise)");
-  app.add_option("--duration", duration_s, "stop after this long [s], 0-1e7; 0 = until q/SIGINT");
-  app.add_option("--stale", stale_s,
+  app.add_option("--duration", f.duration_s, "stop after this long [s], 0-1e7; 0 = until q/SIGINT");
+  app.add_option("--stale", f.stale_s,
                  "a stream topic silent this long is STALE [s], 0.05-3600 (server_stats: at "
                  "least 3 s)")
       ->capture_default_str();
-  auto* json_opt = app.add_flag("--json", json, "one JSON object per line, for scripts");
-  auto* lines_opt = app.add_flag("--lines", lines, "scrolling text log (default off a terminal)");
-  auto* tui_opt = app.add_flag("--tui", tui, "screen refreshed in place (default on a terminal)");
-  app.add_flag("--full-rate", full_rate,
+  auto* json_opt = app.add_flag("--json", f.json, "one JSON object per line, for scripts");
+  auto* lines_opt = app.add_flag("--lines", f.lines, "scrolling text log (default off a terminal)");
+  auto* tui_opt = app.add_flag("--tui", f.tui, "screen refreshed in place (default on a terminal)");
+  app.add_flag("--full-rate", f.full_rate,
                "read the full-rate topics (slave_state 1 kHz, master_command, master_state, "
                "mesh_frame) instead of the 10 Hz *_monitor copies; loads the loops");
-  app.add_option("--nice", nice,
+  app.add_option("--nice", f.nice,
                  "scheduling niceness of the monitor, 0-19: it yields the CPU to the server and "
                  "master on the same machine")
       ->capture_default_str();
   json_opt->excludes(lines_opt)->excludes(tui_opt);
   lines_opt->excludes(tui_opt);
+}
+
+/// The topics the monitor counts, in display order, with their counters.
+struct TopicTable {
+  struct Def {
+    const char* name;
+    bool latched;
+    double stale;
+  };
+  explicit TopicTable(double stale_s)
+      : defs{{"slave_state", false, stale_s},
+             {"master_command", false, stale_s},
+             {"master_state", false, stale_s},
+             {"mesh_frame", false, stale_s},
+             {"server_stats", false, std::max(stale_s, 3.0)},
+             {"events", true, 0.0},
+             {"scene", true, 0.0},
+             {"mesh_topology", true, 0.0}},
+        counters(defs.size()) {}
+  Counter& operator[](const char* n) {
+    for (std::size_t i = 0; i < defs.size(); ++i) {
+      if (std::string(defs[i].name) == n) return counters[i];
+    }
+    return counters[0];
+  }
+  std::vector<Def> defs;
+  std::deque<Counter> counters;
+};
+
+void print_now(const std::string& text) {  // lines and json modes only
+  std::fputs(text.c_str(), stdout);
+  std::fputc('\n', stdout);
+  std::fflush(stdout);
+}
+
+/// The readers of every topic the monitor shows; each fills the snapshot and counts its samples.
+class Readers {
+ public:
+  Readers(tdds::Participant& p, const tdds::ObserverTopics& topics, Mode mode, std::int64_t t0,
+          std::mutex& m, Snapshot& snap, TopicTable& table)
+      : mode_(mode),
+        t0_(t0),
+        m_(m),
+        snap_(snap),
+        table_(table),
+        slave_(p, topics.slave_state.name, topics.slave_state.qos,
+               [this, count_commands = !topics.master_command](const SlaveState& s, const Info&) {
+                 on_slave(s, count_commands);
+               }),
+        master_(p, topics.master_state.name, topics.master_state.qos,
+                [this](const MasterState& s, const Info&) {
+                  std::lock_guard<std::mutex> l(m_);
+                  snap_.master = s;
+                  snap_.have_master = true;
+                  table_["master_state"].hit();
+                }),
+        stats_(p, tdds::topics::kServerStats, tdds::TopicQos::kReliableStream,
+               [this](const ServerStats& s, const Info&) {
+                 std::lock_guard<std::mutex> l(m_);
+                 snap_.stats = s;
+                 snap_.have_stats = true;
+                 table_["server_stats"].hit();
+               }),
+        scene_(p, tdds::topics::kScene, tdds::TopicQos::kLatched,
+               [this](const SceneDescription& s, const Info&) { on_scene(s); }),
+        topology_(p, tdds::topics::kMeshTopology, tdds::TopicQos::kLatched,
+                  [this](const MeshTopology&, const Info&) { table_["mesh_topology"].hit(); }),
+        frames_(p, topics.mesh_frame.name, topics.mesh_frame.qos,
+                [this](const MeshFrame&, const Info&) { table_["mesh_frame"].hit(); }),
+        events_(p, tdds::topics::kEvents, tdds::TopicQos::kEventLog,
+                [this](const Event& e, const Info&) { on_event(e); }) {
+    if (topics.master_command) {
+      command_.emplace(
+          p, tdds::topics::kMasterCommand, tdds::TopicQos::kStream,
+          [this](const MasterCommand&, const Info&) { table_["master_command"].hit(); });
+    }
+  }
+
+ private:
+  // without --full-rate, master_command's row is the server's count of commands received
+  void on_slave(const SlaveState& s, bool count_commands) {
+    std::lock_guard<std::mutex> l(m_);
+    snap_.slave = s;
+    snap_.have_slave = true;
+    table_["slave_state"].hit();
+    if (!count_commands) return;
+    const std::uint64_t c = s.commands_received();
+    if (!have_commands_base_ || c < commands_seen_) {  // first sample, or a new server
+      have_commands_base_ = true;
+      commands_seen_ = c;
+      return;
+    }
+    if (c > commands_seen_) {
+      Counter& cmd = table_["master_command"];
+      cmd.last_ns.store(now_ns());
+      cmd.count.fetch_add(c - commands_seen_);
+      commands_seen_ = c;
+    }
+  }
+  void on_scene(const SceneDescription& s) {
+    std::lock_guard<std::mutex> l(m_);
+    snap_.scene = s;
+    snap_.have_scene = true;
+    table_["scene"].hit();
+    if (mode_ == Mode::kLines) print_now(monitor::scene_line(s));
+    if (mode_ == Mode::kJson) print_now(monitor::scene_json(s));
+  }
+  void on_event(const Event& e) {
+    std::lock_guard<std::mutex> l(m_);
+    table_["events"].hit();
+    monitor::EventView ev{seconds_between(t0_, now_ns()), e};
+    snap_.events.push_back(ev);
+    while (snap_.events.size() > 200) snap_.events.pop_front();
+    if (mode_ == Mode::kLines) print_now(monitor::event_line(ev));
+    if (mode_ == Mode::kJson) print_now(monitor::event_json(ev));
+  }
+
+  Mode mode_;
+  std::int64_t t0_;
+  std::mutex& m_;
+  Snapshot& snap_;
+  TopicTable& table_;
+  bool have_commands_base_ = false;
+  std::uint64_t commands_seen_ = 0;
+  tdds::Reader<SlaveStatePubSubType> slave_;
+  tdds::Reader<MasterStatePubSubType> master_;
+  tdds::Reader<ServerStatsPubSubType> stats_;
+  tdds::Reader<SceneDescriptionPubSubType> scene_;
+  tdds::Reader<MeshTopologyPubSubType> topology_;
+  tdds::Reader<MeshFramePubSubType> frames_;
+  tdds::Reader<EventPubSubType> events_;
+  std::optional<tdds::Reader<MasterCommandPubSubType>> command_;
+};
+
+/// Counts at past refreshes, for the rate over the last second.
+using History = std::deque<std::pair<std::int64_t, std::vector<std::uint64_t>>>;
+
+/// The snapshot's topic rows at `now` (counts, rate over the last second, age).
+void update_topics(Snapshot& snap, TopicTable& table, History& history, std::int64_t now) {
+  std::vector<std::uint64_t> counts(table.defs.size());
+  for (std::size_t i = 0; i < table.defs.size(); ++i) counts[i] = table.counters[i].count.load();
+  history.emplace_back(now, counts);
+  while (history.size() > 2 && seconds_between(history[1].first, now) >= 1.0) {
+    history.pop_front();
+  }
+  const double window = seconds_between(history.front().first, now);
+  snap.topics.clear();
+  for (std::size_t i = 0; i < table.defs.size(); ++i) {
+    TopicView t;
+    t.name = table.defs[i].name;
+    t.latched = table.defs[i].latched;
+    t.stale_after_s = table.defs[i].stale;
+    t.count = counts[i];
+    t.rate_hz =
+        window > 0.0 ? static_cast<double>(counts[i] - history.front().second[i]) / window : 0.0;
+    const auto last = table.counters[i].last_ns.load();
+    t.age_s = t.count > 0 ? seconds_between(last, now) : -1.0;
+    snap.topics.push_back(t);
+  }
+}
+
+void render(Mode mode, const Snapshot& snap) {
+  if (mode == Mode::kJson) {
+    print_now(monitor::render_json(snap));
+    return;
+  }
+  if (mode == Mode::kLines) {
+    std::fputs(monitor::render_lines(snap).c_str(), stdout);
+    std::fflush(stdout);
+    return;
+  }
+  winsize ws{};
+  int rows = 40, cols = 160;
+  if (ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_row > 0) {
+    rows = ws.ws_row;
+    cols = ws.ws_col;
+  }
+  std::string frame = "\x1b[H";
+  for (const auto& line : monitor::render_screen(snap, rows - 1, cols)) {
+    frame += line + "\x1b[K\n";
+  }
+  frame += "\x1b[J";
+  std::fputs(frame.c_str(), stdout);
+  std::fflush(stdout);
+}
+
+/// Sleeps until `next` (or a stop), polling the keyboard on the screen.
+void wait_until(std::int64_t next, Mode mode, RawKeys& keys) {
+  while (!stop_requested() && now_ns() < next) {
+    if (keys.quit_pressed()) request_stop();
+    // the screen polls the keyboard; the other modes only wait for the next period
+    const std::int64_t step_ns = mode == Mode::kTui ? 20'000'000 : 100'000'000;
+    std::this_thread::sleep_for(
+        std::chrono::nanoseconds(std::max<std::int64_t>(0, std::min(step_ns, next - now_ns()))));
+  }
+}
+
+int run_monitor(Flags& f) {
+  const Mode mode = f.json    ? Mode::kJson
+                    : f.lines ? Mode::kLines
+                    : f.tui   ? Mode::kTui
+                              : (isatty(STDOUT_FILENO) ? Mode::kTui : Mode::kLines);
+  const double period_s = f.period ? *f.period : (mode == Mode::kTui ? 0.25 : 1.0);
+  config::check_flag("--period", period_s, 0.05, 60.0);
+  config::check_flag("--duration", f.duration_s, 0.0, 1e7);
+  config::check_flag("--stale", f.stale_s, 0.05, 3600.0);
+  config::check_flag("--nice", f.nice, 0, 19);
+  // before the participant: every DDS thread inherits the priority
+  if (f.nice > 0 && setpriority(PRIO_PROCESS, 0, f.nice) != 0) {
+    std::cerr << "teleop_monitor: warning: cannot lower the priority (--nice " << f.nice << ")\n";
+  }
+  const auto opts = tdds::resolve_participant_options(f.profile, f.domain, "teleop_monitor", f.net);
+  tdds::profile_file(opts.profile);
+  tdds::Participant p(opts);
+  install_stop_signal_handlers();
+  // a closed terminal (or tmux kill-server) ends the monitor cleanly too
+  struct sigaction hup {};
+  hup.sa_handler = [](int) { request_stop(); };
+  sigemptyset(&hup.sa_mask);
+  sigaction(SIGHUP, &hup, nullptr);
+
+  const auto t0 = now_ns();
+  std::mutex m;  // guards snap's values, events and stdout
+  Snapshot snap;
+  snap.domain = opts.domain;
+  snap.profile = opts.profile;
+  snap.full_rate = f.full_rate;
+  TopicTable table(f.stale_s);
+  const Readers readers(p, tdds::observer_topics(tdds::ObserverKind::kMonitor, f.full_rate), mode,
+                        t0, m, snap, table);
+  RawKeys keys;
+  if (mode == Mode::kTui) {
+    std::fputs("\x1b[?1049h\x1b[?25l", stdout);  // alternate screen, hide the cursor
+    std::fflush(stdout);
+  }
+  History history;
+  auto next = t0;
+  while (!stop_requested()) {
+    next += static_cast<std::int64_t>(period_s * 1e9);
+    wait_until(next, mode, keys);
+    if (stop_requested()) break;
+    const auto now = now_ns();
+    std::lock_guard<std::mutex> l(m);
+    snap.t_s = seconds_between(t0, now);
+    update_topics(snap, table, history, now);
+    render(mode, snap);
+    if (f.duration_s > 0 && snap.t_s >= f.duration_s) break;
+  }
+  if (mode == Mode::kTui) {
+    std::fputs("\x1b[?25h\x1b[?1049l", stdout);  // restore the screen and the cursor
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"teleop_monitor: terminal observer of a teleoperation session"};
+  Flags flags;
+  add_flags(app, flags);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -135,211 +404,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    using namespace teleop;
-    const Mode mode = json    ? Mode::kJson
-                      : lines ? Mode::kLines
-                      : tui   ? Mode::kTui
-                              : (isatty(STDOUT_FILENO) ? Mode::kTui : Mode::kLines);
-    double period_s = period_flag ? *period_flag : (mode == Mode::kTui ? 0.25 : 1.0);
-    config::check_flag("--period", period_s, 0.05, 60.0);
-    config::check_flag("--duration", duration_s, 0.0, 1e7);
-    config::check_flag("--stale", stale_s, 0.05, 3600.0);
-    config::check_flag("--nice", nice, 0, 19);
-    // before the participant: every DDS thread inherits the priority
-    if (nice > 0 && setpriority(PRIO_PROCESS, 0, nice) != 0) {
-      std::cerr << "teleop_monitor: warning: cannot lower the priority (--nice " << nice << ")\n";
-    }
-    const auto opts =
-        teleop::dds::resolve_participant_options(profile, domain, "teleop_monitor", net_flags);
-    teleop::dds::profile_file(opts.profile);
-    teleop::dds::Participant p(opts);
-    install_stop_signal_handlers();
-    // a closed terminal (or tmux kill-server) ends the monitor cleanly too
-    struct sigaction hup {};
-    hup.sa_handler = [](int) { request_stop(); };
-    sigemptyset(&hup.sa_mask);
-    sigaction(SIGHUP, &hup, nullptr);
-
-    const auto t0 = now_ns();
-    std::mutex m;  // guards snap's values, events and stdout
-    Snapshot snap;
-    snap.domain = opts.domain;
-    snap.profile = opts.profile;
-    snap.full_rate = full_rate;
-    const teleop::dds::ObserverTopics topics =
-        teleop::dds::observer_topics(teleop::dds::ObserverKind::kMonitor, full_rate);
-    struct TopicDef {
-      const char* name;
-      bool latched;
-      double stale;
-    };
-    const std::vector<TopicDef> defs = {
-        {"slave_state", false, stale_s},
-        {"master_command", false, stale_s},
-        {"master_state", false, stale_s},
-        {"mesh_frame", false, stale_s},
-        {"server_stats", false, std::max(stale_s, 3.0)},
-        {"events", true, 0.0},
-        {"scene", true, 0.0},
-        {"mesh_topology", true, 0.0},
-    };
-    std::deque<Counter> counters(defs.size());
-    auto counter = [&](const char* n) -> Counter& {
-      for (std::size_t i = 0; i < defs.size(); ++i) {
-        if (std::string(defs[i].name) == n) return counters[i];
-      }
-      return counters[0];
-    };
-    auto print_now = [&](const std::string& text) {  // lines and json modes only
-      std::fputs(text.c_str(), stdout);
-      std::fputc('\n', stdout);
-      std::fflush(stdout);
-    };
-
-    namespace tdds = teleop::dds;
-    using Info = eprosima::fastdds::dds::SampleInfo;
-    // without --full-rate, master_command's row is the server's count of commands received
-    bool have_commands_base = false;
-    std::uint64_t commands_seen = 0;
-    tdds::Reader<SlaveStatePubSubType> r_slave(
-        p, topics.slave_state.name, topics.slave_state.qos, [&](const SlaveState& s, const Info&) {
-          std::lock_guard<std::mutex> l(m);
-          snap.slave = s;
-          snap.have_slave = true;
-          counter("slave_state").hit();
-          if (topics.master_command) return;
-          const std::uint64_t c = s.commands_received();
-          if (!have_commands_base || c < commands_seen) {  // first sample, or a new server
-            have_commands_base = true;
-            commands_seen = c;
-            return;
-          }
-          if (c > commands_seen) {
-            Counter& cmd = counter("master_command");
-            cmd.last_ns.store(teleop::now_ns());
-            cmd.count.fetch_add(c - commands_seen);
-            commands_seen = c;
-          }
-        });
-    std::optional<tdds::Reader<MasterCommandPubSubType>> r_cmd;
-    if (topics.master_command) {
-      r_cmd.emplace(p, tdds::topics::kMasterCommand, tdds::TopicQos::kStream,
-                    [&](const MasterCommand&, const Info&) { counter("master_command").hit(); });
-    }
-    tdds::Reader<MasterStatePubSubType> r_master(p, topics.master_state.name,
-                                                 topics.master_state.qos,
-                                                 [&](const MasterState& s, const Info&) {
-                                                   std::lock_guard<std::mutex> l(m);
-                                                   snap.master = s;
-                                                   snap.have_master = true;
-                                                   counter("master_state").hit();
-                                                 });
-    tdds::Reader<ServerStatsPubSubType> r_stats(p, tdds::topics::kServerStats,
-                                                tdds::TopicQos::kReliableStream,
-                                                [&](const ServerStats& s, const Info&) {
-                                                  std::lock_guard<std::mutex> l(m);
-                                                  snap.stats = s;
-                                                  snap.have_stats = true;
-                                                  counter("server_stats").hit();
-                                                });
-    tdds::Reader<SceneDescriptionPubSubType> r_scene(p, tdds::topics::kScene,
-                                                     tdds::TopicQos::kLatched,
-                                                     [&](const SceneDescription& s, const Info&) {
-                                                       std::lock_guard<std::mutex> l(m);
-                                                       snap.scene = s;
-                                                       snap.have_scene = true;
-                                                       counter("scene").hit();
-                                                       if (mode == Mode::kLines)
-                                                         print_now(monitor::scene_line(s));
-                                                       if (mode == Mode::kJson)
-                                                         print_now(monitor::scene_json(s));
-                                                     });
-    tdds::Reader<MeshTopologyPubSubType> r_topology(
-        p, tdds::topics::kMeshTopology, tdds::TopicQos::kLatched,
-        [&](const MeshTopology&, const Info&) { counter("mesh_topology").hit(); });
-    tdds::Reader<MeshFramePubSubType> r_frames(
-        p, topics.mesh_frame.name, topics.mesh_frame.qos,
-        [&](const MeshFrame&, const Info&) { counter("mesh_frame").hit(); });
-    tdds::Reader<EventPubSubType> r_events(
-        p, tdds::topics::kEvents, tdds::TopicQos::kEventLog, [&](const Event& e, const Info&) {
-          std::lock_guard<std::mutex> l(m);
-          counter("events").hit();
-          monitor::EventView ev{seconds_between(t0, now_ns()), e};
-          snap.events.push_back(ev);
-          while (snap.events.size() > 200) snap.events.pop_front();
-          if (mode == Mode::kLines) print_now(monitor::event_line(ev));
-          if (mode == Mode::kJson) print_now(monitor::event_json(ev));
-        });
-
-    RawKeys keys;
-    if (mode == Mode::kTui) {
-      std::fputs("\x1b[?1049h\x1b[?25l", stdout);  // alternate screen, hide the cursor
-      std::fflush(stdout);
-    }
-    // rate over the last second: counts at past refreshes
-    std::deque<std::pair<std::int64_t, std::vector<std::uint64_t>>> history;
-    auto next = t0;
-    while (!stop_requested()) {
-      next += static_cast<std::int64_t>(period_s * 1e9);
-      while (!stop_requested() && now_ns() < next) {
-        if (keys.quit_pressed()) request_stop();
-        // the screen polls the keyboard; the other modes only wait for the next period
-        const std::int64_t step_ns = mode == Mode::kTui ? 20'000'000 : 100'000'000;
-        std::this_thread::sleep_for(std::chrono::nanoseconds(
-            std::max<std::int64_t>(0, std::min(step_ns, next - now_ns()))));
-      }
-      if (stop_requested()) break;
-      const auto now = now_ns();
-      std::vector<std::uint64_t> counts(defs.size());
-      for (std::size_t i = 0; i < defs.size(); ++i) counts[i] = counters[i].count.load();
-      history.emplace_back(now, counts);
-      while (history.size() > 2 && seconds_between(history[1].first, now) >= 1.0) {
-        history.pop_front();
-      }
-      const double window = seconds_between(history.front().first, now);
-      std::lock_guard<std::mutex> l(m);
-      snap.t_s = seconds_between(t0, now);
-      snap.topics.clear();
-      for (std::size_t i = 0; i < defs.size(); ++i) {
-        TopicView t;
-        t.name = defs[i].name;
-        t.latched = defs[i].latched;
-        t.stale_after_s = defs[i].stale;
-        t.count = counts[i];
-        t.rate_hz = window > 0.0
-                        ? static_cast<double>(counts[i] - history.front().second[i]) / window
-                        : 0.0;
-        const auto last = counters[i].last_ns.load();
-        t.age_s = t.count > 0 ? seconds_between(last, now) : -1.0;
-        snap.topics.push_back(t);
-      }
-      if (mode == Mode::kJson) {
-        print_now(monitor::render_json(snap));
-      } else if (mode == Mode::kLines) {
-        std::fputs(monitor::render_lines(snap).c_str(), stdout);
-        std::fflush(stdout);
-      } else {
-        winsize ws{};
-        int rows = 40, cols = 160;
-        if (ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_row > 0) {
-          rows = ws.ws_row;
-          cols = ws.ws_col;
-        }
-        std::string frame = "\x1b[H";
-        for (const auto& line : monitor::render_screen(snap, rows - 1, cols)) {
-          frame += line + "\x1b[K\n";
-        }
-        frame += "\x1b[J";
-        std::fputs(frame.c_str(), stdout);
-        std::fflush(stdout);
-      }
-      if (duration_s > 0 && snap.t_s >= duration_s) break;
-    }
-    if (mode == Mode::kTui) {
-      std::fputs("\x1b[?25h\x1b[?1049l", stdout);  // restore the screen and the cursor
-      std::fflush(stdout);
-    }
-    return 0;
+    return run_monitor(flags);
   } catch (const teleop::config::ConfigError& e) {
     std::cerr << "teleop_monitor: " << e.what() << "\n";
     return 2;

@@ -343,30 +343,11 @@ bool has_auto_field(const config::Node& node) {
                            is_auto(node, "level") || is_auto(node, "kernel"));
 }
 
-AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
-                              const std::vector<Plane>& planes) {
-  AutoBody out;
-  const bool any_auto = node.is_map() && (is_auto(node, "model") || is_auto(node, "integrator") ||
-                                          is_auto(node, "level") || is_auto(node, "kernel"));
-  if (!any_auto) {
-    if (node.is_map()) {
-      for (const char* key : {"tolerance_mm", "budget_us", "model_table"}) {
-        if (node.has(key)) {
-          node.fail(key,
-                    "is used only when model, integrator, level or kernel is auto (automatic "
-                    "model selection); remove it or set one of them to auto");
-        }
-      }
-    }
-    const DeformableParams params = load_deformable_params(node);
-    out.model = make_model(make_mesh_for(params), params, planes);
-    return out;
-  }
-  if (node.has("mesh_file")) {
-    node.fail("mesh_file",
-              "cannot be combined with model, integrator, level or kernel: auto (the speed-"
-              "accuracy table is measured on icospheres); give the model explicitly");
-  }
+namespace {
+
+/// What an automatic body asks of the table: tolerance, budget, the fields it fixes, and the
+/// shape error of each icosphere level at its radius.
+ModelRequest model_request(const config::Node& node, double physics_dt_s) {
   ModelRequest req;
   req.physics_dt_s = physics_dt_s;
   req.tolerance_mm = positive_number(node, "tolerance_mm", kToleranceMaxMm);
@@ -401,6 +382,82 @@ AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
   for (std::size_t l = 0; l < unit_shape_error.size(); ++l) {
     req.shape_error_mm[l] = 1e3 * radius_m * unit_shape_error[l];
   }
+  return req;
+}
+
+/// Refuses the body when the selection found nothing (names the field to change and its range).
+void check_selection(const config::Node& node, const SelectResult& r, const ModelRequest& req,
+                     const std::string& table_file, const std::string& dt_text) {
+  switch (r.outcome) {
+    case SelectOutcome::kChosen:
+      break;
+    case SelectOutcome::kNoEntry:
+      node.fail(is_auto(node, "level")        ? "level"
+                : is_auto(node, "model")      ? "model"
+                : is_auto(node, "integrator") ? "integrator"
+                                              : "kernel",
+                "auto: no entry of " + table_file +
+                    " matches the fixed fields at a step dividing the world step " + dt_text +
+                    " (or every matching entry blew up)");
+    case SelectOutcome::kTolerance:
+      node.fail("tolerance_mm", "value " + fmtg(req.tolerance_mm) +
+                                    " is below the smallest error in the table for this body (" +
+                                    fmt4(r.most_accurate.error_mm) +
+                                    " mm: " + r.most_accurate.name() + "); allowed range [" +
+                                    fmt4(r.most_accurate.error_mm) + ", " + fmtg(kToleranceMaxMm) +
+                                    "]");
+    case SelectOutcome::kBudget:
+      node.fail("budget_us",
+                "value " + fmtg(req.budget_us) + " is below the cheapest entry within tolerance " +
+                    fmtg(req.tolerance_mm) + " mm (" + r.cheapest_accurate.name() + ": " +
+                    fmt1(r.cheapest_accurate.cost_us_median) + " us per world step of " + dt_text +
+                    "); allowed range [" + fmt1(r.cheapest_accurate.cost_us_median) + ", " +
+                    fmtg(kBudgetMaxUs) + "]");
+  }
+}
+
+/// The body's parameters with the chosen entry filled in for its auto fields.
+DeformableParams chosen_params(const config::Node& node, const ModelChoice& c) {
+  YAML::Node y = YAML::Clone(node.raw());
+  y.remove("tolerance_mm");
+  y.remove("budget_us");
+  y.remove("model_table");
+  y["model"] = to_string(c.entry.model);
+  y["integrator"] = to_string(c.entry.integrator);
+  y["level"] = c.entry.level;
+  y["kernel"] = to_string(c.entry.kernel);
+  if (c.substeps > 1) y["min_substeps"] = c.substeps;
+  const DeformableParams params = load_deformable_params(config::Node(y, node.file(), node.path()));
+  return load_deformable_params(config::Node(y, node.file(), node.path()));
+}
+
+}  // namespace
+
+AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
+                              const std::vector<Plane>& planes) {
+  AutoBody out;
+  const bool any_auto = node.is_map() && (is_auto(node, "model") || is_auto(node, "integrator") ||
+                                          is_auto(node, "level") || is_auto(node, "kernel"));
+  if (!any_auto) {
+    if (node.is_map()) {
+      for (const char* key : {"tolerance_mm", "budget_us", "model_table"}) {
+        if (node.has(key)) {
+          node.fail(key,
+                    "is used only when model, integrator, level or kernel is auto (automatic "
+                    "model selection); remove it or set one of them to auto");
+        }
+      }
+    }
+    const DeformableParams params = load_deformable_params(node);
+    out.model = make_model(make_mesh_for(params), params, planes);
+    return out;
+  }
+  if (node.has("mesh_file")) {
+    node.fail("mesh_file",
+              "cannot be combined with model, integrator, level or kernel: auto (the speed-"
+              "accuracy table is measured on icospheres); give the model explicitly");
+  }
+  const ModelRequest req = model_request(node, physics_dt_s);
   out.tolerance_mm = req.tolerance_mm;
   out.budget_us = req.budget_us;
   std::string table_file = default_model_table_file();
@@ -417,45 +474,9 @@ AutoBody load_deformable_body(const config::Node& node, double physics_dt_s,
   // more than predicted: drop that entry and select again while the real cost is over budget
   for (std::size_t attempt = 0; attempt <= table.entries.size(); ++attempt) {
     const SelectResult r = select_model(table, req);
-    switch (r.outcome) {
-      case SelectOutcome::kChosen:
-        break;
-      case SelectOutcome::kNoEntry:
-        node.fail(is_auto(node, "level")        ? "level"
-                  : is_auto(node, "model")      ? "model"
-                  : is_auto(node, "integrator") ? "integrator"
-                                                : "kernel",
-                  "auto: no entry of " + table_file +
-                      " matches the fixed fields at a step dividing the world step " + dt_text +
-                      " (or every matching entry blew up)");
-      case SelectOutcome::kTolerance:
-        node.fail("tolerance_mm", "value " + fmtg(req.tolerance_mm) +
-                                      " is below the smallest error in the table for this body (" +
-                                      fmt4(r.most_accurate.error_mm) +
-                                      " mm: " + r.most_accurate.name() + "); allowed range [" +
-                                      fmt4(r.most_accurate.error_mm) + ", " +
-                                      fmtg(kToleranceMaxMm) + "]");
-      case SelectOutcome::kBudget:
-        node.fail("budget_us", "value " + fmtg(req.budget_us) +
-                                   " is below the cheapest entry within tolerance " +
-                                   fmtg(req.tolerance_mm) + " mm (" + r.cheapest_accurate.name() +
-                                   ": " + fmt1(r.cheapest_accurate.cost_us_median) +
-                                   " us per world step of " + dt_text + "); allowed range [" +
-                                   fmt1(r.cheapest_accurate.cost_us_median) + ", " +
-                                   fmtg(kBudgetMaxUs) + "]");
-    }
+    check_selection(node, r, req, table_file, dt_text);
     const ModelChoice& c = r.choice;
-    YAML::Node y = YAML::Clone(node.raw());
-    y.remove("tolerance_mm");
-    y.remove("budget_us");
-    y.remove("model_table");
-    y["model"] = to_string(c.entry.model);
-    y["integrator"] = to_string(c.entry.integrator);
-    y["level"] = c.entry.level;
-    y["kernel"] = to_string(c.entry.kernel);
-    if (c.substeps > 1) y["min_substeps"] = c.substeps;
-    const DeformableParams params =
-        load_deformable_params(config::Node(y, node.file(), node.path()));
+    const DeformableParams params = chosen_params(node, c);
     DeformableModel m = make_model(make_mesh_for(params), params, planes);
     const int stab = m.substeps_needed(c.entry.dt_s);
     if (stab > 1 && c.cost_us_median * stab > req.budget_us) {

@@ -109,257 +109,306 @@ void update_rotations(const DeformableModel& m, DeformableState& s, int max_iter
   }
 }
 
-// compute_forces stays one function (about 245 lines): split into inlined helpers it gave the
-// same forces to the last bit for every path but the mass-spring implicit one, whose AVX2/FMA
-// clone then rounded differently (1e-15 relative), and its results must not change.
-// Total force on every node (and the centre node, column N) into s.work_f at (s.x, s.v).
-// Compiled twice, for x86-64-v3 (AVX2, FMA) and for the baseline; the loader picks the one the
-// CPU supports (GCC function multi-versioning), so the binary still runs on any x86-64.
-TELEOP_HOT_CLONES
-void compute_forces(const DeformableModel& m, DeformableState& s, double h, ForceFlags flags) {
+// Gravity, drag and the caller's loads into s.work_f (every node; column N too if there is a
+// centre node). The drag is relative to the mean velocity: it damps deformation, keeps momentum.
+TELEOP_ALWAYS_INLINE void set_external_forces(const DeformableModel& m, DeformableState& s) {
   const int n = m.node_count;
   const DeformableParams& p = m.params;
   Eigen::Matrix3Xd& F = s.work_f;
-  if (!flags.external) F.setZero();
-  F.col(n).setZero();
+  const Eigen::Matrix3Xd& v = s.v;
+  const double alpha = p.mass_damping_per_s;
+  Vec3 vcm = Vec3::Zero();
+  if (alpha > 0.0) vcm = (v * m.mass_kg + m.centre_mass_kg * s.centre_v) / m.total_mass_kg;
+  for (int i = 0; i < n; ++i) {
+    F.col(i) = m.mass_kg(i) * (p.gravity_mps2 - alpha * (v.col(i) - vcm)) + s.f_ext.col(i);
+  }
+  if (m.has_centre) F.col(n) = m.centre_mass_kg * (p.gravity_mps2 - alpha * (s.centre_v - vcm));
+}
+
+// Mass-spring edge forces into s.edge_force (the force on each edge's first node), and with
+// flags.jacobian the blocks for the implicit solve.
+TELEOP_ALWAYS_INLINE void mass_spring_edge_forces(const DeformableModel& m, DeformableState& s,
+                                                  ForceFlags flags) {
+  const int ne = static_cast<int>(m.edges.cols());
+  const Eigen::Matrix3Xd& x = s.x;
+  const Eigen::Matrix3Xd& v = s.v;
+  const double beta = m.params.stiffness_damping_s;
+  Eigen::Matrix3Xd& Fe = s.edge_force;
+  // 1 / length of every edge first, in a separate pass the compiler vectorises (sqrt and
+  // division two at a time, off the critical path of the force loop)
+  Eigen::VectorXd& inv_len = s.edge_scratch;
+  for (int e = 0; e < ne; ++e) {
+    s.edge_length2(e) = (x.col(m.edges(1, e)) - x.col(m.edges(0, e))).squaredNorm();
+  }
+  inverse_sqrt(s.edge_length2.data(), inv_len.data(), ne);
+  if (!flags.jacobian) {
+    // the explicit/symplectic hot path in plain scalar arithmetic on the raw 3 x N arrays:
+    // Eigen's 2+1-lane handling of 3-vectors (shuffles for every dot product) cost more
+    // than it saved here
+    const double* xp = x.data();
+    const double* vp = v.data();
+    const int* ep = m.edges.data();
+    const double* kp = m.edge_k_iso.data();
+    const double* l0 = m.rest_length_m.data();
+    const double* il = inv_len.data();
+    double* fp = Fe.data();
+    for (int e = 0; e < ne; ++e) {
+      const int i = 3 * ep[2 * e], j = 3 * ep[2 * e + 1];
+      const double dx = xp[j] - xp[i], dy = xp[j + 1] - xp[i + 1], dz = xp[j + 2] - xp[i + 2];
+      const double inv_l = il[e];
+      const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+      const double rate =
+          (vp[j] - vp[i]) * ux + (vp[j + 1] - vp[i + 1]) * uy + (vp[j + 2] - vp[i + 2]) * uz;
+      const double k = kp[e];
+      const double fs = k * ((dx * dx + dy * dy + dz * dz) * inv_l - l0[e]) + beta * k * rate;
+      fp[3 * e] = fs * ux;
+      fp[3 * e + 1] = fs * uy;
+      fp[3 * e + 2] = fs * uz;
+    }
+    return;
+  }
+  for (int e = 0; e < ne; ++e) {
+    const int i = m.edges(0, e), j = m.edges(1, e);
+    const Vec3 d = x.col(j) - x.col(i);
+    const double inv_l = inv_len(e);
+    const Vec3 u = d * inv_l;
+    const double k = m.edge_k_iso(e);
+    const double c = beta * k;
+    const double fs =
+        k * (d.squaredNorm() * inv_l - m.rest_length_m(e)) + c * (v.col(j) - v.col(i)).dot(u);
+    const Vec3 f = fs * u;
+    Fe.col(e) = f;
+    if (flags.jacobian) {
+      // clamped spring Jacobian: the transverse term only when stretched (keeps it SPD)
+      const double kt = k * std::max(0.0, 1.0 - m.rest_length_m(e) * inv_l);
+      s.edge_dir.col(e) = u;
+      s.edge_coef.col(e) << kt, k - kt, 0.0, c;
+    }
+  }
+}
+
+// Linear Navier edge forces into s.edge_force, and with flags.jacobian the implicit blocks.
+TELEOP_ALWAYS_INLINE void navier_linear_edge_forces(const DeformableModel& m, DeformableState& s,
+                                                    ForceFlags flags) {
+  const int ne = static_cast<int>(m.edges.cols());
   const Eigen::Matrix3Xd& x = s.x;
   const Eigen::Matrix3Xd& v = s.v;
   const Eigen::Matrix3Xd& X = m.mesh.vertices;
-  const double beta = p.stiffness_damping_s;
-
-  // gravity, drag and the caller's loads
-  if (flags.external) {
-    // drag relative to the mean velocity: damps deformation, keeps momentum
-    const double alpha = p.mass_damping_per_s;
-    Vec3 vcm = Vec3::Zero();
-    if (alpha > 0.0) vcm = (v * m.mass_kg + m.centre_mass_kg * s.centre_v) / m.total_mass_kg;
-    for (int i = 0; i < n; ++i) {
-      F.col(i) = m.mass_kg(i) * (p.gravity_mps2 - alpha * (v.col(i) - vcm)) + s.f_ext.col(i);
+  const double beta = m.params.stiffness_damping_s;
+  for (int e = 0; e < ne; ++e) {
+    const int i = m.edges(0, e), j = m.edges(1, e);
+    const Vec3 u0 = m.rest_dir.col(e);
+    const Vec3 strain = (x.col(j) - x.col(i)) - (X.col(j) - X.col(i));
+    const Vec3 g = strain + beta * (v.col(j) - v.col(i));
+    const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
+    const Vec3 f = a * g + (b * g.dot(u0)) * u0;
+    s.edge_force.col(e) = f;
+    if (flags.jacobian) {
+      s.edge_dir.col(e) = u0;
+      s.edge_coef.col(e) << a, b, beta * a, beta * b;
     }
-    if (m.has_centre) F.col(n) = m.centre_mass_kg * (p.gravity_mps2 - alpha * (s.centre_v - vcm));
   }
+}
+
+// Co-rotational Navier edge forces into s.edge_force (the frames updated first), and with
+// flags.jacobian the implicit blocks.
+TELEOP_ALWAYS_INLINE void navier_corotational_edge_forces(const DeformableModel& m,
+                                                          DeformableState& s, ForceFlags flags) {
+  const int ne = static_cast<int>(m.edges.cols());
+  const Eigen::Matrix3Xd& x = s.x;
+  const Eigen::Matrix3Xd& v = s.v;
+  const Eigen::Matrix3Xd& X = m.mesh.vertices;
+  const double beta = m.params.stiffness_damping_s;
+  // warm-started: a few iterations per step track the motion; a cold query converges
+  update_rotations(m, s, flags.rotation_iterations, flags.rotation_tolerance_rad);
+  for (int e = 0; e < ne; ++e) {
+    const int i = m.edges(0, e), j = m.edges(1, e);
+    const Mat3 r =
+        0.5 * (s.rotation[static_cast<std::size_t>(i)] + s.rotation[static_cast<std::size_t>(j)]);
+    const Vec3 u0 = m.rest_dir.col(e);
+    // hand-written 3x3 products (Eigen does not inline these mixed expressions here)
+    const Vec3 q = (x.col(j) - x.col(i)) + beta * (v.col(j) - v.col(i));
+    const Vec3 g = Vec3(r.col(0).dot(q), r.col(1).dot(q), r.col(2).dot(q)) - (X.col(j) - X.col(i));
+    const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
+    const Vec3 loc = a * g + (b * g.dot(u0)) * u0;
+    const Vec3 f = r.col(0) * loc.x() + r.col(1) * loc.y() + r.col(2) * loc.z();
+    s.edge_force.col(e) = f;
+    if (flags.jacobian) {
+      s.edge_dir.col(e) = (r * u0).normalized();
+      s.edge_coef.col(e) << a, b, beta * a, beta * b;
+    }
+  }
+}
+
+// Adds to s.work_f, per node, the forces of its incident edges from s.edge_force (+ on an
+// edge's first node, - on its second): a gather per node instead of a scatter per edge.
+TELEOP_ALWAYS_INLINE void gather_edge_forces(const DeformableModel& m, DeformableState& s) {
+  const int n = m.node_count;
+  const auto& off = m.node_edge_offsets;
+  const auto& inc = m.node_edges;
+  const double* fe = s.edge_force.data();
+  double* fp = s.work_f.data();
+  for (int i = 0; i < n; ++i) {
+    double sx = 0.0, sy = 0.0, sz = 0.0;
+    for (int k = off[static_cast<std::size_t>(i)]; k < off[static_cast<std::size_t>(i) + 1]; ++k) {
+      const int code = inc[static_cast<std::size_t>(k)];  // e (first node) or ~e (second)
+      const int c = 3 * (code >= 0 ? code : ~code);
+      const double sign = code >= 0 ? 1.0 : -1.0;
+      sx += sign * fe[c];
+      sy += sign * fe[c + 1];
+      sz += sign * fe[c + 2];
+    }
+    fp[3 * i] += sx;
+    fp[3 * i + 1] += sy;
+    fp[3 * i + 2] += sz;
+  }
+}
+
+// Adds the radial springs between the nodes and the centre node to s.work_f (the reactions to
+// column N), and with flags.jacobian stores their implicit blocks. Needs m.has_centre.
+TELEOP_ALWAYS_INLINE void add_radial_forces(const DeformableModel& m, DeformableState& s,
+                                            ForceFlags flags) {
+  const int n = m.node_count;
+  const DeformableParams& p = m.params;
+  Eigen::Matrix3Xd& F = s.work_f;
+  const Eigen::Matrix3Xd& x = s.x;
+  const Eigen::Matrix3Xd& v = s.v;
+  Vec3 fc = Vec3::Zero();
+  Eigen::VectorXd& inv_len = s.node_scratch;
+  for (int i = 0; i < n; ++i) s.node_length2(i) = (x.col(i) - s.centre_x).squaredNorm();
+  inverse_sqrt(s.node_length2.data(), inv_len.data(), n);
+  if (!flags.jacobian) {
+    const double* xp = x.data();
+    const double* vp = v.data();
+    double* fp = F.data();
+    const double cx = s.centre_x.x(), cy = s.centre_x.y(), cz = s.centre_x.z();
+    const double cvx = s.centre_v.x(), cvy = s.centre_v.y(), cvz = s.centre_v.z();
+    const double* kr = m.radial_k.data();
+    const double* r0 = m.radial_rest_m.data();
+    const double* il = inv_len.data();
+    const double rd = p.radial_damping_s;
+    double fcx = 0.0, fcy = 0.0, fcz = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const int a = 3 * i;
+      const double dx = xp[a] - cx, dy = xp[a + 1] - cy, dz = xp[a + 2] - cz;
+      const double inv_l = il[i];
+      const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
+      const double l = (dx * dx + dy * dy + dz * dz) * inv_l;
+      const double rate = (vp[a] - cvx) * ux + (vp[a + 1] - cvy) * uy + (vp[a + 2] - cvz) * uz;
+      const double k = kr[i];
+      const double fs = -k * (l - r0[i]) - rd * k * rate;
+      fp[a] += fs * ux;
+      fp[a + 1] += fs * uy;
+      fp[a + 2] += fs * uz;
+      fcx -= fs * ux;
+      fcy -= fs * uy;
+      fcz -= fs * uz;
+    }
+    F.col(n) += Vec3(fcx, fcy, fcz);
+    return;
+  }
+  for (int i = 0; i < n; ++i) {
+    const Vec3 d = x.col(i) - s.centre_x;
+    const double inv_l = inv_len(i);
+    const Vec3 u = d * inv_l;
+    const double l = d.squaredNorm() * inv_l;
+    const double k = m.radial_k(i);
+    const double c = p.radial_damping_s * k;
+    const double fs = -k * (l - m.radial_rest_m(i)) - c * (v.col(i) - s.centre_v).dot(u);
+    F.col(i) += fs * u;
+    fc -= fs * u;
+    if (flags.jacobian) {
+      const double kt = k * std::max(0.0, 1.0 - m.radial_rest_m(i) * inv_l);
+      s.radial_dir.col(i) = u;
+      s.radial_coef.col(i) << kt, k - kt, 0.0, c;
+    }
+  }
+  F.col(n) += fc;
+}
+
+// Node-plane penalty contact: records every contact (s.contact_*) and adds its force to
+// s.work_f. Implicit Euler (flags.jacobian): spring, damping and (rate-limited) Coulomb
+// friction as forces here, damping also in its matrix. Explicit/symplectic Euler: only the
+// spring here; damping and friction are applied implicitly per node in apply_contact_impulses()
+// (an explicit damper on a light node next to the stability limit of the membrane would not be
+// stable).
+TELEOP_ALWAYS_INLINE void add_plane_contacts(const DeformableModel& m, DeformableState& s, double h,
+                                             ForceFlags flags) {
+  const int n = m.node_count;
+  const DeformableParams& p = m.params;
+  Eigen::Matrix3Xd& F = s.work_f;
+  const Eigen::Matrix3Xd& x = s.x;
+  const Eigen::Matrix3Xd& v = s.v;
+  int nc = 0;
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < m.plane_count; ++k) {
+      const Plane& pl = m.planes[static_cast<std::size_t>(k)];
+      const double dist = pl.normal.dot(x.col(i)) - pl.offset_m;
+      if (dist >= 0.0) continue;
+      const double spring = -m.contact_k(i) * dist;
+      s.contact_node[static_cast<std::size_t>(nc)] = i;
+      s.contact_normal.col(nc) = pl.normal;
+      s.contact_coef.col(nc) << m.contact_k(i), m.contact_c(i), spring,
+          p.friction ? pl.friction : 0.0;
+      ++nc;
+      if (!flags.jacobian) {
+        F.col(i) += spring * pl.normal;
+        continue;
+      }
+      const Vec3 vi = v.col(i);
+      const double vn = pl.normal.dot(vi);
+      double fn = spring - m.contact_c(i) * vn;
+      if (fn < 0.0) fn = 0.0;  // a wall pushes, never pulls
+      Vec3 f = fn * pl.normal;
+      if (p.friction && pl.friction > 0.0) {
+        const Vec3 vt = vi - vn * pl.normal;
+        const double st = vt.norm();
+        if (st > 1e-12) {
+          const double ft = std::min(pl.friction * fn, 0.5 * m.mass_kg(i) * st / h);
+          f -= (ft / st) * vt;
+        }
+      }
+      F.col(i) += f;
+      s.plane_force_n += f;
+    }
+  }
+  s.contact_count = nc;
+}
+
+// Total force on every node (and the centre node, column N) into s.work_f at (s.x, s.v).
+// Compiled twice, for x86-64-v3 (AVX2, FMA) and for the baseline; the loader picks the one the
+// CPU supports (GCC function multi-versioning), so the binary still runs on any x86-64. The
+// helpers above are always inlined, so each copy has its own.
+TELEOP_HOT_CLONES
+void compute_forces(const DeformableModel& m, DeformableState& s, double h, ForceFlags flags) {
+  const int n = m.node_count;
+  if (!flags.external) s.work_f.setZero();
+  s.work_f.col(n).setZero();
+  if (flags.external) set_external_forces(m, s);  // gravity, drag and the caller's loads
 
   // edges, in two passes: the force of each edge (on its first node; the second node gets
   // the opposite), then a gather per node over its incident edges. Independent iterations
   // instead of a scatter whose read-modify-write chains serialise the loop.
-  const int ne = static_cast<int>(m.edges.cols());
-  Eigen::Matrix3Xd& Fe = s.edge_force;
-  switch (p.model) {
-    case ModelKind::kMassSpring: {
-      // 1 / length of every edge first, in a separate pass the compiler vectorises (sqrt and
-      // division two at a time, off the critical path of the force loop)
-      Eigen::VectorXd& inv_len = s.edge_scratch;
-      for (int e = 0; e < ne; ++e) {
-        s.edge_length2(e) = (x.col(m.edges(1, e)) - x.col(m.edges(0, e))).squaredNorm();
-      }
-      inverse_sqrt(s.edge_length2.data(), inv_len.data(), ne);
-      if (!flags.jacobian) {
-        // the explicit/symplectic hot path in plain scalar arithmetic on the raw 3 x N arrays:
-        // Eigen's 2+1-lane handling of 3-vectors (shuffles for every dot product) cost more
-        // than it saved here
-        const double* xp = x.data();
-        const double* vp = v.data();
-        const int* ep = m.edges.data();
-        const double* kp = m.edge_k_iso.data();
-        const double* l0 = m.rest_length_m.data();
-        const double* il = inv_len.data();
-        double* fp = Fe.data();
-        for (int e = 0; e < ne; ++e) {
-          const int i = 3 * ep[2 * e], j = 3 * ep[2 * e + 1];
-          const double dx = xp[j] - xp[i], dy = xp[j + 1] - xp[i + 1], dz = xp[j + 2] - xp[i + 2];
-          const double inv_l = il[e];
-          const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
-          const double rate =
-              (vp[j] - vp[i]) * ux + (vp[j + 1] - vp[i + 1]) * uy + (vp[j + 2] - vp[i + 2]) * uz;
-          const double k = kp[e];
-          const double fs = k * ((dx * dx + dy * dy + dz * dz) * inv_l - l0[e]) + beta * k * rate;
-          fp[3 * e] = fs * ux;
-          fp[3 * e + 1] = fs * uy;
-          fp[3 * e + 2] = fs * uz;
-        }
-        break;
-      }
-      for (int e = 0; e < ne; ++e) {
-        const int i = m.edges(0, e), j = m.edges(1, e);
-        const Vec3 d = x.col(j) - x.col(i);
-        const double inv_l = inv_len(e);
-        const Vec3 u = d * inv_l;
-        const double k = m.edge_k_iso(e);
-        const double c = beta * k;
-        const double fs =
-            k * (d.squaredNorm() * inv_l - m.rest_length_m(e)) + c * (v.col(j) - v.col(i)).dot(u);
-        const Vec3 f = fs * u;
-        Fe.col(e) = f;
-        if (flags.jacobian) {
-          // clamped spring Jacobian: the transverse term only when stretched (keeps it SPD)
-          const double kt = k * std::max(0.0, 1.0 - m.rest_length_m(e) * inv_l);
-          s.edge_dir.col(e) = u;
-          s.edge_coef.col(e) << kt, k - kt, 0.0, c;
-        }
-      }
+  switch (m.params.model) {
+    case ModelKind::kMassSpring:
+      mass_spring_edge_forces(m, s, flags);
       break;
-    }
-    case ModelKind::kNavierLinear: {
-      for (int e = 0; e < ne; ++e) {
-        const int i = m.edges(0, e), j = m.edges(1, e);
-        const Vec3 u0 = m.rest_dir.col(e);
-        const Vec3 strain = (x.col(j) - x.col(i)) - (X.col(j) - X.col(i));
-        const Vec3 g = strain + beta * (v.col(j) - v.col(i));
-        const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
-        const Vec3 f = a * g + (b * g.dot(u0)) * u0;
-        Fe.col(e) = f;
-        if (flags.jacobian) {
-          s.edge_dir.col(e) = u0;
-          s.edge_coef.col(e) << a, b, beta * a, beta * b;
-        }
-      }
+    case ModelKind::kNavierLinear:
+      navier_linear_edge_forces(m, s, flags);
       break;
-    }
-    case ModelKind::kNavierCorotational: {
-      // warm-started: a few iterations per step track the motion; a cold query converges
-      update_rotations(m, s, flags.rotation_iterations, flags.rotation_tolerance_rad);
-      for (int e = 0; e < ne; ++e) {
-        const int i = m.edges(0, e), j = m.edges(1, e);
-        const Mat3 r = 0.5 * (s.rotation[static_cast<std::size_t>(i)] +
-                              s.rotation[static_cast<std::size_t>(j)]);
-        const Vec3 u0 = m.rest_dir.col(e);
-        // hand-written 3x3 products (Eigen does not inline these mixed expressions here)
-        const Vec3 q = (x.col(j) - x.col(i)) + beta * (v.col(j) - v.col(i));
-        const Vec3 g =
-            Vec3(r.col(0).dot(q), r.col(1).dot(q), r.col(2).dot(q)) - (X.col(j) - X.col(i));
-        const double a = m.edge_k_iso(e), b = m.edge_k_dir(e);
-        const Vec3 loc = a * g + (b * g.dot(u0)) * u0;
-        const Vec3 f = r.col(0) * loc.x() + r.col(1) * loc.y() + r.col(2) * loc.z();
-        Fe.col(e) = f;
-        if (flags.jacobian) {
-          s.edge_dir.col(e) = (r * u0).normalized();
-          s.edge_coef.col(e) << a, b, beta * a, beta * b;
-        }
-      }
+    case ModelKind::kNavierCorotational:
+      navier_corotational_edge_forces(m, s, flags);
       break;
-    }
   }
-
-  {
-    const auto& off = m.node_edge_offsets;
-    const auto& inc = m.node_edges;
-    const double* fe = Fe.data();
-    double* fp = F.data();
-    for (int i = 0; i < n; ++i) {
-      double sx = 0.0, sy = 0.0, sz = 0.0;
-      for (int k = off[static_cast<std::size_t>(i)]; k < off[static_cast<std::size_t>(i) + 1];
-           ++k) {
-        const int code = inc[static_cast<std::size_t>(k)];  // e (first node) or ~e (second)
-        const int c = 3 * (code >= 0 ? code : ~code);
-        const double sign = code >= 0 ? 1.0 : -1.0;
-        sx += sign * fe[c];
-        sy += sign * fe[c + 1];
-        sz += sign * fe[c + 2];
-      }
-      fp[3 * i] += sx;
-      fp[3 * i + 1] += sy;
-      fp[3 * i + 2] += sz;
-    }
-  }
+  gather_edge_forces(m, s);
 
   // radial springs to the centre node
-  if (m.has_centre) {
-    Vec3 fc = Vec3::Zero();
-    Eigen::VectorXd& inv_len = s.node_scratch;
-    for (int i = 0; i < n; ++i) s.node_length2(i) = (x.col(i) - s.centre_x).squaredNorm();
-    inverse_sqrt(s.node_length2.data(), inv_len.data(), n);
-    if (!flags.jacobian) {
-      const double* xp = x.data();
-      const double* vp = v.data();
-      double* fp = F.data();
-      const double cx = s.centre_x.x(), cy = s.centre_x.y(), cz = s.centre_x.z();
-      const double cvx = s.centre_v.x(), cvy = s.centre_v.y(), cvz = s.centre_v.z();
-      const double* kr = m.radial_k.data();
-      const double* r0 = m.radial_rest_m.data();
-      const double* il = inv_len.data();
-      const double rd = p.radial_damping_s;
-      double fcx = 0.0, fcy = 0.0, fcz = 0.0;
-      for (int i = 0; i < n; ++i) {
-        const int a = 3 * i;
-        const double dx = xp[a] - cx, dy = xp[a + 1] - cy, dz = xp[a + 2] - cz;
-        const double inv_l = il[i];
-        const double ux = dx * inv_l, uy = dy * inv_l, uz = dz * inv_l;
-        const double l = (dx * dx + dy * dy + dz * dz) * inv_l;
-        const double rate = (vp[a] - cvx) * ux + (vp[a + 1] - cvy) * uy + (vp[a + 2] - cvz) * uz;
-        const double k = kr[i];
-        const double fs = -k * (l - r0[i]) - rd * k * rate;
-        fp[a] += fs * ux;
-        fp[a + 1] += fs * uy;
-        fp[a + 2] += fs * uz;
-        fcx -= fs * ux;
-        fcy -= fs * uy;
-        fcz -= fs * uz;
-      }
-      F.col(n) += Vec3(fcx, fcy, fcz);
-    } else {
-      for (int i = 0; i < n; ++i) {
-        const Vec3 d = x.col(i) - s.centre_x;
-        const double inv_l = inv_len(i);
-        const Vec3 u = d * inv_l;
-        const double l = d.squaredNorm() * inv_l;
-        const double k = m.radial_k(i);
-        const double c = p.radial_damping_s * k;
-        const double fs = -k * (l - m.radial_rest_m(i)) - c * (v.col(i) - s.centre_v).dot(u);
-        F.col(i) += fs * u;
-        fc -= fs * u;
-        if (flags.jacobian) {
-          const double kt = k * std::max(0.0, 1.0 - m.radial_rest_m(i) * inv_l);
-          s.radial_dir.col(i) = u;
-          s.radial_coef.col(i) << kt, k - kt, 0.0, c;
-        }
-      }
-      F.col(n) += fc;
-    }
-  }
+  if (m.has_centre) add_radial_forces(m, s, flags);
 
-  // node-plane penalty contact. Implicit Euler: spring, damping and (rate-limited) Coulomb
-  // friction as forces here, damping also in its matrix. Explicit/symplectic Euler: only the
-  // spring here; damping and friction are applied implicitly per node in apply_contact_impulses()
-  // (an explicit damper on a light node next to the stability limit of the membrane would not be
-  // stable).
+  // node-plane penalty contact
   s.contact_count = 0;
   s.plane_force_n.setZero();
-  if (flags.contact && m.plane_count > 0) {
-    int nc = 0;
-    for (int i = 0; i < n; ++i) {
-      for (int k = 0; k < m.plane_count; ++k) {
-        const Plane& pl = m.planes[static_cast<std::size_t>(k)];
-        const double dist = pl.normal.dot(x.col(i)) - pl.offset_m;
-        if (dist >= 0.0) continue;
-        const double spring = -m.contact_k(i) * dist;
-        s.contact_node[static_cast<std::size_t>(nc)] = i;
-        s.contact_normal.col(nc) = pl.normal;
-        s.contact_coef.col(nc) << m.contact_k(i), m.contact_c(i), spring,
-            p.friction ? pl.friction : 0.0;
-        ++nc;
-        if (!flags.jacobian) {
-          F.col(i) += spring * pl.normal;
-          continue;
-        }
-        const Vec3 vi = v.col(i);
-        const double vn = pl.normal.dot(vi);
-        double fn = spring - m.contact_c(i) * vn;
-        if (fn < 0.0) fn = 0.0;  // a wall pushes, never pulls
-        Vec3 f = fn * pl.normal;
-        if (p.friction && pl.friction > 0.0) {
-          const Vec3 vt = vi - vn * pl.normal;
-          const double st = vt.norm();
-          if (st > 1e-12) {
-            const double ft = std::min(pl.friction * fn, 0.5 * m.mass_kg(i) * st / h);
-            f -= (ft / st) * vt;
-          }
-        }
-        F.col(i) += f;
-        s.plane_force_n += f;
-      }
-    }
-    s.contact_count = nc;
-  }
+  if (flags.contact && m.plane_count > 0) add_plane_contacts(m, s, h, flags);
 }
 
 // Explicit and symplectic Euler: contact damping and Coulomb friction as velocity impulses,

@@ -199,9 +199,12 @@ std::vector<std::string> physics_rate_notes(const WorldModel& s, double rate_hz)
   return notes;
 }
 
-WorldModel parse_world_model(const config::Node& root) {
-  WorldModel s;
-  s.file = root.file();
+// parse_world_model, section by section (each fills its part of `s` and checks it against what
+// the earlier sections set: the world box first, then physics, command, tool, planes, robot,
+// deformables, and last the checks that need all of them).
+namespace {
+
+void check_scene_root(const config::Node& root) {
   if (root.empty_document()) {
     throw config::ConfigError(root.file() +
                               ": the scene is empty (an empty file, /dev/null or only comments): "
@@ -214,12 +217,9 @@ WorldModel parse_world_model(const config::Node& root) {
                               "' is not a scene: a scene is a YAML mapping of fields such as "
                               "'kind', 'physics', 'planes'");
   }
-  root.reject_unknown_keys(
-      {"name", "kind", "world", "physics", "command", "tool", "planes", "robot", "deformables"});
-  s.name = root.string_or("name", s.name);
-  const std::string kind = root.choice_or("kind", "tool", {"tool", "robot"});
-  s.slave = kind == "robot" ? SlaveKind::kRobot : SlaveKind::kTool;
+}
 
+void parse_world_box(const config::Node& root, WorldModel& s) {
   if (root.has("world")) {
     const auto w = root.at("world");
     w.reject_unknown_keys({"min_m", "max_m"});
@@ -232,7 +232,9 @@ WorldModel parse_world_model(const config::Node& root) {
       }
     }
   }
-  const bool rate_given = root.has("physics") && root.at("physics").has("rate_hz");
+}
+
+void parse_physics(const config::Node& root, WorldModel& s) {
   if (root.has("physics")) {
     const auto p = root.at("physics");
     p.reject_unknown_keys({"rate_hz", "visual_rate_hz", "gravity_mps2"});
@@ -240,6 +242,9 @@ WorldModel parse_world_model(const config::Node& root) {
     s.visual_rate_hz = p.number_or("visual_rate_hz", s.visual_rate_hz, 1.0, 240.0);
     s.gravity_mps2 = vec3(p, "gravity_mps2", s.gravity_mps2, -100.0, 100.0);
   }
+}
+
+void parse_command(const config::Node& root, WorldModel& s) {
   if (root.has("command")) {
     const auto c = root.at("command");
     c.reject_unknown_keys({"timeout_s", "workspace_min_m", "workspace_max_m"});
@@ -264,6 +269,9 @@ WorldModel parse_world_model(const config::Node& root) {
                 "value " + vec_text(s.workspace_max_m) + " reaches outside " + world_text(s));
     }
   }
+}
+
+void parse_tool(const config::Node& root, WorldModel& s) {
   s.tool.gravity_mps2 = s.gravity_mps2;
   if (root.has("tool")) {
     const auto t = root.at("tool");
@@ -283,6 +291,9 @@ WorldModel parse_world_model(const config::Node& root) {
     s.tool.gravity_compensation = t.boolean_or("gravity_compensation", true);
     s.tool_start_m = vec3(t, "start_position_m", s.tool_start_m, -100.0, 100.0);
   }
+}
+
+void parse_planes(const config::Node& root, WorldModel& s) {
   if (root.has("planes")) {
     const auto ps = root.at("planes");
     if (!ps.is_sequence()) ps.fail("", "must be a list of planes");
@@ -316,7 +327,9 @@ WorldModel parse_world_model(const config::Node& root) {
     }
   }
   for (const Plane& pl : s.planes) s.tool.add(Obstacle::of(pl));
+}
 
+void parse_robot(const config::Node& root, WorldModel& s) {
   if (root.has("robot")) {
     // `robot: {include: FILE}` takes the `robot` mapping of another file (relative paths are
     // relative to this scene file), so one robot description serves several scenes. The robot
@@ -360,107 +373,125 @@ WorldModel parse_world_model(const config::Node& root) {
                              " (robot.base.position_m) is outside " + world_text(s));
     }
   }
-  if (root.has("deformables")) {
-    const auto ds = root.at("deformables");
-    if (!ds.is_sequence()) ds.fail("", "must be a list of deformable bodies");
-    int next_id = 10;
-    for (std::size_t i = 0; i < ds.size(); ++i) {
-      const config::Node n = ds.at(i);
-      if (!n.is_map()) n.fail("", "must be a mapping with at least 'body'");
-      n.reject_unknown_keys({"id", "body", "contact"});
-      DeformableBodyModel b;
-      b.object_id = static_cast<int>(n.integer_or("id", next_id, 10, 99));
-      if (b.object_id > 99) {
-        n.fail("id", "value '" + std::to_string(b.object_id) +
-                         "' (assigned automatically: the previous id + 1) is out of the allowed "
-                         "range [10, 99]; give the ids explicitly");
-      }
-      for (std::size_t j = 0; j < s.bodies.size(); ++j) {
-        if (s.bodies[j].object_id == b.object_id) {
-          n.fail("id", "value '" + std::to_string(b.object_id) + "'" +
-                           (n.has("id") ? "" : " (assigned automatically: the previous id + 1)") +
-                           " is already the id of deformables[" + std::to_string(j) +
-                           "]; ids must be unique");
-        }
-      }
-      next_id = b.object_id + 1;
-      const config::Node body = n.at("body");
-      std::string mesh_given;
-      if (deformable::has_auto_field(body)) {
-        // `auto` fields pick the model from the measured table (server/deformable/model_select)
-        deformable::AutoBody ab =
-            deformable::load_deformable_body(body, 1.0 / s.physics_rate_hz, s.planes);
-        b.body = std::move(ab.model);
-        b.auto_summary = ab.summary();
-        b.auto_report = ab.report();
-      } else {
-        for (const char* key : {"tolerance_mm", "budget_us", "model_table"}) {
-          if (body.has(key)) {
-            body.fail(key,
-                      "is used only when model, integrator, level or kernel is auto (automatic "
-                      "model selection); remove it or set one of them to auto");
-          }
-        }
-        deformable::DeformableParams explicit_params = deformable::load_deformable_params(body);
-        mesh_given = explicit_params.mesh_file;
-        if (!mesh_given.empty()) {
-          explicit_params.mesh_file = relative_to(root.file(), mesh_given).string();
-        }
-        try {
-          b.body = deformable::make_model(deformable::make_mesh_for(explicit_params),
-                                          explicit_params, s.planes);
-        } catch (const mesh::MeshError& e) {
-          if (mesh_given.empty()) body.fail("", e.what());
-          body.fail("mesh_file", "value '" + mesh_given + "': " + e.what());
-        } catch (const config::ConfigError& e) {
-          body.fail("", e.what());
-        }
-      }
-      const deformable::DeformableParams& params = b.body.params;
-      if (!(b.body.stable_step_s > 0.0)) {
-        body.fail("integrator",
-                  "value 'explicit_euler' without stiffness damping (stiffness_damping_s " +
-                      num(params.stiffness_damping_s) + ", radial_damping_s " +
-                      num(params.radial_damping_s) +
-                      ") is unstable at any step: give both dampings > 0, or use "
-                      "symplectic_euler or implicit_euler");
-      }
-      // the body must start inside the world box and in the free space of every plane
-      const Eigen::Matrix3Xd& x = b.body.mesh.vertices;
-      const Eigen::Vector3d lo = x.rowwise().minCoeff();
-      const Eigen::Vector3d hi = x.rowwise().maxCoeff();
-      const Eigen::Vector3d size = hi - lo;
-      const std::string size_field = mesh_given.empty() ? "radius_m" : "mesh_scale";
-      const std::string size_value =
-          mesh_given.empty() ? num(params.radius_m) : num(params.mesh_scale);
-      if ((size.array() > (s.world_max_m - s.world_min_m).array()).any()) {
-        body.fail(size_field, "value '" + size_value + "': the body is " + num(size.x()) + " x " +
-                                  num(size.y()) + " x " + num(size.z()) +
-                                  " m and does not fit in " + world_text(s));
-      }
-      const std::string centre_value = "value '" + vec_text(params.centre_m) + "'";
-      if ((lo.array() < s.world_min_m.array()).any() ||
-          (hi.array() > s.world_max_m.array()).any()) {
-        body.fail("centre_m", centre_value + ": the body spans " + vec_text(lo) + " .. " +
-                                  vec_text(hi) + " m, outside " + world_text(s) +
-                                  ": move centre_m or widen the world box");
-      }
-      for (std::size_t j = 0; j < s.planes.size(); ++j) {
-        const Plane& pl = s.planes[j];
-        const double d = (pl.normal.transpose() * x).minCoeff() - pl.offset_m;
-        if (d < -kStartPenetrationM) {
-          body.fail("centre_m", centre_value + ": the body (" + size_field + " " + size_value +
-                                    ") starts " + num(-d) + " m behind plane '" + pl.name +
-                                    "' (planes[" + std::to_string(j) +
-                                    "]); every node must start in free space (at most " +
-                                    num(kStartPenetrationM * 1e3) +
-                                    " mm inside a plane): move centre_m or shrink the body");
-        }
-      }
-      b.contact = load_tip_contact_params(n.child("contact"));
-      s.bodies.push_back(std::move(b));
+}
+
+/// deformables[i]: its id (unique, 10..99; `next_id` is the automatic one) and its body, built
+/// automatically or from the explicit fields. `mesh_given` is the mesh_file as written.
+DeformableBodyModel parse_deformable_body(const config::Node& n, const WorldModel& s, int& next_id,
+                                          std::string& mesh_given) {
+  n.reject_unknown_keys({"id", "body", "contact"});
+  DeformableBodyModel b;
+  b.object_id = static_cast<int>(n.integer_or("id", next_id, 10, 99));
+  if (b.object_id > 99) {
+    n.fail("id", "value '" + std::to_string(b.object_id) +
+                     "' (assigned automatically: the previous id + 1) is out of the allowed "
+                     "range [10, 99]; give the ids explicitly");
+  }
+  for (std::size_t j = 0; j < s.bodies.size(); ++j) {
+    if (s.bodies[j].object_id == b.object_id) {
+      n.fail("id", "value '" + std::to_string(b.object_id) + "'" +
+                       (n.has("id") ? "" : " (assigned automatically: the previous id + 1)") +
+                       " is already the id of deformables[" + std::to_string(j) +
+                       "]; ids must be unique");
     }
   }
+  next_id = b.object_id + 1;
+  const config::Node body = n.at("body");
+  if (deformable::has_auto_field(body)) {
+    // `auto` fields pick the model from the measured table (server/deformable/model_select)
+    deformable::AutoBody ab =
+        deformable::load_deformable_body(body, 1.0 / s.physics_rate_hz, s.planes);
+    b.body = std::move(ab.model);
+    b.auto_summary = ab.summary();
+    b.auto_report = ab.report();
+  } else {
+    for (const char* key : {"tolerance_mm", "budget_us", "model_table"}) {
+      if (body.has(key)) {
+        body.fail(key,
+                  "is used only when model, integrator, level or kernel is auto (automatic "
+                  "model selection); remove it or set one of them to auto");
+      }
+    }
+    deformable::DeformableParams explicit_params = deformable::load_deformable_params(body);
+    mesh_given = explicit_params.mesh_file;
+    if (!mesh_given.empty()) {
+      explicit_params.mesh_file = relative_to(s.file, mesh_given).string();
+    }
+    try {
+      b.body = deformable::make_model(deformable::make_mesh_for(explicit_params), explicit_params,
+                                      s.planes);
+    } catch (const mesh::MeshError& e) {
+      if (mesh_given.empty()) body.fail("", e.what());
+      body.fail("mesh_file", "value '" + mesh_given + "': " + e.what());
+    } catch (const config::ConfigError& e) {
+      body.fail("", e.what());
+    }
+  }
+  return b;
+}
+
+/// The body is runnable (a stable step exists) and starts inside the world box and in the free
+/// space of every plane.
+void check_deformable_placement(const config::Node& body, const DeformableBodyModel& b,
+                                const WorldModel& s, const std::string& mesh_given) {
+  const deformable::DeformableParams& params = b.body.params;
+  if (!(b.body.stable_step_s > 0.0)) {
+    body.fail("integrator",
+              "value 'explicit_euler' without stiffness damping (stiffness_damping_s " +
+                  num(params.stiffness_damping_s) + ", radial_damping_s " +
+                  num(params.radial_damping_s) +
+                  ") is unstable at any step: give both dampings > 0, or use "
+                  "symplectic_euler or implicit_euler");
+  }
+  // the body must start inside the world box and in the free space of every plane
+  const Eigen::Matrix3Xd& x = b.body.mesh.vertices;
+  const Eigen::Vector3d lo = x.rowwise().minCoeff();
+  const Eigen::Vector3d hi = x.rowwise().maxCoeff();
+  const Eigen::Vector3d size = hi - lo;
+  const std::string size_field = mesh_given.empty() ? "radius_m" : "mesh_scale";
+  const std::string size_value = mesh_given.empty() ? num(params.radius_m) : num(params.mesh_scale);
+  if ((size.array() > (s.world_max_m - s.world_min_m).array()).any()) {
+    body.fail(size_field, "value '" + size_value + "': the body is " + num(size.x()) + " x " +
+                              num(size.y()) + " x " + num(size.z()) + " m and does not fit in " +
+                              world_text(s));
+  }
+  const std::string centre_value = "value '" + vec_text(params.centre_m) + "'";
+  if ((lo.array() < s.world_min_m.array()).any() || (hi.array() > s.world_max_m.array()).any()) {
+    body.fail("centre_m", centre_value + ": the body spans " + vec_text(lo) + " .. " +
+                              vec_text(hi) + " m, outside " + world_text(s) +
+                              ": move centre_m or widen the world box");
+  }
+  for (std::size_t j = 0; j < s.planes.size(); ++j) {
+    const Plane& pl = s.planes[j];
+    const double d = (pl.normal.transpose() * x).minCoeff() - pl.offset_m;
+    if (d < -kStartPenetrationM) {
+      body.fail("centre_m", centre_value + ": the body (" + size_field + " " + size_value +
+                                ") starts " + num(-d) + " m behind plane '" + pl.name +
+                                "' (planes[" + std::to_string(j) +
+                                "]); every node must start in free space (at most " +
+                                num(kStartPenetrationM * 1e3) +
+                                " mm inside a plane): move centre_m or shrink the body");
+    }
+  }
+}
+
+void parse_deformables(const config::Node& root, WorldModel& s) {
+  if (!root.has("deformables")) return;
+  const auto ds = root.at("deformables");
+  if (!ds.is_sequence()) ds.fail("", "must be a list of deformable bodies");
+  int next_id = 10;
+  for (std::size_t i = 0; i < ds.size(); ++i) {
+    const config::Node n = ds.at(i);
+    if (!n.is_map()) n.fail("", "must be a mapping with at least 'body'");
+    std::string mesh_given;
+    DeformableBodyModel b = parse_deformable_body(n, s, next_id, mesh_given);
+    check_deformable_placement(n.at("body"), b, s, mesh_given);
+    b.contact = load_tip_contact_params(n.child("contact"));
+    s.bodies.push_back(std::move(b));
+  }
+}
+
+void check_tool_start(const config::Node& root, const WorldModel& s) {
   for (int i = 0; i < 3; ++i) {
     if (s.tool_start_m[i] < s.workspace_min_m[i] || s.tool_start_m[i] > s.workspace_max_m[i]) {
       root.fail("tool.start_position_m", "must lie inside the command workspace");
@@ -479,6 +510,28 @@ WorldModel parse_world_model(const config::Node& root) {
       }
     }
   }
+}
+
+}  // namespace
+
+WorldModel parse_world_model(const config::Node& root) {
+  check_scene_root(root);
+  WorldModel s;
+  s.file = root.file();
+  root.reject_unknown_keys(
+      {"name", "kind", "world", "physics", "command", "tool", "planes", "robot", "deformables"});
+  s.name = root.string_or("name", s.name);
+  const std::string kind = root.choice_or("kind", "tool", {"tool", "robot"});
+  s.slave = kind == "robot" ? SlaveKind::kRobot : SlaveKind::kTool;
+  parse_world_box(root, s);
+  const bool rate_given = root.has("physics") && root.at("physics").has("rate_hz");
+  parse_physics(root, s);
+  parse_command(root, s);
+  parse_tool(root, s);
+  parse_planes(root, s);
+  parse_robot(root, s);
+  parse_deformables(root, s);
+  check_tool_start(root, s);
   const std::string problem = physics_rate_problem(s, s.physics_rate_hz);
   if (!problem.empty()) {
     root.fail("physics.rate_hz", "value '" + num(s.physics_rate_hz) + "'" +
