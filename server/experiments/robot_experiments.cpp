@@ -17,9 +17,11 @@
 #include "common/util/csv.hpp"
 #include "common/util/registry.hpp"
 #include "server/robot/robot_sim.hpp"
+#include "server/world/world.hpp"
 
 namespace {
 
+using teleop::sim::track_plane_contact;
 using teleop::sim::robot::ControlMode;
 using teleop::sim::robot::RobotInput;
 using teleop::sim::robot::RobotModel;
@@ -203,6 +205,7 @@ int run_robot_reach(const teleop::CommandArgs& args) {
                            {"t_s", "kind", "value", "message"});
 
   double t = 0.0;
+  int plane_contact = -1;
   ReachStats stats;
   RobotInput in;
   in.mode = ControlMode::kTrackPose;
@@ -215,6 +218,10 @@ int run_robot_reach(const teleop::CommandArgs& args) {
     for (int k = 0; k < steps; ++k) {
       set_target(a, b, move, (k + 1) * dt, in);
       sim.step(in, dt, &events);
+      // the arm reports no contact events of its own (the world does): the same tracking here
+      track_plane_contact(plane_contact,
+                          sim.state().tip_in_contact ? sim.state().tip_contact_plane : -1,
+                          sim.state().sim_time_s, events);
       t += dt;
       record_step(sim, planes, b, in, t, w, stats, csv);
       teleop::sim::SimEvent e;

@@ -174,6 +174,19 @@ WorldData make_world_data(const WorldModel& model) {
   return d;
 }
 
+void track_plane_contact(int& current, int plane, double sim_time_s, EventQueue& events) {
+  if (plane == current) return;
+  if (current >= 0) {
+    events.push(EventKind::kContactEnd, Severity::kInfo, sim_time_s, current,
+                "tip leaves the plane");
+  }
+  if (plane >= 0) {
+    events.push(EventKind::kContactBegin, Severity::kInfo, sim_time_s, plane,
+                "tip touches the plane");
+  }
+  current = plane;
+}
+
 void world_step(const WorldModel& model, WorldData& d, const WorldCommand& cmd, double dt_s,
                 EventQueue& events) {
   // 1-2. tip against each deformable body, then the bodies
@@ -183,18 +196,8 @@ void world_step(const WorldModel& model, WorldData& d, const WorldCommand& cmd, 
   // 4. outputs: the deformable contact adds to the planes' force on the tip
   WorldOutput& out = d.out;
   read_slave(d, out);
-  const int plane = out.in_contact ? out.contact_object : -1;
-  if (plane != d.plane_contact) {
-    if (d.plane_contact >= 0) {
-      events.push(EventKind::kContactEnd, Severity::kInfo, out.sim_time_s, d.plane_contact,
-                  "tip leaves the plane");
-    }
-    if (plane >= 0) {
-      events.push(EventKind::kContactBegin, Severity::kInfo, out.sim_time_s, plane,
-                  "tip touches the plane");
-    }
-    d.plane_contact = plane;
-  }
+  track_plane_contact(d.plane_contact, out.in_contact ? out.contact_object : -1, out.sim_time_s,
+                      events);
   out.contact_force_n += d.deformable_force_n;
   if (on_tip.deepest_m > out.penetration_m) {
     out.penetration_m = on_tip.deepest_m;
