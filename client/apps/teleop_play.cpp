@@ -3,6 +3,7 @@
 //
 //   teleop_play FILE [--speed 1] [--seek S] [--domain D] [--profile P]
 //                    [--exclude TOPIC]... [--wait 0.5] [--linger 1] [--quiet]
+//   teleop_play FILE --export-commands STREAM.csv
 //
 // Each topic is published with the QoS class it was recorded with (latched topics stay
 // transient local for late observers), each sample byte for byte as it was received, paced by
@@ -11,11 +12,16 @@
 // It also publishes teleop/master_command: play on a domain with no live server, or pass
 // --exclude teleop/master_command.
 //
+// --export-commands writes the recording's master commands as a command stream for the
+// server's off-line re-simulation (`teleop_experiment resim`, docs/tools.md) and publishes
+// nothing.
+//
 // Exit status: 0 done, 2 bad command line (or --seek past the end), 1 runtime failure.
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <optional>
 
+#include "client/record/command_export.hpp"
 #include "client/record/player.hpp"
 #include "client/record/recording.hpp"
 #include "client/record/topic_table.hpp"
@@ -41,6 +47,10 @@ int main(int argc, char** argv) {
                  "keep publishing latched topics after the end [s], 0-3600")
       ->capture_default_str();
   app.add_flag("--quiet", po.quiet, "print only warnings and errors");
+  std::string export_commands;
+  app.add_option("--export-commands", export_commands,
+                 "write the recorded master commands to this command stream (CSV) for "
+                 "`teleop_experiment resim`, publish nothing");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -62,6 +72,12 @@ int main(int argc, char** argv) {
         throw config::ConfigError("command line: --exclude '" + t +
                                   "' is not a known topic (allowed: " + names + ")");
       }
+    }
+    if (!export_commands.empty()) {
+      const std::size_t n = record::export_command_stream(po.file, export_commands);
+      if (!po.quiet)
+        std::cout << "teleop_play: " << n << " commands -> " << export_commands << "\n";
+      return 0;
     }
     const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_play");
     teleop::dds::profile_file(opts.profile);

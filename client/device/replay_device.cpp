@@ -37,45 +37,107 @@ bool parse_double(const std::string& text, double& out) {
 
 }  // namespace
 
+namespace {
+
+/// Split `line` at commas, with each field's 1-based column.
+void split_fields(const std::string& line, std::vector<std::string>& fields,
+                  std::vector<std::size_t>& cols) {
+  fields.clear();
+  cols.clear();
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    fields.push_back(
+        line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    cols.push_back(start + 1);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+}
+
+/// Where the 8 replay values sit in a row: from a header naming them (time_s or t_s; x, y, z
+/// or the master log's dev_x, dev_y, dev_z; optional qw.. or dev_qw..), else positional.
+struct ColumnMap {
+  bool named = false;
+  std::size_t width = 0;  ///< fields a row must have when named
+  int index[8] = {};      ///< field of time, x, y, z, qw, qx, qy, qz (-1: absent)
+};
+
+ColumnMap map_header(const std::vector<std::string>& header) {
+  ColumnMap m;
+  auto find = [&](std::initializer_list<const char*> names) {
+    for (std::size_t i = 0; i < header.size(); ++i) {
+      for (const char* n : names) {
+        if (trim(header[i]) == n) return static_cast<int>(i);
+      }
+    }
+    return -1;
+  };
+  m.index[0] = find({"time_s", "t_s"});
+  const char* pos[3][2] = {{"x", "dev_x"}, {"y", "dev_y"}, {"z", "dev_z"}};
+  for (int k = 0; k < 3; ++k) m.index[1 + k] = find({pos[k][0], pos[k][1]});
+  const char* rot[4][2] = {{"qw", "dev_qw"}, {"qx", "dev_qx"}, {"qy", "dev_qy"}, {"qz", "dev_qz"}};
+  for (int k = 0; k < 4; ++k) m.index[4 + k] = find({rot[k][0], rot[k][1]});
+  m.named = m.index[0] >= 0 && m.index[1] >= 0 && m.index[2] >= 0 && m.index[3] >= 0;
+  if (m.named && (m.index[4] < 0 || m.index[5] < 0 || m.index[6] < 0 || m.index[7] < 0)) {
+    for (int k = 4; k < 8; ++k) m.index[k] = -1;
+  }
+  m.width = header.size();
+  return m;
+}
+
+}  // namespace
+
 std::vector<ReplaySample> parse_replay_csv(const std::string& text, const std::string& file) {
   std::vector<ReplaySample> out;
   std::istringstream in(text);
   std::string line;
   std::size_t line_no = 0;
   bool first_content = true;
+  ColumnMap map;
+  std::vector<std::string> fields;
+  std::vector<std::size_t> cols;
   while (std::getline(in, line)) {
     ++line_no;
     const std::string t = trim(line);
     if (t.empty() || t[0] == '#') continue;
-    // split into fields, remembering each field's 1-based column
-    std::vector<std::string> fields;
-    std::vector<std::size_t> cols;
-    std::size_t start = 0;
-    while (true) {
-      const std::size_t comma = line.find(',', start);
-      fields.push_back(
-          line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
-      cols.push_back(start + 1);
-      if (comma == std::string::npos) break;
-      start = comma + 1;
-    }
+    split_fields(line, fields, cols);
     double first = 0.0;
     if (first_content && !parse_double(fields[0], first)) {
-      first_content = false;  // a header line
+      first_content = false;  // a header line: named columns are taken by name
+      map = map_header(fields);
       continue;
     }
     first_content = false;
-    if (fields.size() != 4 && fields.size() != 8) {
-      fail_at(file, line_no, 1,
-              "expected 4 fields (time_s,x,y,z) or 8 (time_s,x,y,z,qw,qx,qy,qz), found " +
-                  std::to_string(fields.size()));
-    }
     double v[8] = {0, 0, 0, 0, 1, 0, 0, 0};
-    for (std::size_t i = 0; i < fields.size(); ++i) {
-      if (!parse_double(fields[i], v[i])) {
-        fail_at(file, line_no, cols[i],
-                std::string("column '") + kColumnNames[i] + "': '" + trim(fields[i]) +
-                    "' is not a finite number");
+    if (map.named) {
+      if (fields.size() != map.width) {
+        fail_at(file, line_no, 1,
+                "expected " + std::to_string(map.width) + " fields as in the header, found " +
+                    std::to_string(fields.size()));
+      }
+      for (int k = 0; k < 8; ++k) {
+        if (map.index[k] < 0) continue;
+        const auto i = static_cast<std::size_t>(map.index[k]);
+        if (!parse_double(fields[i], v[k])) {
+          fail_at(file, line_no, cols[i],
+                  std::string("column '") + kColumnNames[k] + "': '" + trim(fields[i]) +
+                      "' is not a finite number");
+        }
+      }
+    } else {
+      if (fields.size() != 4 && fields.size() != 8) {
+        fail_at(file, line_no, 1,
+                "expected 4 fields (time_s,x,y,z) or 8 (time_s,x,y,z,qw,qx,qy,qz), or a header "
+                "naming them (a teleop_master --log file has one), found " +
+                    std::to_string(fields.size()));
+      }
+      for (std::size_t i = 0; i < fields.size(); ++i) {
+        if (!parse_double(fields[i], v[i])) {
+          fail_at(file, line_no, cols[i],
+                  std::string("column '") + kColumnNames[i] + "': '" + trim(fields[i]) +
+                      "' is not a finite number");
+        }
       }
     }
     ReplaySample s;
@@ -88,9 +150,10 @@ std::vector<ReplaySample> parse_replay_csv(const std::string& text, const std::s
     }
     s.orientation = q.normalized();
     if (!out.empty() && !(s.time_s > out.back().time_s)) {
-      fail_at(file, line_no, cols[0],
+      fail_at(file, line_no, cols[map.named ? static_cast<std::size_t>(map.index[0]) : 0],
               "column 'time_s': " + config::range_text(out.back().time_s, 1e300) +
-                  " required (time must increase strictly), found " + trim(fields[0]));
+                  " required (time must increase strictly), found " +
+                  trim(fields[map.named ? static_cast<std::size_t>(map.index[0]) : 0]));
     }
     out.push_back(s);
   }

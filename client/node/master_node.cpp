@@ -40,7 +40,7 @@ std::string json_number(double v) {
   return buf;
 }
 
-constexpr std::size_t kCsvColumns = 27;
+constexpr std::size_t kCsvColumns = 34;
 /// A log row; the count must match the header exactly (checked at compile time).
 template <class... T>
 std::array<double, kCsvColumns> csv_row(T... v) {
@@ -250,34 +250,16 @@ struct MasterNode::Impl {
 
   void open_log() {
     if (options.log_csv.empty()) return;
-    log = std::make_unique<CsvWriter>(options.log_csv,
-                                      std::vector<std::string>{"t_s",
-                                                               "phase",
-                                                               "seq",
-                                                               "xm_x",
-                                                               "xm_y",
-                                                               "xm_z",
-                                                               "xs_x",
-                                                               "xs_y",
-                                                               "xs_z",
-                                                               "fe_x",
-                                                               "fe_y",
-                                                               "fe_z",
-                                                               "fm_x",
-                                                               "fm_y",
-                                                               "fm_z",
-                                                               "rtt_ms",
-                                                               "link_ok",
-                                                               "in_contact",
-                                                               "penetration_m",
-                                                               "energy_j",
-                                                               "safety_scale",
-                                                               "position_error_m",
-                                                               "deformation_m",
-                                                               "loop_delay_ms",
-                                                               "delay_injected_ms",
-                                                               "passivity_observer_j",
-                                                               "passivity_dissipated_j"});
+    log = std::make_unique<CsvWriter>(
+        options.log_csv,
+        std::vector<std::string>{
+            "t_s", "phase", "seq", "xm_x", "xm_y", "xm_z", "xs_x", "xs_y", "xs_z", "fe_x", "fe_y",
+            "fe_z", "fm_x", "fm_y", "fm_z", "rtt_ms", "link_ok", "in_contact", "penetration_m",
+            "energy_j", "safety_scale", "position_error_m", "deformation_m", "loop_delay_ms",
+            "delay_injected_ms", "passivity_observer_j", "passivity_dissipated_j",
+            // the device's own pose: the log
+            // is a --device replay file
+            "dev_x", "dev_y", "dev_z", "dev_qw", "dev_qx", "dev_qy", "dev_qz"});
   }
 
   /// MasterState for observers (every state_every cycles).
@@ -311,13 +293,16 @@ struct MasterNode::Impl {
     const Eigen::Vector3d& xm = m.master_position_m;
     const Eigen::Vector3d& fe = xs.contact_force_n;
     const Eigen::Vector3d& f = cycle.device_force_n();
+    const DeviceReading& dev = cycle.reading();
     const auto vals = csv_row(
         t_s, cycle.homing_cycle() ? 0.0 : 1.0, static_cast<double>(cycle.command_seq()), xm.x(),
         xm.y(), xm.z(), xs.position_m.x(), xs.position_m.y(), xs.position_m.z(), fe.x(), fe.y(),
         fe.z(), f.x(), f.y(), f.z(), rtt_ms, cycle.safety().link_lost() ? 0.0 : 1.0,
         xs.in_contact ? 1.0 : 0.0, xs.penetration_m, cycle.metrics().energy_j(),
         cycle.safety().scale(), (xm - xs.position_m).norm(), xs.deformation_m, loop_delay_ms,
-        (options.forward.delay_s + options.backward.delay_s) * 1e3, ps.observer_j, ps.dissipated_j);
+        (options.forward.delay_s + options.backward.delay_s) * 1e3, ps.observer_j, ps.dissipated_j,
+        dev.position_m.x(), dev.position_m.y(), dev.position_m.z(), dev.orientation.w(),
+        dev.orientation.x(), dev.orientation.y(), dev.orientation.z());
     log->row(vals.data(), vals.size());
   }
 

@@ -39,6 +39,7 @@ inline constexpr int kMultiHostSecureLanUnicast = 113;  // multi_host_test, secu
 inline constexpr int kMultiHostSecureWanTcp = 114;      // multi_host_test, secure_wan_tcp_*
 inline constexpr int kServerFaultVerdict = 130;         // server_health_test: a fault on the server
 inline constexpr int kServerRestart = 131;              // server_health_test: kill -9 and restart
+inline constexpr int kResimSession = 132;  // record_play_test: recorded, re-simulated, replayed
 inline constexpr int kObserverRates = 115;    // observers_test: monitor on the 10 Hz topics
 inline constexpr int kObserverSession = 116;  // observers_test: 8 observers, default scene
 inline constexpr int kObserverLate = 117;     // observers_test: a late observer

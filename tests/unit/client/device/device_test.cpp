@@ -142,6 +142,26 @@ TEST(ReplayDevice, InterpolatesPositionAndOrientation) {
   EXPECT_NEAR(dev.read().position_m.x(), 0.1, 1e-12);
 }
 
+// A teleop_master --log file is a replay file as it is (issue 15): the header names t_s and the
+// device's own pose dev_x .. dev_qz among the other columns.
+TEST(ReplayDevice, AMasterLogIsReadByItsHeader) {
+  const std::string log =
+      "t_s,phase,seq,xm_x,dev_x,dev_y,dev_z,dev_qw,dev_qx,dev_qy,dev_qz\n"
+      "0.001,0,1,9,0.10,0.20,0.30,1,0,0,0\n"
+      "0.002,1,2,9,0.11,0.21,0.31,0.7071067811865476,0.7071067811865476,0,0\n";
+  const auto s = parse_replay_csv(log, "master_log.csv");
+  ASSERT_EQ(s.size(), 2u);
+  EXPECT_DOUBLE_EQ(s[0].time_s, 0.001);
+  EXPECT_DOUBLE_EQ(s[1].position_m.x(), 0.11);
+  EXPECT_DOUBLE_EQ(s[1].position_m.z(), 0.31);
+  EXPECT_NEAR(s[1].orientation.x(), 0.7071067811865476, 1e-12);
+  // a row shorter than the header is named
+  const std::string msg =
+      error_of([&] { parse_replay_csv(log + "0.003,1,3\n", "master_log.csv"); });
+  EXPECT_NE(msg.find("master_log.csv:4"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("expected 11 fields as in the header"), std::string::npos) << msg;
+}
+
 TEST(ReplayDevice, BadCsvNamesFileLineAndColumn) {
   std::string msg = error_of([] { parse_replay_csv("0,0,0,0\n0.1,0,zero,0\n", "rec.csv"); });
   EXPECT_NE(msg.find("rec.csv:2:7"), std::string::npos) << msg;
