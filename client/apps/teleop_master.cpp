@@ -42,7 +42,7 @@ struct Flags {
   std::string config_file;
   std::optional<std::string> contact_point;
   std::optional<double> kps, kpm, bm, kf, alpha, beta, max_force;
-  std::optional<std::string> delay, jitter, jitter_dist, loss, burst_loss;
+  std::optional<std::string> delay, jitter, jitter_dist, loss, burst_loss, delay_spike, loss_window;
   std::optional<std::uint64_t> seed;
   bool reorder = false;
   std::optional<double> link_timeout;
@@ -111,6 +111,12 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   app.add_flag("--reorder", f.reorder, "let jittered samples overtake each other");
   app.add_option("--loss", f.loss, "Bernoulli f.loss probability (e.g. 1%)");
   app.add_option("--burst-loss", f.burst_loss, "Gilbert-Elliott P_GB,P_BG (e.g. 0.01,0.2)");
+  app.add_option("--delay-spike", f.delay_spike,
+                 "AT,DURATION,EXTRA: samples sent in [AT, AT+DURATION) after the first get EXTRA "
+                 "more delay, both directions (e.g. 3s,1s,1s)");
+  app.add_option("--loss-window", f.loss_window,
+                 "AT,DURATION,P: samples sent in [AT, AT+DURATION) after the first are lost with "
+                 "probability P, both directions (e.g. 3s,1s,50%)");
   app.add_option("--seed", f.seed, "random f.seed of the channels (backward uses f.seed + 1)");
   app.add_option("--homing", o.homing_s, "time to bring the slave to the script start [s]")
       ->capture_default_str();
@@ -184,6 +190,8 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   add("--jitter-dist", f.jitter_dist);
   add("--loss", f.loss);
   add("--burst-loss", f.burst_loss);
+  add("--delay-spike", f.delay_spike);
+  add("--loss-window", f.loss_window);
   if (f.seed) add("--seed", std::to_string(*f.seed));
   if (f.reorder) dflags.push_back("--reorder");
   if (!dflags.empty()) {

@@ -161,8 +161,9 @@ void MasterCycle::finish(double now_s, const SlaveSample* slave_truth) {
   metrics_.update(sample_);
   const ChannelCounters& fw = forward_.counters();
   const ChannelCounters& bw = backward_.counters();
-  metrics_.set_losses(fw.pushed, fw.lost_random + fw.lost_burst + fw.lost_overflow, bw.pushed,
-                      bw.lost_random + bw.lost_burst + bw.lost_overflow);
+  metrics_.set_losses(fw.pushed, fw.lost_random + fw.lost_burst + fw.lost_overflow + fw.lost_window,
+                      bw.pushed,
+                      bw.lost_random + bw.lost_burst + bw.lost_overflow + bw.lost_window);
   // a cut by the safety layer (saturation, energy) makes the run unstable even if the
   // windows evaluated so far did not show it
   if (cfg_.safety_enabled && safety_.cut()) {
@@ -183,12 +184,13 @@ std::string channel_json(const ChannelReport& r) {
   std::snprintf(
       buf, sizeof(buf),
       "{\"pushed\":%llu,\"delivered\":%llu,\"lost_random\":%llu,\"lost_burst\":%llu,"
-      "\"lost_overflow\":%llu,\"stale\":%llu,\"loss_fraction\":%.6g,"
+      "\"lost_overflow\":%llu,\"lost_window\":%llu,\"stale\":%llu,\"loss_fraction\":%.6g,"
       "\"delay_mean_ms\":%.6g,\"delay_std_ms\":%.6g,\"delay_p50_ms\":%.6g,"
       "\"delay_p99_ms\":%.6g,\"delay_max_ms\":%.6g}",
       static_cast<unsigned long long>(c.pushed), static_cast<unsigned long long>(c.delivered),
       static_cast<unsigned long long>(c.lost_random), static_cast<unsigned long long>(c.lost_burst),
-      static_cast<unsigned long long>(c.lost_overflow), static_cast<unsigned long long>(c.stale),
+      static_cast<unsigned long long>(c.lost_overflow),
+      static_cast<unsigned long long>(c.lost_window), static_cast<unsigned long long>(c.stale),
       r.loss_fraction, r.delay_mean_ms, r.delay_std_ms, r.delay_p50_ms, r.delay_p99_ms,
       r.delay_max_ms);
   return buf;

@@ -29,6 +29,7 @@ struct ChannelCounters {
   std::uint64_t lost_random = 0;    ///< dropped by the Bernoulli loss
   std::uint64_t lost_burst = 0;     ///< dropped in the Gilbert-Elliott bad state
   std::uint64_t lost_overflow = 0;  ///< dropped because capacity samples were in flight
+  std::uint64_t lost_window = 0;    ///< dropped in the scheduled loss window
   std::uint64_t superseded = 0;     ///< due but replaced by a newer one in pop_newest()
   std::uint64_t stale = 0;          ///< arrived after a newer one was delivered (discarded)
   std::uint64_t reordered = 0;      ///< delivered with a lower seq than an earlier delivery
@@ -36,9 +37,9 @@ struct ChannelCounters {
   double delay_sum_sq_s2 = 0.0;     ///< sum of squared observed delays [s^2]
   double delay_max_s = 0.0;         ///< largest observed delay [s]
 
-  /// Fraction of pushed samples lost (random + burst + overflow).
+  /// Fraction of pushed samples lost (random + burst + overflow + window).
   double loss_fraction() const {
-    return pushed ? static_cast<double>(lost_random + lost_burst + lost_overflow) /
+    return pushed ? static_cast<double>(lost_random + lost_burst + lost_overflow + lost_window) /
                         static_cast<double>(pushed)
                   : 0.0;
   }
@@ -94,6 +95,8 @@ class DelayChannel {
     next_seq_ = 0;
     newest_delivered_seq_ = 0;
     any_delivered_ = false;
+    any_pushed_ = false;
+    origin_s_ = 0.0;
   }
 
   /// Offers a sample sent at `now_s` [s]. Returns false if it was lost. Never allocates.
@@ -111,7 +114,28 @@ class DelayChannel {
     // draw the Bernoulli loss and the delay for every sample, lost or not, so that the
     // random stream (and hence the delays of later samples) does not depend on the losses
     const bool lost_random = rng_.bernoulli(cfg_.loss_probability);
-    const double delay = draw_delay();
+    double delay = draw_delay();
+    // the scheduled faults, timed from the first sample (no draw unless a window is set, so a
+    // channel without one keeps its random stream)
+    if (!any_pushed_) {
+      any_pushed_ = true;
+      origin_s_ = now_s;
+    }
+    const double since_s = now_s - origin_s_;
+    bool lost_window = false;
+    if (cfg_.window_duration_s > 0.0 && cfg_.window_loss > 0.0) {
+      const bool draw = rng_.bernoulli(cfg_.window_loss);
+      lost_window = draw && since_s >= cfg_.window_at_s &&
+                    since_s < cfg_.window_at_s + cfg_.window_duration_s;
+    }
+    if (cfg_.spike_duration_s > 0.0 && since_s >= cfg_.spike_at_s &&
+        since_s < cfg_.spike_at_s + cfg_.spike_duration_s) {
+      delay += cfg_.spike_extra_s;
+    }
+    if (lost_window) {
+      ++counters_.lost_window;
+      return false;
+    }
     if (cfg_.burst_loss && bad_state_) {
       ++counters_.lost_burst;
       return false;
@@ -272,6 +296,8 @@ class DelayChannel {
   std::uint64_t next_seq_ = 0;
   std::uint64_t newest_delivered_seq_ = 0;
   bool any_delivered_ = false;
+  bool any_pushed_ = false;  ///< the first sample fixed origin_s_
+  double origin_s_ = 0.0;    ///< send time of the first sample [s] (scheduled faults count from it)
 };
 
 }  // namespace teleop::master

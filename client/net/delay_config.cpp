@@ -40,6 +40,12 @@ void DelayConfig::validate() const {
                         " is out of the allowed range (0, 1] (0 would lose everything forever)");
     }
   }
+  check("spike_at_s", spike_at_s, 0.0, 1e6);
+  check("spike_duration_s", spike_duration_s, 0.0, 3600.0);
+  check("spike_extra_s", spike_extra_s, 0.0, 10.0);
+  check("window_at_s", window_at_s, 0.0, 1e6);
+  check("window_duration_s", window_duration_s, 0.0, 3600.0);
+  check("window_loss", window_loss, 0.0, 1.0);
   if (capacity < 2 || capacity > (1u << 24)) {
     throw ConfigError("delay channel: capacity = " + std::to_string(capacity) +
                       " is out of the allowed range [2, 16777216]");
@@ -57,6 +63,16 @@ std::string DelayConfig::describe() const {
   if (burst_loss) {
     std::snprintf(buf, sizeof(buf), " (p_gb %.3g, p_bg %.3g)", burst_p_good_to_bad,
                   burst_p_bad_to_good);
+    s += buf;
+  }
+  if (spike_duration_s > 0.0 && spike_extra_s > 0.0) {
+    std::snprintf(buf, sizeof(buf), ", +%.3g ms delay at %.3g s for %.3g s", spike_extra_s * 1e3,
+                  spike_at_s, spike_duration_s);
+    s += buf;
+  }
+  if (window_duration_s > 0.0 && window_loss > 0.0) {
+    std::snprintf(buf, sizeof(buf), ", %.3g %% loss at %.3g s for %.3g s", window_loss * 100.0,
+                  window_at_s, window_duration_s);
     s += buf;
   }
   return s;
@@ -77,7 +93,8 @@ double DelayConfig::expected_jitter_stddev_s() const {
 
 bool delay_flag_takes_value(const std::string& flag) {
   return flag == "--delay" || flag == "--jitter" || flag == "--jitter-dist" || flag == "--loss" ||
-         flag == "--burst-loss" || flag == "--seed" || flag == "--channel-capacity";
+         flag == "--burst-loss" || flag == "--seed" || flag == "--channel-capacity" ||
+         flag == "--delay-spike" || flag == "--loss-window";
 }
 
 namespace {
@@ -122,6 +139,21 @@ void parse_burst(DelayConfig& cfg, const std::string& flag, const std::string& t
   }
 }
 
+/// "AT,DURATION,X": two durations and a third value parsed by `third`.
+template <class F>
+void parse_window(const std::string& flag, const std::string& text, double& at, double& duration,
+                  double& third, const char* example, F third_parser) {
+  const auto c1 = text.find(',');
+  const auto c2 = c1 == std::string::npos ? c1 : text.find(',', c1 + 1);
+  if (c2 == std::string::npos) {
+    throw ConfigError("command line: " + flag + " '" + text +
+                      "' must be AT,DURATION,VALUE (example: " + example + ")");
+  }
+  at = config::parse_duration_s(flag + " (at)", text.substr(0, c1));
+  duration = config::parse_duration_s(flag + " (duration)", text.substr(c1 + 1, c2 - c1 - 1));
+  third = third_parser(text.substr(c2 + 1));
+}
+
 }  // namespace
 
 bool apply_delay_flag(DelayConfig& cfg, const std::string& flag, const std::string& value) {
@@ -137,6 +169,14 @@ bool apply_delay_flag(DelayConfig& cfg, const std::string& flag, const std::stri
     cfg.loss_probability = config::parse_probability(flag, value);
   } else if (flag == "--burst-loss") {
     parse_burst(cfg, flag, value);
+  } else if (flag == "--delay-spike") {
+    parse_window(
+        flag, value, cfg.spike_at_s, cfg.spike_duration_s, cfg.spike_extra_s, "3s,1s,1s",
+        [&](const std::string& t) { return config::parse_duration_s(flag + " (extra delay)", t); });
+  } else if (flag == "--loss-window") {
+    parse_window(
+        flag, value, cfg.window_at_s, cfg.window_duration_s, cfg.window_loss, "3s,1s,50%",
+        [&](const std::string& t) { return config::parse_probability(flag + " (loss)", t); });
   } else if (flag == "--seed") {
     cfg.seed = parse_u64(flag, value, 0, std::numeric_limits<std::uint64_t>::max());
   } else if (flag == "--channel-capacity") {

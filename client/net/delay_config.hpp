@@ -36,6 +36,11 @@ struct DelayConfig {
   double burst_p_bad_to_good = 1.0;  ///< p_bg per sample (0, 1]; bad state loses all
   std::uint64_t seed = 1;            ///< random seed (mt19937_64)
   std::size_t capacity = 4096;       ///< samples in flight at most (overflow drops)
+  // Scheduled faults, in seconds after the channel's first sample (the fault suite's "a 1 s
+  // delay spike", "a 50 % loss burst"): samples sent in [at, at + duration) get `extra` more
+  // delay (FIFO: the ones after queue behind them) / are lost with probability `p`.
+  double spike_at_s = 0.0, spike_duration_s = 0.0, spike_extra_s = 0.0;
+  double window_at_s = 0.0, window_duration_s = 0.0, window_loss = 0.0;
 
   /// Throws ConfigError if a field is out of range.
   void validate() const;

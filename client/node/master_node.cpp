@@ -365,7 +365,7 @@ struct MasterNode::Impl {
     rep.issued = cycle.command_seq();
     {
       const ChannelCounters& fw = cycle.forward().counters();
-      rep.dropped = fw.lost_random + fw.lost_burst + fw.lost_overflow;
+      rep.dropped = fw.lost_random + fw.lost_burst + fw.lost_overflow + fw.lost_window;
     }
     rep.sent = link.sent();
     rep.received = std::min(link.received_in_session(), rep.sent);

@@ -289,3 +289,81 @@ TEST(DelayConfig, ParsesYamlAndRejectsBadFields) {
 }
 
 }  // namespace
+
+// Scheduled faults for the fault suite (issue 12): a delay spike and a loss window, timed from
+// the channel's first sample.
+TEST(DelayChannelFaults, DelaySpikeDelaysOnlyTheWindowAndKeepsOrder) {
+  DelayConfig cfg;
+  cfg.delay_s = 0.010;
+  apply_delay_flag(cfg, "--delay-spike", "2s,1s,1s");
+  cfg.validate();
+  DelayChannel<int> ch(cfg);
+  const double t0 = 100.0;  // any origin: the window counts from the first sample
+  int last = -1;
+  double max_delay_in = 0.0, max_delay_out = 0.0;
+  std::vector<double> sent(6000);
+  for (int k = 0; k < 6000; ++k) {
+    const double now = t0 + 1e-3 * k;
+    sent[static_cast<std::size_t>(k)] = now;
+    ch.push(k, now);
+    int v = 0;
+    while (ch.pop(now, v)) {
+      EXPECT_GT(v, last);  // FIFO: the samples after the spike queue behind it
+      last = v;
+      const double d = now - sent[static_cast<std::size_t>(v)];
+      (v >= 2000 && v < 3000 ? max_delay_in : max_delay_out) =
+          std::max(v >= 2000 && v < 3000 ? max_delay_in : max_delay_out, d);
+    }
+  }
+  EXPECT_NEAR(max_delay_in, 1.010, 1.5e-3);
+  EXPECT_LT(ch.counters().delivered, 6000u);  // the last second is still in flight
+  EXPECT_EQ(ch.counters().lost_window, 0u);
+  EXPECT_NE(cfg.describe().find("+1e+03 ms delay at 2 s for 1 s"), std::string::npos)
+      << cfg.describe();
+}
+
+TEST(DelayChannelFaults, LossWindowLosesAboutPInsideAndNothingOutside) {
+  DelayConfig cfg;
+  apply_delay_flag(cfg, "--loss-window", "1s,2s,50%");
+  DelayChannel<int> ch(cfg);
+  int lost_in = 0, lost_out = 0;
+  for (int k = 0; k < 4000; ++k) {
+    if (!ch.push(k, 5.0 + 1e-3 * k)) (k >= 1000 && k < 3000 ? lost_in : lost_out)++;
+    int v = 0;
+    while (ch.pop(5.0 + 1e-3 * k, v)) {
+    }
+  }
+  EXPECT_EQ(lost_out, 0);
+  EXPECT_NEAR(lost_in, 1000, 120);  // 2000 samples at p = 0.5: sd 22
+  EXPECT_EQ(ch.counters().lost_window, static_cast<std::uint64_t>(lost_in));
+  EXPECT_NEAR(ch.counters().loss_fraction(), lost_in / 4000.0, 1e-12);
+  // bad values name the flag and the part
+  const std::string msg = error_of([] {
+    DelayConfig c;
+    apply_delay_flag(c, "--loss-window", "1s,2s");
+  });
+  EXPECT_NE(msg.find("--loss-window '1s,2s' must be AT,DURATION,VALUE"), std::string::npos) << msg;
+}
+
+TEST(DelayChannelFaults, WithoutAWindowTheRandomStreamIsUnchanged) {
+  // a channel with a spike (no random draw) and one without give the same losses and delays
+  DelayConfig a;
+  a.delay_s = 0.02;
+  a.jitter_s = 0.005;
+  a.loss_probability = 0.05;
+  DelayConfig b = a;
+  b.spike_at_s = 100.0;  // after the run: never active
+  b.spike_duration_s = 1.0;
+  b.spike_extra_s = 1.0;
+  DelayChannel<int> ca(a), cb(b);
+  for (int k = 0; k < 3000; ++k) {
+    const double now = 1e-3 * k;
+    EXPECT_EQ(ca.push(k, now), cb.push(k, now));
+    int va = 0, vb = 0;
+    bool ga = false, gb = false;
+    while ((ga = ca.pop(now, va)) | (gb = cb.pop(now, vb))) {
+      ASSERT_EQ(ga, gb);
+      EXPECT_EQ(va, vb);
+    }
+  }
+}
