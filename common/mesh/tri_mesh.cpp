@@ -336,6 +336,88 @@ void check_mesh_format(const std::string& extension) {
   }
 }
 
+namespace {
+
+// Debian's assimp 5.2.5 never returns from some malformed PLY headers (tests/fuzz found one of
+// 263 bytes: tests/fuzz/corpus/mesh/regression_ply_header_hang). A PLY file reaches it only with
+// a header of the standard's grammar: "ply", "format ascii|binary_little_endian|
+// binary_big_endian 1.0", then comment / obj_info / element NAME COUNT / property TYPE NAME /
+// property list TYPE TYPE NAME lines, each property after an element, and "end_header", all
+// within the first 64 KB.
+bool ply_type(const std::string& t) {
+  static const char* const kTypes[] = {"char",  "uchar",  "short",   "ushort", "int",   "uint",
+                                       "float", "double", "int8",    "uint8",  "int16", "uint16",
+                                       "int32", "uint32", "float32", "float64"};
+  for (const char* k : kTypes) {
+    if (t == k) return true;
+  }
+  return false;
+}
+
+void check_ply_header(const char* data, std::size_t size, const std::string& name) {
+  constexpr std::size_t kMaxHeader = 64 * 1024;
+  const std::string text(data, std::min(size, kMaxHeader));
+  std::size_t pos = 0, line_no = 0;
+  bool have_format = false, have_element = false;
+  auto fail = [&](const std::string& why) {
+    throw MeshError(name + ": PLY header line " + std::to_string(line_no) + ": " + why +
+                    " (a PLY header is 'ply', 'format ascii|binary_little_endian|"
+                    "binary_big_endian 1.0', element / property / comment lines, 'end_header')");
+  };
+  while (true) {
+    const std::size_t nl = text.find('\n', pos);
+    ++line_no;
+    if (nl == std::string::npos) fail("no 'end_header' within the first 64 KB");
+    std::string line = text.substr(pos, nl - pos);
+    pos = nl + 1;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream in(line);
+    std::vector<std::string> w;
+    for (std::string x; in >> x;) w.push_back(x);
+    if (line_no == 1) {
+      if (line != "ply") fail("the file must start with the line 'ply'");
+      continue;
+    }
+    if (w.empty()) fail("an empty line");
+    if (w[0] == "comment" || w[0] == "obj_info") continue;
+    if (w[0] == "end_header") {
+      if (w.size() != 1) fail("'end_header' takes nothing after it");
+      if (!have_format || !have_element) fail("'end_header' before a format and an element");
+      return;
+    }
+    if (w[0] == "format") {
+      if (have_format || w.size() != 3 || w[2] != "1.0" ||
+          (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian")) {
+        fail("a bad or second 'format' line");
+      }
+      have_format = true;
+    } else if (w[0] == "element") {
+      if (!have_format || w.size() != 3 || w[2].empty() ||
+          w[2].find_first_not_of("0123456789") != std::string::npos || w[2].size() > 9) {
+        fail("'element NAME COUNT' (after the format, COUNT a number below 1e9)");
+      }
+      have_element = true;
+    } else if (w[0] == "property") {
+      const bool list = w.size() == 5 && w[1] == "list" && ply_type(w[2]) && ply_type(w[3]);
+      const bool scalar = w.size() == 3 && ply_type(w[1]);
+      if (!have_element || !(list || scalar)) {
+        fail("'property TYPE NAME' or 'property list TYPE TYPE NAME' after an element");
+      }
+    } else {
+      fail("'" + w[0].substr(0, 32) + "' is not a PLY header keyword");
+    }
+  }
+}
+
+bool is_ply(const std::string& extension) {
+  std::string e = extension;
+  if (!e.empty() && e[0] == '.') e.erase(0, 1);
+  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e == "ply";
+}
+
+}  // namespace
+
 void check_mesh_file(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -352,6 +434,12 @@ void check_mesh_file(const std::string& path) {
   if (size > kMaxMeshFileBytes) {
     throw MeshError(path + ": " + std::to_string(size >> 20) + " MB is larger than the " +
                     std::to_string(kMaxMeshFileBytes >> 20) + " MB a mesh file may have");
+  }
+  if (is_ply(fs::path(path).extension().string())) {
+    std::ifstream f(path, std::ios::binary);
+    std::string head(64 * 1024, '\0');
+    f.read(head.data(), static_cast<std::streamsize>(head.size()));
+    check_ply_header(head.data(), static_cast<std::size_t>(f.gcount()), path);
   }
 }
 
@@ -381,6 +469,7 @@ TriMesh load_mesh_from_memory(const void* data, std::size_t size, const std::str
   } catch (const MeshError& e) {
     throw MeshError(name + ": " + e.what());
   }
+  if (is_ply(format_hint)) check_ply_header(static_cast<const char*>(data), size, name);
   Assimp::Importer importer;
   const aiScene* scene = importer.ReadFileFromMemory(data, size, kImportFlags, format_hint.c_str());
   if (scene == nullptr) {

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include "common/mesh/tri_mesh.hpp"
@@ -52,6 +53,39 @@ TEST(MeshFileChecks, FromMemoryLoadsAndRefusesLikeTheFileLoader) {
     return;
   }
   ADD_FAILURE() << "a mesh with a NaN coordinate was accepted";
+}
+
+TEST(MeshFileChecks, PlyHeadersOutsideTheGrammarAreRefusedBeforeAssimp) {
+  // the input that hangs Debian's assimp 5.2.5 (tests/fuzz/known_issues): refused at its
+  // malformed 'format' line, naming the line, before assimp sees it
+  std::ifstream f(
+      std::string(TELEOP_SOURCE_DIR) + "/tests/fuzz/known_issues/mesh_ply_hang_assimp_5.2.5",
+      std::ios::binary);
+  ASSERT_TRUE(f.good());
+  const std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 1u);
+  try {
+    load_mesh_from_memory(bytes.data() + 1, bytes.size() - 1, "ply", "hang.ply");
+    ADD_FAILURE() << "the hanging PLY header was accepted";
+  } catch (const MeshError& e) {
+    EXPECT_NE(std::string(e.what()).find("hang.ply: PLY header line 2"), std::string::npos)
+        << e.what();
+  }
+  // a well-formed header still loads (a tetrahedron)
+  const std::string tet =
+      "ply\nformat ascii 1.0\ncomment a tetrahedron\nelement vertex 4\nproperty float x\n"
+      "property float y\nproperty float z\nelement face 4\nproperty list uchar int "
+      "vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n"
+      "3 1 2 3\n";
+  const TriMesh m = load_mesh_from_memory(tet.data(), tet.size(), "ply", "tet.ply");
+  EXPECT_EQ(m.triangle_count(), 4);
+  // no end_header, an unknown keyword, a property before any element
+  for (const std::string bad :
+       {std::string("ply\nformat ascii 1.0\nelement vertex 4\n"),
+        std::string("ply\nformat ascii 1.0\nelemant vertex 4\nend_header\n"),
+        std::string("ply\nformat ascii 1.0\nproperty float x\nend_header\n")}) {
+    EXPECT_THROW(load_mesh_from_memory(bad.data(), bad.size(), "ply", "bad.ply"), MeshError) << bad;
+  }
 }
 
 }  // namespace
