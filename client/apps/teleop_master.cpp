@@ -11,7 +11,9 @@
 //                 [--log FILE.csv] [--summary-json FILE]
 //
 // Exit status: 0 session done, 2 bad command line or config, 3 no server, 1 runtime failure.
+#include <unistd.h>
 #include <CLI/CLI.hpp>
+
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -122,6 +124,16 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
       ->capture_default_str();
   app.add_option("--wait-server", o.wait_server_s, "wait for the server this long [s]")
       ->capture_default_str();
+  app.add_option("--wait-owner", o.wait_owner_s,
+                 "when another master owns the slave, wait this long for it to release it "
+                 "(or to fall silent) instead of exiting with status 4 [s], 0-86400 (default 0)");
+  app.add_option("--reconnect", o.reconnect_s,
+                 "TCP client profiles: with no answer from a server for this long, make a new "
+                 "participant (a new connection) [s], 0.5-3600, 0 = never")
+      ->capture_default_str();
+  app.add_option("--name", o.name,
+                 "who this master is in the server's ownership events, up to 48 characters "
+                 "(default IDENTITY@HOST:PID)");
   app.add_option("--link-timeout", f.link_timeout,
                  "no SlaveState for this long fades the force to zero [s], 0.001-10");
   app.add_option("--log", o.log_csv, "per-cycle CSV log");
@@ -140,6 +152,22 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   check_flag("--rate", o.rate_hz, 10.0, 20000.0);
   check_flag("--wait-server", o.wait_server_s, 0.0, 3600.0);
   check_flag("--homing", o.homing_s, 0.0, 60.0);
+  check_flag("--wait-owner", o.wait_owner_s, 0.0, 86400.0);
+  if (o.reconnect_s != 0.0) check_flag("--reconnect", o.reconnect_s, 0.5, 3600.0);
+  if (o.name.size() > 48) {
+    throw teleop::config::ConfigError("command line: --name '" + o.name + "' has " +
+                                      std::to_string(o.name.size()) +
+                                      " characters; at most 48 are allowed");
+  }
+  if (o.name.empty()) {
+    char host[64] = {};
+    gethostname(host, sizeof(host) - 1);
+    const std::string who = o.dds.network.security.identity.empty()
+                                ? std::string("master")
+                                : o.dds.network.security.identity;
+    o.name =
+        who.substr(0, 16) + "@" + std::string(host).substr(0, 20) + ":" + std::to_string(getpid());
+  }
   check_flag("--press-depth", o.press_depth_m, 0.0, 0.2);
   check_flag("--tremor", o.tremor_m, 0.0, 0.01);
   if (o.device == "replay" && o.replay_file.empty()) {
@@ -179,9 +207,9 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   if (f.tdpa_base) o.controller.tdpa_base = *f.tdpa_base;
   o.controller.validate();
   std::vector<std::string> dflags;
-  auto add = [&](const char* f, const std::optional<std::string>& v) {
+  auto add = [&](const char* flag, const std::optional<std::string>& v) {
     if (v) {
-      dflags.push_back(f);
+      dflags.push_back(flag);
       dflags.push_back(*v);
     }
   };

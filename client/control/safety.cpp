@@ -21,7 +21,30 @@ void SafetyLayer::configure(const SafetyParams& params, const DeviceSpec& spec) 
   cut_time_s_ = -1.0;
   cut_reason_ = "";
   faults_ = 0;
+  rate_limited_ = 0;
+  max_step_n_ = 0.0;
+  last_out_.setZero();
   events_.clear();
+}
+
+Eigen::Vector3d SafetyLayer::limit_rate(const Eigen::Vector3d& target, double dt_s) {
+  Eigen::Vector3d f = target;
+  const Eigen::Vector3d delta = target - last_out_;
+  const double d = delta.norm();
+  const double max_d = spec_.max_force_rate_n_per_s > 0.0 ? spec_.max_force_rate_n_per_s * dt_s : d;
+  if (d > max_d) {
+    // both ends lie within the peak force, so every point between them does too
+    f = last_out_ + delta * (max_d / d);
+    ++rate_limited_;
+  }
+  max_step_n_ = std::max(max_step_n_, (f - last_out_).norm());
+  last_out_ = f;
+  max_out_ = std::max(max_out_, f.norm());
+  return f;
+}
+
+Eigen::Vector3d SafetyLayer::hold_zero(double dt_s) {
+  return limit_rate(Eigen::Vector3d::Zero(), dt_s);
 }
 
 void SafetyLayer::rearm() {
@@ -101,8 +124,7 @@ Eigen::Vector3d SafetyLayer::filter(double now_s, double dt_s, const Eigen::Vect
     if (thermal_limited_) f = saturate_norm(f, spec_.max_continuous_force_n);
   }
   f = saturate_norm(f, std::min(limit_n, spec_.max_force_n));
-  max_out_ = std::max(max_out_, f.norm());
-  return f;
+  return limit_rate(f, dt_s);
 }
 
 }  // namespace teleop::master

@@ -10,7 +10,12 @@
 //     -energy_limit (metrics.energy_growing()) -> s ramps to 0 over cut_fade_s (EVENT_SAFETY);
 //   - thermal limit: a first-order average of |F| (time constant continuous_tau_s) above the
 //     spec's max continuous force clamps |F| to that force until it cools (EVENT_LIMIT);
-//   - non-finite force: zero force for that cycle, counted (EVENT_FAULT).
+//   - non-finite force: zero force for that cycle, counted (EVENT_FAULT);
+//   - rate bound: the force written never changes by more than the spec's
+//     max_force_rate_n_per_s times the period in one cycle, whatever the controller, a
+//     returning link, a cut or a re-homing asks (cycles where it acted are counted);
+//   - hold_zero(): cycles where nothing is rendered (homing, refused, closing) bring the force
+//     to zero at that rate instead of dropping it.
 // The output never exceeds the spec's peak force. filter() allocates nothing.
 #include <cstdint>
 
@@ -47,6 +52,12 @@ class SafetyLayer {
   void configure(const SafetyParams& params, const DeviceSpec& spec);
   /// Clears a latched cut and restarts with the force faded in from zero.
   void rearm();
+  /// The next filter() calls fade the force in from zero over link_fade_s (after a re-homing).
+  void fade_in() { scale_ = 0.0; }
+
+  /// A cycle with nothing to render (homing, refused, closing): the force goes to zero at the
+  /// spec's rate bound. Returns the force to write. Real-time safe.
+  Eigen::Vector3d hold_zero(double dt_s);
 
   /// One cycle: `now_s` master clock [s], `dt_s` period, `force_n` the controller's force,
   /// `last_slave_rx_s` master time the newest slave sample arrived (negative: never),
@@ -72,9 +83,17 @@ class SafetyLayer {
   teleop::sim::EventQueue& events() { return events_; }
   /// Number of non-finite forces replaced by zero.
   std::uint64_t faults() const { return faults_; }
+  /// Cycles in which the rate bound changed the force.
+  std::uint64_t rate_limited_cycles() const { return rate_limited_; }
+  /// Largest change of the force written between two cycles [N].
+  double max_step_n() const { return max_step_n_; }
+  /// Force written in the last cycle [N].
+  const Eigen::Vector3d& last_output_n() const { return last_out_; }
 
  private:
   void do_cut(double now_s, const char* reason);
+  /// Moves the output towards `target` by at most the rate bound; records the output.
+  Eigen::Vector3d limit_rate(const Eigen::Vector3d& target, double dt_s);
 
   SafetyParams p_;
   DeviceSpec spec_;
@@ -88,6 +107,9 @@ class SafetyLayer {
   double cut_time_s_ = -1.0;
   const char* cut_reason_ = "";
   std::uint64_t faults_ = 0;
+  std::uint64_t rate_limited_ = 0;
+  double max_step_n_ = 0.0;
+  Eigen::Vector3d last_out_ = Eigen::Vector3d::Zero();
   teleop::sim::EventQueue events_;
 };
 

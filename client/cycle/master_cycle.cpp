@@ -1,9 +1,22 @@
 #include "client/cycle/master_cycle.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
 namespace teleop::master {
+
+const char* to_string(RehomeReason r) {
+  switch (r) {
+    case RehomeReason::kLinkBack:
+      return "link back after a loss";
+    case RehomeReason::kSlaveRestart:
+      return "the slave restarted";
+    case RehomeReason::kTakeover:
+      return "took the slave over";
+  }
+  return "?";
+}
 
 double min_jerk(double t_s, double duration_s) {
   if (duration_s <= 0.0 || t_s >= duration_s) return 1.0;
@@ -45,6 +58,14 @@ void MasterCycle::prepare(double now_s) {
   seq_ = 0;
   sample_arrived_ = false;
   homing_cycle_ = false;
+  held_ = false;
+  track_goal_ = false;
+  link_was_lost_ = false;
+  epoch_seen_ = 0;
+  have_epoch_ = false;
+  rehomes_ = 0;
+  std::fill(std::begin(rehomes_by_), std::end(rehomes_by_), 0);
+  next_session_id_ = cfg_.session_id;
   reading_ = device_.read();
 }
 
@@ -72,13 +93,106 @@ void MasterCycle::start_homing(double now_s, const Eigen::Vector3d& slave_tip_m,
   slave_tip_m_ = slave_tip_m;
   homing_target_m_ = slave_tip_m;
   homing_goal_m_ = cfg_.controller.workspace.to_slave_position(reading_.position_m);
+  // the goal follows the device: a device held still (the simulated and replayed ones do not
+  // move while homing) gives the fixed path of the first versions
+  track_goal_ = true;
+}
+
+void MasterCycle::rehome(double now_s, RehomeReason why) {
+  ++rehomes_;
+  ++rehomes_by_[static_cast<std::size_t>(why)];
+  controller_->deactivate();
+  link_was_lost_ = false;
+  homing_ = true;
+  track_goal_ = true;
+  homing_start_s_ = now_s;
+  homing_from_m_ = slave_tip_m_;
+  homing_target_m_ = slave_tip_m_;
+  homing_goal_m_ = cfg_.controller.workspace.to_slave_position(reading_.position_m);
+  const double distance_m = (homing_goal_m_ - homing_from_m_).norm();
+  homing_duration_s_ =
+      std::clamp(distance_m / std::max(cfg_.rehome_speed_mps, 1e-6), cfg_.rehome_min_s,
+                 std::max(cfg_.rehome_min_s, cfg_.rehome_max_s));
+  char msg[sizeof(sim::SimEvent::message)];
+  std::snprintf(msg, sizeof(msg), "re-homing (%s): slave %.3f m from the master, %.2f s path",
+                to_string(why), distance_m, homing_duration_s_);
+  safety_.events().push(sim::EventKind::kModeChange, sim::Severity::kWarning, now_s, distance_m,
+                        msg);
 }
 
 void MasterCycle::end_homing(double now_s) {
   homing_ = false;
-  session_start_s_ = now_s;
+  const bool first = session_start_s_ < 0.0;
+  if (first) {
+    session_start_s_ = now_s;
+  } else {
+    // a new passivity session: the slave restarts its wave / TDPA state with it
+    if (next_session_id_ != 0) {
+      next_session_id_ += 2;
+      controller_->set_session_id(next_session_id_);
+    }
+    safety_.fade_in();
+  }
   controller_->activate(device_.read());
   last_rx_s_ = now_s;
+}
+
+void MasterCycle::check_rehome(double now_s) {
+  // the epoch is checked on the sample that came through the backward channel, so the path
+  // starts where the restarted slave is
+  const bool restarted = sample_arrived_ && have_epoch_ && newest_.slave_epoch != epoch_seen_;
+  if (sample_arrived_) {
+    epoch_seen_ = newest_.slave_epoch;
+    have_epoch_ = true;
+  }
+  if (held_) return;
+  if (restarted) {
+    rehome(now_s, RehomeReason::kSlaveRestart);
+  } else if (link_was_lost_ && sample_arrived_ && !homing_) {
+    rehome(now_s, RehomeReason::kLinkBack);
+  }
+}
+
+void MasterCycle::homing_step(double now_s) {
+  // the slave follows the path; the operator feels nothing
+  const double th = now_s - homing_start_s_;
+  if (track_goal_) {
+    homing_goal_m_ = cfg_.controller.workspace.to_slave_position(reading_.position_m);
+  }
+  homing_target_m_ =
+      homing_from_m_ + min_jerk(th, homing_duration_s_) * (homing_goal_m_ - homing_from_m_);
+  command_ = SlaveCommand{};
+  command_.position_m = homing_target_m_;
+  command_.orientation = Eigen::Quaterniond::Identity();
+  command_.position_gain_n_per_m = cfg_.controller.slave_stiffness_n_per_m;
+  command_.enabled = true;
+  force_n_ = cfg_.safety_enabled ? safety_.hold_zero(cfg_.dt_s) : Eigen::Vector3d::Zero();
+  controller_force_n_.setZero();
+  device_.write(force_n_, Eigen::Vector3d::Zero());
+  sample_.master_position_m = homing_target_m_;
+  sample_.device_force_n = force_n_;
+  sample_.safety_scale = safety_.scale();
+  if (th >= homing_duration_s_ && ((slave_tip_m_ - homing_goal_m_).norm() < homing_tolerance_m_ ||
+                                   th > homing_duration_s_ + homing_timeout_s_)) {
+    end_homing(now_s);
+  }
+  homing_cycle_ = true;
+}
+
+void MasterCycle::hold_step() {
+  // refused the slave: render nothing, ask nothing of it
+  command_ = SlaveCommand{};
+  command_.position_m = slave_tip_m_;
+  command_.orientation = Eigen::Quaterniond::Identity();
+  command_.position_gain_n_per_m = cfg_.controller.slave_stiffness_n_per_m;
+  command_.enabled = false;
+  force_n_ = cfg_.safety_enabled ? safety_.hold_zero(cfg_.dt_s) : Eigen::Vector3d::Zero();
+  controller_force_n_.setZero();
+  device_.write(force_n_, Eigen::Vector3d::Zero());
+  sample_.master_position_m = slave_tip_m_;
+  sample_.device_force_n = force_n_;
+  sample_.safety_scale = safety_.scale();
+  homing_cycle_ = true;
 }
 
 void MasterCycle::step(double now_s) {
@@ -95,27 +209,11 @@ void MasterCycle::step(double now_s) {
   }
 
   reading_ = device_.read();
-  if (homing_) {
-    // the slave follows the path; the operator feels nothing
-    const double th = now_s - homing_start_s_;
-    homing_target_m_ =
-        homing_from_m_ + min_jerk(th, homing_duration_s_) * (homing_goal_m_ - homing_from_m_);
-    command_ = SlaveCommand{};
-    command_.position_m = homing_target_m_;
-    command_.orientation = Eigen::Quaterniond::Identity();
-    command_.position_gain_n_per_m = cfg_.controller.slave_stiffness_n_per_m;
-    command_.enabled = true;
-    force_n_.setZero();
-    controller_force_n_.setZero();
-    device_.write(force_n_, Eigen::Vector3d::Zero());
-    sample_.master_position_m = homing_target_m_;
-    sample_.device_force_n.setZero();
-    sample_.safety_scale = safety_.scale();
-    if (th >= homing_duration_s_ && ((slave_tip_m_ - homing_goal_m_).norm() < homing_tolerance_m_ ||
-                                     th > homing_duration_s_ + homing_timeout_s_)) {
-      end_homing(now_s);
-    }
-    homing_cycle_ = true;
+  check_rehome(now_s);
+  if (held_) {
+    hold_step();
+  } else if (homing_) {
+    homing_step(now_s);
   } else {
     homing_cycle_ = false;
     const ControlOutput out = controller_->update(reading_, newest_, dt);
@@ -123,6 +221,9 @@ void MasterCycle::step(double now_s) {
     force_n_ = cfg_.safety_enabled ? safety_.filter(now_s, dt, out.force_n, last_rx_s_,
                                                     controller_->force_limit_n(), metrics_)
                                    : out.force_n;
+    if (cfg_.rehome_on_link_back && cfg_.safety_enabled && safety_.link_lost()) {
+      link_was_lost_ = true;
+    }
     device_.write(force_n_, out.torque_nm);
     command_ = out.command;
     sample_.master_position_m = command_.position_m;  // the device mapped to the slave frame

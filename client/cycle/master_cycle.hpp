@@ -9,8 +9,14 @@
 //
 // Before the session the cycle may home: the slave is brought along a minimum-jerk path from
 // where it is to the mapped device position while no force is rendered; the controller is
-// activated once the slave is there. The clock is an argument (seconds on any steady clock);
-// metrics time counts from start(). step() and finish() allocate nothing.
+// activated once the slave is there. During the session it re-homes the same way, from where
+// the slave is to where the device is now, whenever master and slave may have parted: the link
+// came back after a loss, the slave restarted (SlaveLink::restarts()), or the caller says so
+// (rehome(): a takeover of the slave). The force goes to zero at the device's rate bound while
+// homing and fades in from zero after it (SafetyLayer), so none of these makes a force step.
+// hold() keeps the cycle rendering nothing and commanding nothing (a master refused the
+// slave). The clock is an argument (seconds on any steady clock); metrics time counts from
+// start(). step() and finish() allocate nothing.
 #include <Eigen/Core>
 #include <memory>
 #include <string>
@@ -30,6 +36,14 @@ enum class ForwardDelivery {
   kNewestDue,  ///< only the newest due command (an in-process slave reads one per step)
 };
 
+/// Why a session re-homed.
+enum class RehomeReason : std::uint8_t {
+  kLinkBack = 0,      ///< slave samples came back after a link loss
+  kSlaveRestart = 1,  ///< the slave restarted (new server instance)
+  kTakeover = 2,      ///< this master took the slave over from another
+};
+const char* to_string(RehomeReason r);
+
 /// Everything a master cycle needs besides the device and the link.
 struct MasterCycleConfig {
   ControllerParams controller;  ///< scheme, gains, workspace map
@@ -40,7 +54,11 @@ struct MasterCycleConfig {
   VerdictParams verdict;        ///< verdict thresholds
   double dt_s = 1e-3;           ///< haptic period [s]
   ForwardDelivery delivery = ForwardDelivery::kEveryDue;
-  std::uint32_t session_id = 0;  ///< passivity session id sent to the slave (0: controller's)
+  std::uint32_t session_id = 0;     ///< passivity session id sent to the slave (0: controller's)
+  bool rehome_on_link_back = true;  ///< re-home when samples return after a link loss
+  double rehome_speed_mps = 0.1;    ///< re-homing path length / duration, slave frame [m/s]
+  double rehome_min_s = 0.1;        ///< shortest re-homing path [s]
+  double rehome_max_s = 3.0;        ///< longest re-homing path [s]
 };
 
 /// One master cycle. See the file comment.
@@ -58,6 +76,17 @@ class MasterCycle {
   void start_homing(double now_s, const Eigen::Vector3d& slave_tip_m, double duration_s,
                     double tolerance_m = 0.005, double timeout_s = 3.0);
 
+  /// Re-homes now (see the file comment): the controller stops, the force goes to zero at the
+  /// rate bound, the slave goes from where it is to the mapped device position, then the
+  /// controller restarts (a new passivity session) and the force fades in. Real-time safe.
+  void rehome(double now_s, RehomeReason why);
+  /// While on, the cycle renders nothing (force to zero at the rate bound), runs no
+  /// controller and sends commands that hold the slave (enabled = false); its cycles are not
+  /// part of the session's figures. Turning it off does not restart the controller: call
+  /// rehome() for that.
+  void hold(bool on) { held_ = on; }
+  bool held() const { return held_; }
+
   /// The master half of a cycle (see the file comment). Real-time safe.
   void step(double now_s);
   /// Closes the cycle: metrics from the newest slave sample at the master, or from
@@ -68,6 +97,13 @@ class MasterCycle {
   void stop();
 
   bool homing() const { return homing_; }
+  /// Re-homings so far in this session, and why the last one happened.
+  std::uint64_t rehomes() const { return rehomes_; }
+  std::uint64_t rehomes(RehomeReason why) const {
+    return rehomes_by_[static_cast<std::size_t>(why)];
+  }
+  /// True from rehome() until the controller runs again.
+  bool rehoming() const { return homing_ && session_start_s_ >= 0.0; }
   /// True if the last step() was a homing cycle (nothing rendered, no metrics recorded).
   bool homing_cycle() const { return homing_cycle_; }
   /// Time the session proper began (homing over) [s]; negative while homing.
@@ -94,10 +130,14 @@ class MasterCycle {
   const DelayChannel<SlaveCommand>& forward() const { return forward_; }
   const DelayChannel<SlaveSample>& backward() const { return backward_; }
   const MasterCycleConfig& config() const { return cfg_; }
+  const DeviceSpec& device_spec() const { return device_.spec(); }
 
  private:
   void prepare(double now_s);
   void end_homing(double now_s);
+  void homing_step(double now_s);
+  void hold_step();
+  void check_rehome(double now_s);
 
   MasterCycleConfig cfg_;
   HapticDevice& device_;
@@ -131,6 +171,14 @@ class MasterCycle {
   Eigen::Vector3d homing_goal_m_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d homing_target_m_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d slave_tip_m_ = Eigen::Vector3d::Zero();  // where the slave is, as known
+  bool track_goal_ = false;                                // re-homing: the goal follows the device
+  bool held_ = false;
+  bool link_was_lost_ = false;  // the link was lost while the controller ran
+  std::uint32_t epoch_seen_ = 0;
+  bool have_epoch_ = false;
+  std::uint64_t rehomes_ = 0;
+  std::uint64_t rehomes_by_[3] = {0, 0, 0};
+  std::uint32_t next_session_id_ = 0;
 };
 
 /// JSON object of a channel report: {"pushed":..,"delay_mean_ms":..,"delay_p50_ms":..,...}.

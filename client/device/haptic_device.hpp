@@ -22,6 +22,13 @@ struct DeviceSpec {
   double max_damping_ns_per_m = 20.0;     ///< largest stable virtual damping [N s/m]
   int translational_dof = 3;              ///< actuated translational axes
   int rotational_dof = 3;                 ///< sensed rotational axes
+  /// Largest rate of change of the commanded force [N/s]: the safety layer never changes the
+  /// force written by more than this times the period in one cycle (no force steps), whatever
+  /// the controller, a returning link or a re-homing asks. 1000 N/s is 1 N per 1 kHz cycle,
+  /// the 10 N peak from zero in 10 ms. Contact with the default sphere loads at a few N/s and a
+  /// 3000 N/m wall touched at 5 cm/s at 150 N/s; TDPA's damping at K = 3000 N/m and 100 ms
+  /// needs more than 500 N/s to stay passive (tests/unit/client/control/passivity_test.cpp).
+  double max_force_rate_n_per_s = 1000.0;
 
   /// True if `p` [m] lies inside the workspace box.
   bool inside_workspace(const Eigen::Vector3d& p) const {

@@ -78,6 +78,8 @@ const char* event_kind(std::uint8_t k) {
       return "limit";
     case EVENT_SAFETY:
       return "safety";
+    case EVENT_OWNERSHIP:
+      return "ownership";
     default:
       return "info";
   }

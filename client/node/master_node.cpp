@@ -4,9 +4,11 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <mutex>
 #include <thread>
 
 #include "client/cycle/master_cycle.hpp"
@@ -53,6 +55,19 @@ double relative_force_error(const SessionMetrics& m) {
   return f > 1e-9 ? m.force_error_rms_n() / f : std::nan("");
 }
 
+/// `text` as the inside of a JSON string.
+std::string json_escape(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) >= 0x20) out += c;
+  }
+  return out;
+}
+
+/// Internal status of Impl::run: make a new participant and wait again.
+constexpr int kReconnect = -2;
+
 /// Commands whose entry time is remembered for the loop-delay measurement.
 constexpr std::uint64_t kEntryRing = 1 << 16;
 
@@ -82,6 +97,29 @@ struct SessionReport {
   std::uint64_t server_overruns = 0;
   std::uint64_t server_rejected = 0;
   std::uint64_t server_restarts = 0;
+  // ownership of the slave (docs/topics.md, "Ownership")
+  std::uint64_t issued_before_owning = 0;  // commands sent while another master owned the slave
+  bool refused = false;                    // refused the slave and never got it (exit status 4)
+  bool refused_first = false;              // refused before it first owned the slave
+  double waited_for_owner_s = 0.0;         // time spent refused, waiting for the slave
+  std::uint64_t closing_cycles = 0;        // cycles of the final fade-out (after --samples)
+  std::uint64_t releases_sent = 0;         // release commands written at the very end
+  std::string owner_message;               // the server's word on who owns the slave
+};
+
+/// The verdict of a session; "refused" when it never had the slave (nothing was judged).
+inline const char* session_verdict(const SessionMetrics& m, const SessionReport& rep) {
+  return rep.refused && rep.issued == 0 ? "refused" : verdict_name(m.verdict());
+}
+
+/// The master's side of ownership during a run (watch_ownership()).
+struct OwnershipWatch {
+  bool refused = false;        // another master owns the slave: the cycle holds
+  bool owned_once = false;     // this master has owned the slave in this session
+  bool give_up = false;        // refused and not (or no longer) waiting: end the session
+  bool refused_first = false;  // refused before it ever owned the slave
+  double refused_at_s = 0.0;
+  double waited_s = 0.0;
 };
 
 struct MasterNode::Impl {
@@ -112,6 +150,13 @@ struct MasterNode::Impl {
   std::atomic<std::uint64_t> server_fault_events{0};
   ServerHealth health;
   std::uint64_t stats_seen = 0;
+  // ownership: this master's session id, and the newest server event about it
+  std::uint32_t master_session = static_cast<std::uint32_t>(now_ns() >> 10) | 1u;
+  std::mutex owner_event_mutex;
+  std::string owner_event;
+
+  double waited_s = 0.0;  // time run() waited for the server before returning kReconnect
+  bool tcp_client = false;
 
   explicit Impl(const MasterOptions& o)
       : options(o),
@@ -122,6 +167,10 @@ struct MasterNode::Impl {
         state_views(participant,
                     {{dds::topics::kMasterStateView, dds::topics::kViewRateHz},
                      {dds::topics::kMasterStateMonitor, dds::topics::kMonitorRateHz}}) {
+    dds::ProfileKind kind = dds::ProfileKind::kUdp;
+    (void)dds::participant_qos(o.dds, &kind);
+    tcp_client = kind == dds::ProfileKind::kTcp;
+
     state_reader = std::make_unique<dds::Reader<SlaveStatePubSubType>>(
         participant, dds::topics::kSlaveState, dds::TopicQos::kStream,
         [this](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo&) {
@@ -147,6 +196,15 @@ struct MasterNode::Impl {
               e.kind() == static_cast<std::uint8_t>(sim::EventKind::kFault) &&
               now_ns() >= session_start_ns.load()) {
             server_fault_events.fetch_add(1);
+          }
+          // the server's word on this master's ownership (it names the session in hex)
+          char mine[16];
+          std::snprintf(mine, sizeof(mine), "0x%08x", master_session);
+          if (e.source() == "server" &&
+              e.kind() == static_cast<std::uint8_t>(sim::EventKind::kOwnership) &&
+              std::strstr(e.message().c_str(), mine) != nullptr) {
+            std::lock_guard<std::mutex> lock(owner_event_mutex);
+            owner_event = e.message().c_str();
           }
         });
     if (o.device == "external") {
@@ -226,18 +284,29 @@ struct MasterNode::Impl {
   }
 
   /// Waits for a matched command reader, a first SlaveState and the scene (or 2 s more).
-  /// Returns -1 when the server is there, else the exit status (3: no server, 0: stopped).
-  int wait_for_server(double& wait_s) {
+  /// Returns -1 when the server is there, kReconnect when a TCP client should make a new
+  /// participant (see MasterNode::run), else the exit status (3: no server, 0: stopped).
+  /// `waited_before_s`: time already spent waiting by earlier participants.
+  int wait_for_server(double& wait_s, double waited_before_s = 0.0) {
     const std::int64_t wait_start = now_ns();
     std::int64_t first_state_ns = 0;
     while (!stop_requested()) {
+      // Fast DDS 2.9's TCP client has been seen (multi-host test, about one connection in
+      // sixteen) never to complete its connection to a running server: a new participant
+      // makes a new connection
+      if (tcp_client && mailbox.version() == 0 && options.reconnect_s > 0.0 &&
+          seconds_between(wait_start, now_ns()) > options.reconnect_s &&
+          waited_before_s + seconds_between(wait_start, now_ns()) < options.wait_server_s) {
+        wait_s = waited_before_s + seconds_between(wait_start, now_ns());
+        return kReconnect;
+      }
       const bool ready = command_writer.matched() > 0 && mailbox.version() > 0;
       if (ready && first_state_ns == 0) first_state_ns = now_ns();
       if (ready && (scene_box.version() > 0 || seconds_between(first_state_ns, now_ns()) > 2.0)) {
         wait_s = seconds_between(wait_start, now_ns());
         return -1;
       }
-      if (seconds_between(wait_start, now_ns()) > options.wait_server_s) {
+      if (waited_before_s + seconds_between(wait_start, now_ns()) > options.wait_server_s) {
         std::cerr << "teleop_master: no server answered on domain " << options.dds.domain
                   << " (profile " << options.dds.profile << ") within " << options.wait_server_s
                   << " s\n";
@@ -306,12 +375,15 @@ struct MasterNode::Impl {
     log->row(vals.data(), vals.size());
   }
 
-  int run() {
+  int run(double waited_before_s = 0.0) {
     install_stop_signal_handlers();
     // 1. wait for the server: a matched command reader, a first SlaveState and the scene
     double wait_s = 0.0;
-    if (const int status = wait_for_server(wait_s); status >= 0) return status;
-    DdsSlaveLink link(command_writer, mailbox);
+    if (const int status = wait_for_server(wait_s, waited_before_s); status != -1) {
+      waited_s = wait_s;
+      return status;
+    }
+    DdsSlaveLink link(command_writer, mailbox, master_session, options.name);
     link.take_newest();
     SceneDescription scene;
     std::uint64_t scene_seen = 0;
@@ -362,7 +434,13 @@ struct MasterNode::Impl {
     }
     state_reader->stop();
 
-    rep.issued = cycle.command_seq();
+    // commands sent while another master owned the slave are not this session's (commands lost
+    // on the way before the first one arrived are: only a refusal seen moves the start)
+    if (rep.refused_first) {
+      rep.issued_before_owning =
+          link.first_owned_seq() > 0 ? link.first_owned_seq() - 1 : cycle.command_seq();
+    }
+    rep.issued = cycle.command_seq() - rep.issued_before_owning;
     {
       const ChannelCounters& fw = cycle.forward().counters();
       rep.dropped = fw.lost_random + fw.lost_burst + fw.lost_overflow + fw.lost_window;
@@ -384,9 +462,89 @@ struct MasterNode::Impl {
     rep.backward = cycle.backward().report();
     rep.rtt_ms = summarize(link.rtt().rtt_ms().snapshot());
     rep.jitter_us = summarize(loop.lateness_us().snapshot());
+    {
+      std::lock_guard<std::mutex> lock(owner_event_mutex);
+      rep.owner_message = owner_event;
+    }
     if (!options.summary_json.empty()) write_summary_json(cycle, rep);
     if (!options.quiet) print_summary(cycle, rep);
+    if (rep.refused) {
+      std::cerr << "teleop_master: refused: another master owns the slave ("
+                << (rep.owner_message.empty() ? "the server's state names its session"
+                                              : rep.owner_message)
+                << "); no force was rendered"
+                << (options.wait_owner_s > 0
+                        ? "; waited " + std::to_string(rep.waited_for_owner_s) + " s for it"
+                        : "; --wait-owner SECONDS waits for it")
+                << "\n";
+      return 4;
+    }
     return 0;
+  }
+
+  /// Ownership, once per cycle (see OwnershipWatch): a master refused the slave holds (renders
+  /// nothing, commands nothing) and ends the session unless it waits; one that gets the slave
+  /// after waiting re-homes. `grace_s`: how long this master's first commands may take to
+  /// reach the server and its answer to come back.
+  void watch_ownership(MasterCycle& cycle, const DdsSlaveLink& link, double now_s, double t0_s,
+                       double grace_s, OwnershipWatch& w) {
+    const DdsSlaveLink::Owner owner = link.owner();
+    if (owner == DdsSlaveLink::Owner::kMine) {
+      if (w.refused) {
+        w.refused = false;
+        w.waited_s += now_s - w.refused_at_s;
+        cycle.hold(false);
+        cycle.rehome(now_s, RehomeReason::kTakeover);
+        event(static_cast<std::uint8_t>(sim::EventKind::kOwnership), 1,
+              "got the slave after waiting " + std::to_string(now_s - w.refused_at_s) + " s",
+              now_s - w.refused_at_s);
+      }
+      w.owned_once = true;
+      return;
+    }
+    if (owner != DdsSlaveLink::Owner::kOther) return;
+    if (!w.refused && (w.owned_once || now_s - t0_s > grace_s)) {
+      w.refused = true;
+      w.refused_first = !w.owned_once;
+      w.refused_at_s = now_s;
+      cycle.hold(true);
+      char msg[160];
+      std::snprintf(msg, sizeof(msg), "refused: the slave is owned by master session 0x%08x%s",
+                    link.other_owner_session(),
+                    options.wait_owner_s > 0 ? "; waiting for it" : "; no force rendered");
+      event(static_cast<std::uint8_t>(sim::EventKind::kOwnership), 2, msg, 0.0);
+      if (options.wait_owner_s <= 0) w.give_up = true;
+    } else if (w.refused && now_s - w.refused_at_s > options.wait_owner_s) {
+      w.give_up = true;
+    }
+  }
+
+  /// The end of a session: the force fades to zero at the device's rate bound while the slave
+  /// holds, then this master releases the slave (three release commands, best effort).
+  /// Returns the cycles it took.
+  std::uint64_t close_session(MasterCycle& cycle, RateLoop& loop, DdsSlaveLink& link, double t0_s) {
+    cycle.hold(true);
+    const std::int64_t start = now_ns();
+    std::uint64_t cycles = 0;
+    while (seconds_between(start, now_ns()) < 1.0) {
+      const double now_s = static_cast<double>(now_ns()) * 1e-9;
+      ++cycles;
+      cycle.step(now_s);
+      cycle.finish(now_s);
+      if (log) log_row(cycle, now_s - t0_s, link.last_rtt_ms(), std::nan(""));
+      if (cycle.device_force_n().squaredNorm() == 0.0) break;
+      loop.wait();
+    }
+    SlaveCommand release;
+    release.position_m = cycle.slave_at_master().position_m;
+    release.enabled = false;
+    release.release = true;
+    for (int k = 1; k <= 3; ++k) {
+      release.seq = cycle.command_seq() + static_cast<std::uint64_t>(k);
+      link.send(release);
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return cycles;
   }
 
   /// Takes the newest ServerStats into the health counters. Returns the faults so far.
@@ -425,11 +583,14 @@ struct MasterNode::Impl {
     session_start_ns.store(t0);
     cycle.start_homing(t0_s, tip0, options.homing_s);
     std::uint64_t faults_seen = 0;
+    OwnershipWatch owner;
+    const double grace_s = 0.5 + 2.0 * (options.forward.delay_s + options.backward.delay_s);
 
     while (!stop_requested()) {
       const std::int64_t now = now_ns();
       const double now_s = static_cast<double>(now) * 1e-9;
       if (options.samples > 0 && cycles >= options.samples) break;
+      if (owner.give_up) break;
       if (!cycle.homing() && now_s - cycle.session_start_s() >= session_length) break;
       ++cycles;
 
@@ -452,6 +613,7 @@ struct MasterNode::Impl {
         DeviceCommand dc = to_idl(external->next_command(), now);
         device_command_writer->write(dc);
       }
+      watch_ownership(cycle, link, now_s, t0_s, grace_s, owner);
       cycle.finish(now_s);
       // a session whose slave faulted is never stable
       if (const std::uint64_t faults = update_health(); faults > faults_seen) {
@@ -471,8 +633,13 @@ struct MasterNode::Impl {
     }
     const double end_s = static_cast<double>(now_ns()) * 1e-9;
     rep.elapsed_s = end_s - t0_s;
-    rep.session_s = cycle.homing() ? 0.0 : end_s - cycle.session_start_s();
+    rep.session_s = cycle.session_start_s() < 0 ? 0.0 : end_s - cycle.session_start_s();
     rep.loop_delay_ms = summarize(loop_delay_ms.snapshot());
+    rep.refused = owner.give_up;
+    rep.refused_first = owner.refused_first;
+    rep.waited_for_owner_s = owner.waited_s + (owner.refused ? end_s - owner.refused_at_s : 0.0);
+    rep.closing_cycles = close_session(cycle, loop, link, t0_s);
+    rep.releases_sent = link.releases_sent();
   }
 
   void write_summary_json(const MasterCycle& cycle, const SessionReport& rep) const {
@@ -511,15 +678,29 @@ struct MasterNode::Impl {
         << "  \"loop_jitter_us\": {\"p50\": " << json_number(j.p50)
         << ", \"p99\": " << json_number(j.p99) << ", \"max\": " << json_number(j.max) << "},\n"
         << "  \"overruns\": " << rep.overruns << ",\n"
+        << "  \"closing_cycles\": " << rep.closing_cycles << ",\n"
+        << "  \"releases_sent\": " << rep.releases_sent << ",\n"
         << "  \"link_losses\": " << rep.link_losses << ",\n"
         << "  \"wait_server_s\": " << json_number(rep.wait_s) << ",\n"
-        << "  \"verdict\": \"" << verdict_name(metrics.verdict()) << "\",\n"
+        << "  \"verdict\": \"" << session_verdict(metrics, rep) << "\",\n"
         << "  \"metrics\": " << metrics.summary_json() << ",\n"
         << "  \"delay\": {\"forward\": " << channel_json(rep.forward)
         << ", \"backward\": " << channel_json(rep.backward) << "},\n"
         << "  \"safety\": {\"cut\": " << (safety.cut() ? "true" : "false") << ", \"reason\": \""
         << safety.cut_reason() << "\", \"max_output_n\": " << json_number(safety.max_output_n())
-        << "}\n"
+        << ", \"max_step_n\": " << json_number(safety.max_step_n())
+        << ", \"max_force_rate_n_per_s\": "
+        << json_number(cycle.device_spec().max_force_rate_n_per_s)
+        << ", \"rate_limited_cycles\": " << safety.rate_limited_cycles() << "},\n"
+        << "  \"rehomes\": {\"total\": " << cycle.rehomes()
+        << ", \"link_back\": " << cycle.rehomes(RehomeReason::kLinkBack)
+        << ", \"slave_restart\": " << cycle.rehomes(RehomeReason::kSlaveRestart)
+        << ", \"takeover\": " << cycle.rehomes(RehomeReason::kTakeover) << "},\n"
+        << "  \"ownership\": {\"session\": " << master_session
+        << ", \"refused\": " << (rep.refused ? "true" : "false")
+        << ", \"issued_before_owning\": " << rep.issued_before_owning
+        << ", \"waited_s\": " << json_number(rep.waited_for_owner_s) << ", \"server_says\": \""
+        << json_escape(rep.owner_message) << "\"}\n"
         << "}\n";
   }
 
@@ -536,6 +717,17 @@ struct MasterNode::Impl {
     char rel_buf[32];
     std::snprintf(rel_buf, sizeof(rel_buf), "%.0f%%", 100.0 * rel);
     const std::string relative = std::isfinite(rel) ? rel_buf : "no contact: -";
+    char own_buf[160];
+    std::snprintf(own_buf, sizeof(own_buf), "session 0x%08x%s", master_session,
+                  rep.refused ? ": REFUSED, another master owns the slave"
+                              : (rep.issued_before_owning > 0 ? ": got the slave after waiting"
+                                                              : ": owned the slave"));
+    std::string ownership = own_buf;
+    if (rep.issued_before_owning > 0 || rep.refused) {
+      ownership += " (" + std::to_string(rep.issued_before_owning) +
+                   " commands sent while refused, " + std::to_string(rep.waited_for_owner_s) +
+                   " s)";
+    }
     std::fprintf(
         stdout,
         "session summary (%s, %s, script %s)\n"
@@ -551,7 +743,10 @@ struct MasterNode::Impl {
         "  force           max rendered %.2f N, force error RMS %.3f N (%s of the mean "
         "contact force), contact %.2f s, mean contact force %.2f N\n"
         "  passivity       energy at the master port %.4f J (min %.4f J)\n"
-        "  safety          %s%s, link losses %llu\n"
+        "  safety          %s%s, link losses %llu, re-homed %llu times (link back %llu, slave "
+        "restart %llu, takeover %llu); force change at most %.3f N per cycle (bound %.0f N/s, "
+        "held to it in %llu cycles)\n"
+        "  ownership       %s\n"
         "  server          %llu faults, %llu watchdog trips, %llu overruns, %llu commands "
         "rejected, %llu restarts\n"
         "  verdict         %s%s%s\n",
@@ -569,17 +764,37 @@ struct MasterNode::Impl {
         metrics.contact_time_s(), metrics.mean_contact_force_n(), metrics.energy_j(),
         metrics.energy_min_j(), safety.cut() ? "CUT: " : "ok",
         safety.cut() ? safety.cut_reason() : "", static_cast<unsigned long long>(rep.link_losses),
+        static_cast<unsigned long long>(cycle.rehomes()),
+        static_cast<unsigned long long>(cycle.rehomes(RehomeReason::kLinkBack)),
+        static_cast<unsigned long long>(cycle.rehomes(RehomeReason::kSlaveRestart)),
+        static_cast<unsigned long long>(cycle.rehomes(RehomeReason::kTakeover)),
+        safety.max_step_n(), cycle.device_spec().max_force_rate_n_per_s,
+        static_cast<unsigned long long>(safety.rate_limited_cycles()), ownership.c_str(),
         static_cast<unsigned long long>(rep.server_faults),
         static_cast<unsigned long long>(rep.server_watchdog_trips),
         static_cast<unsigned long long>(rep.server_overruns),
         static_cast<unsigned long long>(rep.server_rejected),
-        static_cast<unsigned long long>(rep.server_restarts), verdict_name(metrics.verdict()),
+        static_cast<unsigned long long>(rep.server_restarts), session_verdict(metrics, rep),
         *metrics.verdict_reason() ? " - " : "", metrics.verdict_reason());
   }
 };
 
-MasterNode::MasterNode(const MasterOptions& options) : impl_(std::make_unique<Impl>(options)) {}
+MasterNode::MasterNode(const MasterOptions& options)
+    : impl_options_(options), impl_(std::make_unique<Impl>(options)) {}
 MasterNode::~MasterNode() = default;
-int MasterNode::run() { return impl_->run(); }
+int MasterNode::run() {
+  double waited_s = 0.0;
+  for (;;) {
+    const int status = impl_->run(waited_s);
+    if (status != kReconnect) return status;
+    waited_s = impl_->waited_s;
+    if (!impl_->options.quiet) {
+      std::cerr << "teleop_master: no answer from a server over TCP for "
+                << impl_->options.reconnect_s << " s: reconnecting\n";
+    }
+    impl_.reset();
+    impl_ = std::make_unique<Impl>(impl_options_);
+  }
+}
 
 }  // namespace teleop::master

@@ -6,7 +6,11 @@
 //                        -> MasterCommand writer;   SlaveState reader -> backward channel
 //
 // Before the operator's script starts, a homing phase brings the slave smoothly from where
-// it is to the script's start (no force rendered). The round trip is measured on the master's
+// it is to the script's start (no force rendered); the cycle re-homes after a link loss, a
+// server restart or a takeover (MasterCycle). One master owns the slave at a time
+// (docs/topics.md, "Ownership"): a master refused by the server renders nothing and exits with
+// status 4, or waits for the slave with wait_owner_s. At the end the force fades out at the
+// device's rate bound and the master releases the slave. The round trip is measured on the master's
 // own clock: SlaveState echoes the command's seq and send time, stamped when the command
 // entered the forward channel, so it includes both injected delays.
 #include <memory>
@@ -28,6 +32,13 @@ struct MasterOptions {
   double homing_s = 1.5;         ///< time to bring the slave to the script start [s]
   double state_rate_hz = 100.0;  ///< MasterState publication rate [Hz]
   double drain_s = 0.3;          ///< after the last command, keep reading this long [s]
+  /// Another master owns the slave: wait up to this long for it to release it (or fall silent
+  /// past the server's ownership watchdog) instead of exiting with status 4 [s]; 0 = no wait.
+  double wait_owner_s = 0.0;
+  /// TCP client profiles: with no answer from a server for this long, make a new participant
+  /// (a new connection) and go on waiting [s]; 0 = never.
+  double reconnect_s = 3.0;
+  std::string name;  ///< who this master is, in the server's ownership events ("" = identity)
 
   // device
   std::string device = "simulated";   ///< simulated | replay | external
@@ -52,11 +63,13 @@ class MasterNode {
  public:
   explicit MasterNode(const MasterOptions& options);
   ~MasterNode();
-  /// Runs the session. Returns the exit status (0 ok, 3 server never appeared).
+  /// Runs the session. Returns the exit status (0 ok, 3 server never appeared, 4 refused: another
+  /// master owns the slave).
   int run();
 
  private:
   struct Impl;
+  MasterOptions impl_options_;
   std::unique_ptr<Impl> impl_;
 };
 

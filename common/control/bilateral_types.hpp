@@ -30,6 +30,7 @@ struct SlaveCommand {
   double position_gain_n_per_m = 0.0;  ///< K_ps requested from the slave (0 = its default)
   SchemeId scheme = SchemeId::kPositionPosition;
   bool enabled = true;  ///< false: the slave holds its pose
+  bool release = false;  ///< the master gives the slave up (its last commands; ownership)
   // passivity schemes (see common/control/slave_port.hpp)
   std::uint32_t passivity_session = 0;   ///< session id of a wave / TDPA run (0: none)
   double wave_impedance_ns_per_m = 0.0;  ///< b [N s/m] (wave variables)
@@ -54,6 +55,9 @@ struct SlaveSample {
   double deformation_m = 0.0;  ///< indentation of a deformable body since contact began [m]
   bool in_contact = false;     ///< tip touches something
   bool valid = false;          ///< false: no sample received yet
+  /// Which life of the slave this sample comes from: the transport counts the slave's
+  /// restarts (a new server instance starts from home); a master re-homes when it changes.
+  std::uint32_t slave_epoch = 0;
   // passivity schemes (see common/control/slave_port.hpp)
   std::uint32_t passivity_session = 0;  ///< session the fields below belong to (0: none)
   Eigen::Vector3d wave_v_integral = Eigen::Vector3d::Zero();  ///< sum dt v [sqrt(W) s]

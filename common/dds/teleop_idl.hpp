@@ -51,6 +51,7 @@ inline void to_idl(const SlaveCommand& c, std::int64_t send_time_ns, teleop::Mas
   detail::put3(m.wave_u(), c.wave_u);
   m.position_gain_n_per_m(c.position_gain_n_per_m);
   m.enabled(c.enabled);
+  m.release(c.release);
   m.passivity_session(c.passivity_session);
   m.wave_impedance_ns_per_m(c.wave_impedance_ns_per_m);
   m.wave_matched(c.wave_matched);
@@ -105,6 +106,7 @@ inline SlaveCommand from_idl(const teleop::MasterCommand& m) {
   c.position_gain_n_per_m = m.position_gain_n_per_m();
   c.scheme = static_cast<SchemeId>(m.scheme());
   c.enabled = m.enabled();
+  c.release = m.release();
   c.passivity_session = m.passivity_session();
   c.wave_impedance_ns_per_m = m.wave_impedance_ns_per_m();
   c.wave_matched = m.wave_matched();

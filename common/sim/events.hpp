@@ -19,6 +19,7 @@ enum class EventKind : std::uint8_t {
   kCommandRejected = 6,
   kLimit = 7,
   kSafety = 8,
+  kOwnership = 9,  ///< a master took, released or was refused the slave
 };
 
 enum class Severity : std::uint8_t { kInfo = 0, kWarning = 1, kError = 2 };

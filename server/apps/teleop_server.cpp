@@ -7,6 +7,7 @@
 // 1 runtime failure (e.g. DDS could not start).
 #include <CLI/CLI.hpp>
 #include <iostream>
+#include <algorithm>
 #include <optional>
 #include <sstream>
 
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
   std::string scene_file = std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml";
   std::optional<double> rate_hz;
   std::optional<double> command_timeout_s;
+  std::optional<double> owner_timeout_s;
   double duration_s = 0.0;
   double stats_period_s = 1.0;
   std::optional<int> domain;
@@ -32,6 +34,10 @@ int main(int argc, char** argv) {
   app.add_option("--command-timeout", command_timeout_s,
                  "hold the slave when no valid command arrives for this long [s], 0.001-10 "
                  "(default: the scene's, 0.05)");
+  app.add_option("--owner-timeout", owner_timeout_s,
+                 "a master owning the slave loses it when none of its commands arrived for "
+                 "this long, and another may take it over [s], from the command timeout to 60 "
+                 "(default: 0.5, or the command timeout if longer)");
   app.add_option("--duration", duration_s, "stop after this many seconds; 0 = run until SIGINT");
   app.add_option("--stats-period", stats_period_s, "ServerStats period [s], 0.1-10");
   app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
@@ -71,6 +77,9 @@ int main(int argc, char** argv) {
     }
     o.command_timeout_s = teleop::config::check_flag(
         "--command-timeout", command_timeout_s.value_or(scene.command_timeout_s), 0.001, 10.0);
+    o.owner_timeout_s = teleop::config::check_flag(
+        "--owner-timeout", owner_timeout_s.value_or(std::max(0.5, o.command_timeout_s)),
+        o.command_timeout_s, 60.0);
     o.duration_s = teleop::config::check_flag("--duration", duration_s, 0.0, 1e7);
     o.stats_period_s = teleop::config::check_flag("--stats-period", stats_period_s, 0.1, 10.0);
     o.summary_json = summary_json;

@@ -5,7 +5,7 @@
 
 #include "common/dds/checked_type.hpp"
 #include "common/dds/teleop_idl.hpp"
-#include "server/node/command_validation.hpp"
+#include "server/node/command_gate.hpp"
 #include "server/node/server_cycle.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
 
@@ -29,60 +29,34 @@ struct Fnv1a {
   }
 };
 
-/// The node's edge validation (server_node.cpp on_command), on one stream row.
-class EdgeValidator {
- public:
-  explicit EdgeValidator(const sim::WorldModel& model) : model_(model) {}
-
-  /// True (and `out` set) when the row is a valid command the node would hand to the cycle.
-  bool accept(const StreamedCommand& row, MasterCommand& out, ResimResult& r) {
-    eprosima::fastrtps::rtps::SerializedPayload_t payload(
-        static_cast<std::uint32_t>(row.payload.size()));
-    std::memcpy(payload.data, row.payload.data(), row.payload.size());
-    payload.length = static_cast<std::uint32_t>(row.payload.size());
-    if (!dds::deserialize_checked<MasterCommandPubSubType>(payload, out)) {
-      ++r.undecodable;
-      return false;
-    }
-    if (!have_writer_ || row.writer != writer_) {  // a new master restarts the numbering
-      have_writer_ = true;
-      writer_ = row.writer;
-      have_last_ = false;
-      history_ = PassivityHistory{};
-      ++r.masters;
-    }
-    CommandVerdict v = validate_command(out, model_.workspace_min_m, model_.workspace_max_m,
-                                        last_seq_, have_last_);
-    if (v == CommandVerdict::kAccepted) v = validate_passivity(out, history_);
-    switch (v) {
-      case CommandVerdict::kAccepted:
-        have_last_ = true;
-        last_seq_ = out.seq();
-        ++r.accepted;
-        return true;
-      case CommandVerdict::kOutsideWorkspace:
-        ++r.rejected_workspace;
-        return false;
-      case CommandVerdict::kStale:
-        ++r.rejected_stale;
-        return false;
-      case CommandVerdict::kBadPassivity:
-        ++r.rejected_passivity;
-        return false;
-      default:
-        ++r.rejected_nan;
-        return false;
-    }
+/// The writer's GUID (32 hex digits) as the node's writer id.
+WriterId writer_id(const std::string& hex) {
+  WriterId w;
+  for (std::size_t i = 0; i < w.bytes.size() && 2 * i + 1 < hex.size(); ++i) {
+    auto nibble = [](char c) -> std::uint8_t {
+      if (c >= '0' && c <= '9') return static_cast<std::uint8_t>(c - '0');
+      if (c >= 'a' && c <= 'f') return static_cast<std::uint8_t>(c - 'a' + 10);
+      if (c >= 'A' && c <= 'F') return static_cast<std::uint8_t>(c - 'A' + 10);
+      return 0;
+    };
+    w.bytes[i] = static_cast<std::uint8_t>(nibble(hex[2 * i]) << 4 | nibble(hex[2 * i + 1]));
   }
+  return w;
+}
 
- private:
-  const sim::WorldModel& model_;
-  bool have_writer_ = false;
-  std::string writer_;
-  bool have_last_ = false;
-  std::uint64_t last_seq_ = 0;
-  PassivityHistory history_;
-};
+/// The node's edge (command_gate.hpp) on one stream row: true (and `out` set) when the row is
+/// a command the node would hand to the cycle.
+bool accept(CommandGate& gate, const StreamedCommand& row, MasterCommand& out, ResimResult& r) {
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(
+      static_cast<std::uint32_t>(row.payload.size()));
+  std::memcpy(payload.data, row.payload.data(), row.payload.size());
+  payload.length = static_cast<std::uint32_t>(row.payload.size());
+  if (!dds::deserialize_checked<MasterCommandPubSubType>(payload, out)) {
+    ++r.undecodable;
+    return false;
+  }
+  return gate.pass(out, writer_id(row.writer), row.receive_ns);
+}
 
 void hash_step(Fnv1a& h, const ResimStep& s) {
   const sim::WorldOutput& o = *s.out;
@@ -125,7 +99,8 @@ ResimResult resimulate(const sim::WorldModel& model, const std::vector<StreamedC
   const double dt_s = 1.0 / options.rate_hz;
   const auto dt_ns = static_cast<std::int64_t>(std::llround(1e9 * dt_s));
   ServerCycle cycle(model, dt_s, model.command_timeout_s);
-  EdgeValidator edge(model);
+  CommandGate gate(model.workspace_min_m, model.workspace_max_m,
+                   static_cast<std::int64_t>(std::llround(1e9 * options.owner_timeout_s)));
   sim::EventQueue events;
   Fnv1a h;
   const std::int64_t t0 = stream.front().receive_ns;
@@ -137,7 +112,7 @@ ResimResult resimulate(const sim::WorldModel& model, const std::vector<StreamedC
     bool have_newest = false;
     std::int64_t newest_receive = 0;
     for (; next < stream.size() && stream[next].receive_ns <= t; ++next) {
-      if (edge.accept(stream[next], cmd, r)) {
+      if (accept(gate, stream[next], cmd, r)) {
         newest = cmd;
         newest_receive = stream[next].receive_ns;
         have_newest = true;
@@ -160,6 +135,14 @@ ResimResult resimulate(const sim::WorldModel& model, const std::vector<StreamedC
       if (on_event) on_event(e);
     }
   }
+  const GateCounts& c = gate.counts();
+  r.accepted = c.accepted;
+  r.rejected_nan = c.rejected_nan;
+  r.rejected_workspace = c.rejected_workspace;
+  r.rejected_stale = c.rejected_stale;
+  r.rejected_passivity = c.rejected_passivity;
+  r.refused_owner = c.refused_owner;
+  r.masters = gate.ownership().changes();
   r.watchdog_trips = cycle.watchdog_trips();
   r.hash = h.h;
   return r;

@@ -1,8 +1,10 @@
 #include "server/node/server_node.hpp"
 
+#include <array>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <mutex>
 #include <vector>
 
 #include "common/dds/endpoint.hpp"
@@ -12,7 +14,7 @@
 #include "common/util/rate_loop.hpp"
 #include "common/util/signals.hpp"
 #include "common/util/stats.hpp"
-#include "server/node/command_validation.hpp"
+#include "server/node/command_gate.hpp"
 #include "server/node/mesh_publisher.hpp"
 #include "server/node/scene_objects.hpp"
 #include "server/node/server_cycle.hpp"
@@ -28,6 +30,27 @@ struct ReceivedCommand {
   MasterCommand cmd;
   std::int64_t receive_ns = 0;
 };
+
+/// The reader thread's view of ownership for the loop: a snapshot and the messages of notable
+/// decisions, under a mutex the loop only try-locks (it never waits for the reader).
+struct OwnerMailbox {
+  static constexpr std::size_t kMessages = 8;
+  std::mutex mutex;
+  OwnerReport report;
+  std::int64_t owner_last_ns = 0;  // the owner's newest command [server ns]
+  bool owned = false;
+  std::uint64_t changes = 0;
+  std::array<std::array<char, 256>, kMessages> messages{};
+  std::array<double, kMessages> values{};
+  std::array<sim::Severity, kMessages> severities{};
+  std::size_t pending = 0;
+};
+
+WriterId writer_id(const eprosima::fastrtps::rtps::InstanceHandle_t& h) {
+  WriterId w;
+  for (std::size_t i = 0; i < w.bytes.size(); ++i) w.bytes[i] = h.value[i];
+  return w;
+}
 
 std::string json_number(double v) {
   if (!std::isfinite(v)) return "null";
@@ -55,11 +78,14 @@ struct ServerNode::Impl {
   dds::RateLimitedPublisher<ServerStatsPubSubType> stats_publisher;
   CommandCounters counters;
   dds::Mailbox<ReceivedCommand> mailbox;
-  // reader-thread state
-  eprosima::fastrtps::rtps::InstanceHandle_t current_writer;
-  bool have_last = false;
-  std::uint64_t last_seq = 0;
-  PassivityHistory passivity_history;
+  // reader-thread state: the edge (field checks, ownership, the owner's sequence / passivity)
+  CommandGate gate;
+  OwnerMailbox owner_box;
+  // loop-side copy of the ownership snapshot
+  OwnerReport owner;
+  std::int64_t owner_last_ns = 0;
+  bool owned = false;
+  std::uint64_t ownership_changes = 0;
   std::unique_ptr<dds::Reader<MasterCommandPubSubType>> command_reader;
   // loop state
   sim::EventQueue events;
@@ -87,7 +113,9 @@ struct ServerNode::Impl {
         state_views(participant, {{dds::topics::kSlaveStateView, dds::topics::kViewRateHz},
                                   {dds::topics::kSlaveStateMonitor, dds::topics::kMonitorRateHz}}),
         stats_publisher(participant, {{dds::topics::kServerStats, 0.0}},
-                        dds::TopicQos::kReliableStream) {
+                        dds::TopicQos::kReliableStream),
+        gate(m.workspace_min_m, m.workspace_max_m,
+             static_cast<std::int64_t>(std::llround(o.owner_timeout_s * 1e9))) {
     scratch.reserve(step_us.capacity());
     command_reader = std::make_unique<dds::Reader<MasterCommandPubSubType>>(
         participant, dds::topics::kMasterCommand, dds::TopicQos::kStream,
@@ -98,43 +126,45 @@ struct ServerNode::Impl {
 
   ~Impl() { command_reader->stop(); }
 
-  /// Reader thread: validate at the edge, count, hand the newest accepted command over.
+  /// Reader thread: the edge (command_gate.hpp), counted; the newest command that passes goes
+  /// to the loop's mailbox, ownership changes to the owner mailbox.
   void on_command(const MasterCommand& c, const eprosima::fastdds::dds::SampleInfo& info) {
-    counters.received.fetch_add(1);
-    // a new master (another writer) restarts the sequence numbering
-    if (!have_last || info.publication_handle != current_writer) {
-      have_last = false;
-      passivity_history = PassivityHistory{};
-      current_writer = info.publication_handle;
+    const std::int64_t now = now_ns();
+    const bool pass = gate.pass(c, writer_id(info.publication_handle), now);
+    const GateCounts& g = gate.counts();
+    counters.received.store(g.received);
+    counters.accepted.store(g.accepted);
+    counters.rejected_nan.store(g.rejected_nan);
+    counters.rejected_workspace.store(g.rejected_workspace);
+    counters.rejected_stale.store(g.rejected_stale);
+    counters.rejected_passivity.store(g.rejected_passivity);
+    counters.refused_owner.store(g.refused_owner);
+    {
+      const Ownership& own = gate.ownership();
+      std::lock_guard<std::mutex> lock(owner_box.mutex);
+      owner_box.report.session = own.session();
+      owner_box.report.first_seq = own.owner_first_seq();
+      owner_box.report.received = own.owner_received();
+      owner_box.owned = own.owned();
+      owner_box.owner_last_ns = own.owner_last_ns();
+      owner_box.changes = own.changes();
+      if (gate.ownership().notable() && owner_box.pending < OwnerMailbox::kMessages) {
+        std::snprintf(owner_box.messages[owner_box.pending].data(), 256, "%s", own.message());
+        owner_box.values[owner_box.pending] = static_cast<double>(own.changes());
+        owner_box.severities[owner_box.pending] =
+            gate.admit() == Admit::kRefused || gate.admit() == Admit::kTakenOver
+                ? sim::Severity::kWarning
+                : sim::Severity::kInfo;
+        ++owner_box.pending;
+      }
     }
-    CommandVerdict v =
-        validate_command(c, model.workspace_min_m, model.workspace_max_m, last_seq, have_last);
-    if (v == CommandVerdict::kAccepted) v = validate_passivity(c, passivity_history);
-    switch (v) {
-      case CommandVerdict::kAccepted:
-        break;
-      case CommandVerdict::kOutsideWorkspace:
-        counters.rejected_workspace.fetch_add(1);
-        return;
-      case CommandVerdict::kStale:
-        counters.rejected_stale.fetch_add(1);
-        return;
-      case CommandVerdict::kBadPassivity:
-        counters.rejected_passivity.fetch_add(1);
-        return;
-      default:
-        counters.rejected_nan.fetch_add(1);
-        return;
-    }
-    have_last = true;
-    last_seq = c.seq();
-    counters.accepted.fetch_add(1);
-    mailbox.put(ReceivedCommand{c, now_ns()});
+    if (pass) mailbox.put(ReceivedCommand{c, now});
   }
 
   std::uint64_t rejected() const {
     return counters.rejected_nan.load() + counters.rejected_workspace.load() +
-           counters.rejected_stale.load() + counters.rejected_passivity.load();
+           counters.rejected_stale.load() + counters.rejected_passivity.load() +
+           counters.refused_owner.load();
   }
 
   void publish_event(const sim::SimEvent& e) {
@@ -173,6 +203,24 @@ struct ServerNode::Impl {
     }
   }
 
+  /// Loop: the reader's ownership snapshot (when its mutex is free) and its events; whether
+  /// the owner is active is judged on the loop's clock.
+  void take_owner(std::int64_t t_ns) {
+    std::unique_lock<std::mutex> lock(owner_box.mutex, std::try_to_lock);
+    if (lock.owns_lock()) {
+      owner = owner_box.report;
+      owned = owner_box.owned;
+      owner_last_ns = owner_box.owner_last_ns;
+      ownership_changes = owner_box.changes;
+      for (std::size_t i = 0; i < owner_box.pending; ++i) {
+        events.push(sim::EventKind::kOwnership, owner_box.severities[i], cycle.output().sim_time_s,
+                    owner_box.values[i], owner_box.messages[i].data());
+      }
+      owner_box.pending = 0;
+    }
+    owner.active = owned && t_ns - owner_last_ns <= gate.ownership().timeout_ns();
+  }
+
   /// Rejected commands: one event per second at most, with the counts so far.
   void report_rejections(std::int64_t t_ns) {
     const std::uint64_t r = rejected();
@@ -180,11 +228,12 @@ struct ServerNode::Impl {
     char msg[sizeof(sim::SimEvent::message)];
     std::snprintf(msg, sizeof(msg),
                   "rejected commands so far: %llu non-finite, %llu outside workspace, "
-                  "%llu stale, %llu bad passivity",
+                  "%llu stale, %llu bad passivity, %llu not the owner's",
                   static_cast<unsigned long long>(counters.rejected_nan.load()),
                   static_cast<unsigned long long>(counters.rejected_workspace.load()),
                   static_cast<unsigned long long>(counters.rejected_stale.load()),
-                  static_cast<unsigned long long>(counters.rejected_passivity.load()));
+                  static_cast<unsigned long long>(counters.rejected_passivity.load()),
+                  static_cast<unsigned long long>(counters.refused_owner.load()));
     events.push(sim::EventKind::kCommandRejected, sim::Severity::kWarning,
                 cycle.output().sim_time_s, static_cast<double>(r), msg);
     last_rejected = r;
@@ -224,6 +273,9 @@ struct ServerNode::Impl {
     st.matched_state_readers(state_writer.matched());
     st.matched_command_writers(command_reader->matched());
     st.commands_rejected_passivity(counters.rejected_passivity.load());
+    st.commands_refused_owner(counters.refused_owner.load());
+    st.owner_session(owner.active ? owner.session : 0);
+    st.ownership_changes(ownership_changes);
     stats_publisher.offer(st, /*wake=*/true);  // written by the publisher's thread
     last_stats_ns = t_ns;
     last_stats_steps = cycle.steps();
@@ -248,10 +300,11 @@ struct ServerNode::Impl {
       if (mailbox.take_if_newer(rc, seen)) {
         cycle.on_command(from_idl(rc.cmd), rc.receive_ns, rc.cmd.send_time_ns());
       }
+      take_owner(t0);
       cycle.step(t0, events);
       step_us.record(cycle.step_time_us());
       step_us_all.record(cycle.step_time_us());
-      pack_slave_state(cycle, counters.received.load(), now_ns(), state);
+      pack_slave_state(cycle, counters.received.load(), owner, now_ns(), state);
       state_writer.write(state);
       state_views.offer(state);  // a copy under a try-lock; the views are written elsewhere
       if (cycle.steps() % visual_every == 0) meshes.offer(cycle.data(), cycle.output().sim_time_s);
@@ -271,11 +324,14 @@ struct ServerNode::Impl {
     if (options.quiet) return;
     std::fprintf(stderr,
                  "teleop_server: %llu steps in %.1f s, step p50 %.1f us p99 %.1f us, "
-                 "%llu overruns, commands %llu received / %llu rejected, %llu watchdog trips\n",
+                 "%llu overruns, commands %llu received / %llu rejected (%llu not the owner's), "
+                 "%llu owners, %llu watchdog trips\n",
                  static_cast<unsigned long long>(cycle.steps()), elapsed_s, s.p50, s.p99,
                  static_cast<unsigned long long>(loop.overruns()),
                  static_cast<unsigned long long>(counters.received.load()),
                  static_cast<unsigned long long>(rejected()),
+                 static_cast<unsigned long long>(counters.refused_owner.load()),
+                 static_cast<unsigned long long>(ownership_changes),
                  static_cast<unsigned long long>(cycle.watchdog_trips()));
   }
 
@@ -298,6 +354,8 @@ struct ServerNode::Impl {
       << "  \"commands_rejected_workspace\": " << counters.rejected_workspace.load() << ",\n"
       << "  \"commands_rejected_stale\": " << counters.rejected_stale.load() << ",\n"
       << "  \"commands_rejected_passivity\": " << counters.rejected_passivity.load() << ",\n"
+      << "  \"commands_refused_owner\": " << counters.refused_owner.load() << ",\n"
+      << "  \"ownership_changes\": " << ownership_changes << ",\n"
       << "  \"watchdog_trips\": " << cycle.watchdog_trips() << ",\n"
       << "  \"faults\": " << faults << "\n"
       << "}\n";

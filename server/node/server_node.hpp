@@ -16,6 +16,7 @@ struct ServerOptions {
   dds::ParticipantOptions dds;
   double rate_hz = 1000.0;          ///< physics rate [Hz]
   double command_timeout_s = 0.05;  ///< watchdog [s]
+  double owner_timeout_s = 0.5;     ///< ownership watchdog: owner silent this long loses it [s]
   double duration_s = 0.0;          ///< stop after this long; 0 = until SIGINT/SIGTERM [s]
   double stats_period_s = 1.0;      ///< ServerStats period [s]
   std::string summary_json;         ///< write a JSON summary here at exit (optional)
@@ -30,6 +31,7 @@ struct CommandCounters {
   std::atomic<std::uint64_t> rejected_workspace{0};
   std::atomic<std::uint64_t> rejected_stale{0};
   std::atomic<std::uint64_t> rejected_passivity{0};  ///< wave / TDPA fields unusable
+  std::atomic<std::uint64_t> refused_owner{0};       ///< from a master not owning the slave
 };
 
 class ServerNode {

@@ -11,7 +11,7 @@ void copy3(std::array<double, 3>& dst, const Eigen::Vector3d& v) {
 }  // namespace
 
 void pack_slave_state(const ServerCycle& cycle, std::uint64_t commands_received,
-                      std::int64_t server_time_ns, SlaveState& state) {
+                      const OwnerReport& owner, std::int64_t server_time_ns, SlaveState& state) {
   const sim::WorldOutput& out = cycle.output();
   state.seq(cycle.steps());
   if (cycle.have_command()) {
@@ -51,6 +51,10 @@ void pack_slave_state(const ServerCycle& cycle, std::uint64_t commands_received,
   state.tdpa_energy_in_j(pr.tdpa_energy_in_j);
   state.tdpa_energy_out_j(pr.tdpa_energy_out_j);
   state.passivity_dissipated_j(pr.dissipated_j);
+  state.owner_session(owner.session);
+  state.owner_active(owner.active);
+  state.owner_first_seq(owner.first_seq);
+  state.owner_commands_received(owner.received);
 }
 
 void pack_mesh_frame(int object_id, const Eigen::Matrix3Xd& x, std::uint64_t frame_no,

@@ -9,10 +9,18 @@
 
 namespace teleop::server {
 
+/// Who owns the slave, as SlaveState reports it (server/node/ownership.hpp).
+struct OwnerReport {
+  std::uint32_t session = 0;  ///< current or last owner's master session, 0 = none yet
+  bool active = false;        ///< it owns the slave now
+  std::uint64_t first_seq = 0;
+  std::uint64_t received = 0;  ///< its commands received since it took the slave
+};
+
 /// Fills `out` from the cycle's last step. `commands_received`: the reader's count so far;
-/// `server_time_ns`: the server clock now.
+/// `owner`: the ownership snapshot; `server_time_ns`: the server clock now.
 void pack_slave_state(const ServerCycle& cycle, std::uint64_t commands_received,
-                      std::int64_t server_time_ns, SlaveState& out);
+                      const OwnerReport& owner, std::int64_t server_time_ns, SlaveState& out);
 
 /// Fills `out` with body `index`'s node positions (float32, x y z per node).
 void pack_mesh_frame(int object_id, const Eigen::Matrix3Xd& positions_m, std::uint64_t frame_no,

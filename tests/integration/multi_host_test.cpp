@@ -163,11 +163,13 @@ class MultiHost : public ::testing::Test {
     EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;
     EXPECT_GT(p99, 0.0) << m;
     EXPECT_LT(p99, 100.0) << m;  // generous: a loaded 2-core machine
-    for (auto& o : observers) {
-      const std::string out = o->out();
-      EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos) << name << "\n" << out;
+    for (std::size_t k = 0; k < observers.size(); ++k) {
+      const std::string out = observers[k]->out();
+      EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos)
+          << name << " observer " << k << "\n"
+          << out << observers[k]->err();
       // the monitor's default topics: the 10 Hz copies (teleop/slave_state_monitor)
-      EXPECT_GT(max_rate(out, "slave_state"), 4.0) << name << "\n" << out;
+      EXPECT_GT(max_rate(out, "slave_state"), 4.0) << name << " observer " << k;
     }
     if (ds0) ds0->signal(SIGTERM);
     if (ds1) ds1->signal(SIGTERM);

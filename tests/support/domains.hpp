@@ -39,10 +39,11 @@ inline constexpr int kMultiHostSecureLanUnicast = 113;  // multi_host_test, secu
 inline constexpr int kMultiHostSecureWanTcp = 114;      // multi_host_test, secure_wan_tcp_*
 inline constexpr int kServerFaultVerdict = 130;         // server_health_test: a fault on the server
 inline constexpr int kServerRestart = 131;              // server_health_test: kill -9 and restart
-inline constexpr int kFaultDelaySpike = 133;   // fault_suite_test: a 1 s delay spike mid-contact
-inline constexpr int kFaultLossWindow = 134;   // fault_suite_test: 50 % loss for 1 s mid-contact
-inline constexpr int kFaultNanFlood = 135;     // fault_suite_test: NaN commands from a third participant
-inline constexpr int kResimSession = 132;  // record_play_test: recorded, re-simulated, replayed
+inline constexpr int kFaultDelaySpike = 133;  // fault_suite_test: a 1 s delay spike mid-contact
+inline constexpr int kFaultLossWindow = 134;  // fault_suite_test: 50 % loss for 1 s mid-contact
+inline constexpr int kFaultNanFlood =
+    135;  // fault_suite_test: NaN commands from a third participant
+inline constexpr int kResimSession = 132;     // record_play_test: recorded, re-simulated, replayed
 inline constexpr int kObserverRates = 115;    // observers_test: monitor on the 10 Hz topics
 inline constexpr int kObserverSession = 116;  // observers_test: 8 observers, default scene
 inline constexpr int kObserverLate = 117;     // observers_test: a late observer
@@ -52,5 +53,10 @@ inline constexpr int kBadScenes = 101;          // bad_scene_test: refused scene
 inline constexpr int kSubstepScene = 102;       // bad_scene_test: a scene that sub-steps runs
 inline constexpr int kMalformedCommands = 103;  // bad_scene_test: malformed command payloads
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
+inline constexpr int kOwnerRefused = 140;  // ownership_test: a second master is refused
+inline constexpr int kOwnerRelease = 141;  // ownership_test: a waiting master after a release
+inline constexpr int kOwnerKilled = 142;   // ownership_test: the owner killed, taken over
+inline constexpr int kOwnerRestart = 143;  // ownership_test: server restart mid-contact
+// 144-149: reserved for ownership tests; 150-159, 160-169: transparency and contact tests
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains

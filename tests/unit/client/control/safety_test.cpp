@@ -40,7 +40,11 @@ TEST(Safety, LostLinkFadesForceToZeroAndBack) {
   double t = 0.0;
   for (; t < 1.0; t += dt) {
     last_rx = t;  // samples arriving
-    EXPECT_NEAR(safety.filter(t, dt, f, last_rx, 10.0, metrics).z(), 4.0, 1e-12);
+    const double z = safety.filter(t, dt, f, last_rx, 10.0, metrics).z();
+    // 4 N from zero at the spec's rate bound (1 N per cycle), then held
+    if (t > 0.0045) {
+      EXPECT_NEAR(z, 4.0, 1e-12) << t;
+    }
   }
   // the link dies at t = 1.0: nothing for 0.1 s, then a fade of 0.2 s
   double at_timeout = 0, mid_fade = 0, after = 0;
@@ -128,9 +132,67 @@ TEST(Safety, ThermalLimitClampsToContinuousForceAndNaNIsZeroed) {
     out = safety.filter(t, 1e-3, Eigen::Vector3d(0, 8.0, 0), t, 10.0, metrics).norm();
   }
   EXPECT_NEAR(out, DeviceSpec{}.max_continuous_force_n, 1e-9);
+  // a NaN force is replaced by zero, reached at the rate bound (6 N at 1 N per cycle)
   const Eigen::Vector3d nan(std::nan(""), 0, 0);
-  EXPECT_EQ(safety.filter(5.0, 1e-3, nan, 5.0, 10.0, metrics).norm(), 0.0);
+  const double bound_n = DeviceSpec{}.max_force_rate_n_per_s * 1e-3;
+  EXPECT_NEAR(safety.filter(5.0, 1e-3, nan, 5.0, 10.0, metrics).norm(), out - bound_n, 1e-9);
+  for (int i = 1; i < 6; ++i) safety.filter(5.0 + i * 1e-3, 1e-3, nan, 5.0, 10.0, metrics);
+  EXPECT_EQ(safety.filter(5.006, 1e-3, nan, 5.0, 10.0, metrics).norm(), 0.0);
+  EXPECT_EQ(safety.faults(), 7u);
+}
+
+TEST(Safety, TheForceNeverChangesFasterThanTheSpecsRateBound) {
+  SafetyLayer safety;
+  DeviceSpec spec;  // 10 N peak, 1000 N/s
+  SafetyParams p;
+  p.thermal_limit = false;
+  safety.configure(p, spec);
+  SessionMetrics metrics;
+  const double dt = 1e-3, bound_n = spec.max_force_rate_n_per_s * dt;
+  // the controller asks for a step of 8 N, then a reversal to -8 N, then a NaN
+  Eigen::Vector3d prev = Eigen::Vector3d::Zero();
+  int cycles_to_8n = -1;
+  for (int i = 0; i < 400; ++i) {
+    const double t = 1.0 + i * dt;
+    Eigen::Vector3d ask(8.0, 0.0, 0.0);
+    if (i >= 100) ask = Eigen::Vector3d(-8.0, 0.0, 0.0);
+    if (i == 300) ask.x() = std::nan("");
+    const Eigen::Vector3d f = safety.filter(t, dt, ask, t, 10.0, metrics);
+    EXPECT_LE((f - prev).norm(), bound_n + 1e-12) << "cycle " << i;
+    if (cycles_to_8n < 0 && f.x() >= 8.0 - 1e-12) cycles_to_8n = i + 1;
+    prev = f;
+  }
+  EXPECT_EQ(cycles_to_8n, 8);  // 8 N at 1 N per cycle
+  EXPECT_LE(safety.max_step_n(), bound_n + 1e-12);
+  EXPECT_GE(safety.rate_limited_cycles(), 7u + 15u);  // the rise, the reversal
   EXPECT_EQ(safety.faults(), 1u);
+  // a cycle with nothing to render brings the force to zero at the same rate
+  const Eigen::Vector3d before = safety.last_output_n();
+  const Eigen::Vector3d held = safety.hold_zero(dt);
+  EXPECT_NEAR((held - before).norm(), std::min(bound_n, before.norm()), 1e-12);
+  for (int i = 0; i < 100; ++i) safety.hold_zero(dt);
+  EXPECT_EQ(safety.last_output_n(), Eigen::Vector3d::Zero());
+}
+
+TEST(Safety, FadeInAfterAReHomingStartsFromZero) {
+  SafetyLayer safety;
+  SafetyParams p;
+  p.thermal_limit = false;
+  safety.configure(p, DeviceSpec{});
+  SessionMetrics metrics;
+  safety.fade_in();
+  const Eigen::Vector3d ask(0.1, 0.0, 0.0);  // small: the fade, not the rate bound, shapes it
+  const double dt = 1e-3;
+  double prev = 0.0;
+  for (int i = 0; i < 300; ++i) {
+    const Eigen::Vector3d f = safety.filter(1.0 + i * dt, dt, ask, 1.0 + i * dt, 10.0, metrics);
+    EXPECT_GE(f.x(), prev - 1e-15);
+    prev = f.x();
+    if (i == 99) {
+      EXPECT_NEAR(f.x(), 0.05, 1e-3);  // half-way through the 0.2 s fade
+    }
+  }
+  EXPECT_NEAR(prev, 0.1, 1e-12);
 }
 
 }  // namespace

@@ -147,5 +147,111 @@ TEST(MasterCycle, StepAndFinishAllocateNothing) {
   EXPECT_FALSE(cycle.homing());
 }
 
+/// A slave that can restart (a new life starts at `home`, with a new epoch) and whose samples
+/// can stop (a link loss); otherwise a position servo like ServoLink, pushing back with a
+/// spring when the commanded tip goes below z = `floor_m` (contact).
+struct RestartableLink final : SlaveLink {
+  SlaveSample slave;
+  Eigen::Vector3d home;
+  double floor_m = -1.0;
+  bool silent = false;
+  explicit RestartableLink(const Eigen::Vector3d& tip) : home(tip) {
+    slave.valid = true;
+    slave.position_m = tip;
+  }
+  void restart() {
+    slave.position_m = home;
+    ++slave.slave_epoch;
+  }
+  void send(const SlaveCommand& c) override {
+    if (silent) return;
+    slave.position_m = c.enabled ? c.position_m : slave.position_m;
+    slave.command_seq = c.seq;
+  }
+  bool receive(double now_s, SlaveSample& s, double& at_s) override {
+    if (silent) return false;
+    const double depth = floor_m - slave.position_m.z();
+    slave.in_contact = depth > 0.0;
+    slave.contact_force_n = Eigen::Vector3d(0.0, 0.0, depth > 0.0 ? 100.0 * depth : 0.0);
+    s = slave;
+    at_s = now_s;
+    return true;
+  }
+};
+
+TEST(MasterCycle, ASlaveRestartReHomesWithoutAForceStep) {
+  // the device holds 1 cm below the contact plane: force-position renders the slave's 1 N; the
+  // slave restarts 0.2 m away; the force must go to zero and come back within the rate bound
+  SimulatedDevice device(holding_device(Eigen::Vector3d(0.0, 0.0, -0.01)));
+  const Eigen::Vector3d contact(0.6, 0.0, 0.5), home(0.6, 0.0, 0.7);
+  RestartableLink link(contact + Eigen::Vector3d(0.0, 0.0, -0.01));
+  link.home = home;
+  link.floor_m = 0.5;
+  MasterCycle cycle(config("force-position"), device, link);
+  cycle.start(0.0);
+  const double dt = 1e-3, bound_n = device.spec().max_force_rate_n_per_s * dt;
+  double t = 0.0, max_step = 0.0;
+  Eigen::Vector3d prev = Eigen::Vector3d::Zero();
+  bool rehomed = false;
+  double force_before = 0.0;
+  for (int i = 0; i < 8000; ++i, t += dt) {
+    if (i == 2000) {
+      force_before = cycle.device_force_n().norm();
+      link.restart();
+    }
+    cycle.step(t);
+    cycle.finish(t);
+    max_step = std::max(max_step, (cycle.device_force_n() - prev).norm());
+    prev = cycle.device_force_n();
+    if (cycle.rehoming()) rehomed = true;
+    if (cycle.rehoming()) {
+      EXPECT_LE(cycle.device_force_n().norm(), force_before + 1e-9);
+    }
+  }
+  EXPECT_GT(force_before, 0.3);
+  EXPECT_TRUE(rehomed);
+  EXPECT_EQ(cycle.rehomes(RehomeReason::kSlaveRestart), 1u);
+  EXPECT_EQ(cycle.rehomes(), 1u);
+  EXPECT_LE(max_step, bound_n + 1e-12);
+  // after the path the slave is back under the device and the force is what it was
+  EXPECT_LT((link.slave.position_m - cycle.last_sample().master_position_m).norm(), 1e-9);
+  EXPECT_LT(link.slave.position_m.z(), 0.5);  // pressing again
+  EXPECT_NEAR(cycle.device_force_n().norm(), force_before, 0.05);
+  EXPECT_FALSE(cycle.metrics().verdict() == Verdict::kUnstable);
+}
+
+TEST(MasterCycle, ALinkThatComesBackReHomesAndAHeldCycleRendersNothing) {
+  SimulatedDevice device(holding_device(Eigen::Vector3d::Zero()));
+  RestartableLink link(Eigen::Vector3d(0.6, 0.0, 0.5));
+  MasterCycle cycle(config("force-position"), device, link);
+  cycle.start(0.0);
+  double t = 0.0;
+  const double dt = 1e-3;
+  for (int i = 0; i < 1500; ++i, t += dt) {
+    link.silent = i >= 500 && i < 800;  // 0.3 s without samples: the link is lost
+    cycle.step(t);
+    cycle.finish(t);
+  }
+  EXPECT_EQ(cycle.rehomes(RehomeReason::kLinkBack), 1u);
+  EXPECT_FALSE(cycle.homing());
+  // held: nothing rendered, the slave asked to hold, no session figures
+  cycle.hold(true);
+  for (int i = 0; i < 100; ++i, t += dt) {
+    cycle.step(t);
+    cycle.finish(t);
+    EXPECT_TRUE(cycle.homing_cycle());
+  }
+  EXPECT_EQ(cycle.device_force_n(), Eigen::Vector3d::Zero());
+  cycle.hold(false);
+  cycle.rehome(t, RehomeReason::kTakeover);
+  for (int i = 0; i < 1000 && cycle.homing(); ++i, t += dt) {
+    cycle.step(t);
+    cycle.finish(t);
+  }
+  EXPECT_FALSE(cycle.homing());
+  EXPECT_EQ(cycle.rehomes(RehomeReason::kTakeover), 1u);
+  EXPECT_EQ(cycle.rehomes(), 2u);
+}
+
 }  // namespace
 }  // namespace teleop::master
