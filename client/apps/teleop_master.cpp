@@ -127,6 +127,9 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   app.add_option("--wait-owner", o.wait_owner_s,
                  "when another master owns the slave, wait this long for it to release it "
                  "(or to fall silent) instead of exiting with status 4 [s], 0-86400 (default 0)");
+  app.add_option("--command-rate", o.command_rate_hz,
+                 "commands to the slave per second [Hz], at most --rate (default: one per "
+                 "haptic cycle; model-mediated: 1000 with the haptic loop at 4000)");
   app.add_option("--reconnect", o.reconnect_s,
                  "TCP client profiles: with no answer from a server for this long, make a new "
                  "participant (a new connection) [s], 0.5-3600, 0 = never")
@@ -233,6 +236,13 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   }
   if (f.link_timeout)
     o.safety.link_timeout_s = check_flag("--link-timeout", *f.link_timeout, 0.001, 10.0);
+  // model-mediated renders from its local model at 4 kHz and sends positions at 1 kHz, unless
+  // told otherwise
+  if (o.controller.scheme == "model-mediated") {
+    if (!app.count("--rate")) o.rate_hz = 4000.0;
+    if (!app.count("--command-rate")) o.command_rate_hz = std::min(1000.0, o.rate_hz);
+  }
+  if (o.command_rate_hz != 0.0) check_flag("--command-rate", o.command_rate_hz, 1.0, o.rate_hz);
 }
 
 }  // namespace

@@ -27,7 +27,7 @@ void check(const char* field, double v, double lo, double hi) {
 
 const std::vector<std::string>& scheme_names() {
   static const std::vector<std::string> names = {"position-position", "force-position",
-                                                 "wave-variables", "tdpa"};
+                                                 "wave-variables", "tdpa", "model-mediated"};
   return names;
 }
 
@@ -66,6 +66,9 @@ void ControllerParams::validate() const {
                       "' is unknown (allowed: position-position, force-position)");
   }
   check("wave_impedance_ns_per_m", wave_impedance_ns_per_m, 0.0, passivity::kMaxWaveImpedance);
+  check("mmt_blend_s", mmt_blend_s, 1e-4, 1.0);
+  check("mmt_energy_rate_w", mmt_energy_rate_w, 0.0, 10.0);
+  check("mmt_energy_burst_j", mmt_energy_burst_j, 0.0, 1.0);
   check("wave_time_constant_s", wave_time_constant_s, 1e-4, 1.0);
   check("wave_filter_hz", wave_filter_hz, 0.0, 1000.0);
   check("slave_stiffness_n_per_m", slave_stiffness_n_per_m, 0.0, 1e6);
@@ -85,7 +88,8 @@ ControllerParams controller_params_from_yaml(const config::Node& node) {
   node.reject_unknown_keys({"scheme", "workspace", "slave_stiffness_n_per_m",
                             "master_stiffness_n_per_m", "master_damping_ns_per_m", "force_gain",
                             "max_force_n", "send_velocity", "wave_impedance_ns_per_m",
-                            "wave_time_constant_s", "wave_matched", "wave_filter_hz", "tdpa_base"});
+                            "wave_time_constant_s", "wave_matched", "wave_filter_hz", "tdpa_base",
+                            "mmt_blend_s", "mmt_energy_rate_w", "mmt_energy_burst_j"});
   p.scheme = node.choice_or("scheme", p.scheme, scheme_names());
   p.slave_stiffness_n_per_m =
       node.number_or("slave_stiffness_n_per_m", p.slave_stiffness_n_per_m, 0.0, 1e6);
@@ -103,6 +107,9 @@ ControllerParams controller_params_from_yaml(const config::Node& node) {
   p.wave_matched = node.boolean_or("wave_matched", p.wave_matched);
   p.wave_filter_hz = node.number_or("wave_filter_hz", p.wave_filter_hz, 0.0, 1000.0);
   p.tdpa_base = node.choice_or("tdpa_base", p.tdpa_base, {"position-position", "force-position"});
+  p.mmt_blend_s = node.number_or("mmt_blend_s", p.mmt_blend_s, 1e-4, 1.0);
+  p.mmt_energy_rate_w = node.number_or("mmt_energy_rate_w", p.mmt_energy_rate_w, 0.0, 10.0);
+  p.mmt_energy_burst_j = node.number_or("mmt_energy_burst_j", p.mmt_energy_burst_j, 0.0, 1.0);
   if (node.has("workspace")) {
     const config::Node w = node.at("workspace");
     w.reject_unknown_keys({"offset_m", "position_scale", "force_scale"});
@@ -185,6 +192,70 @@ void PositionPositionController::compute(const DeviceReading& master, const Slav
 void ForcePositionController::compute(const DeviceReading& master, const SlaveSample& slave,
                                       double /*dt_s*/, ControlOutput& out) {
   out.force_n = force_position_force(params_.workspace, params_.force_gain, b_m_, master, slave);
+}
+
+// --- model-mediated ---------------------------------------------------------------------------
+
+void ModelMediatedController::on_activate(const DeviceReading& /*master*/) {
+  status_ = ModelStatus{};
+  status_.budget_j = params_.mmt_energy_burst_j;
+}
+
+void ModelMediatedController::blend_toward(const mmt::LocalModel& target, const Eigen::Vector3d& x,
+                                           double dt_s) {
+  mmt::LocalModel& cur = status_.rendered;
+  // the device renders alpha beta k: keep it within the stiffness and damping it can render
+  const WorkspaceMap& w = params_.workspace;
+  const double ab = std::max(1e-9, w.position_scale * w.force_scale);
+  mmt::LocalModel tgt = target;
+  tgt.stiffness_n_per_m = std::min(tgt.stiffness_n_per_m, spec_.max_stiffness_n_per_m / ab);
+  tgt.damping_ns_per_m = std::min(tgt.damping_ns_per_m, spec_.max_damping_ns_per_m / ab);
+  mmt::LocalModel next = tgt;
+  if (cur.valid && cur.normal.dot(tgt.normal) > std::cos(25.0 * M_PI / 180.0)) {
+    // the same surface, moved or re-estimated: a first-order step toward the new model
+    const double a = std::min(1.0, dt_s / params_.mmt_blend_s);
+    next.normal = (cur.normal + a * (tgt.normal - cur.normal)).normalized();
+    next.offset_m = cur.offset_m + a * (tgt.offset_m - cur.offset_m);
+    next.stiffness_n_per_m =
+        cur.stiffness_n_per_m + a * (tgt.stiffness_n_per_m - cur.stiffness_n_per_m);
+    next.damping_ns_per_m =
+        cur.damping_ns_per_m + a * (tgt.damping_ns_per_m - cur.damping_ns_per_m);
+  }
+  // energy the update would add where the master is: within the budget, else the surface
+  // moves out so that it adds exactly the budget
+  const double before_j = cur.valid ? cur.energy_j(x) : 0.0;
+  double added_j = next.energy_j(x) - before_j;
+  if (added_j > status_.budget_j) {
+    const double allowed_j = before_j + status_.budget_j;
+    next.offset_m = next.normal.dot(x) + std::sqrt(2.0 * allowed_j / next.stiffness_n_per_m);
+    added_j = status_.budget_j;
+    ++status_.limited_updates;
+  }
+  if (added_j > 0.0) {
+    status_.budget_j -= added_j;
+    status_.injected_j += added_j;
+  }
+  cur = next;
+}
+
+void ModelMediatedController::compute(const DeviceReading& master, const SlaveSample& slave,
+                                      double dt_s, ControlOutput& out) {
+  const WorkspaceMap& w = params_.workspace;
+  const Eigen::Vector3d x = out.command.position_m;  // the master in the slave frame
+  const Eigen::Vector3d v = w.to_slave_velocity(master.linear_velocity_mps);
+  status_.budget_j =
+      std::min(params_.mmt_energy_burst_j, status_.budget_j + params_.mmt_energy_rate_w * dt_s);
+  mmt::LocalModel& cur = status_.rendered;
+  if (slave.valid && slave.model.valid && slave.model.stiffness_n_per_m > 0.0) {
+    ++status_.models_received;
+    blend_toward(slave.model, x, dt_s);
+  } else if (cur.valid) {
+    // nothing near the slave any more: the model softens away (its energy only falls)
+    cur.stiffness_n_per_m *= 1.0 - std::min(1.0, dt_s / params_.mmt_blend_s);
+    cur.damping_ns_per_m *= 1.0 - std::min(1.0, dt_s / params_.mmt_blend_s);
+    if (cur.stiffness_n_per_m < 1e-3) cur.valid = false;
+  }
+  out.force_n = w.to_master_force(cur.force_n(x, v)) - b_m_ * master.linear_velocity_mps;
 }
 
 // --- wave variables -------------------------------------------------------------------------
@@ -289,6 +360,7 @@ std::unique_ptr<BilateralController> make_controller(const std::string& scheme) 
   if (scheme == "force-position") return std::make_unique<ForcePositionController>();
   if (scheme == "wave-variables") return std::make_unique<WaveVariablesController>();
   if (scheme == "tdpa") return std::make_unique<TimeDomainPassivityController>();
+  if (scheme == "model-mediated") return std::make_unique<ModelMediatedController>();
   throw ConfigError("controller: scheme '" + scheme + "' is unknown (allowed: " + joined_names() +
                     ")");
 }

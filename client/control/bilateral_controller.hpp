@@ -25,6 +25,15 @@
 //   that keeps the master port's output energy within the slave port's input energy
 //   received; the command carries the master port's input energy for the slave's PC.
 //
+// model-mediated (docs/control.md): the slave sends, with each state, a local model of what its
+//   tip touches (common/control/contact_model.hpp: a half-space with a stiffness and damping
+//   estimated online); the master renders F_m = beta R^T F_model(x_m, v_m) - B_m v_m from its
+//   own position at its own rate, and commands the slave x_c = map(x_m) as position-position
+//   does. Model updates are blended in (time constant mmt_blend_s); a blend step that would
+//   raise the model's stored energy at the master's position by more than an energy budget
+//   (refilled at mmt_energy_rate_w up to mmt_energy_burst_j) moves the surface out instead, so
+//   late or changing models cannot push the operator with more than that energy.
+//
 // Extension: a scheme overrides compute() (and on_configure(), on_activate(), finish() if it
 // keeps state); the base pre-fills the command with the mapped pose and saturates the force
 // between compute() and finish().
@@ -65,6 +74,11 @@ struct ControllerParams {
   double wave_filter_hz = 10.0;
   /// Base law of tdpa: "position-position" | "force-position".
   std::string tdpa_base = "position-position";
+  /// model-mediated: time constant of the blend toward each new model [s].
+  double mmt_blend_s = 0.02;
+  /// model-mediated: energy model updates may add at the master per second [W], and at once [J].
+  double mmt_energy_rate_w = 0.05;
+  double mmt_energy_burst_j = 2e-4;
 
   /// Throws ConfigError naming the field if a value is out of range.
   void validate() const;
@@ -179,6 +193,33 @@ class ForcePositionController final : public BilateralController {
  protected:
   void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
                ControlOutput& out) override;
+};
+
+/// Model-mediated teleoperation, master side (see the file comment).
+class ModelMediatedController final : public BilateralController {
+ public:
+  const char* name() const override { return "model-mediated"; }
+  SchemeId scheme() const override { return SchemeId::kModelMediated; }
+  /// The model rendered now (slave frame), and the energy bookkeeping of model updates.
+  struct ModelStatus {
+    mmt::LocalModel rendered;
+    double injected_j = 0.0;            ///< energy model updates added at the master [J]
+    double budget_j = 0.0;              ///< what they may add now [J]
+    std::uint64_t limited_updates = 0;  ///< blend steps held to the budget
+    std::uint64_t models_received = 0;  ///< cycles with a valid model from the slave
+  };
+  const ModelStatus& model_status() const { return status_; }
+
+ protected:
+  void on_activate(const DeviceReading& master) override;
+  void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
+               ControlOutput& out) override;
+
+ private:
+  /// The rendered model one blend step toward `target` at master position x, within the budget.
+  void blend_toward(const mmt::LocalModel& target, const Eigen::Vector3d& x, double dt_s);
+
+  ModelStatus status_;
 };
 
 /// Wave variables, master side (see the file comment).

@@ -56,6 +56,7 @@ void MasterCycle::prepare(double now_s) {
   origin_s_ = now_s;
   last_rx_s_ = -1.0;
   seq_ = 0;
+  cycles_ = 0;
   sample_arrived_ = false;
   homing_cycle_ = false;
   held_ = false;
@@ -229,10 +230,12 @@ void MasterCycle::step(double now_s) {
     sample_.master_position_m = command_.position_m;  // the device mapped to the slave frame
   }
 
-  // command -> forward channel -> link
-  command_.seq = ++seq_;
-  command_.send_time_s = now_s;
-  forward_.push(command_, now_s);
+  // command -> forward channel -> link (every command_every cycles)
+  if (cycles_++ % std::max<std::uint32_t>(1, cfg_.command_every) == 0) {
+    command_.seq = ++seq_;
+    command_.send_time_s = now_s;
+    forward_.push(command_, now_s);
+  }
   SlaveCommand due;
   if (cfg_.delivery == ForwardDelivery::kNewestDue) {
     if (forward_.pop_newest(now_s, due)) link_.send(due);

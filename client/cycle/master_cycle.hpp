@@ -59,6 +59,9 @@ struct MasterCycleConfig {
   double rehome_speed_mps = 0.1;    ///< re-homing path length / duration, slave frame [m/s]
   double rehome_min_s = 0.1;        ///< shortest re-homing path [s]
   double rehome_max_s = 3.0;        ///< longest re-homing path [s]
+  /// A command goes to the slave every this many cycles (a haptic loop faster than the network,
+  /// e.g. model-mediated at 4 kHz with commands at 1 kHz); slave samples are taken every cycle.
+  std::uint32_t command_every = 1;
 };
 
 /// One master cycle. See the file comment.
@@ -157,6 +160,7 @@ class MasterCycle {
   double origin_s_ = 0.0;    // metrics time zero
   double last_rx_s_ = -1.0;  // when the controller last got a new sample
   std::uint64_t seq_ = 0;
+  std::uint64_t cycles_ = 0;
   bool sample_arrived_ = false;
   bool homing_cycle_ = false;  // this cycle was a homing cycle (no metrics)
 

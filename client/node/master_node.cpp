@@ -398,6 +398,10 @@ struct MasterNode::Impl {
     cc.backward = options.backward;
     cc.safety = options.safety;
     cc.dt_s = 1.0 / options.rate_hz;
+    if (options.command_rate_hz > 0.0) {
+      cc.command_every = static_cast<std::uint32_t>(
+          std::max(1.0, std::round(options.rate_hz / options.command_rate_hz)));
+    }
     cc.delivery = ForwardDelivery::kEveryDue;
     // a session id the server has not seen from an earlier master (it restarts its wave /
     // TDPA state when the id changes)

@@ -26,6 +26,7 @@ namespace teleop::master {
 struct MasterOptions {
   dds::ParticipantOptions dds;
   double rate_hz = 1000.0;       ///< haptic loop rate [Hz]
+  double command_rate_hz = 0.0;  ///< commands to the slave [Hz]; 0 = one per haptic cycle
   double duration_s = 0.0;       ///< stop after this long [s]; 0 = the script's length + 1 s
   std::uint64_t samples = 0;     ///< stop after this many haptic cycles (0 = no limit)
   double wait_server_s = 15.0;   ///< wait this long for the server before starting [s]

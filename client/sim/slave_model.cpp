@@ -8,6 +8,21 @@ void PointSlave::reset(const Eigen::Vector3d& position_m) {
   sample_.position_m = position_m;
   sample_.valid = true;
   port_.reset();
+  estimator_.reset();
+}
+
+mmt::SurfacePrior PointSlave::nearest_surface(const Eigen::Vector3d& tip_m) const {
+  mmt::SurfacePrior best;
+  for (int i = 0; i < params_.obstacle_count; ++i) {
+    const sim::Obstacle& o = params_.obstacles[static_cast<std::size_t>(i)];
+    best =
+        mmt::nearer(best, o.kind == sim::Obstacle::Kind::kPlane
+                              ? mmt::plane_prior(o.id, o.normal, o.offset_m, params_.radius_m,
+                                                 tip_m, o.stiffness_n_per_m, o.damping_ns_per_m)
+                              : mmt::sphere_prior(o.id, o.centre_m, o.radius_m, params_.radius_m,
+                                                  tip_m, o.stiffness_n_per_m, o.damping_ns_per_m));
+  }
+  return best;
 }
 
 void PointSlave::step(const SlaveCommand& cmd, double dt) {
@@ -40,6 +55,9 @@ void PointSlave::step(const SlaveCommand& cmd, double dt) {
   s.command_send_time_s = cmd.send_time_s;
   s.valid = true;
   passivity::apply_port_report(port_.report(), s);
+  estimator_.update(s.position_m, s.velocity_mps, s.contact_force_n, s.in_contact,
+                    nearest_surface(s.position_m));
+  s.model = estimator_.model();
 }
 
 }  // namespace teleop::master

@@ -6,6 +6,7 @@
 //   target = port.before_step(cmd); tool_step(model, state, target); port.after_step(f_pd).
 // step() allocates nothing.
 #include "common/control/bilateral_types.hpp"
+#include "common/control/contact_model.hpp"
 #include "common/control/slave_port.hpp"
 #include "common/sim/tool.hpp"
 
@@ -42,10 +43,14 @@ class PointSlave final : public SlaveSimulator {
   const Eigen::Vector3d& tracking_force_n() const { return state_.tracking_force_n; }
 
  private:
+  /// The nearest obstacle surface to the tip (the model-mediated scheme's prior).
+  mmt::SurfacePrior nearest_surface(const Eigen::Vector3d& tip_m) const;
+
   PointSlaveParams params_;
   sim::ToolState state_;
   SlaveSample sample_;
   passivity::SlavePassivityPort port_;
+  mmt::ContactEstimator estimator_;
 };
 
 }  // namespace teleop::master

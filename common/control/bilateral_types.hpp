@@ -6,6 +6,8 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
+#include "common/control/contact_model.hpp"
+
 namespace teleop {
 
 /// Scheme ids, equal to the SCHEME_* constants of idl/Teleop.idl.
@@ -14,6 +16,7 @@ enum class SchemeId : std::uint8_t {
   kForcePosition = 1,
   kWaveVariables = 2,
   kTimeDomainPassivity = 3,
+  kModelMediated = 4,
 };
 
 /// Master -> slave, slave frame. Mirrors teleop::MasterCommand.
@@ -29,7 +32,7 @@ struct SlaveCommand {
   Eigen::Vector3d wave_u = Eigen::Vector3d::Zero();          ///< forward wave this cycle [sqrt(W)]
   double position_gain_n_per_m = 0.0;  ///< K_ps requested from the slave (0 = its default)
   SchemeId scheme = SchemeId::kPositionPosition;
-  bool enabled = true;  ///< false: the slave holds its pose
+  bool enabled = true;   ///< false: the slave holds its pose
   bool release = false;  ///< the master gives the slave up (its last commands; ownership)
   // passivity schemes (see common/control/slave_port.hpp)
   std::uint32_t passivity_session = 0;   ///< session id of a wave / TDPA run (0: none)
@@ -58,6 +61,8 @@ struct SlaveSample {
   /// Which life of the slave this sample comes from: the transport counts the slave's
   /// restarts (a new server instance starts from home); a master re-homes when it changes.
   std::uint32_t slave_epoch = 0;
+  /// What the tip touches or is about to (model-mediated scheme, common/control/contact_model).
+  mmt::LocalModel model;
   // passivity schemes (see common/control/slave_port.hpp)
   std::uint32_t passivity_session = 0;  ///< session the fields below belong to (0: none)
   Eigen::Vector3d wave_v_integral = Eigen::Vector3d::Zero();  ///< sum dt v [sqrt(W) s]

@@ -60,6 +60,17 @@ inline void to_idl(const SlaveCommand& c, std::int64_t send_time_ns, teleop::Mas
   m.tdpa_energy_in_j(c.tdpa_energy_in_j);
 }
 
+/// A slave's local contact model into SlaveState (model-mediated scheme).
+inline void to_idl(const mmt::LocalModel& l, teleop::SlaveState& m) {
+  m.model_valid(l.valid);
+  m.model_touched(l.touched);
+  m.model_object(l.object_id);
+  detail::put3(m.model_normal(), l.normal);
+  m.model_offset_m(l.offset_m);
+  m.model_stiffness_n_per_m(l.stiffness_n_per_m);
+  m.model_damping_ns_per_m(l.damping_ns_per_m);
+}
+
 /// teleop::SlaveState -> SlaveSample (valid = true). Non-finite fields make it invalid: the
 /// node should then drop it (and count a fault) rather than hand it to the channel.
 inline SlaveSample from_idl(const teleop::SlaveState& m) {
@@ -82,6 +93,21 @@ inline SlaveSample from_idl(const teleop::SlaveState& m) {
   s.tdpa_energy_in_j = m.tdpa_energy_in_j();
   s.tdpa_energy_out_j = m.tdpa_energy_out_j();
   s.passivity_dissipated_j = m.passivity_dissipated_j();
+  s.model.valid = m.model_valid();
+  s.model.touched = m.model_touched();
+  s.model.object_id = m.model_object();
+  s.model.normal = detail::get3(m.model_normal());
+  s.model.offset_m = m.model_offset_m();
+  s.model.stiffness_n_per_m = m.model_stiffness_n_per_m();
+  s.model.damping_ns_per_m = m.model_damping_ns_per_m();
+  // a model that is not a surface (a normal not of unit length, non-finite or negative
+  // figures) is dropped, not rendered
+  if (s.model.valid &&
+      !(std::abs(s.model.normal.norm() - 1.0) < 1e-3 && std::isfinite(s.model.offset_m) &&
+        s.model.stiffness_n_per_m >= 0.0 && s.model.stiffness_n_per_m < 1e7 &&
+        s.model.damping_ns_per_m >= 0.0 && s.model.damping_ns_per_m < 1e6)) {
+    s.model.valid = false;
+  }
   s.valid = s.position_m.allFinite() && s.velocity_mps.allFinite() &&
             s.contact_force_n.allFinite() && std::isfinite(s.penetration_m) &&
             std::isfinite(s.deformation_m) && s.wave_v.allFinite() &&

@@ -23,6 +23,39 @@ ServerCycle::ServerCycle(const sim::WorldModel& model, double dt_s, double comma
   // until a command arrives the slave holds where it starts
   world_cmd_.position_m = model.tool_start_m;
   world_cmd_.hold = true;
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    const Eigen::Matrix3Xd& x = data_.bodies[i].state.x;
+    const Eigen::Vector3d centre = x.rowwise().mean();
+    const sim::DeformableBodyModel& b = model.bodies[i];
+    spheres_.push_back({b.object_id, centre, (x.colwise() - centre).colwise().norm().maxCoeff(),
+                        b.contact.stiffness_n_per_m, b.contact.damping_ns_per_m});
+  }
+}
+
+mmt::SurfacePrior ServerCycle::nearest_surface(const Eigen::Vector3d& tip_m) const {
+  const double r = model_.tip_radius_m();
+  mmt::SurfacePrior best;
+  for (const sim::Plane& p : model_.planes) {
+    best = mmt::nearer(best, mmt::plane_prior(p.id, p.normal, p.offset_m, r, tip_m,
+                                              p.stiffness_n_per_m, p.damping_ns_per_m));
+  }
+  for (std::size_t i = 0; i < spheres_.size(); ++i) {
+    const BodySphere& b = spheres_[i];
+    mmt::SurfacePrior p = mmt::sphere_prior(b.id, b.centre_m, b.radius_m, r, tip_m,
+                                            b.stiffness_n_per_m, b.damping_ns_per_m);
+    if (p.valid && p.distance_m < 0.2) {
+      // near it: the body as it is now (it sags, it is pressed), by its support point in the
+      // direction of the tip: the tangent plane of its nodes' hull facing the tip
+      const Eigen::Matrix3Xd& x = data_.bodies[i].state.x;
+      double support = -1e30;
+      for (Eigen::Index k = 0; k < x.cols(); ++k)
+        support = std::max(support, p.normal.dot(x.col(k)));
+      p.offset_m = support + r;
+      p.distance_m = p.normal.dot(tip_m) - p.offset_m;
+    }
+    best = mmt::nearer(best, p);
+  }
+  return best;
 }
 
 void ServerCycle::on_command(const SlaveCommand& c, std::int64_t receive_ns,
@@ -79,6 +112,9 @@ void ServerCycle::step(std::int64_t t_ns, sim::EventQueue& events) {
   sim::world_step(model_, data_, applied, dt_s_, events);
   step_time_us_ = static_cast<double>(now_ns() - ts) * 1e-3;
   if (port_active_) port_.after_step(data_.out.tracking_force_n, dt_s_);
+  const sim::WorldOutput& o = data_.out;
+  estimator_.update(o.tip_position_m, o.tip_velocity_mps, o.contact_force_n, o.in_contact,
+                    nearest_surface(o.tip_position_m));
   held_ = applied.hold;
   ++steps_;
 }

@@ -10,7 +10,10 @@
 // Allocation-free after construction; deterministic for the same commands and clock.
 #include <cstdint>
 
+#include <vector>
+
 #include "common/control/bilateral_types.hpp"
+#include "common/control/contact_model.hpp"
 #include "common/control/slave_port.hpp"
 #include "server/world/world.hpp"
 
@@ -49,8 +52,21 @@ class ServerCycle {
   std::uint64_t watchdog_trips() const { return watchdog_trips_; }
   /// Duration of the last world step [us].
   double step_time_us() const { return step_time_us_; }
+  /// What the tip touches or is about to: the local model of the model-mediated scheme,
+  /// estimated after each step (common/control/contact_model.hpp).
+  const mmt::LocalModel& local_model() const { return estimator_.model(); }
 
  private:
+  /// The nearest surface of the scene to the tip: its planes, and each deformable body as its
+  /// bounding sphere at rest (nominal stiffness: its contact spring's).
+  mmt::SurfacePrior nearest_surface(const Eigen::Vector3d& tip_m) const;
+
+  struct BodySphere {
+    std::int32_t id;
+    Eigen::Vector3d centre_m;
+    double radius_m, stiffness_n_per_m, damping_ns_per_m;
+  };
+
   const sim::WorldModel& model_;
   sim::WorldData data_;
   double dt_s_;
@@ -67,6 +83,8 @@ class ServerCycle {
   std::uint64_t steps_ = 0;
   std::uint64_t watchdog_trips_ = 0;
   double step_time_us_ = 0.0;
+  std::vector<BodySphere> spheres_;
+  mmt::ContactEstimator estimator_;
 };
 
 }  // namespace teleop::server

@@ -1,5 +1,7 @@
 #include "server/node/state_message.hpp"
 
+#include "common/dds/teleop_idl.hpp"
+
 namespace teleop::server {
 
 namespace {
@@ -55,6 +57,7 @@ void pack_slave_state(const ServerCycle& cycle, std::uint64_t commands_received,
   state.owner_active(owner.active);
   state.owner_first_seq(owner.first_seq);
   state.owner_commands_received(owner.received);
+  to_idl(cycle.local_model(), state);
 }
 
 void pack_mesh_frame(int object_id, const Eigen::Matrix3Xd& x, std::uint64_t frame_no,
