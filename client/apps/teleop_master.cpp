@@ -130,10 +130,7 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   app.add_option("--command-rate", o.command_rate_hz,
                  "commands to the slave per second [Hz], at most --rate (default: one per "
                  "haptic cycle; model-mediated: 1000 with the haptic loop at 4000)");
-  app.add_option("--reconnect", o.reconnect_s,
-                 "TCP client profiles: with no answer from a server for this long, make a new "
-                 "participant (a new connection) [s], 0.5-3600, 0 = never")
-      ->capture_default_str();
+  teleop::dds::add_reconnect_flag(app, o.reconnect_s);
   app.add_option("--name", o.name,
                  "who this master is in the server's ownership events, up to 48 characters "
                  "(default IDENTITY@HOST:PID)");

@@ -134,10 +134,7 @@ void add_flags(CLI::App& app, Flags& f) {
                  "scheduling niceness of the monitor, 0-19: it yields the CPU to the server and "
                  "master on the same machine")
       ->capture_default_str();
-  app.add_option("--reconnect", f.reconnect_s,
-                 "TCP client profiles: with nothing from a server for this long, make a new "
-                 "participant (a new connection) [s], 0.5-3600, 0 = never")
-      ->capture_default_str();
+  teleop::dds::add_reconnect_flag(app, f.reconnect_s);
   json_opt->excludes(lines_opt)->excludes(tui_opt);
   lines_opt->excludes(tui_opt);
 }

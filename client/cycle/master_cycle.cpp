@@ -154,6 +154,21 @@ void MasterCycle::check_rehome(double now_s) {
   }
 }
 
+void MasterCycle::render_nothing(const Eigen::Vector3d& target_m, bool enabled) {
+  command_ = SlaveCommand{};
+  command_.position_m = target_m;
+  command_.orientation = Eigen::Quaterniond::Identity();
+  command_.position_gain_n_per_m = cfg_.controller.slave_stiffness_n_per_m;
+  command_.enabled = enabled;
+  force_n_ = cfg_.safety_enabled ? safety_.hold_zero(cfg_.dt_s) : Eigen::Vector3d::Zero();
+  controller_force_n_.setZero();
+  device_.write(force_n_, Eigen::Vector3d::Zero());
+  sample_.master_position_m = target_m;
+  sample_.device_force_n = force_n_;
+  sample_.safety_scale = safety_.scale();
+  homing_cycle_ = true;
+}
+
 void MasterCycle::homing_step(double now_s) {
   // the slave follows the path; the operator feels nothing
   const double th = now_s - homing_start_s_;
@@ -162,38 +177,11 @@ void MasterCycle::homing_step(double now_s) {
   }
   homing_target_m_ =
       homing_from_m_ + min_jerk(th, homing_duration_s_) * (homing_goal_m_ - homing_from_m_);
-  command_ = SlaveCommand{};
-  command_.position_m = homing_target_m_;
-  command_.orientation = Eigen::Quaterniond::Identity();
-  command_.position_gain_n_per_m = cfg_.controller.slave_stiffness_n_per_m;
-  command_.enabled = true;
-  force_n_ = cfg_.safety_enabled ? safety_.hold_zero(cfg_.dt_s) : Eigen::Vector3d::Zero();
-  controller_force_n_.setZero();
-  device_.write(force_n_, Eigen::Vector3d::Zero());
-  sample_.master_position_m = homing_target_m_;
-  sample_.device_force_n = force_n_;
-  sample_.safety_scale = safety_.scale();
+  render_nothing(homing_target_m_, true);
   if (th >= homing_duration_s_ && ((slave_tip_m_ - homing_goal_m_).norm() < homing_tolerance_m_ ||
                                    th > homing_duration_s_ + homing_timeout_s_)) {
     end_homing(now_s);
   }
-  homing_cycle_ = true;
-}
-
-void MasterCycle::hold_step() {
-  // refused the slave: render nothing, ask nothing of it
-  command_ = SlaveCommand{};
-  command_.position_m = slave_tip_m_;
-  command_.orientation = Eigen::Quaterniond::Identity();
-  command_.position_gain_n_per_m = cfg_.controller.slave_stiffness_n_per_m;
-  command_.enabled = false;
-  force_n_ = cfg_.safety_enabled ? safety_.hold_zero(cfg_.dt_s) : Eigen::Vector3d::Zero();
-  controller_force_n_.setZero();
-  device_.write(force_n_, Eigen::Vector3d::Zero());
-  sample_.master_position_m = slave_tip_m_;
-  sample_.device_force_n = force_n_;
-  sample_.safety_scale = safety_.scale();
-  homing_cycle_ = true;
 }
 
 void MasterCycle::step(double now_s) {
@@ -212,7 +200,7 @@ void MasterCycle::step(double now_s) {
   reading_ = device_.read();
   check_rehome(now_s);
   if (held_) {
-    hold_step();
+    render_nothing(slave_tip_m_, false);  // refused or closing: ask nothing of the slave
   } else if (homing_) {
     homing_step(now_s);
   } else {

@@ -139,7 +139,9 @@ class MasterCycle {
   void prepare(double now_s);
   void end_homing(double now_s);
   void homing_step(double now_s);
-  void hold_step();
+  /// A cycle that renders nothing (force to zero at the rate bound) and commands the slave to
+  /// `target_m` (enabled) or to hold (not enabled); not part of the session's figures.
+  void render_nothing(const Eigen::Vector3d& target_m, bool enabled);
   void check_rehome(double now_s);
 
   MasterCycleConfig cfg_;

@@ -54,4 +54,14 @@ inline void add_network_flags(CLI::App& app, NetworkFlags& f,
       ->type_name("NAME");
 }
 
+/// --reconnect S of the clients (teleop_master, teleop_monitor): on a TCP client profile, with no
+/// answer from a server for S seconds, make a new participant (Fast DDS 2.9's TCP client was seen
+/// never to complete a connection, docs/networking.md). 0 = never.
+inline void add_reconnect_flag(CLI::App& app, double& reconnect_s) {
+  app.add_option("--reconnect", reconnect_s,
+                 "TCP client profiles: with no answer from a server for this long, make a new "
+                 "participant (a new connection) [s], 0.5-3600, 0 = never")
+      ->capture_default_str();
+}
+
 }  // namespace teleop::dds
