@@ -22,11 +22,13 @@ mkdir -p "$out"
 domain="${TELEOP_DOMAIN:-7}"
 
 echo "== teleop session (experiment 3): default scene, loopback, domain ${domain} =="
-"$build_dir/server/teleop_server" --domain "$domain" --quiet \
+# both loops SCHED_FIFO where the machine allows it (a warning and normal threads otherwise):
+# docs/results.md, "Live session"
+"$build_dir/server/teleop_server" --domain "$domain" --quiet --realtime 20 \
   --summary-json "$out/server.json" &
 server_pid=$!
 trap 'kill $server_pid 2>/dev/null || true' EXIT
-"$build_dir/client/teleop_master" --domain "$domain" --duration "$duration" \
+"$build_dir/client/teleop_master" --domain "$domain" --duration "$duration" --realtime 20 \
   --log "$out/master.csv" --summary-json "$out/master.json" "${extra[@]}"
 kill -TERM "$server_pid"
 wait "$server_pid" || true

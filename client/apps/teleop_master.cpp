@@ -17,6 +17,7 @@
 #include <iostream>
 #include <optional>
 #include <sstream>
+#include <thread>
 
 #include "client/device/device_factory.hpp"
 #include "client/node/master_node.hpp"
@@ -131,6 +132,9 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
                  "commands to the slave per second [Hz], at most --rate (default: one per "
                  "haptic cycle; model-mediated: 1000 with the haptic loop at 4000)");
   teleop::dds::add_reconnect_flag(app, o.reconnect_s);
+  app.add_option("--realtime", o.realtime.priority,
+                 "run the haptic loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)");
+  app.add_option("--cpu", o.realtime.cpu, "pin the haptic loop to this CPU (-1 = no pinning)");
   app.add_option("--name", o.name,
                  "who this master is in the server's ownership events, up to 48 characters "
                  "(default IDENTITY@HOST:PID)");
@@ -153,6 +157,9 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   check_flag("--wait-server", o.wait_server_s, 0.0, 3600.0);
   check_flag("--homing", o.homing_s, 0.0, 60.0);
   check_flag("--wait-owner", o.wait_owner_s, 0.0, 86400.0);
+  check_flag("--realtime", o.realtime.priority, 0.0, 99.0);
+  check_flag("--cpu", o.realtime.cpu, -1.0,
+             static_cast<double>(std::thread::hardware_concurrency()) - 1.0);
   if (o.reconnect_s != 0.0) check_flag("--reconnect", o.reconnect_s, 0.5, 3600.0);
   if (o.name.size() > 48) {
     throw teleop::config::ConfigError("command line: --name '" + o.name + "' has " +

@@ -583,6 +583,13 @@ struct MasterNode::Impl {
     std::uint64_t device_seen = 0;
     const std::int64_t t0 = now_ns();
     const double t0_s = static_cast<double>(t0) * 1e-9;
+    if (options.realtime.priority > 0 || options.realtime.cpu >= 0) {
+      const std::string problem = make_thread_realtime(options.realtime);
+      if (!problem.empty()) {
+        std::cerr << "teleop_master: warning: the haptic loop stays a normal thread: " << problem
+                  << "\n";
+      }
+    }
     update_health();  // the baseline: the server's counts from before this session
     session_start_ns.store(t0);
     cycle.start_homing(t0_s, tip0, options.homing_s);

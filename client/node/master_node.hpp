@@ -20,6 +20,7 @@
 #include "client/control/safety.hpp"
 #include "client/net/delay_config.hpp"
 #include "common/dds/participant.hpp"
+#include "common/util/realtime.hpp"
 
 namespace teleop::master {
 
@@ -39,6 +40,7 @@ struct MasterOptions {
   /// TCP client profiles: with no answer from a server for this long, make a new participant
   /// (a new connection) and go on waiting [s]; 0 = never.
   double reconnect_s = 3.0;
+  RealtimeOptions realtime;  ///< scheduling of the haptic loop (common/util/realtime)
   std::string name;  ///< who this master is, in the server's ownership events ("" = identity)
 
   // device

@@ -6,10 +6,11 @@
 // Exit status: 0 clean stop (SIGINT/SIGTERM or --duration), 2 bad command line or scene,
 // 1 runtime failure (e.g. DDS could not start).
 #include <CLI/CLI.hpp>
-#include <iostream>
 #include <algorithm>
+#include <iostream>
 #include <optional>
 #include <sstream>
+#include <thread>
 
 #include "common/config/config.hpp"
 #include "common/dds/network_flags.hpp"
@@ -29,6 +30,7 @@ int main(int argc, char** argv) {
   std::optional<std::string> profile;
   std::string summary_json;
   bool quiet = false;
+  teleop::RealtimeOptions realtime;
   app.add_option("--scene", scene_file, "scene YAML file")->capture_default_str();
   app.add_option("--rate", rate_hz, "physics rate [Hz], 10-20000 (default: the scene's)");
   app.add_option("--command-timeout", command_timeout_s,
@@ -46,6 +48,9 @@ int main(int argc, char** argv) {
   teleop::dds::NetworkFlags net_flags;
   teleop::dds::add_network_flags(app, net_flags, "server");
   app.add_option("--summary-json", summary_json, "write a JSON summary here at exit");
+  app.add_option("--realtime", realtime.priority,
+                 "run the physics loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)");
+  app.add_option("--cpu", realtime.cpu, "pin the physics loop to this CPU (-1 = no pinning)");
   app.add_flag("--quiet", quiet, "print only warnings and errors");
   try {
     app.parse(argc, argv);
@@ -83,6 +88,10 @@ int main(int argc, char** argv) {
     o.duration_s = teleop::config::check_flag("--duration", duration_s, 0.0, 1e7);
     o.stats_period_s = teleop::config::check_flag("--stats-period", stats_period_s, 0.1, 10.0);
     o.summary_json = summary_json;
+    o.realtime.priority =
+        static_cast<int>(teleop::config::check_flag("--realtime", realtime.priority, 0.0, 99.0));
+    o.realtime.cpu = static_cast<int>(teleop::config::check_flag(
+        "--cpu", realtime.cpu, -1.0, static_cast<double>(std::thread::hardware_concurrency()) - 1));
     o.quiet = quiet;
     teleop::server::ServerNode node(o, scene);
     return node.run();

@@ -93,6 +93,10 @@ struct ServerNode::Impl {
   std::uint64_t faults = 0;
   SampleWindow step_us{1 << 16};
   SampleWindow step_us_all{1 << 20};
+  // where a step's time goes, over the session: collision, deformable bodies, slave, and
+  // packing + writing the state and offering the observers' copies (publish)
+  SampleWindow collision_us{1 << 19}, deformable_us{1 << 19}, slave_us{1 << 19},
+      publish_us{1 << 19};
   std::vector<double> scratch;
   std::uint64_t last_rejected = 0;
   std::int64_t last_reject_event_ns = 0;
@@ -290,6 +294,13 @@ struct ServerNode::Impl {
         1, static_cast<std::uint64_t>(std::llround(options.rate_hz / model.visual_rate_hz)));
     const std::int64_t t_start = now_ns();
     last_stats_ns = t_start;
+    if (options.realtime.priority > 0 || options.realtime.cpu >= 0) {
+      const std::string problem = make_thread_realtime(options.realtime);
+      if (!problem.empty()) {
+        std::cerr << "teleop_server: warning: the physics loop stays a normal thread: " << problem
+                  << "\n";
+      }
+    }
     RateLoop loop(options.rate_hz);
     SlaveState state;
     ReceivedCommand rc;
@@ -304,10 +315,16 @@ struct ServerNode::Impl {
       cycle.step(t0, events);
       step_us.record(cycle.step_time_us());
       step_us_all.record(cycle.step_time_us());
+      const sim::StepCost& cost = cycle.data().cost;
+      collision_us.record(cost.collision_us);
+      deformable_us.record(cost.deformable_us);
+      slave_us.record(cost.slave_us);
+      const std::int64_t tp = now_ns();
       pack_slave_state(cycle, counters.received.load(), owner, now_ns(), state);
       state_writer.write(state);
       state_views.offer(state);  // a copy under a try-lock; the views are written elsewhere
       if (cycle.steps() % visual_every == 0) meshes.offer(cycle.data(), cycle.output().sim_time_s);
+      publish_us.record(static_cast<double>(now_ns() - tp) * 1e-3);
       report_rejections(t0);
       drain_events();
       maybe_publish_stats(t0, loop);
@@ -322,6 +339,12 @@ struct ServerNode::Impl {
     const Summary s = summarize(step_us_all.snapshot());
     if (!options.summary_json.empty()) write_summary(loop, elapsed_s, s);
     if (options.quiet) return;
+    const Summary c = summarize(collision_us.snapshot()), d = summarize(deformable_us.snapshot()),
+                  sl = summarize(slave_us.snapshot()), pu = summarize(publish_us.snapshot());
+    std::fprintf(stderr,
+                 "teleop_server: step parts p50/p99 [us]: collision %.1f/%.1f, deformable "
+                 "%.1f/%.1f, slave %.1f/%.1f, publish %.1f/%.1f\n",
+                 c.p50, c.p99, d.p50, d.p99, sl.p50, sl.p99, pu.p50, pu.p99);
     std::fprintf(stderr,
                  "teleop_server: %llu steps in %.1f s, step p50 %.1f us p99 %.1f us, "
                  "%llu overruns, commands %llu received / %llu rejected (%llu not the owner's), "
@@ -335,6 +358,12 @@ struct ServerNode::Impl {
                  static_cast<unsigned long long>(cycle.watchdog_trips()));
   }
 
+  static std::string part_json(const char* name, const SampleWindow& w) {
+    const Summary p = summarize(w.snapshot());
+    return std::string("\"") + name + "\": {\"p50\": " + json_number(p.p50) +
+           ", \"p99\": " + json_number(p.p99) + ", \"max\": " + json_number(p.max) + "}";
+  }
+
   void write_summary(const RateLoop& loop, double elapsed_s, const Summary& s) {
     const Summary late = summarize(loop.lateness_us().snapshot());
     std::ofstream f(options.summary_json);
@@ -346,6 +375,10 @@ struct ServerNode::Impl {
       << "  \"overruns\": " << loop.overruns() << ",\n"
       << "  \"step_us\": {\"p50\": " << json_number(s.p50) << ", \"p99\": " << json_number(s.p99)
       << ", \"max\": " << json_number(s.max) << "},\n"
+      << "  \"step_parts_us\": {" << part_json("collision", collision_us) << ", "
+      << part_json("deformable", deformable_us) << ", " << part_json("slave", slave_us) << ", "
+      << part_json("publish", publish_us) << "},\n"
+      << "  \"realtime_priority\": " << options.realtime.priority << ",\n"
       << "  \"loop_jitter_us\": {\"p50\": " << json_number(late.p50)
       << ", \"p99\": " << json_number(late.p99) << "},\n"
       << "  \"commands_received\": " << counters.received.load() << ",\n"

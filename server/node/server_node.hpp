@@ -8,6 +8,7 @@
 #include <string>
 
 #include "common/dds/participant.hpp"
+#include "common/util/realtime.hpp"
 #include "server/world/world_model.hpp"
 
 namespace teleop::server {
@@ -20,6 +21,7 @@ struct ServerOptions {
   double duration_s = 0.0;          ///< stop after this long; 0 = until SIGINT/SIGTERM [s]
   double stats_period_s = 1.0;      ///< ServerStats period [s]
   std::string summary_json;         ///< write a JSON summary here at exit (optional)
+  RealtimeOptions realtime;         ///< scheduling of the physics loop (common/util/realtime)
   bool quiet = false;
 };
 

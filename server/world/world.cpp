@@ -1,5 +1,7 @@
 #include "server/world/world.hpp"
 
+#include "common/util/clock.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -80,6 +82,7 @@ BodiesOnTip step_bodies(const WorldModel& model, WorldData& d, double dt_s, Even
   const double r = model.tip_radius_m();
   BodiesOnTip on_tip;
   d.deformable_force_n.setZero();
+  d.cost.collision_us = d.cost.deformable_us = 0.0;
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {
     const DeformableBodyModel& bm = model.bodies[i];
     DeformableBodyData& b = d.bodies[i];
@@ -87,10 +90,12 @@ BodiesOnTip step_bodies(const WorldModel& model, WorldData& d, double dt_s, Even
     const bool was = b.last.in_contact;
     // out of contact and clear of the body's box: the tree refit and the query are skipped
     // (about 20 us at level 4)
+    const std::int64_t t0 = now_ns();
     const bool near = b.contact.in_contact() || tip_may_reach(b.state.x, d.tip_prev_m, tip_now, r);
     b.last = near ? b.contact.update(b.state.x, &b.state.v, d.tip_prev_m, tip_now, r, tip_vel, dt_s,
                                      b.state.f_ext)
                   : collision::TipContactResult{};
+    d.cost.collision_us += static_cast<double>(now_ns() - t0) * 1e-3;
     if (b.last.fault) {
       events.push(EventKind::kFault, Severity::kWarning, d.out.sim_time_s, bm.object_id,
                   "tip-mesh contact saw non-finite data: contact dropped, force zero");
@@ -114,7 +119,9 @@ BodiesOnTip step_bodies(const WorldModel& model, WorldData& d, double dt_s, Even
           d.out.sim_time_s, bm.object_id,
           b.last.in_contact ? "tip touches the deformable body" : "tip leaves the deformable body");
     }
+    const std::int64_t t1 = now_ns();
     const deformable::StepStatus st = deformable::step(bm.body, b.state, dt_s, &events);
+    d.cost.deformable_us += static_cast<double>(now_ns() - t1) * 1e-3;
     if (st == deformable::StepStatus::kFaultReset) b.contact.release();
   }
   d.tip_prev_m = tip_now;
@@ -192,7 +199,9 @@ void world_step(const WorldModel& model, WorldData& d, const WorldCommand& cmd, 
   // 1-2. tip against each deformable body, then the bodies
   const BodiesOnTip on_tip = step_bodies(model, d, dt_s, events);
   // 3. the slave
+  const std::int64_t t0 = now_ns();
   step_slave(model, d, cmd, dt_s, events);
+  d.cost.slave_us = static_cast<double>(now_ns() - t0) * 1e-3;
   // 4. outputs: the deformable contact adds to the planes' force on the tip
   WorldOutput& out = d.out;
   read_slave(d, out);

@@ -64,6 +64,14 @@ struct WorldOutput {
   double sim_time_s = 0.0;
 };
 
+/// Wall time of each part of the last world_step [us] (reported per session by the server:
+/// what a step costs and where).
+struct StepCost {
+  double collision_us = 0.0;   ///< tip against every deformable body (trees, proxy, reaction)
+  double deformable_us = 0.0;  ///< the deformable bodies' own steps
+  double slave_us = 0.0;       ///< the robot (ODE) or the tool law
+};
+
 /// The changing part of one deformable body.
 struct DeformableBodyData {
   deformable::DeformableState state;
@@ -79,6 +87,7 @@ struct WorldData {
   Eigen::Vector3d tip_prev_m = Eigen::Vector3d::Zero();  ///< tip centre before the last step
   Eigen::Vector3d deformable_force_n = Eigen::Vector3d::Zero();  ///< bodies on the tip [N]
   int plane_contact = -1;  ///< plane id the slave touched in the last step, -1 none
+  StepCost cost;           ///< where the last step's time went (not part of the physics)
   WorldOutput out;
 };
 

@@ -161,6 +161,8 @@ struct SessionResult {
   int observers_with_scene = 0;
   double monitor_state_hz = NAN;  ///< median over the monitors of their slave_state rate
   double view_state_hz = NAN;     ///< median over the view probes of their slave_state rate
+  double server_steps = NAN, server_step_p50_us = NAN;
+  double collision_p99_us = NAN, deformable_p99_us = NAN, slave_p99_us = NAN, publish_p99_us = NAN;
 };
 
 double median(std::vector<double> v) {
@@ -178,7 +180,7 @@ double last_count(const std::string& out, const std::string& topic) {
 }
 
 SessionResult run_session(const Binaries& bin, int observers, bool full_rate, int nice, int domain,
-                          double duration_s, const fs::path& work) {
+                          double duration_s, const fs::path& work, int realtime = 0) {
   SessionResult r;
   double load[3] = {0, 0, 0};
   if (getloadavg(load, 3) > 0) r.load1 = load[0];
@@ -189,8 +191,9 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   const std::string master_json = (work / ("master_" + tag + ".json")).string();
   fs::remove(server_json);
   fs::remove(master_json);
-  Process server(bin.server, {"--domain", d, "--summary-json", server_json, "--quiet"},
-                 "obs_bench_server");
+  std::vector<std::string> sargs = {"--domain", d, "--summary-json", server_json, "--quiet"};
+  if (realtime > 0) sargs.insert(sargs.end(), {"--realtime", std::to_string(realtime)});
+  Process server(bin.server, sargs, "obs_bench_server");
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
   std::vector<std::unique_ptr<Process>> obs;
   std::vector<double> started_s;
@@ -221,10 +224,11 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   // let every observer start and discover the others before the session starts: the steady
   // state is measured (32 participants starting at once on 2 cores take a few seconds of CPU)
   std::this_thread::sleep_for(std::chrono::milliseconds(2000 + 150 * observers));
-  Process master(bin.master,
-                 {"--domain", d, "--duration", std::to_string(duration_s), "--summary-json",
-                  master_json, "--quiet"},
-                 "obs_bench_master");
+  std::vector<std::string> margs = {
+      "--domain",       d,           "--duration", std::to_string(duration_s),
+      "--summary-json", master_json, "--quiet"};
+  if (realtime > 0) margs.insert(margs.end(), {"--realtime", std::to_string(realtime)});
+  Process master(bin.master, margs, "obs_bench_master");
   const int mst = master.wait_for(duration_s + 60.0);
   const double stopped_s = seconds_between(t0, now_ns());
   for (auto& o : obs) o->signal(SIGINT);
@@ -263,6 +267,16 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   r.server_overruns = json_value(s, "overruns");
   r.monitor_state_hz = median(monitor_rates);
   r.view_state_hz = median(view_rates);
+  r.server_steps = json_value(s, "steps");
+  r.server_step_p50_us = json_nested(s, "step_us", "p50");
+  const auto part_p99 = [&](const char* part) {
+    const auto at = s.find(std::string("\"") + part + "\": {");
+    return at == std::string::npos ? NAN : json_value(s.substr(at), "p99");
+  };
+  r.collision_p99_us = part_p99("collision");
+  r.deformable_p99_us = part_p99("deformable");
+  r.slave_p99_us = part_p99("slave");
+  r.publish_p99_us = part_p99("publish");
   return r;
 }
 
@@ -281,6 +295,51 @@ std::vector<int> parse_counts(const std::string& flag, const std::string& text) 
     out.push_back(static_cast<int>(v));
   }
   return out;
+}
+
+/// A live session (issue 14 part 5): server, master and N observers on the 2 cores, with the
+/// loops as normal threads or SCHED_FIFO; rounds interleave every (priority, count) pair.
+int live_bench(const CommandArgs& args, const Binaries& bin, const fs::path& work) {
+  const std::vector<int> counts = parse_counts("--counts", args.option("--counts", "0,8"));
+  const std::vector<int> prios = parse_counts("--realtime", args.option("--realtime", "0,20"));
+  const double rounds = std::stod(args.option("--rounds", args.quick ? "1" : "3"));
+  config::check_flag("--rounds", rounds, 1.0, 100.0);
+  const double duration_s = std::stod(args.option("--duration", args.quick ? "3" : "10"));
+  config::check_flag("--duration", duration_s, 1.0, 600.0);
+  const double domain = std::stod(args.option("--domain", "110"));
+  const std::string csv_path = (args.out_dir / "live.csv").string();
+  CsvWriter csv(csv_path,
+                {"realtime", "observers", "round", "load1", "server_steps", "server_overruns",
+                 "server_overrun_percent", "server_step_us_p50", "server_step_us_p99",
+                 "collision_us_p99", "deformable_us_p99", "slave_us_p99", "publish_us_p99",
+                 "rtt_ms_p99", "master_overruns", "link_losses", "verdict"});
+  for (int round = 1; round <= static_cast<int>(rounds); ++round) {
+    for (const int prio : prios) {
+      for (const int n : counts) {
+        const SessionResult r =
+            run_session(bin, n, false, 19, static_cast<int>(domain), duration_s, work, prio);
+        const double pct = 100.0 * r.server_overruns / r.server_steps;
+        csv.row_text({std::to_string(prio), std::to_string(n), std::to_string(round),
+                      format_number(r.load1), format_number(r.server_steps),
+                      format_number(r.server_overruns), format_number(pct),
+                      format_number(r.server_step_p50_us), format_number(r.server_step_p99_us),
+                      format_number(r.collision_p99_us), format_number(r.deformable_p99_us),
+                      format_number(r.slave_p99_us), format_number(r.publish_p99_us),
+                      format_number(r.rtt_p99), format_number(r.master_overruns),
+                      format_number(r.link_losses), r.verdict});
+        csv.flush();
+        std::printf(
+            "live rt %2d %2d observers round %d load %.2f: server step p50 %.1f p99 %.1f "
+            "us, overruns %.0f of %.0f (%.3f %%), parts p99 collision %.1f deformable "
+            "%.1f slave %.1f publish %.1f us; master rtt p99 %.3f ms overruns %.0f\n",
+            prio, n, round, r.load1, r.server_step_p50_us, r.server_step_p99_us, r.server_overruns,
+            r.server_steps, pct, r.collision_p99_us, r.deformable_p99_us, r.slave_p99_us,
+            r.publish_p99_us, r.rtt_p99, r.master_overruns);
+        std::fflush(stdout);
+      }
+    }
+  }
+  return 0;
 }
 
 int observers_bench(const CommandArgs& args) {
@@ -311,6 +370,7 @@ int observers_bench(const CommandArgs& args) {
   }
   const fs::path work = args.out_dir / "observers_work";
   fs::create_directories(work);
+  if (args.option("--live", "0") == "1") return live_bench(args, bin, work);
   const std::string csv_path = (args.out_dir / "observers.csv").string();
   CsvWriter csv(csv_path,
                 {"mode", "observers", "round", "load1", "rtt_ms_p50", "rtt_ms_p99", "rtt_ms_p999",

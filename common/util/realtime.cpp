@@ -1,0 +1,42 @@
+#include "common/util/realtime.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+#include <sys/mman.h>
+
+#include <cerrno>
+#include <cstring>
+
+namespace teleop {
+
+std::string make_thread_realtime(const RealtimeOptions& o) {
+  std::string problems;
+  if (o.cpu >= 0) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(o.cpu, &set);
+    if (const int e = pthread_setaffinity_np(pthread_self(), sizeof(set), &set); e != 0) {
+      problems += "pinning to CPU " + std::to_string(o.cpu) + ": " + std::strerror(e) + "; ";
+    }
+  }
+  if (o.priority > 0) {
+    // the pages touched so far (the loop's preallocated state) stay in memory: no page fault
+    // in the loop; later allocations (other threads) are not locked
+    if (mlockall(MCL_CURRENT) != 0) {
+      problems += std::string("locking memory: ") + std::strerror(errno) + "; ";
+    }
+    sched_param p{};
+    p.sched_priority = o.priority;
+    if (const int e = pthread_setschedparam(pthread_self(), SCHED_FIFO, &p); e != 0) {
+      problems += "SCHED_FIFO priority " + std::to_string(o.priority) + ": " + std::strerror(e) +
+                  " (needs root or CAP_SYS_NICE, and an RT budget: "
+                  "/proc/sys/kernel/sched_rt_runtime_us)";
+    }
+  }
+  if (problems.size() >= 2 && problems.substr(problems.size() - 2) == "; ") {
+    problems.resize(problems.size() - 2);
+  }
+  return problems;
+}
+
+}  // namespace teleop
