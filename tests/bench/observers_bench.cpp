@@ -326,7 +326,7 @@ int live_bench(const CommandArgs& args, const Binaries& bin, const fs::path& wor
                       format_number(r.collision_p99_us), format_number(r.deformable_p99_us),
                       format_number(r.slave_p99_us), format_number(r.publish_p99_us),
                       format_number(r.rtt_p99), format_number(r.master_overruns),
-                      format_number(r.link_losses), r.verdict});
+                      format_number(r.link_losses), format_number(r.watchdog_trips), r.verdict});
         csv.flush();
         std::printf(
             "live rt %2d %2d observers round %d load %.2f: server step p50 %.1f p99 %.1f "
