@@ -97,8 +97,11 @@ LoopModel press_loop_model(const PressScenario& s, const PressSetup& setup) {
 }
 
 void fill_analytic(const PressScenario& s, const PressSetup& setup, PressResult& r) {
-  r.passive_scheme = s.scheme == "wave-variables" || s.scheme == "tdpa";
-  if (s.scheme == "wave-variables") {
+  // model-mediated closes its force loop at the master, not across the delay: like the passive
+  // schemes, its "theory" is stability at every delay
+  r.passive_scheme =
+      s.scheme == "wave-variables" || s.scheme == "tdpa" || s.scheme == "model-mediated";
+  if (s.scheme == "wave-variables" || s.scheme == "model-mediated") {
     r.analytic_margin_s = std::numeric_limits<double>::infinity();
     r.analytic_stable = true;
     return;
@@ -106,6 +109,22 @@ void fill_analytic(const PressScenario& s, const PressSetup& setup, PressResult&
   const LoopModel m = press_loop_model(s, setup);
   r.analytic_margin_s = task_delay_margin(m).one_way_s;
   r.analytic_stable = task_stable_at(m, s.one_way_delay_s);
+}
+
+void fill_metrics(const SessionMetrics& m, PressResult& r) {
+  r.verdict = m.verdict();
+  r.reason = m.verdict_reason();
+  r.position_error_rms_m = m.position_error_rms_m();
+  r.force_error_rms_n = m.force_error_rms_n();
+  r.max_device_force_n = m.max_device_force_n();
+  r.energy_min_j = m.energy_min_j();
+  r.contact_time_s = m.contact_time_s();
+  r.free_force_mean_n = m.free_force_mean_n();
+  r.free_force_p99_n = m.free_force_p99_n();
+  r.felt_force_ratio = m.felt_force_ratio();
+  r.felt_stiffness_n_per_m = m.felt_stiffness_n_per_m();
+  r.environment_stiffness_n_per_m = m.environment_stiffness_n_per_m();
+  r.stiffness_ratio = m.stiffness_ratio();
 }
 
 PressResult run_press(const PressScenario& s) {
@@ -120,16 +139,9 @@ PressResult run_press(const PressScenario& s) {
     max_ctrl = std::max(max_ctrl, session.controller_force_n().norm());
     min_observer = std::min(min_observer, session.controller().passivity_status().observer_j);
   }
-  const SessionMetrics& m = session.metrics();
   PressResult r;
-  r.verdict = m.verdict();
-  r.reason = m.verdict_reason();
-  r.position_error_rms_m = m.position_error_rms_m();
-  r.force_error_rms_n = m.force_error_rms_n();
-  r.max_device_force_n = m.max_device_force_n();
+  fill_metrics(session.metrics(), r);
   r.max_controller_force_n = max_ctrl;
-  r.energy_min_j = m.energy_min_j();
-  r.contact_time_s = m.contact_time_s();
   r.safety_cut = session.safety().cut();
   fill_analytic(s, setup, r);
   r.passivity_dissipated_j =

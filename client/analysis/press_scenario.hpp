@@ -72,7 +72,14 @@ struct PressResult {
   bool passive_scheme = false;          ///< wave-variables or tdpa: passive for any delay by design
   double passivity_dissipated_j = 0.0;  ///< master + slave passivity controllers [J]
   double min_observer_j = 0.0;          ///< lowest master-side observer value seen [J]
+  // transparency (SessionMetrics, docs/control.md "Transparency"); NaN where not measured
+  double free_force_mean_n = 0.0, free_force_p99_n = 0.0;
+  double felt_force_ratio = 0.0, felt_stiffness_n_per_m = 0.0, environment_stiffness_n_per_m = 0.0,
+         stiffness_ratio = 0.0;
 };
+
+/// Fills the result's metrics figures (verdict, errors, forces, transparency) from a session.
+void fill_metrics(const SessionMetrics& m, PressResult& r);
 
 /// Sets analytic_margin_s, analytic_stable and passive_scheme of `r` for `s`.
 void fill_analytic(const PressScenario& s, const PressSetup& setup, PressResult& r);

@@ -53,6 +53,11 @@ Eigen::Vector3d force_position_force(const WorkspaceMap& w, double k_f, double b
   return f;
 }
 
+/// `value` moved toward `target` by at most `step`.
+double ramp_toward(double value, double target, double step) {
+  return value < target ? std::min(target, value + step) : std::max(target, value - step);
+}
+
 std::atomic<std::uint32_t> g_session_counter{0};
 }  // namespace
 
@@ -67,6 +72,7 @@ void ControllerParams::validate() const {
   }
   check("wave_impedance_ns_per_m", wave_impedance_ns_per_m, 0.0, passivity::kMaxWaveImpedance);
   check("mmt_blend_s", mmt_blend_s, 1e-4, 1.0);
+  check("contact_damping_ramp_s", contact_damping_ramp_s, 1e-4, 10.0);
   check("mmt_energy_rate_w", mmt_energy_rate_w, 0.0, 10.0);
   check("mmt_energy_burst_j", mmt_energy_burst_j, 0.0, 1.0);
   check("wave_time_constant_s", wave_time_constant_s, 1e-4, 1.0);
@@ -89,7 +95,8 @@ ControllerParams controller_params_from_yaml(const config::Node& node) {
                             "master_stiffness_n_per_m", "master_damping_ns_per_m", "force_gain",
                             "max_force_n", "send_velocity", "wave_impedance_ns_per_m",
                             "wave_time_constant_s", "wave_matched", "wave_filter_hz", "tdpa_base",
-                            "mmt_blend_s", "mmt_energy_rate_w", "mmt_energy_burst_j"});
+                            "mmt_blend_s", "mmt_energy_rate_w", "mmt_energy_burst_j",
+                            "contact_damping_ramp_s"});
   p.scheme = node.choice_or("scheme", p.scheme, scheme_names());
   p.slave_stiffness_n_per_m =
       node.number_or("slave_stiffness_n_per_m", p.slave_stiffness_n_per_m, 0.0, 1e6);
@@ -108,6 +115,8 @@ ControllerParams controller_params_from_yaml(const config::Node& node) {
   p.wave_filter_hz = node.number_or("wave_filter_hz", p.wave_filter_hz, 0.0, 1000.0);
   p.tdpa_base = node.choice_or("tdpa_base", p.tdpa_base, {"position-position", "force-position"});
   p.mmt_blend_s = node.number_or("mmt_blend_s", p.mmt_blend_s, 1e-4, 1.0);
+  p.contact_damping_ramp_s =
+      node.number_or("contact_damping_ramp_s", p.contact_damping_ramp_s, 1e-4, 10.0);
   p.mmt_energy_rate_w = node.number_or("mmt_energy_rate_w", p.mmt_energy_rate_w, 0.0, 10.0);
   p.mmt_energy_burst_j = node.number_or("mmt_energy_burst_j", p.mmt_energy_burst_j, 0.0, 1.0);
   if (node.has("workspace")) {
@@ -189,9 +198,14 @@ void PositionPositionController::compute(const DeviceReading& master, const Slav
   out.force_n = position_position_force(params_.workspace, k_pm_, b_m_, master, slave);
 }
 
+void ForcePositionController::on_activate(const DeviceReading& /*master*/) { damping_share_ = 0.0; }
+
 void ForcePositionController::compute(const DeviceReading& master, const SlaveSample& slave,
-                                      double /*dt_s*/, ControlOutput& out) {
-  out.force_n = force_position_force(params_.workspace, params_.force_gain, b_m_, master, slave);
+                                      double dt_s, ControlOutput& out) {
+  damping_share_ = ramp_toward(damping_share_, slave.valid && slave.in_contact ? 1.0 : 0.0,
+                               dt_s / params_.contact_damping_ramp_s);
+  out.force_n = force_position_force(params_.workspace, params_.force_gain, damping_share_ * b_m_,
+                                     master, slave);
 }
 
 // --- model-mediated ---------------------------------------------------------------------------
@@ -255,7 +269,12 @@ void ModelMediatedController::compute(const DeviceReading& master, const SlaveSa
     cur.damping_ns_per_m *= 1.0 - std::min(1.0, dt_s / params_.mmt_blend_s);
     if (cur.stiffness_n_per_m < 1e-3) cur.valid = false;
   }
-  out.force_n = w.to_master_force(cur.force_n(x, v)) - b_m_ * master.linear_velocity_mps;
+  const Eigen::Vector3d f_model = cur.force_n(x, v);
+  status_.damping_share =
+      ramp_toward(status_.damping_share, f_model.squaredNorm() > 0.0 ? 1.0 : 0.0,
+                  dt_s / params_.contact_damping_ramp_s);
+  out.force_n =
+      w.to_master_force(f_model) - status_.damping_share * b_m_ * master.linear_velocity_mps;
 }
 
 // --- wave variables -------------------------------------------------------------------------

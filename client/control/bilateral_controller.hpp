@@ -5,7 +5,9 @@
 //   position and a damper:      F_m = K_pm (x_s' - x_m) - B_m v_m,   x_s' = slave pos. in
 //   master frame; the slave is commanded x_c = map(x_m) and tracks it with its own K_ps.
 // force-position (paper Fig. 11): the master sends x_m; the slave returns its contact force
-//   f_e (environment on tip); the master renders   F_m = K_f beta R^T f_e - B_m v_m.
+//   f_e (environment on tip); the master renders   F_m = K_f beta R^T f_e - s B_m v_m, the
+//   damping share s ramped (contact_damping_ramp_s) to 1 while the slave is in contact and to
+//   0 in free space: nothing there for the damper to stabilise, so free motion is not dragged.
 //   (The paper writes F_m = -K_f f_e with f_e the force the slave exerts on the environment;
 //   ours is the reaction, hence the sign.)
 //
@@ -51,8 +53,9 @@ namespace teleop::master {
 
 /// Parameters of a bilateral controller. Defaults with units; 0 means "derive" where noted.
 struct ControllerParams {
-  /// "position-position" | "force-position" | "wave-variables" | "tdpa"
-  std::string scheme = "position-position";
+  /// "force-position" (the default: the design card's loop) | "position-position" |
+  /// "wave-variables" | "tdpa" | "model-mediated"
+  std::string scheme = "force-position";
   WorkspaceMap workspace;                  ///< master -> slave map and force scaling
   double slave_stiffness_n_per_m = 400.0;  ///< K_ps requested from the slave [N/m]
   /// K_pm [N/m]; 0 = transparent choice alpha * beta * K_ps (felt force = beta * contact force
@@ -76,6 +79,8 @@ struct ControllerParams {
   std::string tdpa_base = "position-position";
   /// model-mediated: time constant of the blend toward each new model [s].
   double mmt_blend_s = 0.02;
+  /// force-position and model-mediated: time to ramp B_m in at contact and out after it [s].
+  double contact_damping_ramp_s = 0.02;
   /// model-mediated: energy model updates may add at the master per second [W], and at once [J].
   double mmt_energy_rate_w = 0.05;
   double mmt_energy_burst_j = 2e-4;
@@ -191,8 +196,12 @@ class ForcePositionController final : public BilateralController {
   double environment_force_gain() const override { return params_.force_gain; }
 
  protected:
+  void on_activate(const DeviceReading& master) override;
   void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
                ControlOutput& out) override;
+
+ private:
+  double damping_share_ = 0.0;  // B_m's share now: 1 in contact, 0 in free space, ramped
 };
 
 /// Model-mediated teleoperation, master side (see the file comment).
@@ -207,6 +216,7 @@ class ModelMediatedController final : public BilateralController {
     double budget_j = 0.0;              ///< what they may add now [J]
     std::uint64_t limited_updates = 0;  ///< blend steps held to the budget
     std::uint64_t models_received = 0;  ///< cycles with a valid model from the slave
+    double damping_share = 0.0;         ///< of B_m, ramped to 1 while the model pushes
   };
   const ModelStatus& model_status() const { return status_; }
 

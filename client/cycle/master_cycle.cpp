@@ -248,6 +248,18 @@ void MasterCycle::finish(double now_s, const SlaveSample* slave_truth) {
   sample_.in_contact = slave.in_contact;
   sample_.link_ok = !safety_.link_lost();
   sample_.safety_scale = cfg_.safety_enabled ? safety_.scale() : 1.0;
+  // transparency: depths and forces along the contact normal, in the slave's units
+  const double fe = slave.contact_force_n.norm();
+  sample_.contact_force_n = slave.in_contact ? fe : 0.0;
+  sample_.slave_depth_m = sample_.master_depth_m = sample_.felt_force_n = 0.0;
+  if (slave.in_contact && fe > 1e-9) {
+    const Eigen::Vector3d n = slave.contact_force_n / fe;  // out of the object
+    sample_.slave_depth_m = slave.deformation_m > 0.0 ? slave.deformation_m : slave.penetration_m;
+    sample_.master_depth_m =
+        sample_.slave_depth_m + n.dot(slave.position_m - sample_.master_position_m);
+    sample_.felt_force_n = w.to_slave_force(force_n_).dot(n);
+  }
+  sample_.continuous_force_n = device_.spec().max_continuous_force_n;
   if (homing_cycle_) return;  // homing is not part of the session's figures
 
   metrics_.update(sample_);

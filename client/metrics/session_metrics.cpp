@@ -14,8 +14,31 @@ const char* verdict_name(Verdict v) {
       return "oscillating";
     case Verdict::kUnstable:
       return "unstable";
+    case Verdict::kOutOfSpec:
+      return "out-of-spec";
   }
   return "?";
+}
+
+namespace {
+/// Severity: stable < oscillating < out of spec < unstable.
+int rank(Verdict v) {
+  switch (v) {
+    case Verdict::kStable:
+      return 0;
+    case Verdict::kOscillating:
+      return 1;
+    case Verdict::kOutOfSpec:
+      return 2;
+    case Verdict::kUnstable:
+      return 3;
+  }
+  return 3;
+}
+}  // namespace
+
+double SecantFit::stiffness() const {
+  return n >= 10 && depth_sum > 1e-12 ? force_sum / depth_sum : std::nan("");
 }
 
 void SessionMetrics::reset() {
@@ -24,7 +47,7 @@ void SessionMetrics::reset() {
 }
 
 void SessionMetrics::set_verdict(Verdict v, const char* reason, double t) {
-  if (static_cast<int>(v) <= static_cast<int>(verdict_)) return;
+  if (rank(v) <= rank(verdict_)) return;
   verdict_ = v;
   reason_ = reason;
   if (v == Verdict::kUnstable && unstable_time_s_ < 0.0) unstable_time_s_ = t;
@@ -63,6 +86,7 @@ void SessionMetrics::update(const MetricsSample& s) {
     fenv_sum_ += s.environment_force_n.norm();
   }
   if (!s.link_ok) link_lost_time_ += dt;
+  update_transparency(s);
 
   // passivity observer of the master port: power from the operator into the teleoperator
   energy_ += -dt * s.device_force_n.dot(s.master_velocity_mps);
@@ -91,6 +115,65 @@ void SessionMetrics::update(const MetricsSample& s) {
     win_start_s_ = s.time_s + dt;
     win_energy_start_ = energy_;
   }
+}
+
+void SessionMetrics::update_transparency(const MetricsSample& s) {
+  const double dt = s.dt_s;
+  const double fn = s.device_force_n.norm();
+  if (!s.in_contact && s.link_ok && s.have_slave) {
+    ++n_free_;
+    free_sum_ += fn;
+    free_max_ = std::max(free_max_, fn);
+    free_time_ += dt;
+    ++free_hist_[static_cast<std::size_t>(std::min(kFreeBins - 1.0, std::floor(fn / 0.005)))];
+  }
+  if (s.in_contact && s.contact_force_n > 0.0) {
+    ++n_felt_;
+    felt_sum_ += s.felt_force_n;
+    contact_sum_ += s.contact_force_n;
+    felt_err_sq_ += (s.felt_force_n - s.contact_force_n) * (s.felt_force_n - s.contact_force_n);
+    if (s.slave_depth_m > 0.0) {
+      felt_fit_.add(s.master_depth_m, s.felt_force_n);
+      env_fit_.add(s.slave_depth_m, s.contact_force_n);
+    }
+  }
+  // the device's continuous rating, judged as its thermal model does
+  if (s.continuous_force_n > 0.0) {
+    f_avg_ += std::min(1.0, dt / std::max(p_.spec_tau_s, 1e-9)) * (fn - f_avg_);
+    f_avg_max_ = std::max(f_avg_max_, f_avg_);
+    if (fn > s.continuous_force_n) over_rating_time_ += dt;
+    if (f_avg_ > s.continuous_force_n || over_rating_time_ > p_.spec_time_s) {
+      set_verdict(Verdict::kOutOfSpec, "force above the device's continuous rating", s.time_s);
+    }
+  }
+}
+
+double SessionMetrics::free_force_mean_n() const {
+  return n_free_ ? free_sum_ / static_cast<double>(n_free_) : std::nan("");
+}
+
+double SessionMetrics::free_force_p99_n() const {
+  if (n_free_ == 0) return std::nan("");
+  const auto target = static_cast<std::uint64_t>(std::ceil(0.99 * static_cast<double>(n_free_)));
+  std::uint64_t seen = 0;
+  for (int i = 0; i < kFreeBins; ++i) {
+    seen += free_hist_[static_cast<std::size_t>(i)];
+    if (seen >= target) return std::min(free_max_, 0.005 * (i + 1));
+  }
+  return free_max_;
+}
+
+double SessionMetrics::felt_force_ratio() const {
+  return contact_sum_ > 0.0 ? felt_sum_ / contact_sum_ : std::nan("");
+}
+
+double SessionMetrics::felt_force_error_rms_n() const {
+  return n_felt_ ? std::sqrt(felt_err_sq_ / static_cast<double>(n_felt_)) : std::nan("");
+}
+
+double SessionMetrics::stiffness_ratio() const {
+  const double e = environment_stiffness_n_per_m();
+  return e > 0.0 ? felt_stiffness_n_per_m() / e : std::nan("");
 }
 
 void SessionMetrics::close_window(double end_time_s) {
@@ -141,6 +224,31 @@ double SessionMetrics::force_error_rms_n() const {
 
 double SessionMetrics::mean_contact_force_n() const {
   return n_contact_ ? fenv_sum_ / static_cast<double>(n_contact_) : 0.0;
+}
+
+namespace {
+/// %.6g, or null for a NaN (JSON has no NaN).
+std::string num(double v) {
+  if (!std::isfinite(v)) return "null";
+  char b[32];
+  std::snprintf(b, sizeof(b), "%.6g", v);
+  return b;
+}
+}  // namespace
+
+std::string SessionMetrics::transparency_json() const {
+  return "{\"free_force_mean_n\":" + num(free_force_mean_n()) +
+         ",\"free_force_p99_n\":" + num(free_force_p99_n()) +
+         ",\"free_force_max_n\":" + num(n_free_ ? free_max_ : std::nan("")) +
+         ",\"free_time_s\":" + num(free_time_) +
+         ",\"felt_force_ratio\":" + num(felt_force_ratio()) +
+         ",\"felt_force_error_rms_n\":" + num(felt_force_error_rms_n()) +
+         ",\"felt_stiffness_n_per_m\":" + num(felt_stiffness_n_per_m()) +
+         ",\"environment_stiffness_n_per_m\":" + num(environment_stiffness_n_per_m()) +
+         ",\"stiffness_ratio\":" + num(stiffness_ratio()) +
+         ",\"position_error_rms_m\":" + num(position_error_rms_m()) +
+         ",\"over_rating_time_s\":" + num(over_rating_time_) +
+         ",\"peak_average_force_n\":" + num(f_avg_max_) + "}";
 }
 
 std::string SessionMetrics::summary_json() const {

@@ -21,16 +21,34 @@
 //       oscillating at least sustain_windows consecutive windows each with >= min_crossings
 //                   velocity zero crossings (hysteresis +-velocity_threshold_mps on any axis);
 //       stable      otherwise.
-//     The session verdict is the worst window verdict (unstable latches).
+//       out-of-spec the device was driven beyond its continuous force rating: |F_device| above
+//                   the rating for more than spec_time_s in all (peaks within the peak rating
+//                   are what the peak rating is for; a scheme that keeps pushing that hard is
+//                   not), or its first-order average (time constant spec_tau_s, the safety
+//                   layer's thermal model) above the rating;
+//     The session verdict is the worst window verdict (unstable latches), in the order stable <
+//     oscillating < out-of-spec < unstable.
+//
+// Transparency, what the operator feels (docs/control.md, "Transparency"):
+//   - free space (slave not in contact, link ok): |F_device| mean, p99 (5 mN bins), max;
+//   - in contact: the force felt, F_device along the contact normal in the slave's units
+//     (felt_force_n), against the environment's |f_e| (contact_force_n): ratio of the sums and
+//     the RMS of the difference;
+//   - stiffness, secant over the contact: sum of the felt force over sum of the master's depth
+//     (its position along the contact normal, master_depth_m = slave_depth_m + n . (x_s - x_m)),
+//     and sum of |f_e| over sum of the slave's depth (slave_depth_m): felt and environment
+//     stiffness, and their ratio (1 is transparent; below 1 the object feels softer than it is,
+//     e.g. force-position's slave lagging behind the master by its tracking error).
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <string>
 
 namespace teleop::master {
 
-/// Stability verdict of a run.
-enum class Verdict : std::uint8_t { kStable = 0, kOscillating = 1, kUnstable = 2 };
-/// "stable" | "oscillating" | "unstable".
+/// Verdict of a run. From best to worst: stable, oscillating, out of spec, unstable.
+enum class Verdict : std::uint8_t { kStable = 0, kOscillating = 1, kUnstable = 2, kOutOfSpec = 3 };
+/// "stable" | "oscillating" | "unstable" | "out-of-spec".
 const char* verdict_name(Verdict v);
 
 /// Thresholds of the verdict (see the file comment). Defaults suit a 1 kHz desk device.
@@ -43,8 +61,10 @@ struct VerdictParams {
   int growth_windows = 2;                ///< consecutive growing windows = unstable
   double saturation_fraction = 0.3;      ///< share of a window at the force limit = unstable
   double energy_limit_j = 0.2;           ///< generated energy that counts as unstable [J]
-  int energy_windows = 1;                ///< windows in a row with E < -limit and falling
-  double settle_s = 0.0;                 ///< windows ending before this are not judged [s]
+  double spec_tau_s = 1.0;    ///< averaging time of |F| against the continuous rating [s]
+  double spec_time_s = 0.25;  ///< time above the continuous rating that is out of spec [s]
+  int energy_windows = 1;     ///< windows in a row with E < -limit and falling
+  double settle_s = 0.0;      ///< windows ending before this are not judged [s]
 };
 
 /// One haptic cycle as the metrics see it.
@@ -63,6 +83,25 @@ struct MetricsSample {
   bool have_slave = true;       ///< a slave sample is known (else no position error counted)
   bool link_ok = true;          ///< slave samples arriving in time
   double safety_scale = 1.0;    ///< force scale applied by the safety layer [0, 1]
+  // transparency (in contact; slave units, see the file comment)
+  double slave_depth_m = 0.0;       ///< how deep the slave's tip is in the object [m]
+  double master_depth_m = 0.0;      ///< how deep the master is, along the same normal [m]
+  double felt_force_n = 0.0;        ///< device force along the contact normal, slave units [N]
+  double contact_force_n = 0.0;     ///< |f_e| at the slave [N]
+  double continuous_force_n = 0.0;  ///< the device's continuous rating [N] (0: not judged)
+};
+
+/// A secant stiffness: sum of forces over sum of depths, accumulated without allocation.
+struct SecantFit {
+  double force_sum = 0.0, depth_sum = 0.0;
+  std::uint64_t n = 0;
+  void add(double depth_m, double force_n) {
+    depth_sum += depth_m;
+    force_sum += force_n;
+    ++n;
+  }
+  /// [N/m]; NaN with fewer than 10 samples or no depth.
+  double stiffness() const;
 };
 
 /// Accumulated metrics and the online verdict. See the file comment.
@@ -120,8 +159,24 @@ class SessionMetrics {
   /// Mean contact force magnitude |F_env| in contact [N].
   double mean_contact_force_n() const;
 
+  // transparency (see the file comment)
+  double free_force_mean_n() const;                      ///< [N]
+  double free_force_p99_n() const;                       ///< [N] (5 mN resolution)
+  double free_force_max_n() const { return free_max_; }  ///< [N]
+  double free_time_s() const { return free_time_; }      ///< [s]
+  double felt_force_ratio() const;                       ///< sum felt / sum |f_e| [-]
+  double felt_force_error_rms_n() const;                 ///< RMS(felt - |f_e|) [N]
+  double felt_stiffness_n_per_m() const { return felt_fit_.stiffness(); }
+  double environment_stiffness_n_per_m() const { return env_fit_.stiffness(); }
+  double stiffness_ratio() const;  ///< felt / environment stiffness [-] (NaN if unknown)
+  /// Time the force was above the continuous rating [s], and the peak of its average [N].
+  double over_rating_time_s() const { return over_rating_time_; }
+  double peak_average_force_n() const { return f_avg_max_; }
+
   /// JSON object with the summary, e.g. {"verdict":"stable",...}. Allocates.
   std::string summary_json() const;
+  /// JSON object with the transparency figures (NaN as null). Allocates.
+  std::string transparency_json() const;
 
   /// CSV header of the per-cycle log (see docs/control.md for the columns).
   static const char* csv_header();
@@ -131,6 +186,7 @@ class SessionMetrics {
 
  private:
   void close_window(double end_time_s);
+  void update_transparency(const MetricsSample& s);
   void set_verdict(Verdict v, const char* reason, double t);
 
   VerdictParams p_;
@@ -163,6 +219,16 @@ class SessionMetrics {
   int energy_run_ = 0;
   bool energy_growing_ = false;
   std::uint64_t osc_windows_total_ = 0;
+
+  // transparency
+  static constexpr int kFreeBins = 2000;  // 5 mN bins up to 10 N (the last holds the rest)
+  std::array<std::uint32_t, kFreeBins> free_hist_{};
+  std::uint64_t n_free_ = 0;
+  double free_sum_ = 0.0, free_max_ = 0.0, free_time_ = 0.0;
+  std::uint64_t n_felt_ = 0;
+  double felt_sum_ = 0.0, contact_sum_ = 0.0, felt_err_sq_ = 0.0;
+  SecantFit felt_fit_, env_fit_;
+  double f_avg_ = 0.0, f_avg_max_ = 0.0, over_rating_time_ = 0.0;
 
   Verdict verdict_ = Verdict::kStable;
   const char* reason_ = "";

@@ -695,6 +695,7 @@ struct MasterNode::Impl {
         << "  \"wait_server_s\": " << json_number(rep.wait_s) << ",\n"
         << "  \"verdict\": \"" << session_verdict(metrics, rep) << "\",\n"
         << "  \"metrics\": " << metrics.summary_json() << ",\n"
+        << "  \"transparency\": " << metrics.transparency_json() << ",\n"
         << "  \"delay\": {\"forward\": " << channel_json(rep.forward)
         << ", \"backward\": " << channel_json(rep.backward) << "},\n"
         << "  \"safety\": {\"cut\": " << (safety.cut() ? "true" : "false") << ", \"reason\": \""
@@ -753,6 +754,8 @@ struct MasterNode::Impl {
         "  tracking        position error RMS %.2f mm, max %.2f mm\n"
         "  force           max rendered %.2f N, force error RMS %.3f N (%s of the mean "
         "contact force), contact %.2f s, mean contact force %.2f N\n"
+        "  transparency    free space %.3f N mean, %.3f N p99, %.3f N max; in contact felt %.2f x "
+        "the environment's force (RMS %.3f N), stiffness felt %.0f N/m against %.0f N/m (%.2f)\n"
         "  passivity       energy at the master port %.4f J (min %.4f J)\n"
         "  safety          %s%s, link losses %llu, re-homed %llu times (link back %llu, slave "
         "restart %llu, takeover %llu); force change at most %.3f N per cycle (bound %.0f N/s, "
@@ -772,7 +775,10 @@ struct MasterNode::Impl {
         j.p50, j.p99, static_cast<unsigned long long>(rep.overruns),
         metrics.position_error_rms_m() * 1e3, metrics.position_error_max_m() * 1e3,
         metrics.max_device_force_n(), metrics.force_error_rms_n(), relative.c_str(),
-        metrics.contact_time_s(), metrics.mean_contact_force_n(), metrics.energy_j(),
+        metrics.contact_time_s(), metrics.mean_contact_force_n(), metrics.free_force_mean_n(),
+        metrics.free_force_p99_n(), metrics.free_force_max_n(), metrics.felt_force_ratio(),
+        metrics.felt_force_error_rms_n(), metrics.felt_stiffness_n_per_m(),
+        metrics.environment_stiffness_n_per_m(), metrics.stiffness_ratio(), metrics.energy_j(),
         metrics.energy_min_j(), safety.cut() ? "CUT: " : "ok",
         safety.cut() ? safety.cut_reason() : "", static_cast<unsigned long long>(rep.link_losses),
         static_cast<unsigned long long>(cycle.rehomes()),

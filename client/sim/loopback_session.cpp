@@ -52,6 +52,7 @@ std::string LoopbackSession::summary_json() const {
   std::string s = "{\"scheme\":\"";
   s += controller().name();
   s += "\",\"metrics\":" + metrics().summary_json();
+  s += ",\"transparency\":" + metrics().transparency_json();
   s += ",\"forward\":" + channel_json(forward().report());
   s += ",\"backward\":" + channel_json(backward().report());
   s += ",\"safety\":{\"cut\":";

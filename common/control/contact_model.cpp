@@ -61,8 +61,12 @@ void ContactEstimator::start_contact(const Eigen::Vector3d& x, const Eigen::Vect
                                      const SurfacePrior& prior) {
   in_contact_ = true;
   samples_ = 0;
-  model_.normal = n;
-  s0_ = n.dot(x);
+  // touching a surface the geometry knows: depth is measured from it, along its normal at the
+  // point nearest the tip, so a tip sliding over a curved body keeps a true depth; otherwise
+  // along the force's first direction from where the contact began
+  geometric_ = prior.valid && prior.distance_m < p_.geometric_gap_m;
+  model_.normal = geometric_ ? prior.normal : n;
+  s0_ = geometric_ ? prior.offset_m : n.dot(x);
   // start from what is known of the object: its last estimate, else its nominal stiffness
   const bool known = prior.valid && prior.object_id == last_object_ && last_k_ > 0.0;
   const double k = std::clamp(known         ? last_k_
@@ -88,7 +92,13 @@ void ContactEstimator::update(const Eigen::Vector3d& x, const Eigen::Vector3d& v
   if (touching) {
     const Eigen::Vector3d n = f / f_mag;
     const double turn_cos = std::cos(p_.new_contact_angle_deg * M_PI / 180.0);
-    if (!in_contact_ || model_.normal.dot(n) < turn_cos) start_contact(x, n, f_mag, prior);
+    const bool same_surface = geometric_ ? prior.valid && prior.object_id == model_.object_id
+                                         : model_.normal.dot(n) >= turn_cos;
+    if (!in_contact_ || !same_surface) start_contact(x, n, f_mag, prior);
+    if (geometric_) {
+      model_.normal = prior.normal;  // the surface's normal where the tip is now
+      s0_ = prior.offset_m;
+    }
     // recursive least squares with forgetting on f_n = t0 + t1 (s - s0) + t2 s_dot
     const Eigen::Vector3d& nn = model_.normal;
     const double f_n = nn.dot(f);

@@ -11,9 +11,11 @@
 // nearest the tip) with the stiffness last estimated for it (or its nominal one); in contact, k,
 // b and the offset come from the tip's own response, by recursive least squares on
 //   f_n = k (offset - s) - b s_dot,     s = n . x,  f_n = n . f_contact,
-// with exponential forgetting, a covariance bounded by its initial value (no wind-up while the
-// tip rests), and the normal held from the contact's first sample (a new contact starts when the
-// force turns by more than 25 degrees).
+// with exponential forgetting and a covariance bounded by its initial value (no wind-up while the
+// tip rests). When the contact is on a surface the geometry knows (within 1 cm of it), s is
+// measured from that surface along its normal where the tip is now, so sliding over a curved
+// body keeps a true depth and the model's normal follows the curvature; otherwise along the
+// force's first direction (a new contact starts when the force turns by more than 25 degrees).
 //
 // Allocation-free and deterministic; real-time safe.
 #include <Eigen/Core>
@@ -75,6 +77,7 @@ class ContactEstimator {
     double max_damping_ns_per_m = 200.0;
     double range_m = 0.1;  ///< a surface farther than this from the tip: no model
     double new_contact_angle_deg = 25.0;
+    double geometric_gap_m = 0.01;  ///< a contact within this of a known surface is on it
   };
 
   ContactEstimator() = default;
@@ -96,6 +99,7 @@ class ContactEstimator {
   Params p_;
   LocalModel model_;
   bool in_contact_ = false;
+  bool geometric_ = false;  // depth measured from the geometry's surface (see start_contact)
   std::uint64_t samples_ = 0;
   double s0_ = 0.0;  // n . x at the contact's start: the regressor is s - s0 (conditioning)
   Eigen::Vector3d theta_ = Eigen::Vector3d::Zero();  // f_n = t0 + t1 (s - s0) + t2 s_dot

@@ -39,6 +39,9 @@ using namespace teleop;
 /// rows run the same slave and stay in the CSV to show the unification changed no result.
 using ToolSceneSlave = PointSlave;
 
+/// A figure for the CSV; "nan" where it was not measured.
+std::string num(double v) { return std::isfinite(v) ? teleop::format_number(v) : "nan"; }
+
 struct RunRow {
   std::string sweep, scheme, environment, slave;
   double k = 0, gain = 0, delay_ms = 0;
@@ -53,13 +56,7 @@ PressResult run_with(const PressScenario& s, bool tool_scene) {
   LoopbackSession session(setup.loop, device, slave);
   session.run();
   PressResult r;
-  r.verdict = session.metrics().verdict();
-  r.reason = session.metrics().verdict_reason();
-  r.position_error_rms_m = session.metrics().position_error_rms_m();
-  r.force_error_rms_n = session.metrics().force_error_rms_n();
-  r.max_device_force_n = session.metrics().max_device_force_n();
-  r.energy_min_j = session.metrics().energy_min_j();
-  r.contact_time_s = session.metrics().contact_time_s();
+  fill_metrics(session.metrics(), r);
   r.safety_cut = session.safety().cut();
   fill_analytic(s, setup, r);
   return r;
@@ -71,13 +68,15 @@ struct SweepScheme {
   const char* scheme;  ///< controller scheme
   const char* base;    ///< tdpa base law ("" otherwise)
   bool force_gain;     ///< gain axis is K_f (else a stiffness in N/m)
+  bool one_gain;       ///< the scheme has no gain to sweep: its default only
 };
 constexpr SweepScheme kSchemes[] = {
-    {"position-position", "position-position", "", false},
-    {"force-position", "force-position", "", true},
-    {"wave-variables", "wave-variables", "", false},
-    {"tdpa", "tdpa", "position-position", false},
-    {"tdpa-fp", "tdpa", "force-position", true},
+    {"position-position", "position-position", "", false, false},
+    {"force-position", "force-position", "", true, false},
+    {"wave-variables", "wave-variables", "", false, false},
+    {"tdpa", "tdpa", "position-position", false, false},
+    {"tdpa-fp", "tdpa", "force-position", true, false},
+    {"model-mediated", "model-mediated", "", true, true},
 };
 
 int run_delay_bench(const teleop::CommandArgs& args) {
@@ -117,8 +116,9 @@ int run_delay_bench(const teleop::CommandArgs& args) {
     rows.push_back(row);
   };
   for (const SweepScheme& scheme : kSchemes) {
-    const auto& gains = scheme.force_gain ? fp_gains : pp_gains;
     const double default_gain = scheme.force_gain ? 1.0 : 400.0;
+    const std::vector<double> only_default = {default_gain};
+    const auto& gains = scheme.one_gain ? only_default : scheme.force_gain ? fp_gains : pp_gains;
     for (double g : gains) {
       for (double d : delays_ms) {
         add("gain", scheme, Environment::kSphere, 2000.0, g, d, false);
@@ -135,11 +135,30 @@ int run_delay_bench(const teleop::CommandArgs& args) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // the per-run map
-  teleop::CsvWriter csv((args.out_dir / "delay_map.csv").string(),
-                        {"sweep", "scheme", "environment", "slave", "stiffness_n_per_m", "gain",
-                         "delay_ms", "verdict", "verdict_code", "reason", "theory_stable",
-                         "analytic_margin_ms", "position_error_rms_mm", "force_error_rms_n",
-                         "max_device_force_n", "energy_min_j", "contact_time_s", "safety_cut"});
+  teleop::CsvWriter csv((args.out_dir / "delay_map.csv").string(), {"sweep",
+                                                                    "scheme",
+                                                                    "environment",
+                                                                    "slave",
+                                                                    "stiffness_n_per_m",
+                                                                    "gain",
+                                                                    "delay_ms",
+                                                                    "verdict",
+                                                                    "verdict_code",
+                                                                    "reason",
+                                                                    "theory_stable",
+                                                                    "analytic_margin_ms",
+                                                                    "position_error_rms_mm",
+                                                                    "force_error_rms_n",
+                                                                    "max_device_force_n",
+                                                                    "energy_min_j",
+                                                                    "contact_time_s",
+                                                                    "safety_cut",
+                                                                    "free_force_mean_n",
+                                                                    "free_force_p99_n",
+                                                                    "felt_force_ratio",
+                                                                    "felt_stiffness_n_per_m",
+                                                                    "environment_stiffness_n_per_m",
+                                                                    "stiffness_ratio"});
   int agree = 0, judged = 0, tool_agree = 0, tool_pairs = 0;
   // per scheme: point-slave runs, stable ones, agreement with its theory, verdict reasons
   struct SchemeStats {
@@ -181,16 +200,30 @@ int run_delay_bench(const teleop::CommandArgs& args) {
     std::string reason = row.r.reason;
     std::replace(reason.begin(), reason.end(), ',', ';');
     std::replace(reason.begin(), reason.end(), ' ', '_');
-    csv.row_text({row.sweep, row.scheme, row.environment, row.slave, teleop::format_number(row.k),
-                  teleop::format_number(row.gain), teleop::format_number(row.delay_ms),
-                  verdict_name(row.r.verdict), std::to_string(static_cast<int>(row.r.verdict)),
-                  reason.empty() ? "-" : reason, theory_stable ? "1" : "0",
+    csv.row_text({row.sweep,
+                  row.scheme,
+                  row.environment,
+                  row.slave,
+                  teleop::format_number(row.k),
+                  teleop::format_number(row.gain),
+                  teleop::format_number(row.delay_ms),
+                  verdict_name(row.r.verdict),
+                  std::to_string(static_cast<int>(row.r.verdict)),
+                  reason.empty() ? "-" : reason,
+                  theory_stable ? "1" : "0",
                   std::isfinite(margin_ms) ? teleop::format_number(margin_ms) : "inf",
                   teleop::format_number(row.r.position_error_rms_m * 1e3),
                   teleop::format_number(row.r.force_error_rms_n),
                   teleop::format_number(row.r.max_device_force_n),
                   teleop::format_number(row.r.energy_min_j),
-                  teleop::format_number(row.r.contact_time_s), row.r.safety_cut ? "1" : "0"});
+                  teleop::format_number(row.r.contact_time_s),
+                  row.r.safety_cut ? "1" : "0",
+                  num(row.r.free_force_mean_n),
+                  num(row.r.free_force_p99_n),
+                  num(row.r.felt_force_ratio),
+                  num(row.r.felt_stiffness_n_per_m),
+                  num(row.r.environment_stiffness_n_per_m),
+                  num(row.r.stiffness_ratio)});
   }
   // tool-scene vs point slave on the same wall runs
   for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -358,6 +391,8 @@ int run_delay_bench(const teleop::CommandArgs& args) {
         "delay_map.py",
         {(args.out_dir / "delay_map.csv").string(), (args.out_dir / "delay_boundary.csv").string(),
          (args.out_dir / "delay_theory.csv").string(), (args.out_dir / "delay_map.png").string()});
+    teleop::run_chart_script("transparency.py", {(args.out_dir / "delay_map.csv").string(),
+                                                 (args.out_dir / "transparency.png").string()});
   }
   return 0;
 }

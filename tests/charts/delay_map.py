@@ -26,18 +26,19 @@ def main():
                                    sys.argv[4])
     present = {r["scheme"] for r in runs}
     schemes = [s for s in ["position-position", "force-position", "wave-variables", "tdpa",
-                           "tdpa-fp"] if s in present]
+                           "tdpa-fp", "model-mediated"] if s in present]
     # the analytic model a row is drawn against (tdpa: its base law, without the PC)
     base = {"position-position": "position-position", "force-position": "force-position",
             "tdpa": "position-position", "tdpa-fp": "force-position"}
     gain_axis = {"position-position": "K_pm = K_ps [N/m]", "force-position": "force gain K_f [-]",
                  "wave-variables": "K_ps [N/m] (b = K_ps x 25 ms, <= 20 N s/m)",
-                 "tdpa": "K_pm = K_ps [N/m]", "tdpa-fp": "force gain K_f [-]"}
+                 "tdpa": "K_pm = K_ps [N/m]", "tdpa-fp": "force gain K_f [-]",
+                 "model-mediated": "(no gain: K_ps = 400 N/m)"}
     panels = [("gain", "sphere", "sphere k = 2000 N/m"),
               ("gain", "wall", "stiff wall k = 2e4 N/m"),
               ("stiffness", "sphere", "sphere, default gain")]
     style = {"stable": ("o", "tab:green"), "oscillating": ("s", "tab:orange"),
-             "unstable": ("x", "tab:red")}
+             "out-of-spec": ("D", "tab:purple"), "unstable": ("x", "tab:red")}
     max_delay = max(float(r["delay_ms"]) for r in runs) if runs else 200.0
     fig, axes = plt.subplots(len(schemes), 3, figsize=(15, 4.25 * len(schemes)), squeeze=False)
     for i, scheme in enumerate(schemes):

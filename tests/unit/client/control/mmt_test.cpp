@@ -145,5 +145,57 @@ TEST(ModelMediated, FreeSpaceForceIsForcePositionsDamping) {
   EXPECT_LE(mmt.free_mean_n, fp.free_mean_n + 1e-3);
 }
 
+/// The press-slip task (Fig. 13) at 137 ms / 13 ms jitter / 4.5 % burst loss each way.
+PressResult hostile_press(const std::string& scheme, const std::string& base) {
+  PressScenario s = teleop::test::scenario(scheme, Environment::kSphere, 2000.0, 0.0, 0.137);
+  s.tdpa_base = base;
+  s.jitter_s = 0.013;
+  PressSetup setup = build_press_setup(s);
+  for (DelayConfig* c : {&setup.loop.forward, &setup.loop.backward}) {
+    c->burst_loss = true;
+    c->burst_p_good_to_bad = 0.0094;  // steady-state loss p_gb / (p_gb + p_bg) = 4.5 %
+    c->burst_p_bad_to_good = 0.2;
+  }
+  SimulatedDevice device(setup.device);
+  PointSlave slave(setup.slave);
+  LoopbackSession session(setup.loop, device, slave);
+  session.run();
+  const SessionMetrics& m = session.metrics();
+  std::printf(
+      "[ hostile  ] %s/%s: %s (%s), peak %.2f N, peak 1 s average %.2f N, over the "
+      "rating %.2f s, felt %.2f x\n",
+      scheme.c_str(), base.c_str(), verdict_name(m.verdict()), m.verdict_reason(),
+      m.max_device_force_n(), m.peak_average_force_n(), m.over_rating_time_s(),
+      m.felt_force_ratio());
+  PressResult r;
+  r.verdict = m.verdict();
+  r.max_device_force_n = m.max_device_force_n();
+  return r;
+}
+
+TEST(Transparency, ASchemeDrivingTheDeviceBeyondItsContinuousRatingIsNotCalledStable) {
+  // the verdict follows the device's thermal model: the 1 s average of |F| above the 6 N rating
+  // tdpa on position-position there: above 6 N for about 0.5 s (over DDS on the default scene,
+  // 0.83 s, 9.01 N peak): out of spec, no longer "stable"; on force-position it stays at 0.8 N
+  EXPECT_EQ(hostile_press("tdpa", "position-position").verdict, Verdict::kOutOfSpec);
+  EXPECT_EQ(hostile_press("tdpa", "force-position").verdict, Verdict::kStable);
+  SessionMetrics m;
+  MetricsSample s;
+  s.have_slave = true;
+  s.continuous_force_n = 6.0;
+  s.device_force_n = Eigen::Vector3d(0.0, 0.0, 9.0);  // 9 N peaks, 50 ms each: within spec
+  for (int burst = 0; burst < 4; ++burst) {
+    for (int i = 0; i < 50; ++i, s.time_s += 1e-3) m.update(s);
+    s.device_force_n.z() = 0.5;
+    for (int i = 0; i < 950; ++i, s.time_s += 1e-3) m.update(s);
+    s.device_force_n.z() = 9.0;
+  }
+  EXPECT_EQ(m.verdict(), Verdict::kStable);
+  EXPECT_NEAR(m.over_rating_time_s(), 0.2, 1e-9);
+  for (int i = 0; i < 100; ++i, s.time_s += 1e-3) m.update(s);  // 0.3 s above 6 N in all
+  EXPECT_EQ(m.verdict(), Verdict::kOutOfSpec);
+  EXPECT_STREQ(verdict_name(m.verdict()), "out-of-spec");
+}
+
 }  // namespace
 }  // namespace teleop::master

@@ -561,7 +561,13 @@ TEST(Tdpa, PressTaskAtTheDefaultGainIsStableAtEveryDelay) {
       PressScenario s = scenario("tdpa", env, env == Environment::kWall ? 2.0e4 : 2000.0, 400, d);
       const PressResult r = run_press(s);
       EXPECT_FALSE(r.analytic_stable) << d;  // the base loop alone is not
-      EXPECT_EQ(r.verdict, Verdict::kStable) << d << " " << r.reason;
+      if (d <= 0.1) {
+        EXPECT_EQ(r.verdict, Verdict::kStable) << d << " " << r.reason;
+      } else {
+        // passive, never unstable; at 200 ms its drag (K 2T v) holds the device above its
+        // continuous rating for longer than the spec allows, and the verdict says so
+        EXPECT_EQ(r.verdict, Verdict::kOutOfSpec) << d << " " << r.reason;
+      }
       EXPECT_GT(r.contact_time_s, 2.0);
     }
   }
