@@ -318,15 +318,15 @@ TELEOP_TIP_INLINE bool TipMeshContact::slide_proxy(const Eigen::Matrix3Xd& x,
 // Equal and opposite: node penalty forces to their nodes, the proxy's share to the patch nodes
 // with the anchor's weights; the node forces sum to exactly -f.
 TELEOP_TIP_INLINE void TipMeshContact::apply_reaction(const Eigen::Vector3d& f_patch,
-                                                      bool use_nodes, double scale,
+                                                      double node_scale,
                                                       Eigen::Matrix3Xd& node_forces_n) const {
   for (int i = 0; i < patch_size_; ++i) {
     node_forces_n.col(patch_node_[static_cast<std::size_t>(i)]) -=
         patch_w_[static_cast<std::size_t>(i)] * f_patch;
   }
-  if (use_nodes) {
+  if (node_scale > 0.0) {
     for (int i = 0; i < node_contacts_; ++i) {
-      node_forces_n.col(node_list_[static_cast<std::size_t>(i)]) += scale * node_force_.col(i);
+      node_forces_n.col(node_list_[static_cast<std::size_t>(i)]) += node_scale * node_force_.col(i);
     }
   }
 }
@@ -414,11 +414,20 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
     if (ftn > mu_k * pr.fn_eff && ftn > 0.0) ft *= mu_k * pr.fn_eff / ftn;
   }
 
-  // the larger normal response acts: node penalty (area contact) or the proxy spring (a
-  // face touched between nodes, a thin sheet, or a tip through the surface)
-  const bool use_nodes = node_contacts_ > 0 && fn_nodes > pr.fn;
-  Eigen::Vector3d f =
-      use_nodes ? Eigen::Vector3d(f_nodes_tip + ft) : Eigen::Vector3d(pr.fn * pr.n + ft);
+  // the node penalty (area contact) takes over from the proxy spring (a face touched between
+  // nodes, a thin sheet, a tip through the surface) smoothly: share a of the node response,
+  // 1 - a of the proxy's, a = smoothstep of their ratio over [0.25, 1.75], both scaled by s so
+  // that the normal force is still the larger of the two (file comment)
+  double a = 0.0, s = 1.0;
+  if (node_contacts_ > 0) {
+    const double ratio = pr.fn > 1e-12 ? fn_nodes / pr.fn : 2.0;
+    const double u = std::clamp((ratio - 0.25) / 1.5, 0.0, 1.0);
+    a = u * u * (3.0 - 2.0 * u);
+    const double blended_n = a * fn_nodes + (1.0 - a) * pr.fn;
+    if (blended_n > 1e-12) s = std::max(fn_nodes, pr.fn) / blended_n;
+  }
+  const bool use_nodes = a > 0.0;
+  Eigen::Vector3d f = s * (a * f_nodes_tip + (1.0 - a) * pr.fn * pr.n) + ft;
   double scale = 1.0;
   if (params_.max_force_n > 0.0) {
     const double fm = f.norm();
@@ -433,7 +442,7 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
     res.ended = was_in_contact;
     return res;
   }
-  apply_reaction(use_nodes ? Eigen::Vector3d(scale * ft) : f, use_nodes, scale, node_forces_n);
+  apply_reaction(scale * (s * (1.0 - a) * pr.fn * pr.n + ft), scale * s * a, node_forces_n);
   res.node_contacts = use_nodes ? node_contacts_ : 0;
   res.max_node_depth_m = max_node_depth;
   anchor_prev_m_ = pr.a;
