@@ -32,6 +32,8 @@ MasterCycle::MasterCycle(const MasterCycleConfig& cfg, HapticDevice& device, Sla
       controller_(make_controller(cfg.controller.scheme)),
       forward_(cfg.forward),
       backward_(cfg.backward),
+      sent_position_m_(kSentRing, Eigen::Vector3d::Zero()),
+      sent_force_n_(kSentRing, Eigen::Vector3d::Zero()),
       metrics_(cfg.verdict) {
   if (!(cfg.dt_s > 0.0 && cfg.dt_s <= 0.1)) {
     throw config::ConfigError("master cycle: dt_s = " + std::to_string(cfg.dt_s) +
@@ -223,6 +225,9 @@ void MasterCycle::step(double now_s) {
     command_.seq = ++seq_;
     command_.send_time_s = now_s;
     forward_.push(command_, now_s);
+    // what the master was and felt when it sent this command (transparency over a network)
+    sent_position_m_[seq_ % kSentRing] = sample_.master_position_m;
+    sent_force_n_[seq_ % kSentRing] = cfg_.controller.workspace.to_slave_force(force_n_);
   }
   SlaveCommand due;
   if (cfg_.delivery == ForwardDelivery::kNewestDue) {
@@ -248,16 +253,26 @@ void MasterCycle::finish(double now_s, const SlaveSample* slave_truth) {
   sample_.in_contact = slave.in_contact;
   sample_.link_ok = !safety_.link_lost();
   sample_.safety_scale = cfg_.safety_enabled ? safety_.scale() : 1.0;
-  // transparency: depths and forces along the contact normal, in the slave's units
+  // transparency: depths and forces along the contact normal, in the slave's units; over a
+  // network the master's side is taken at the time of the command the slave's sample echoes
+  Eigen::Vector3d x_m = sample_.master_position_m, f_m = w.to_slave_force(force_n_);
+  sample_.transparency_valid = slave_truth != nullptr;
+  if (!slave_truth && sample_arrived_ && newest_.command_seq >= 1 && newest_.command_seq <= seq_ &&
+      seq_ - newest_.command_seq < kSentRing) {
+    const std::size_t k = newest_.command_seq % kSentRing;
+    x_m = sent_position_m_[k];
+    f_m = sent_force_n_[k];
+    sample_.transparency_valid = true;
+  }
+  sample_.aligned_force_n = w.to_master_force(f_m).norm();
   const double fe = slave.contact_force_n.norm();
   sample_.contact_force_n = slave.in_contact ? fe : 0.0;
   sample_.slave_depth_m = sample_.master_depth_m = sample_.felt_force_n = 0.0;
   if (slave.in_contact && fe > 1e-9) {
     const Eigen::Vector3d n = slave.contact_force_n / fe;  // out of the object
     sample_.slave_depth_m = slave.deformation_m > 0.0 ? slave.deformation_m : slave.penetration_m;
-    sample_.master_depth_m =
-        sample_.slave_depth_m + n.dot(slave.position_m - sample_.master_position_m);
-    sample_.felt_force_n = w.to_slave_force(force_n_).dot(n);
+    sample_.master_depth_m = sample_.slave_depth_m + n.dot(slave.position_m - x_m);
+    sample_.felt_force_n = f_m.dot(n);
   }
   sample_.continuous_force_n = device_.spec().max_continuous_force_n;
   if (homing_cycle_) return;  // homing is not part of the session's figures

@@ -20,6 +20,7 @@
 #include <Eigen/Core>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "client/control/bilateral_controller.hpp"
 #include "client/control/safety.hpp"
@@ -151,6 +152,9 @@ class MasterCycle {
   DelayChannel<SlaveCommand> forward_;
   DelayChannel<SlaveSample> backward_;
   SafetyLayer safety_;
+  // the master's position and felt force (slave frame) when each command was sent, by seq
+  static constexpr std::uint64_t kSentRing = 8192;
+  std::vector<Eigen::Vector3d> sent_position_m_, sent_force_n_;
   SessionMetrics metrics_;
 
   DeviceReading reading_;

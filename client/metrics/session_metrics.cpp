@@ -120,14 +120,15 @@ void SessionMetrics::update(const MetricsSample& s) {
 void SessionMetrics::update_transparency(const MetricsSample& s) {
   const double dt = s.dt_s;
   const double fn = s.device_force_n.norm();
-  if (!s.in_contact && s.link_ok && s.have_slave) {
+  const double fa = s.aligned_force_n;
+  if (s.transparency_valid && !s.in_contact && s.link_ok && s.have_slave) {
     ++n_free_;
-    free_sum_ += fn;
-    free_max_ = std::max(free_max_, fn);
+    free_sum_ += fa;
+    free_max_ = std::max(free_max_, fa);
     free_time_ += dt;
-    ++free_hist_[static_cast<std::size_t>(std::min(kFreeBins - 1.0, std::floor(fn / 0.005)))];
+    ++free_hist_[static_cast<std::size_t>(std::min(kFreeBins - 1.0, std::floor(fa / 0.005)))];
   }
-  if (s.in_contact && s.contact_force_n > 0.0) {
+  if (s.transparency_valid && s.in_contact && s.contact_force_n > 0.0) {
     ++n_felt_;
     felt_sum_ += s.felt_force_n;
     contact_sum_ += s.contact_force_n;

@@ -89,6 +89,12 @@ struct MetricsSample {
   double felt_force_n = 0.0;        ///< device force along the contact normal, slave units [N]
   double contact_force_n = 0.0;     ///< |f_e| at the slave [N]
   double continuous_force_n = 0.0;  ///< the device's continuous rating [N] (0: not judged)
+  /// The transparency figures of this sample are meaningful: in-process always; over a
+  /// network only when a slave sample arrived, its figures paired with the master's at the time
+  /// of the command it echoes (both sides at the same moment of the exchange, not a force felt
+  /// now against a slave state a round trip old).
+  bool transparency_valid = true;
+  double aligned_force_n = 0.0;  ///< |device force| of that moment [N] (free space figures)
 };
 
 /// A secant stiffness: sum of forces over sum of depths, accumulated without allocation.

@@ -28,11 +28,11 @@ ServerCycle::ServerCycle(const sim::WorldModel& model, double dt_s, double comma
     const Eigen::Vector3d centre = x.rowwise().mean();
     const sim::DeformableBodyModel& b = model.bodies[i];
     spheres_.push_back({b.object_id, centre, (x.colwise() - centre).colwise().norm().maxCoeff(),
-                        b.contact.stiffness_n_per_m, b.contact.damping_ns_per_m});
+                        b.contact.stiffness_n_per_m, b.contact.damping_ns_per_m, x, false});
   }
 }
 
-mmt::SurfacePrior ServerCycle::nearest_surface(const Eigen::Vector3d& tip_m) const {
+mmt::SurfacePrior ServerCycle::nearest_surface(const Eigen::Vector3d& tip_m) {
   const double r = model_.tip_radius_m();
   mmt::SurfacePrior best;
   for (const sim::Plane& p : model_.planes) {
@@ -40,13 +40,22 @@ mmt::SurfacePrior ServerCycle::nearest_surface(const Eigen::Vector3d& tip_m) con
                                               p.stiffness_n_per_m, p.damping_ns_per_m));
   }
   for (std::size_t i = 0; i < spheres_.size(); ++i) {
-    const BodySphere& b = spheres_[i];
+    BodySphere& b = spheres_[i];
     mmt::SurfacePrior p = mmt::sphere_prior(b.id, b.centre_m, b.radius_m, r, tip_m,
                                             b.stiffness_n_per_m, b.damping_ns_per_m);
+    // while the tip presses the body, its surface is where it was when the touch began (the
+    // dent is the depth, not a new surface); the nodes are copied once per touch
+    const bool touching = data_.bodies[i].last.in_contact;
+    if (touching && !b.reference_valid) {
+      b.reference_x = data_.bodies[i].state.x;  // same size: no allocation
+      b.reference_valid = true;
+    } else if (!touching) {
+      b.reference_valid = false;
+    }
     if (p.valid && p.distance_m < 0.2) {
-      // near it: the body as it is now (it sags, it is pressed), by its support point in the
+      // near it: the body as it is (it sags under gravity), by its support point in the
       // direction of the tip: the tangent plane of its nodes' hull facing the tip
-      const Eigen::Matrix3Xd& x = data_.bodies[i].state.x;
+      const Eigen::Matrix3Xd& x = b.reference_valid ? b.reference_x : data_.bodies[i].state.x;
       double support = -1e30;
       for (Eigen::Index k = 0; k < x.cols(); ++k)
         support = std::max(support, p.normal.dot(x.col(k)));

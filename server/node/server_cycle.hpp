@@ -59,12 +59,14 @@ class ServerCycle {
  private:
   /// The nearest surface of the scene to the tip: its planes, and each deformable body as its
   /// bounding sphere at rest (nominal stiffness: its contact spring's).
-  mmt::SurfacePrior nearest_surface(const Eigen::Vector3d& tip_m) const;
+  mmt::SurfacePrior nearest_surface(const Eigen::Vector3d& tip_m);
 
   struct BodySphere {
     std::int32_t id;
     Eigen::Vector3d centre_m;
     double radius_m, stiffness_n_per_m, damping_ns_per_m;
+    Eigen::Matrix3Xd reference_x;  ///< the body's nodes when the tip began touching it
+    bool reference_valid = false;
   };
 
   const sim::WorldModel& model_;
