@@ -1,5 +1,7 @@
 #include "client/metrics/session_metrics.hpp"
 
+#include "common/util/json.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -228,13 +230,7 @@ double SessionMetrics::mean_contact_force_n() const {
 }
 
 namespace {
-/// %.6g, or null for a NaN (JSON has no NaN).
-std::string num(double v) {
-  if (!std::isfinite(v)) return "null";
-  char b[32];
-  std::snprintf(b, sizeof(b), "%.6g", v);
-  return b;
-}
+std::string num(double v) { return json_number(v); }
 }  // namespace
 
 std::string SessionMetrics::transparency_json() const {

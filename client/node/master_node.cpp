@@ -26,6 +26,7 @@
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/csv.hpp"
+#include "common/util/json.hpp"
 #include "common/util/rate_loop.hpp"
 #include "common/util/signals.hpp"
 #include "teleop/idl/DevicePubSubTypes.h"
@@ -34,13 +35,6 @@
 namespace teleop::master {
 
 namespace {
-
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
-}
 
 constexpr std::size_t kCsvColumns = 34;
 /// A log row; the count must match the header exactly (checked at compile time).

@@ -100,10 +100,12 @@ int run_resim(const teleop::CommandArgs& args) {
   summary.flush();
   std::printf("resim: %s on %s: %" PRIu64 " steps, %" PRIu64 " commands (%" PRIu64
               " accepted, %" PRIu64 " rejected, %" PRIu64 " undecodable, %" PRIu64
-              " refused: not the owner) from %" PRIu64 " owner(s), %" PRIu64 " events, %" PRIu64 " watchdog trips; hash %s\n",
+              " refused: not the owner) from %" PRIu64 " owner(s), %" PRIu64 " events, %" PRIu64
+              " watchdog trips; hash %s\n",
               commands.c_str(), model.name.c_str(), r.steps, r.commands, r.accepted,
               r.rejected_nan + r.rejected_workspace + r.rejected_stale + r.rejected_passivity,
-              r.undecodable, r.refused_owner, r.masters, r.events, r.watchdog_trips, hash_text(r.hash).c_str());
+              r.undecodable, r.refused_owner, r.masters, r.events, r.watchdog_trips,
+              hash_text(r.hash).c_str());
   return 0;
 }
 

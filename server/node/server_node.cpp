@@ -11,6 +11,7 @@
 #include "common/dds/rate_limited_publisher.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
+#include "common/util/json.hpp"
 #include "common/util/rate_loop.hpp"
 #include "common/util/signals.hpp"
 #include "common/util/stats.hpp"
@@ -50,13 +51,6 @@ WriterId writer_id(const eprosima::fastrtps::rtps::InstanceHandle_t& h) {
   WriterId w;
   for (std::size_t i = 0; i < w.bytes.size(); ++i) w.bytes[i] = h.value[i];
   return w;
-}
-
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.6g", v);
-  return buf;
 }
 
 }  // namespace

@@ -172,7 +172,8 @@ TEST(RecordPlay, RecordedSessionReSimulatesBitIdenticallyAndItsLogReplays) {
     std::printf("[ resim    ] %s", resim.out().c_str());
     // every recorded command decoded; the session's commands were accepted (none stale: one
     // master, in order)
-    EXPECT_NE(resim.out().find(" 0 undecodable, 0 refused: not the owner) from 1 owner(s)"), std::string::npos)
+    EXPECT_NE(resim.out().find(" 0 undecodable, 0 refused: not the owner) from 1 owner(s)"),
+              std::string::npos)
         << resim.out();
   }
   ASSERT_EQ(hashes[0].size(), 16u);
