@@ -125,6 +125,10 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
       ->capture_default_str();
   app.add_option("--wait-server", o.wait_server_s, "wait for the server this long [s]")
       ->capture_default_str();
+  app.add_flag("--accept-tuning", o.accept_tuning,
+               "apply live tuning requests (teleop/tuning: gains and injected delays, checked "
+               "against the scheme and the device, ramped in; e.g. from teleop_viewer's tuning "
+               "panel). Off: the master only publishes its tuning status");
   app.add_option("--wait-owner", o.wait_owner_s,
                  "when another master owns the slave, wait this long for it to release it "
                  "(or to fall silent) instead of exiting with status 4 [s], 0-86400 (default 0)");

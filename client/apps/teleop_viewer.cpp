@@ -20,6 +20,13 @@
 // allocation after warm-up); the render loop copies what changed once per frame and draws at the
 // display rate (vsync) or --fps.
 //
+// Drive (--drive, docs/tools.md "Drive it by hand"): the viewer is also the master's haptic
+// device (teleop/device_state at 1 kHz from a 1 kHz thread; teleop_master --device external)
+// and its tuning tool (teleop/tuning; teleop_master --accept-tuning). Drag the ring at the
+// master's hand with the left button, or hold the arrows and PgUp/PgDn; the force the master
+// renders is drawn as an arrow from the ring and as a bar. --input-script FILE plays the same
+// input from a file (client/viewer/input_script.hpp), through the same handlers.
+//
 // Exit status: 0 done, 1 runtime failure (no display, OpenGL, DDS, file), 2 bad command line,
 // 3 snapshot: the data never became complete within --timeout.
 #include <sys/resource.h>
@@ -46,9 +53,12 @@
 #include <imgui.h>
 
 #include "client/viewer/camera.hpp"
+#include "client/viewer/drive_session.hpp"
+#include "client/viewer/input_script.hpp"
 #include "client/viewer/gl/offscreen.hpp"
 #include "client/viewer/gl/renderer.hpp"
 #include "client/viewer/png.hpp"
+#include "client/viewer/ui/drive_panel.hpp"
 #include "client/viewer/ui/panel.hpp"
 #include "client/viewer/viewer_data.hpp"
 #include "common/config/config.hpp"
@@ -56,6 +66,7 @@
 #include "common/dds/network_flags.hpp"
 #include "common/dds/observer_topics.hpp"
 #include "common/util/clock.hpp"
+#include "common/util/json.hpp"
 #include "common/util/signals.hpp"
 #include "common/util/stats.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
@@ -89,6 +100,12 @@ struct Options {
   bool wireframe = false;
   bool displacement = false;
   bool full_rate = false;  ///< read the 1 kHz topics instead of the 60 Hz *_view copies
+  // drive
+  bool drive = false;            ///< be the master's device and tuning tool
+  std::string input_script;      ///< scripted input (needs --drive)
+  std::string drive_json;        ///< write the drive summary here at exit
+  double drive_scale = 1.0;      ///< slave metres per device metre (the master's alpha)
+  double drive_peak_force_n = 10.0;  ///< declared peak force of the device [N]
 };
 
 /// Checks the flags that CLI11 cannot; throws config::ConfigError naming flag, value and range.
@@ -105,6 +122,14 @@ void validate(const Options& o) {
   check_flag("--nice", o.nice, 0, 19);
   check_flag("--force-scale", o.force_scale_m_per_n, 1e-4, 10.0);
   check_flag("--displacement-scale", o.displacement_scale_m, 1e-5, 1.0);
+  check_flag("--drive-scale", o.drive_scale, 1e-3, 1e3);
+  check_flag("--drive-peak-force", o.drive_peak_force_n, 0.1, 1000.0);
+  if (!o.drive && (!o.input_script.empty() || !o.drive_json.empty())) {
+    throw config::ConfigError("command line: --input-script and --drive-json need --drive");
+  }
+  if (o.drive && !o.snapshot.empty()) {
+    throw config::ConfigError("command line: --drive needs a window; it cannot go with --snapshot");
+  }
   if (!o.snapshot.empty()) {
     const std::filesystem::path p(o.snapshot);
     std::string ext = p.extension().string();
@@ -239,7 +264,14 @@ class ViewerApp {
     r_events_ = std::make_unique<teleop::dds::Reader<EventPubSubType>>(
         p, teleop::dds::topics::kEvents, teleop::dds::TopicQos::kEventLog,
         [this](const Event& e, const SampleInfo&) { data_.on_event(e, now_ns()); });
+    if (options_.drive) {
+      viewer::HandDriveParams hp;
+      hp.position_scale = options_.drive_scale;
+      drive_ = std::make_unique<viewer::DriveSession>(p, hp, options_.drive_peak_force_n);
+    }
   }
+
+  void set_script(std::vector<viewer::ScriptAction> script) { script_ = std::move(script); }
 
   /// The render loop. Returns the exit status.
   int run() {
@@ -265,6 +297,7 @@ class ViewerApp {
       if (!paused_) data_.update(view_);
       renderer_.sync_scene(view_);
       update_rates(frame_start);
+      if (drive_ && !run_script(frame_start)) break;
 
       // headless: wait until the data is complete, then --after seconds more
       bool snapshot_now = false;
@@ -376,6 +409,7 @@ class ViewerApp {
     panel_info_.msaa = msaa_;
     viewer::draw_panel(view_, panel_info_, layout);
     viewer::draw_overlay(view_, panel_info_);
+    if (drive_) draw_drive(layout);
     ImGui::Render();
     if (!render || minimised) return -1;
 
@@ -453,6 +487,25 @@ class ViewerApp {
         glfwSetWindowShouldClose(window_, GLFW_TRUE);
       }
     }
+    if (drive_) {
+      drive_keys(io.DeltaTime);
+      const Eigen::Vector2f mouse(io.MousePos.x, io.MousePos.y);
+      if (mouse_dragging_) {
+        if (ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
+          drive_move(mouse, layout);
+        } else {
+          drive_->release();
+          mouse_dragging_ = false;
+        }
+        return;
+      }
+      if (!io.WantCaptureMouse && !script_dragging_ &&
+          ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !io.KeyShift &&
+          drive_press(mouse, layout)) {
+        mouse_dragging_ = true;
+        return;
+      }
+    }
     if (io.WantCaptureMouse || io.MousePos.x >= static_cast<float>(layout.view_width)) return;
     const bool pan = ImGui::IsMouseDown(ImGuiMouseButton_Right) ||
                      ImGui::IsMouseDown(ImGuiMouseButton_Middle) ||
@@ -465,6 +518,170 @@ class ViewerApp {
     if (io.MouseWheel != 0.0f) camera_.zoom(io.MouseWheel);
   }
 
+  // ---- drive (--drive) ----
+
+  /// The master's hand in the slave world (MasterState.command_position_m); false until known.
+  bool hand_world(Eigen::Vector3d& hand) const {
+    if (!view_.have_master) return false;
+    const auto& p = view_.master.command_position_m();
+    hand = Eigen::Vector3d(p[0], p[1], p[2]);
+    return hand.allFinite() && hand.squaredNorm() > 0.0;
+  }
+
+  void pixel_ray(const Eigen::Vector2f& px, const viewer::Layout& layout, Eigen::Vector3d& o,
+                 Eigen::Vector3d& d) const {
+    Eigen::Vector3f of, df;
+    camera_.ray(px, static_cast<float>(layout.view_width), static_cast<float>(layout.view_height),
+                of, df);
+    o = of.cast<double>();
+    d = df.cast<double>();
+  }
+
+  /// A left press at `px`: grabs the hand when the press is within 30 px of its ring.
+  bool drive_press(const Eigen::Vector2f& px, const viewer::Layout& layout) {
+    Eigen::Vector3d hand;
+    if (!hand_world(hand)) return false;
+    Eigen::Vector2f at;
+    if (!camera_.project(hand.cast<float>(), static_cast<float>(layout.view_width),
+                         static_cast<float>(layout.view_height), at) ||
+        (at - px).norm() > 30.0f) {
+      return false;
+    }
+    Eigen::Vector3d o, d;
+    pixel_ray(px, layout, o, d);
+    drive_->grab(hand, camera_.forward().cast<double>(), o, d);
+    return drive_->dragging();
+  }
+
+  void drive_move(const Eigen::Vector2f& px, const viewer::Layout& layout) {
+    Eigen::Vector3d o, d;
+    pixel_ray(px, layout, o, d);
+    drive_->drag(o, d);
+  }
+
+  /// Held arrows and PgUp/PgDn move the hand along the world axes.
+  void drive_keys(float dt_s) {
+    if (ImGui::GetIO().WantCaptureKeyboard) return;
+    Eigen::Vector3d dir = Eigen::Vector3d::Zero();
+    if (ImGui::IsKeyDown(ImGuiKey_RightArrow)) dir.x() += 1.0;
+    if (ImGui::IsKeyDown(ImGuiKey_LeftArrow)) dir.x() -= 1.0;
+    if (ImGui::IsKeyDown(ImGuiKey_UpArrow)) dir.y() += 1.0;
+    if (ImGui::IsKeyDown(ImGuiKey_DownArrow)) dir.y() -= 1.0;
+    if (ImGui::IsKeyDown(ImGuiKey_PageUp)) dir.z() += 1.0;
+    if (ImGui::IsKeyDown(ImGuiKey_PageDown)) dir.z() -= 1.0;
+    drive_->nudge(dir, dt_s);
+  }
+
+  void send_tuning(std::uint32_t fields) {
+    drive_->send_tuning(viewer::make_tuning_request(tuning_form_, fields));
+  }
+
+  void draw_drive(const viewer::Layout& layout) {
+    const viewer::DriveView v = drive_->view();
+    Eigen::Vector3d hand;
+    if (hand_world(hand)) {
+      viewer::draw_drive_overlay(camera_, static_cast<float>(layout.view_width),
+                                 static_cast<float>(layout.view_height), hand, v,
+                                 options_.force_scale_m_per_n, drive_->dragging());
+    }
+    const std::uint32_t fields = viewer::draw_drive_window(v, drive_->peak_force_n(),
+                                                           tuning_form_,
+                                                           static_cast<float>(layout.view_height));
+    if (fields != 0) send_tuning(fields);
+  }
+
+  /// Plays --input-script through the handlers above. Returns false to close the viewer.
+  bool run_script(std::int64_t now) {
+    if (script_.empty() && !script_dragging_ && script_key_until_s_ < 0.0) return true;
+    Eigen::Vector3d hand;
+    if (script_t0_ns_ == 0) {
+      if (!hand_world(hand)) return true;  // times count from when the hand is known
+      script_t0_ns_ = now;
+      std::cerr << "teleop_viewer: input script starts (the master's hand is known)\n";
+    }
+    const double t = seconds_between(script_t0_ns_, now);
+    const viewer::Layout layout = viewer::layout_for(options_.width, options_.height, show_panel_);
+    // a drag under way: the pointer moves linearly from its press point
+    if (script_dragging_) {
+      const double s = std::clamp((t - script_drag_.at_s) / script_drag_.duration_s, 0.0, 1.0);
+      drive_move(script_press_px_ + static_cast<float>(s) *
+                                        Eigen::Vector2f(static_cast<float>(script_drag_.dx_px),
+                                                        static_cast<float>(script_drag_.dy_px)),
+                 layout);
+      if (s >= 1.0) {
+        drive_->release();
+        script_dragging_ = false;
+      }
+    }
+    if (script_key_until_s_ >= 0.0) {
+      const double dt = std::min(t, script_key_until_s_) - script_key_last_s_;
+      drive_->nudge(script_key_dir_, dt);
+      script_key_last_s_ = std::min(t, script_key_until_s_);
+      if (t >= script_key_until_s_) script_key_until_s_ = -1.0;
+    }
+    while (!script_.empty() && script_.front().at_s <= t) {
+      const viewer::ScriptAction a = script_.front();
+      script_.erase(script_.begin());
+      std::cerr << "teleop_viewer: script t=" << t << " s:" << a.text << "\n";
+      switch (a.kind) {
+        case viewer::ScriptAction::Kind::kDrag: {
+          Eigen::Vector2f at;
+          if (hand_world(hand) &&
+              camera_.project(hand.cast<float>(), static_cast<float>(layout.view_width),
+                              static_cast<float>(layout.view_height), at) &&
+              drive_press(at, layout)) {
+            script_press_px_ = at;
+            script_drag_ = a;
+            script_dragging_ = true;
+          } else {
+            std::cerr << "teleop_viewer: script: the master's hand is not on screen; drag skipped\n";
+          }
+          break;
+        }
+        case viewer::ScriptAction::Kind::kKey:
+          script_key_dir_ = a.key_direction;
+          script_key_last_s_ = a.at_s;
+          script_key_until_s_ = a.at_s + a.duration_s;
+          break;
+        case viewer::ScriptAction::Kind::kTune:
+          tuning_form_.master_stiffness_n_per_m = a.master_stiffness_n_per_m;
+          tuning_form_.master_damping_ns_per_m = a.master_damping_ns_per_m;
+          tuning_form_.force_gain = a.force_gain;
+          tuning_form_.slave_stiffness_n_per_m = a.slave_stiffness_n_per_m;
+          tuning_form_.forward_delay_ms = a.forward_delay_ms;
+          tuning_form_.backward_delay_ms = a.backward_delay_ms;
+          tuning_form_.ramp_s = a.ramp_s;
+          tuning_form_.loaded = true;
+          send_tuning(a.fields);  // what Apply sends, with the script's fields
+          break;
+        case viewer::ScriptAction::Kind::kQuit:
+          return false;
+      }
+    }
+    return true;
+  }
+
+
+ public:
+  /// The drive summary: printed, and written to --drive-json.
+  void finish_drive() const {
+    if (!drive_) return;
+    const std::string json = drive_->summary_json();
+    std::printf("teleop_viewer: drive %s\n", json.c_str());
+    std::fflush(stdout);
+    if (!options_.drive_json.empty()) {
+      std::FILE* f = std::fopen(options_.drive_json.c_str(), "w");
+      if (f) {
+        std::fprintf(f, "%s\n", json.c_str());
+        std::fclose(f);
+      } else {
+        std::cerr << "teleop_viewer: cannot write " << options_.drive_json << "\n";
+      }
+    }
+  }
+
+
+ private:
   /// Receive rates and frame-time percentiles, refreshed once a second.
   void update_rates(std::int64_t now) {
     if (rates_ns_ == 0) {
@@ -500,6 +717,7 @@ class ViewerApp {
   }
 
   void shutdown() {
+    drive_.reset();
     // readers first: their callbacks write into data_
     r_events_.reset();
     r_stats_.reset();
@@ -561,6 +779,19 @@ class ViewerApp {
   std::uint64_t frames_ = 0, last_frames_ = 0;
   std::int64_t rates_ns_ = 0;
   viewer::Counters last_counters_;
+
+  // drive
+  std::unique_ptr<viewer::DriveSession> drive_;
+  viewer::TuningForm tuning_form_;
+  std::vector<viewer::ScriptAction> script_;
+  std::int64_t script_t0_ns_ = 0;
+  viewer::ScriptAction script_drag_;  // the drag under way (when script_dragging_)
+  bool script_dragging_ = false;
+  bool mouse_dragging_ = false;  // a drag started with the mouse
+  Eigen::Vector2f script_press_px_ = Eigen::Vector2f::Zero();
+  Eigen::Vector3d script_key_dir_ = Eigen::Vector3d::Zero();
+  double script_key_last_s_ = 0.0;
+  double script_key_until_s_ = -1.0;
 };
 
 }  // namespace
@@ -608,6 +839,18 @@ int main(int argc, char** argv) {
                "read the 1 kHz state topics instead of the 60 Hz *_view copies; loads the loops");
   app.add_flag("--hide-panel", o.hide_panel, "start without the plot panel (key H)");
   app.add_flag("--wireframe", o.wireframe, "start with wireframe meshes (key W)");
+  app.add_flag("--drive", o.drive,
+               "drive the session by hand: be the master's device (teleop_master --device "
+               "external) and its tuning tool (teleop_master --accept-tuning)");
+  app.add_option("--input-script", o.input_script,
+                 "with --drive: play mouse, key and tuning input from this file (docs/tools.md)");
+  app.add_option("--drive-json", o.drive_json, "with --drive: write the drive summary here");
+  app.add_option("--drive-scale", o.drive_scale,
+                 "slave metres per device metre (the master's position scale), 0.001-1000")
+      ->capture_default_str();
+  app.add_option("--drive-peak-force", o.drive_peak_force_n,
+                 "the device's declared peak force [N] (the force bar's full scale), 0.1-1000")
+      ->capture_default_str();
   app.add_flag("--displacement", o.displacement,
                "start with meshes coloured by displacement from the first frame (key C)");
   try {
@@ -634,11 +877,15 @@ int main(int argc, char** argv) {
         teleop::dds::resolve_participant_options(o.profile, o.domain, "teleop_viewer", net_flags);
     teleop::dds::profile_file(dds_options.profile);  // fail early with the list of profiles
     install_stop_signal_handlers();
+    std::vector<teleop::viewer::ScriptAction> script;
+    if (!o.input_script.empty()) script = teleop::viewer::parse_input_script(o.input_script);
     ViewerApp viewer(o, dds_options);
     if (const int status = viewer.init_graphics(); status != 0) return status;
     viewer.init_dds();
+    viewer.set_script(std::move(script));
     const int status = viewer.run();
     viewer.print_summary();
+    viewer.finish_drive();
     return status;
   } catch (const config::ConfigError& e) {
     std::cerr << "teleop_viewer: " << e.what() << "\n";

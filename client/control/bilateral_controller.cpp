@@ -148,6 +148,13 @@ void BilateralController::configure(const ControllerParams& params, const Device
   on_configure();
 }
 
+void BilateralController::retune(double k_pm, double b_m, double k_f, double k_ps) {
+  k_pm_ = std::min(k_pm, spec_.max_stiffness_n_per_m);
+  b_m_ = std::min(b_m, spec_.max_damping_ns_per_m);
+  params_.force_gain = k_f;
+  params_.slave_stiffness_n_per_m = k_ps;
+}
+
 void BilateralController::activate(const DeviceReading& master) {
   seq_ = 0;
   session_ = next_session_ != 0 ? next_session_ : ++g_session_counter;

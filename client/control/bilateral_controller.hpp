@@ -118,6 +118,11 @@ class BilateralController {
   /// period dt [s]. Real-time safe.
   ControlOutput update(const DeviceReading& master, const SlaveSample& slave, double dt_s);
 
+  /// Live gains (client/control/tuning.hpp): K_pm and B_m clamped to the spec as configure()
+  /// does, K_f and K_ps as given (checked by check_tuning()). Real-time safe.
+  void retune(double master_stiffness_n_per_m, double master_damping_ns_per_m, double force_gain,
+              double slave_stiffness_n_per_m);
+
   /// Scheme name ("position-position", ...).
   virtual const char* name() const = 0;
   /// Scheme id (SCHEME_* constant).

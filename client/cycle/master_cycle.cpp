@@ -47,6 +47,17 @@ void MasterCycle::prepare(double now_s) {
   controller_->configure(cfg_.controller, device_.spec());
   if (cfg_.session_id != 0) controller_->set_session_id(cfg_.session_id);
   safety_.configure(cfg_.safety, device_.spec());
+  tuning_limits_ = master::tuning_limits(
+      cfg_.controller, device_.spec(), std::min(cfg_.forward.capacity, cfg_.backward.capacity),
+      cfg_.dt_s);
+  TuningValues in_force;
+  in_force.master_stiffness_n_per_m = controller_->master_stiffness_n_per_m();
+  in_force.master_damping_ns_per_m = controller_->master_damping_ns_per_m();
+  in_force.force_gain = controller_->params().force_gain;
+  in_force.slave_stiffness_n_per_m = controller_->params().slave_stiffness_n_per_m;
+  in_force.forward_delay_s = cfg_.forward.delay_s;
+  in_force.backward_delay_s = cfg_.backward.delay_s;
+  tuning_.reset(in_force);
   metrics_.reset();
   forward_.reset();
   backward_.reset();
@@ -186,8 +197,27 @@ void MasterCycle::homing_step(double now_s) {
   }
 }
 
+std::string MasterCycle::tune(const TuningRequestData& request, double now_s) {
+  std::string problem = check_tuning(request, tuning_limits_, cfg_.controller.scheme);
+  if (!problem.empty()) {
+    ++tunings_rejected_;
+    return problem;
+  }
+  ++tunings_accepted_;
+  tuning_.start(request, now_s, tuning_limits_.min_ramp_s);
+  return {};
+}
+
 void MasterCycle::step(double now_s) {
   const double dt = cfg_.dt_s;
+  // live tuning: gains and injected delays move along their ramps
+  if (tuning_.advance(now_s)) {
+    const TuningValues& v = tuning_.current();
+    controller_->retune(v.master_stiffness_n_per_m, v.master_damping_ns_per_m, v.force_gain,
+                        v.slave_stiffness_n_per_m);
+    forward_.set_delay_s(v.forward_delay_s);
+    backward_.set_delay_s(v.backward_delay_s);
+  }
   // slave side of the link -> backward channel -> the controller's newest sample
   sample_arrived_ = false;
   SlaveSample arrived;

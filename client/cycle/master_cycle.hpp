@@ -24,6 +24,7 @@
 
 #include "client/control/bilateral_controller.hpp"
 #include "client/control/safety.hpp"
+#include "client/control/tuning.hpp"
 #include "client/cycle/slave_link.hpp"
 #include "client/device/haptic_device.hpp"
 #include "client/metrics/session_metrics.hpp"
@@ -90,6 +91,17 @@ class MasterCycle {
   /// rehome() for that.
   void hold(bool on) { held_ = on; }
   bool held() const { return held_; }
+
+  /// Live tuning (client/control/tuning.hpp): checks `request` against tuning_limits() and,
+  /// if it passes, ramps the gains and the injected delays to its values from `now_s`. Returns
+  /// an empty string, or why it was rejected (field, value, range). Called between cycles: its
+  /// message allocates; the ramp runs in step() and allocates nothing.
+  std::string tune(const TuningRequestData& request, double now_s);
+  const TuningLimits& tuning_limits() const { return tuning_limits_; }
+  /// Values in force now (current()) and the targets of the newest accepted request (target()).
+  const TuningRamp& tuning() const { return tuning_; }
+  std::uint64_t tunings_accepted() const { return tunings_accepted_; }
+  std::uint64_t tunings_rejected() const { return tunings_rejected_; }
 
   /// The master half of a cycle (see the file comment). Real-time safe.
   void step(double now_s);
@@ -189,6 +201,11 @@ class MasterCycle {
   std::uint64_t rehomes_ = 0;
   std::uint64_t rehomes_by_[3] = {0, 0, 0};
   std::uint32_t next_session_id_ = 0;
+  // live tuning
+  TuningLimits tuning_limits_;
+  TuningRamp tuning_;
+  std::uint64_t tunings_accepted_ = 0;
+  std::uint64_t tunings_rejected_ = 0;
 };
 
 /// JSON object of a channel report: {"pushed":..,"delay_mean_ms":..,"delay_p50_ms":..,...}.

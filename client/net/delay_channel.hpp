@@ -99,6 +99,11 @@ class DelayChannel {
     origin_s_ = 0.0;
   }
 
+  /// Sets the constant one-way delay D of samples pushed from now on [s] (live tuning; the
+  /// caller slews it, see client/control/tuning.hpp). Samples in flight keep their delivery
+  /// times; without reordering a shorter delay still never lets a sample overtake. Real-time safe.
+  void set_delay_s(double delay_s) { cfg_.delay_s = std::clamp(delay_s, 0.0, 10.0); }
+
   /// Offers a sample sent at `now_s` [s]. Returns false if it was lost. Never allocates.
   bool push(const T& value, double now_s) {
     ++counters_.pushed;

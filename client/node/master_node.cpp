@@ -21,6 +21,7 @@
 #include "client/net/delay_channel.hpp"
 #include "client/node/dds_slave_link.hpp"
 #include "client/node/server_health.hpp"
+#include "client/node/tuning_endpoint.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/dds/rate_limited_publisher.hpp"
 #include "common/dds/teleop_idl.hpp"
@@ -47,16 +48,6 @@ std::array<double, kCsvColumns> csv_row(T... v) {
 double relative_force_error(const SessionMetrics& m) {
   const double f = m.mean_contact_force_n();
   return f > 1e-9 ? m.force_error_rms_n() / f : std::nan("");
-}
-
-/// `text` as the inside of a JSON string.
-std::string json_escape(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) >= 0x20) out += c;
-  }
-  return out;
 }
 
 /// Internal status of Impl::run: make a new participant and wait again.
@@ -149,6 +140,7 @@ struct MasterNode::Impl {
   std::mutex owner_event_mutex;
   std::string owner_event;
 
+  std::unique_ptr<TuningEndpoint> tuning;  // live tuning (teleop/tuning, teleop/tuning_status)
   double waited_s = 0.0;  // time run() waited for the server before returning kReconnect
   bool tcp_client = false;
 
@@ -201,6 +193,7 @@ struct MasterNode::Impl {
             owner_event = e.message().c_str();
           }
         });
+    tuning = std::make_unique<TuningEndpoint>(participant, master_session, o.accept_tuning);
     if (o.device == "external") {
       device_command_writer = std::make_unique<dds::Writer<DeviceCommandPubSubType>>(
           participant, "teleop/device_command", dds::TopicQos::kStream);
@@ -345,6 +338,7 @@ struct MasterNode::Impl {
     const BilateralController::PassivityStatus ps = cycle.controller().passivity_status();
     ms.passivity_observer_j(ps.observer_j);
     ms.passivity_dissipated_j(ps.dissipated_j);
+    detail::put3(ms.command_position_m(), m.master_position_m);
     state_writer.write(ms);
     state_views.offer(ms);  // a copy under a try-lock; the views are written elsewhere
   }
@@ -587,6 +581,11 @@ struct MasterNode::Impl {
     update_health();  // the baseline: the server's counts from before this session
     session_start_ns.store(t0);
     cycle.start_homing(t0_s, tip0, options.homing_s);
+    tuning->publish_status(cycle, t0);
+    const auto report_tuning = [this](std::uint8_t severity, const std::string& msg) {
+      event(static_cast<std::uint8_t>(sim::EventKind::kTuning), severity, msg, 0.0);
+      if (!options.quiet && severity == 0) std::cerr << "teleop_master: " << msg << "\n";
+    };
     std::uint64_t faults_seen = 0;
     OwnershipWatch owner;
     const double grace_s = 0.5 + 2.0 * (options.forward.delay_s + options.backward.delay_s);
@@ -602,6 +601,7 @@ struct MasterNode::Impl {
       if (external && device_box.take_if_newer(device_sample, device_seen)) {
         external->on_sample(from_idl(device_sample));
       }
+      tuning->poll(cycle, now_s, now, report_tuning);
       cycle.step(now_s);
       entry_time_s[cycle.command_seq() % kEntryRing] = now_s;
       if (cycle.sample_arrived()) {
@@ -702,12 +702,32 @@ struct MasterNode::Impl {
         << ", \"link_back\": " << cycle.rehomes(RehomeReason::kLinkBack)
         << ", \"slave_restart\": " << cycle.rehomes(RehomeReason::kSlaveRestart)
         << ", \"takeover\": " << cycle.rehomes(RehomeReason::kTakeover) << "},\n"
+        << "  \"tuning\": " << tuning_json(cycle) << ",\n"
         << "  \"ownership\": {\"session\": " << master_session
         << ", \"refused\": " << (rep.refused ? "true" : "false")
         << ", \"issued_before_owning\": " << rep.issued_before_owning
         << ", \"waited_s\": " << json_number(rep.waited_for_owner_s) << ", \"server_says\": \""
         << json_escape(rep.owner_message) << "\"}\n"
         << "}\n";
+  }
+
+  /// {"accepting":..,"received":..,"applied":..,"rejected":..,"ignored":..,"dropped":..,
+  ///  "in_force": {...}}: live tuning over the session.
+  std::string tuning_json(const MasterCycle& cycle) const {
+    const TuningValues& v = cycle.tuning().current();
+    return std::string("{\"accepting\": ") + (tuning->accepting() ? "true" : "false") +
+           ", \"received\": " + std::to_string(tuning->received()) +
+           ", \"applied\": " + std::to_string(cycle.tunings_accepted()) +
+           ", \"rejected\": " + std::to_string(cycle.tunings_rejected()) +
+           ", \"ignored\": " + std::to_string(tuning->ignored()) +
+           ", \"dropped\": " + std::to_string(tuning->dropped()) +
+           ", \"in_force\": {\"master_stiffness_n_per_m\": " +
+           json_number(v.master_stiffness_n_per_m) +
+           ", \"master_damping_ns_per_m\": " + json_number(v.master_damping_ns_per_m) +
+           ", \"force_gain\": " + json_number(v.force_gain) +
+           ", \"slave_stiffness_n_per_m\": " + json_number(v.slave_stiffness_n_per_m) +
+           ", \"forward_delay_ms\": " + json_number(v.forward_delay_s * 1e3) +
+           ", \"backward_delay_ms\": " + json_number(v.backward_delay_s * 1e3) + "}}";
   }
 
   void print_summary(const MasterCycle& cycle, const SessionReport& rep) const {
@@ -734,6 +754,20 @@ struct MasterNode::Impl {
                    " commands sent while refused, " + std::to_string(rep.waited_for_owner_s) +
                    " s)";
     }
+    std::string tuning_line;
+    if (tuning->accepting()) {
+      const TuningValues& v = cycle.tuning().current();
+      char buf[256];
+      std::snprintf(buf, sizeof(buf),
+                    "  tuning          %llu requests: %llu applied, %llu rejected; in force K_pm "
+                    "%.0f N/m, B_m %.2f N s/m, K_f %.2f, K_ps %.0f N/m, delay %.1f / %.1f ms\n",
+                    static_cast<unsigned long long>(tuning->received()),
+                    static_cast<unsigned long long>(cycle.tunings_accepted()),
+                    static_cast<unsigned long long>(cycle.tunings_rejected()),
+                    v.master_stiffness_n_per_m, v.master_damping_ns_per_m, v.force_gain,
+                    v.slave_stiffness_n_per_m, v.forward_delay_s * 1e3, v.backward_delay_s * 1e3);
+      tuning_line = buf;
+    }
     std::fprintf(
         stdout,
         "session summary (%s, %s, script %s)\n"
@@ -755,6 +789,7 @@ struct MasterNode::Impl {
         "restart %llu, takeover %llu); force change at most %.3f N per cycle (bound %.0f N/s, "
         "held to it in %llu cycles)\n"
         "  ownership       %s\n"
+        "%s"
         "  server          %llu faults, %llu watchdog trips, %llu overruns, %llu commands "
         "rejected, %llu restarts\n"
         "  verdict         %s%s%s\n",
@@ -781,6 +816,7 @@ struct MasterNode::Impl {
         static_cast<unsigned long long>(cycle.rehomes(RehomeReason::kTakeover)),
         safety.max_step_n(), cycle.device_spec().max_force_rate_n_per_s,
         static_cast<unsigned long long>(safety.rate_limited_cycles()), ownership.c_str(),
+        tuning_line.c_str(),
         static_cast<unsigned long long>(rep.server_faults),
         static_cast<unsigned long long>(rep.server_watchdog_trips),
         static_cast<unsigned long long>(rep.server_overruns),

@@ -42,6 +42,9 @@ struct MasterOptions {
   double reconnect_s = 3.0;
   RealtimeOptions realtime;  ///< scheduling of the haptic loop (common/util/realtime)
   std::string name;  ///< who this master is, in the server's ownership events ("" = identity)
+  /// Apply live tuning requests from teleop/tuning (client/control/tuning.hpp); off: the
+  /// master only publishes its tuning status, saying it does not accept any.
+  bool accept_tuning = false;
 
   // device
   std::string device = "simulated";   ///< simulated | replay | external

@@ -27,6 +27,9 @@ const std::vector<TopicEntry>& known_topics() {
       {t::kMeshFrame, "", TopicQos::kStream, &make<MeshFramePubSubType>},
       {t::kEvents, "", TopicQos::kEventLog, &make<EventPubSubType>},
       {t::kServerStats, "", TopicQos::kReliableStream, &make<ServerStatsPubSubType>},
+      // the master's answers to live tuning (what was applied, when); the requests themselves
+      // are not recorded, so that playing a recording can never retune a running master
+      {t::kTuningStatus, "", TopicQos::kLatched, &make<TuningStatusPubSubType>},
       // the observers' rate-limited copies: recorded too, so that a played session reaches
       // monitors and viewers on their default (rate-limited) topics
       {t::kSlaveStateView, "", TopicQos::kLatest, &make<SlaveStatePubSubType>},

@@ -47,6 +47,19 @@ bool OrbitCamera::project(const Eigen::Vector3f& p_world, float vp_w, float vp_h
   return true;
 }
 
+void OrbitCamera::ray(const Eigen::Vector2f& px, float vp_w, float vp_h, Eigen::Vector3f& origin,
+                      Eigen::Vector3f& direction) const {
+  const float x_ndc = 2.0f * px.x() / vp_w - 1.0f;
+  const float y_ndc = 1.0f - 2.0f * px.y() / vp_h;
+  const float t = std::tan(0.5f * fov_y_rad);
+  const Eigen::Vector3f e = eye();
+  const Eigen::Vector3f f = (target - e).normalized();
+  const Eigen::Vector3f r = f.cross(Eigen::Vector3f::UnitZ()).normalized();
+  const Eigen::Vector3f u = r.cross(f);
+  origin = e;
+  direction = (f + x_ndc * t * (vp_w / vp_h) * r + y_ndc * t * u).normalized();
+}
+
 float OrbitCamera::pixels_per_metre(const Eigen::Vector3f& p_world, float vp_h) const {
   const Eigen::Vector3f e = eye();
   const float depth = (p_world - e).dot((target - e).normalized());

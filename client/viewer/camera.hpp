@@ -28,6 +28,12 @@ struct OrbitCamera {
   /// Pixel position (x right, y down, origin at the viewport's top-left corner) of a world
   /// point in a viewport of vp_w x vp_h pixels. False when the point is behind the camera.
   bool project(const Eigen::Vector3f& p_world, float vp_w, float vp_h, Eigen::Vector2f& px) const;
+  /// The ray through pixel `px` (as project() gives it) of a vp_w x vp_h viewport: from the
+  /// eye, unit direction. project() of any point on it lands on `px`.
+  void ray(const Eigen::Vector2f& px, float vp_w, float vp_h, Eigen::Vector3f& origin,
+           Eigen::Vector3f& direction) const;
+  /// Unit vector from the eye toward the target.
+  Eigen::Vector3f forward() const { return (target - eye()).normalized(); }
   /// Size on screen [px] of a length l [m] at distance along the view axis of point p.
   float pixels_per_metre(const Eigen::Vector3f& p_world, float vp_h) const;
 

@@ -20,6 +20,7 @@ enum class EventKind : std::uint8_t {
   kLimit = 7,
   kSafety = 8,
   kOwnership = 9,  ///< a master took, released or was refused the slave
+  kTuning = 10,    ///< a live tuning request was applied or rejected (teleop/tuning)
 };
 
 enum class Severity : std::uint8_t { kInfo = 0, kWarning = 1, kError = 2 };

@@ -47,6 +47,8 @@ const char* event_kind(std::uint8_t k) {
       return "safety";
     case EVENT_OWNERSHIP:
       return "ownership";
+    case EVENT_TUNING:
+      return "tuning";
     default:
       return "info";
   }

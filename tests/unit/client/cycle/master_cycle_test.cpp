@@ -138,6 +138,14 @@ TEST(MasterCycle, StepAndFinishAllocateNothing) {
   c.forward.jitter_s = 0.002;
   MasterCycle cycle(c, device, link);
   cycle.start_homing(0.0, Eigen::Vector3d(0.5, 0.0, 0.6), 0.2);
+  // a live tuning ramp (gains and delays) runs during the measured cycles
+  TuningRequestData tune;
+  tune.fields = kTuneMasterStiffness | kTuneMasterDamping | kTuneForwardDelay;
+  tune.values.master_stiffness_n_per_m = 800.0;
+  tune.values.master_damping_ns_per_m = 4.0;
+  tune.values.forward_delay_s = 0.05;
+  tune.ramp_s = 2.0;
+  ASSERT_EQ(cycle.tune(tune, 0.0), "");
   teleop::test::NoAllocScope scope;
   for (int i = 0; i < 3000; ++i) {
     cycle.step(i * 1e-3);
@@ -251,6 +259,102 @@ TEST(MasterCycle, ALinkThatComesBackReHomesAndAHeldCycleRendersNothing) {
   EXPECT_FALSE(cycle.homing());
   EXPECT_EQ(cycle.rehomes(RehomeReason::kTakeover), 1u);
   EXPECT_EQ(cycle.rehomes(), 2u);
+}
+
+// Live tuning: a gain change ramps in (no force step), bad requests are rejected and counted
+// and change nothing, and a delay change slews so that the channel never stalls or bunches.
+TEST(MasterCycle, LiveTuningRampsTheForceInWithoutAStep) {
+  SimulatedDevice device(holding_device(Eigen::Vector3d::Zero()));
+  ServoLink link(Eigen::Vector3d(0.6, 0.0, 0.5));
+  link.contact_force_n = Eigen::Vector3d(0.0, 0.0, 4.0);
+  MasterCycle cycle(config("force-position"), device, link);
+  cycle.start(0.0);
+  double t = 0.0;
+  auto run = [&](int cycles, double& max_change_n) {
+    Eigen::Vector3d prev = cycle.device_force_n();
+    for (int i = 0; i < cycles; ++i, t += 1e-3) {
+      cycle.step(t);
+      cycle.finish(t);
+      max_change_n = std::max(max_change_n, (cycle.device_force_n() - prev).norm());
+      prev = cycle.device_force_n();
+    }
+  };
+  double settle = 0.0;
+  run(500, settle);
+  // K_f = 1: the contact force, felt (the held device's small motion adds a little damping)
+  EXPECT_NEAR(cycle.device_force_n().z(), 4.0, 0.05);
+
+  // rejected, counted, nothing changes
+  TuningRequestData bad;
+  bad.fields = kTuneForceGain;
+  bad.values.force_gain = 1000.0;
+  EXPECT_EQ(cycle.tune(bad, t), "force_gain = 1000 is outside [0, 10]");
+  bad.values.force_gain = std::nan("");
+  EXPECT_NE(cycle.tune(bad, t).find("force_gain = nan is outside"), std::string::npos);
+  bad.fields = kTuneMasterStiffness;  // K_pm: not a force-position gain
+  bad.values.master_stiffness_n_per_m = 100.0;
+  EXPECT_EQ(cycle.tune(bad, t), "master_stiffness_n_per_m is not used by the force-position scheme");
+  EXPECT_EQ(cycle.tunings_rejected(), 3u);
+  EXPECT_EQ(cycle.tunings_accepted(), 0u);
+  double unchanged = 0.0;
+  run(100, unchanged);
+  EXPECT_NEAR(cycle.device_force_n().z(), 4.0, 0.05);
+  EXPECT_LT(unchanged, 1e-3);
+
+  // K_f 1 -> 2 over 0.5 s: the felt force goes 4 -> 8 N in steps of 4 N * 1 ms / 0.5 s
+  TuningRequestData good;
+  good.fields = kTuneForceGain;
+  good.values.force_gain = 2.0;
+  good.ramp_s = 0.5;
+  ASSERT_EQ(cycle.tune(good, t), "");
+  double max_change = 0.0;
+  run(1000, max_change);
+  EXPECT_NEAR(cycle.device_force_n().z(), 8.0, 0.05);
+  // 8 mN per cycle from the ramp, plus the damping's share (a step would be 4 N, and the safety
+  // layer's own bound 1 N per cycle)
+  EXPECT_LE(max_change, 4.0 * 1e-3 / 0.5 + 1e-3);
+  EXPECT_GT(max_change, 4.0 * 1e-3 / 0.5 * 0.9);  // it did ramp, at that rate
+  EXPECT_EQ(cycle.tunings_accepted(), 1u);
+  EXPECT_DOUBLE_EQ(cycle.tuning().current().force_gain, 2.0);
+  EXPECT_DOUBLE_EQ(cycle.controller().params().force_gain, 2.0);
+}
+
+TEST(MasterCycle, LiveDelayChangeSlewsWithoutStallingTheChannel) {
+  SimulatedDevice device(holding_device(Eigen::Vector3d::Zero()));
+  ServoLink link(Eigen::Vector3d(0.6, 0.0, 0.5));
+  MasterCycle cycle(config("position-position"), device, link);
+  cycle.start(0.0);
+  TuningRequestData up;
+  up.fields = kTuneForwardDelay;
+  up.values.forward_delay_s = 0.1;
+  up.ramp_s = 0.05;  // asked faster than a delay may move: it slews at 0.25 s/s (0.4 s)
+  int longest_gap = 0, gap = 0;
+  std::size_t delivered_before = 0;
+  double t = 0.0;
+  for (int i = 0; i < 3000; ++i, t += 1e-3) {
+    if (i == 500) {
+      ASSERT_EQ(cycle.tune(up, t), "");
+      delivered_before = link.sent.size();
+    }
+    const std::size_t before = link.sent.size();
+    cycle.step(t);
+    cycle.finish(t);
+    if (i >= 500) {
+      gap = link.sent.size() == before ? gap + 1 : 0;
+      longest_gap = std::max(longest_gap, gap);
+    }
+  }
+  EXPECT_GT(delivered_before, 0u);
+  // at 0.25 s/s a command arrives every 1.25 ms at most: never two empty cycles in a row (a
+  // step of the delay would leave 100)
+  EXPECT_LE(longest_gap, 1);
+  // every command arrives, in order: 3000 issued, the last 100 ms still in flight
+  for (std::size_t k = 1; k < link.sent.size(); ++k) {
+    ASSERT_EQ(link.sent[k].seq, link.sent[k - 1].seq + 1);
+  }
+  EXPECT_NEAR(static_cast<double>(link.sent.size()), 2900.0, 2.0);
+  EXPECT_DOUBLE_EQ(cycle.tuning().current().forward_delay_s, 0.1);
+  EXPECT_EQ(cycle.forward().counters().lost_overflow, 0u);
 }
 
 }  // namespace
