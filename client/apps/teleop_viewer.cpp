@@ -54,9 +54,9 @@
 
 #include "client/viewer/camera.hpp"
 #include "client/viewer/drive_session.hpp"
-#include "client/viewer/input_script.hpp"
 #include "client/viewer/gl/offscreen.hpp"
 #include "client/viewer/gl/renderer.hpp"
+#include "client/viewer/input_script.hpp"
 #include "client/viewer/png.hpp"
 #include "client/viewer/ui/drive_panel.hpp"
 #include "client/viewer/ui/panel.hpp"
@@ -101,10 +101,10 @@ struct Options {
   bool displacement = false;
   bool full_rate = false;  ///< read the 1 kHz topics instead of the 60 Hz *_view copies
   // drive
-  bool drive = false;            ///< be the master's device and tuning tool
-  std::string input_script;      ///< scripted input (needs --drive)
-  std::string drive_json;        ///< write the drive summary here at exit
-  double drive_scale = 1.0;      ///< slave metres per device metre (the master's alpha)
+  bool drive = false;                ///< be the master's device and tuning tool
+  std::string input_script;          ///< scripted input (needs --drive)
+  std::string drive_json;            ///< write the drive summary here at exit
+  double drive_scale = 1.0;          ///< slave metres per device metre (the master's alpha)
   double drive_peak_force_n = 10.0;  ///< declared peak force of the device [N]
 };
 
@@ -584,8 +584,7 @@ class ViewerApp {
                                  static_cast<float>(layout.view_height), hand, v,
                                  options_.force_scale_m_per_n, drive_->dragging());
     }
-    const std::uint32_t fields = viewer::draw_drive_window(v, drive_->peak_force_n(),
-                                                           tuning_form_,
+    const std::uint32_t fields = viewer::draw_drive_window(v, drive_->peak_force_n(), tuning_form_,
                                                            static_cast<float>(layout.view_height));
     if (fields != 0) send_tuning(fields);
   }
@@ -634,7 +633,8 @@ class ViewerApp {
             script_drag_ = a;
             script_dragging_ = true;
           } else {
-            std::cerr << "teleop_viewer: script: the master's hand is not on screen; drag skipped\n";
+            std::cerr
+                << "teleop_viewer: script: the master's hand is not on screen; drag skipped\n";
           }
           break;
         }
@@ -661,7 +661,6 @@ class ViewerApp {
     return true;
   }
 
-
  public:
   /// The drive summary: printed, and written to --drive-json.
   void finish_drive() const {
@@ -679,7 +678,6 @@ class ViewerApp {
       }
     }
   }
-
 
  private:
   /// Receive rates and frame-time percentiles, refreshed once a second.

@@ -141,7 +141,8 @@ std::string describe_tuning(const TuningRequestData& r, const TuningValues& from
 void TuningRamp::start(const TuningRequestData& r, double now_s, double min_ramp_s) {
   from_ = current_;
   const TuningValues& v = r.values;
-  if (r.fields & kTuneMasterStiffness) target_.master_stiffness_n_per_m = v.master_stiffness_n_per_m;
+  if (r.fields & kTuneMasterStiffness)
+    target_.master_stiffness_n_per_m = v.master_stiffness_n_per_m;
   if (r.fields & kTuneMasterDamping) target_.master_damping_ns_per_m = v.master_damping_ns_per_m;
   if (r.fields & kTuneForceGain) target_.force_gain = v.force_gain;
   if (r.fields & kTuneSlaveStiffness) target_.slave_stiffness_n_per_m = v.slave_stiffness_n_per_m;

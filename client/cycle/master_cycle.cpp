@@ -47,9 +47,9 @@ void MasterCycle::prepare(double now_s) {
   controller_->configure(cfg_.controller, device_.spec());
   if (cfg_.session_id != 0) controller_->set_session_id(cfg_.session_id);
   safety_.configure(cfg_.safety, device_.spec());
-  tuning_limits_ = master::tuning_limits(
-      cfg_.controller, device_.spec(), std::min(cfg_.forward.capacity, cfg_.backward.capacity),
-      cfg_.dt_s);
+  tuning_limits_ =
+      master::tuning_limits(cfg_.controller, device_.spec(),
+                            std::min(cfg_.forward.capacity, cfg_.backward.capacity), cfg_.dt_s);
   TuningValues in_force;
   in_force.master_stiffness_n_per_m = controller_->master_stiffness_n_per_m();
   in_force.master_damping_ns_per_m = controller_->master_damping_ns_per_m();
@@ -145,8 +145,10 @@ void MasterCycle::end_homing(double now_s) {
       next_session_id_ += 2;
       controller_->set_session_id(next_session_id_);
     }
-    safety_.fade_in();
   }
+  // the first force fades in too: the device may have moved the slave into contact while it
+  // homed (a hand on a real device does), and the contact force must not start as a step
+  safety_.fade_in();
   controller_->activate(device_.read());
   last_rx_s_ = now_s;
 }

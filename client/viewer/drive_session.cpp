@@ -141,7 +141,8 @@ std::string DriveSession::summary_json() const {
            ", \"accepted_count\": " + std::to_string(s.accepted_count()) +
            ", \"rejected_count\": " + std::to_string(s.rejected_count()) +
            ", \"last_accepted\": " + (s.accepted() ? "true" : "false") + ", \"message\": \"" +
-           json_escape(s.message().to_string()) + "\", \"force_gain\": " + json_number(s.force_gain()) +
+           json_escape(s.message().to_string()) +
+           "\", \"force_gain\": " + json_number(s.force_gain()) +
            ", \"master_damping_ns_per_m\": " + json_number(s.master_damping_ns_per_m()) +
            ", \"forward_delay_ms\": " + json_number(s.forward_delay_ms()) + "}";
   }

@@ -27,13 +27,13 @@ struct DriveView {
   Eigen::Vector3d target_m = Eigen::Vector3d::Zero();    ///< device frame [m]
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  ///< handle, device frame [m]
   Eigen::Vector3d force_n = Eigen::Vector3d::Zero();     ///< newest force from the master [N]
-  bool force_enabled = false;    ///< the master enables force output
-  double force_age_s = 1e9;      ///< since the newest DeviceCommand [s]
+  bool force_enabled = false;                            ///< the master enables force output
+  double force_age_s = 1e9;                              ///< since the newest DeviceCommand [s]
   std::uint64_t states_written = 0;
   std::uint64_t commands_received = 0;
-  double max_force_n = 0.0;      ///< largest |force| received [N]
+  double max_force_n = 0.0;  ///< largest |force| received [N]
   bool have_status = false;
-  TuningStatus status;           ///< newest tuning status of a master
+  TuningStatus status;  ///< newest tuning status of a master
   std::uint64_t tunings_sent = 0;
 };
 

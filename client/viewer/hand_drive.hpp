@@ -8,9 +8,9 @@
 // motion becomes device motion through position_scale (slave metres per device metre, the
 // master's workspace map; rotation identity). The target is kept inside a box of
 // +-workspace_half_m around the start (a desk device's workspace). advance(dt) moves the handle
-// toward the target at most max_speed_mps and max_accel_mps2 (a pointer jump becomes a quick, smooth motion, not a
-// step of the slave's set point) and gives its velocity; that handle is what the viewer
-// publishes as teleop/device_state at 1 kHz.
+// toward the target at most max_speed_mps and max_accel_mps2 (a pointer jump becomes a quick,
+// smooth motion, not a step of the slave's set point) and gives its velocity; that handle is what
+// the viewer publishes as teleop/device_state at 1 kHz.
 #include <Eigen/Core>
 
 namespace teleop::viewer {
@@ -45,7 +45,7 @@ class HandDrive {
   /// The handle moves toward the target for `dt_s` (speed-limited).
   void advance(double dt_s);
 
-  const Eigen::Vector3d& target_m() const { return target_; }    ///< device frame [m]
+  const Eigen::Vector3d& target_m() const { return target_; }      ///< device frame [m]
   const Eigen::Vector3d& position_m() const { return position_; }  ///< device frame [m]
   const Eigen::Vector3d& velocity_mps() const { return velocity_; }
   const HandDriveParams& params() const { return p_; }

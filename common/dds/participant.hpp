@@ -190,7 +190,7 @@ inline constexpr const char* kMeshTopology = "teleop/mesh_topology";
 inline constexpr const char* kMeshFrame = "teleop/mesh_frame";
 inline constexpr const char* kEvents = "teleop/events";
 inline constexpr const char* kServerStats = "teleop/server_stats";
-inline constexpr const char* kTuning = "teleop/tuning";                ///< tools -> master
+inline constexpr const char* kTuning = "teleop/tuning";               ///< tools -> master
 inline constexpr const char* kTuningStatus = "teleop/tuning_status";  ///< master -> tools
 // Rate-limited copies for observers (docs/topics.md): written off the loops' threads, so the
 // number of observers does not load the 1 kHz path. `_view` at kViewRateHz for windows,

@@ -40,7 +40,8 @@ void draw_drive_overlay(const OrbitCamera& camera, float view_w, float view_h,
       // arrow head
       const Eigen::Vector2f d = (pt - px).normalized() * 10.0f;
       const Eigen::Vector2f n(-d.y() * 0.5f, d.x() * 0.5f);
-      dl->AddTriangleFilled(ImVec2(pt.x(), pt.y()), ImVec2(pt.x() - d.x() + n.x(), pt.y() - d.y() + n.y()),
+      dl->AddTriangleFilled(ImVec2(pt.x(), pt.y()),
+                            ImVec2(pt.x() - d.x() + n.x(), pt.y() - d.y() + n.y()),
                             ImVec2(pt.x() - d.x() - n.x(), pt.y() - d.y() - n.y()), col);
     }
   }
@@ -61,7 +62,8 @@ void field_row(const char* label, double& value, double max, bool enabled, const
 
 std::uint32_t draw_drive_window(const DriveView& drive, double peak_force_n, TuningForm& form,
                                 float view_h) {
-  ImGui::SetNextWindowPos(ImVec2(10.0f, view_h - 10.0f), ImGuiCond_FirstUseEver, ImVec2(0.0f, 1.0f));
+  ImGui::SetNextWindowPos(ImVec2(10.0f, view_h - 10.0f), ImGuiCond_FirstUseEver,
+                          ImVec2(0.0f, 1.0f));
   ImGui::SetNextWindowBgAlpha(0.75f);
   ImGui::Begin("Drive", nullptr,
                ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoSavedSettings);
@@ -102,10 +104,10 @@ std::uint32_t draw_drive_window(const DriveView& drive, double peak_force_n, Tun
       field_row("K_f", form.force_gain, s.max_force_gain(), t & TUNE_FORCE_GAIN, "%.2f");
       field_row("K_ps [N/m]", form.slave_stiffness_n_per_m, s.max_slave_stiffness_n_per_m(),
                 t & TUNE_SLAVE_STIFFNESS, "%.0f");
-      field_row("delay fwd [ms]", form.forward_delay_ms, s.max_delay_ms(),
-                t & TUNE_FORWARD_DELAY, "%.1f");
-      field_row("delay bwd [ms]", form.backward_delay_ms, s.max_delay_ms(),
-                t & TUNE_BACKWARD_DELAY, "%.1f");
+      field_row("delay fwd [ms]", form.forward_delay_ms, s.max_delay_ms(), t & TUNE_FORWARD_DELAY,
+                "%.1f");
+      field_row("delay bwd [ms]", form.backward_delay_ms, s.max_delay_ms(), t & TUNE_BACKWARD_DELAY,
+                "%.1f");
       field_row("ramp [s]", form.ramp_s, 10.0, true, "%.2f");
       if (ImGui::Button("Apply")) send = t;
       ImGui::SameLine();
@@ -114,9 +116,9 @@ std::uint32_t draw_drive_window(const DriveView& drive, double peak_force_n, Tun
                   static_cast<unsigned long long>(s.rejected_count()));
       if (s.request_seq() > 0) {
         ImGui::PushTextWrapPos(ImGui::GetCursorPosX() + 300.0f);
-        ImGui::TextColored(s.accepted() ? ImVec4(0.5f, 0.9f, 0.5f, 1.0f)
-                                        : ImVec4(1.0f, 0.45f, 0.45f, 1.0f),
-                           "%s", s.message().c_str());
+        ImGui::TextColored(
+            s.accepted() ? ImVec4(0.5f, 0.9f, 0.5f, 1.0f) : ImVec4(1.0f, 0.45f, 0.45f, 1.0f), "%s",
+            s.message().c_str());
         ImGui::PopTextWrapPos();
       }
     }

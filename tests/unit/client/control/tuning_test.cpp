@@ -93,9 +93,10 @@ TEST(Tuning, TheRampIsLinearAndADelaySlewsAtItsOwnRate) {
   ramp.advance(10.8);
   EXPECT_FALSE(ramp.active());
   EXPECT_DOUBLE_EQ(ramp.current().forward_delay_s, 0.2);
-  EXPECT_EQ(describe_tuning(r, v, 0.05),
-            "force_gain 1 -> 3, forward_delay_ms 0 -> 200 over 0.05 s (a delay moves at most 250 ms "
-            "per s)");
+  EXPECT_EQ(
+      describe_tuning(r, v, 0.05),
+      "force_gain 1 -> 3, forward_delay_ms 0 -> 200 over 0.05 s (a delay moves at most 250 ms "
+      "per s)");
 }
 
 }  // namespace

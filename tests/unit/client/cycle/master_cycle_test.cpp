@@ -293,7 +293,8 @@ TEST(MasterCycle, LiveTuningRampsTheForceInWithoutAStep) {
   EXPECT_NE(cycle.tune(bad, t).find("force_gain = nan is outside"), std::string::npos);
   bad.fields = kTuneMasterStiffness;  // K_pm: not a force-position gain
   bad.values.master_stiffness_n_per_m = 100.0;
-  EXPECT_EQ(cycle.tune(bad, t), "master_stiffness_n_per_m is not used by the force-position scheme");
+  EXPECT_EQ(cycle.tune(bad, t),
+            "master_stiffness_n_per_m is not used by the force-position scheme");
   EXPECT_EQ(cycle.tunings_rejected(), 3u);
   EXPECT_EQ(cycle.tunings_accepted(), 0u);
   double unchanged = 0.0;

@@ -17,7 +17,7 @@ namespace {
 TEST(OrbitCamera, ARayThroughAPixelProjectsBackOntoIt) {
   const OrbitCamera c;
   for (const Eigen::Vector2f& px : {Eigen::Vector2f(450.0f, 360.0f), Eigen::Vector2f(10.0f, 700.0f),
-                                   Eigen::Vector2f(880.0f, 20.0f)}) {
+                                    Eigen::Vector2f(880.0f, 20.0f)}) {
     Eigen::Vector3f o, d;
     c.ray(px, 900.0f, 720.0f, o, d);
     EXPECT_NEAR(d.norm(), 1.0f, 1e-5f);
@@ -106,8 +106,7 @@ TEST(InputScript, ParsesActionsInTimeOrderAndNamesTheLineOfAMistake) {
   };
   EXPECT_NE(error("\n1 jump\n").find("s.txt:2: action 'jump' is not one of drag, key, tune, quit"),
             std::string::npos);
-  EXPECT_NE(error("1 key space 1\n").find("s.txt:1: key 'space' is not one of"),
-            std::string::npos);
+  EXPECT_NE(error("1 key space 1\n").find("s.txt:1: key 'space' is not one of"), std::string::npos);
   EXPECT_NE(error("1 tune force_gain fast\n").find("s.txt:1: force_gain 'fast' is not a number"),
             std::string::npos);
   EXPECT_NE(error("1 tune gain 2\n").find("tuning field 'gain' is not one of"), std::string::npos);

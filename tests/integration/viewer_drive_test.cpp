@@ -1,0 +1,215 @@
+// Driving a session by hand and tuning it live: teleop_viewer --drive under Xvfb is the
+// master's device (teleop_master --device external) and its tuning tool (--accept-tuning); a
+// scripted input presses the slave into the elastic sphere with the keys, drags it sideways with
+// the "mouse" (the viewer's own drag handler, fed pixel positions) and sends one good and two bad
+// tuning requests. The test checks what each side measured, and what the slave did from the
+// topics. A second test checks that a master started without --accept-tuning applies nothing.
+//
+// Skipped (not failed) when the viewer was not built or xvfb-run is missing.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "common/dds/endpoint.hpp"
+#include "common/util/clock.hpp"
+#include "teleop/idl/TeleopPubSubTypes.h"
+#include "tests/support/domains.hpp"
+#include "tests/support/integration.hpp"
+#include "tests/support/process.hpp"
+
+namespace teleop::test {
+namespace {
+
+std::string tmp(const std::string& name) { return temp_path("viewer_drive", name); }
+
+std::string read_all(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream b;
+  b << f.rdbuf();
+  return b.str();
+}
+
+std::string find_xvfb_run() {
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path ? path : "");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    const std::string p = (dir.empty() ? std::string(".") : dir) + "/xvfb-run";
+    if (access(p.c_str(), X_OK) == 0) return p;
+  }
+  return "";
+}
+
+/// What the slave did: contact, deepest deformation, from the 1 kHz SlaveState.
+struct SlaveWatch {
+  explicit SlaveWatch(int domain)
+      : participant(dds::ParticipantOptions{"loopback", domain, "drive-test"}),
+        reader(participant, dds::topics::kSlaveState, dds::TopicQos::kStream,
+               [this](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo&) {
+                 ++states;
+                 if (s.in_contact()) ++contact_states;
+                 std::lock_guard<std::mutex> l(m);
+                 max_deformation_m = std::max(max_deformation_m, s.deformation_m());
+               }) {}
+  double deformation() {
+    std::lock_guard<std::mutex> l(m);
+    return max_deformation_m;
+  }
+  dds::Participant participant;
+  std::atomic<int> states{0}, contact_states{0};
+  std::mutex m;
+  double max_deformation_m = 0.0;
+  dds::Reader<SlaveStatePubSubType> reader;
+};
+
+#ifdef TELEOP_HAVE_VIEWER
+TEST(ViewerDrive, ScriptedInputDrivesTheSlaveAndTunesTheMasterLive) {
+  const std::string xvfb = find_xvfb_run();
+  if (xvfb.empty()) GTEST_SKIP() << "xvfb-run not found (apt-get install xvfb xauth)";
+  const int domain = domains::kViewerDrive;
+  const std::string d = std::to_string(domain);
+  const std::string script = tmp("script.txt");
+  {
+    std::ofstream f(script);
+    f << "# press 2 cm into the sphere, tune, drag sideways, come up\n"
+         "1.0 key pagedown 0.4\n"
+         "2.5 tune force_gain 1.5 ramp_s 0.5\n"
+         "3.2 tune force_gain 1000\n"
+         "3.6 tune master_stiffness_n_per_m 500\n"
+         "4.0 drag 12 0 0.6\n"
+         "5.0 key pageup 0.8\n"
+         "6.5 quit\n";
+  }
+  Process server(kServerBinary, {"--domain", d, "--quiet"}, "drive_server");
+  SlaveWatch watch(domain);
+  const std::string master_json = tmp("master.json"), drive_json = tmp("drive.json");
+  Process master(kMasterBinary,
+                 {"--domain", d, "--device", "external", "--accept-tuning", "--duration", "12",
+                  "--summary-json", master_json},
+                 "drive_master");
+  Process viewer(xvfb,
+                 {"-a",
+                  "-n",
+                  std::to_string(100 + domain),
+                  "-s",
+                  "-screen 0 960x540x24",
+                  kViewerBinary,
+                  "--domain",
+                  d,
+                  "--drive",
+                  "--input-script",
+                  script,
+                  "--drive-json",
+                  drive_json,
+                  "--duration",
+                  "40",
+                  "--fps",
+                  "20",
+                  "--width",
+                  "960",
+                  "--height",
+                  "540"},
+                 "drive_viewer");
+  ASSERT_EQ(viewer.wait_for(60.0), 0) << viewer.err();
+  ASSERT_EQ(master.wait_for(40.0), 0) << master.err();
+  server.signal(SIGINT);
+  server.wait_for(10.0);
+
+  // the viewer: it wrote device states at 1 kHz and got the master's force back
+  const std::string dj = read_all(drive_json);
+  SCOPED_TRACE(dj);
+  EXPECT_GT(json_value(dj, "states_written"), 3000.0);
+  EXPECT_GT(json_value(dj, "commands_received"), 3000.0);
+  EXPECT_GT(json_value(dj, "max_force_n"), 0.5);  // pressed into the sphere: felt it
+  EXPECT_LT(json_value(dj, "max_force_n"), 10.0);
+  EXPECT_EQ(json_nested(dj, "status", "accepted_count"), 1.0);
+  EXPECT_EQ(json_nested(dj, "status", "rejected_count"), 2.0);
+  EXPECT_DOUBLE_EQ(json_nested(dj, "status", "force_gain"), 1.5);
+  // the drag moved the handle sideways (device frame; the keys only move it along z)
+  const std::size_t fp = dj.find("\"final_position_m\": [");
+  ASSERT_NE(fp, std::string::npos);
+  double x = 0, y = 0, z = 0;
+  ASSERT_EQ(std::sscanf(dj.c_str() + fp, "\"final_position_m\": [%lf, %lf, %lf]", &x, &y, &z), 3);
+  EXPECT_GT(std::hypot(x, y), 0.01);
+  EXPECT_NEAR(z, 0.02, 0.002);  // 0.4 s down and 0.8 s up at 0.05 m/s
+
+  // the master: three requests, one applied, two rejected with their reasons, no force step
+  const std::string mj = read_all(master_json);
+  SCOPED_TRACE(mj);
+  EXPECT_EQ(json_nested(mj, "tuning", "received"), 3.0);
+  EXPECT_EQ(json_nested(mj, "tuning", "applied"), 1.0);
+  EXPECT_EQ(json_nested(mj, "tuning", "rejected"), 2.0);
+  EXPECT_DOUBLE_EQ(json_nested(mj, "in_force", "force_gain"), 1.5);
+  EXPECT_NE(master.err().find("force_gain = 1000 is outside [0, 10]"), std::string::npos);
+  EXPECT_NE(master.err().find("master_stiffness_n_per_m is not used by the force-position"),
+            std::string::npos);
+  EXPECT_NE(master.err().find("force_gain 1 -> 1.5 over 0.5 s"), std::string::npos);
+  // the session starts in contact (the keys pressed during homing): the force fades in, and the
+  // drag in contact changes it smoothly (a step would be ~0.5 N; the rate bound is 1 N a cycle)
+  EXPECT_LT(json_nested(mj, "safety", "max_step_n"), 0.25);
+  EXPECT_EQ(json_nested(mj, "server", "faults"), 0.0);
+  EXPECT_NE(mj.find("\"verdict\": \"stable\""), std::string::npos);
+
+  // the slave: it touched the sphere and dented it
+  EXPECT_GT(watch.states.load(), 5000);
+  EXPECT_GT(watch.contact_states.load(), 300);
+  EXPECT_GT(watch.deformation(), 0.005);
+}
+#endif
+
+TEST(ViewerDrive, AMasterWithoutAcceptTuningAppliesNoRequestAndSaysSo) {
+  const int domain = domains::kTuningRefused;
+  const std::string d = std::to_string(domain);
+  Process server(kServerBinary, {"--domain", d, "--quiet"}, "tuning_server");
+  dds::Participant p(dds::ParticipantOptions{"loopback", domain, "tuning-test"});
+  std::mutex m;
+  bool have_status = false, accepting = true;
+  dds::Reader<TuningStatusPubSubType> status(
+      p, dds::topics::kTuningStatus, dds::TopicQos::kLatched,
+      [&](const TuningStatus& s, const eprosima::fastdds::dds::SampleInfo&) {
+        std::lock_guard<std::mutex> l(m);
+        have_status = true;
+        accepting = s.accepting();
+      });
+  dds::Writer<TuningRequestPubSubType> writer(p, dds::topics::kTuning,
+                                              dds::TopicQos::kReliableStream);
+  const std::string master_json = tmp("refusing_master.json");
+  Process master(
+      kMasterBinary,
+      {"--domain", d, "--script", "hold", "--duration", "3", "--summary-json", master_json},
+      "tuning_master");
+  std::uint64_t seq = 0;
+  for (int i = 0; i < 150; ++i) {  // until the master exits (about 5 s), at most 30 s
+    TuningRequest r;
+    r.seq(++seq);
+    r.source("test");
+    r.fields(4);  // force_gain: a force-position gain, within range
+    r.force_gain(2.0);
+    r.ramp_s(0.1);
+    writer.write(r);
+    if (master.wait_for(0.2) != -1) break;
+  }
+  ASSERT_EQ(master.wait_for(30.0), 0) << master.err();
+  server.signal(SIGINT);
+  server.wait_for(10.0);
+  {
+    std::lock_guard<std::mutex> l(m);
+    EXPECT_TRUE(have_status);
+    EXPECT_FALSE(accepting);
+  }
+  EXPECT_GT(seq, 10u);
+  const std::string mj = read_all(master_json);
+  SCOPED_TRACE(mj);
+  EXPECT_NE(mj.find("\"accepting\": false"), std::string::npos);
+  EXPECT_EQ(json_nested(mj, "tuning", "received"), 0.0);
+  EXPECT_EQ(json_nested(mj, "tuning", "applied"), 0.0);
+  EXPECT_DOUBLE_EQ(json_nested(mj, "in_force", "force_gain"), 1.0);
+}
+
+}  // namespace
+}  // namespace teleop::test
