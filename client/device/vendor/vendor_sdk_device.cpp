@@ -1,7 +1,8 @@
 // OpenHaptics (HD API) implementation of the vendor driver skeleton. Compiled only with
-// -DTELEOP_WITH_VENDOR_SDK=ON (client/CMakeLists.txt finds HD/hd.h and libHD). Not built or
-// run on the project's CI machines, which have no SDK and no device: treat it as a documented
-// starting point, to be checked on the real hardware.
+// -DTELEOP_WITH_VENDOR_SDK=ON (client/CMakeLists.txt finds HD/hd.h and libHD). CI compiles and
+// runs it against a simulated device behind a stand-in of the HD API subset it calls
+// (tests/vendor/vendor_sdk_test.cpp); it has not met the real SDK or a real device: check it on
+// the hardware before trusting it.
 #include "client/device/vendor/vendor_sdk_device.hpp"
 
 #include <HD/hd.h>
@@ -19,8 +20,8 @@ HDCallbackCode HDCALLBACK servo_callback(void* self) {
                                                            : HD_CALLBACK_DONE;
 }
 
-std::string hd_error_text() {
-  const HDErrorInfo e = hdGetError();
+// hdGetError() pops the SDK's error stack: read it once and describe what was read
+std::string hd_error_text(const HDErrorInfo& e) {
   return HD_DEVICE_ERROR(e)
              ? std::string(reinterpret_cast<const char*>(hdGetErrorString(e.errorCode)))
              : std::string("no error");
@@ -37,8 +38,8 @@ VendorSdkDevice::~VendorSdkDevice() {
 
 void VendorSdkDevice::configure() {
   const HHD h = hdInitDevice(device_name_.empty() ? HD_DEFAULT_DEVICE : device_name_.c_str());
-  if (HD_DEVICE_ERROR(hdGetError())) {
-    throw config::ConfigError("--device vendor: cannot open the device: " + hd_error_text());
+  if (const HDErrorInfo e = hdGetError(); HD_DEVICE_ERROR(e)) {
+    throw config::ConfigError("--device vendor: cannot open the device: " + hd_error_text(e));
   }
   handle_ = static_cast<unsigned long>(h);
   hdMakeCurrentDevice(h);
@@ -71,8 +72,9 @@ void VendorSdkDevice::activate() {
   callback_ = static_cast<unsigned long>(
       hdScheduleAsynchronous(servo_callback, this, HD_MAX_SCHEDULER_PRIORITY));
   hdStartScheduler();
-  if (HD_DEVICE_ERROR(hdGetError())) {
-    throw config::ConfigError("--device vendor: cannot start the servo loop: " + hd_error_text());
+  if (const HDErrorInfo e = hdGetError(); HD_DEVICE_ERROR(e)) {
+    throw config::ConfigError("--device vendor: cannot start the servo loop: " +
+                              hd_error_text(e));
   }
   state_ = DeviceLifecycle::kActive;
 }
