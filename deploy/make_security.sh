@@ -6,9 +6,9 @@
 #
 #   deploy/make_security.sh [options] DIR
 #
-#   --identity NAME:ROLE   an identity to make (repeatable); ROLE is server, master, observer or
-#                          bench (teleop_bench rtt's bench/* topics only).
-#                          Default: server:server master:master observer:observer
+#   --identity NAME:ROLE   an identity to make (repeatable); ROLE is server, master, operator,
+#                          observer or bench (teleop_bench rtt's bench/* topics only).
+#                          Default: server:server master:master operator:operator observer:observer
 #   --days N               validity of certificates and permissions (default 365)
 #   --org NAME             O= of every subject (default teleop-test)
 #   --domains MIN-MAX      domain ids governance and permissions cover (default 0-232)
@@ -30,8 +30,11 @@
 #   server    publishes teleop/slave_state, scene, mesh_topology, mesh_frame, events,
 #             server_stats and the observers' copies slave_state_view, slave_state_monitor,
 #             mesh_frame_monitor; subscribes teleop/*
-#   master    publishes teleop/master_command, master_state, events and the observers'
-#             copies master_state_view, master_state_monitor; subscribes teleop/*
+#   master    publishes teleop/master_command, master_state, events, tuning_status,
+#             device_command (to an external device driver) and the observers' copies
+#             master_state_view, master_state_monitor; subscribes teleop/*
+#   operator  a device driver or a tuning tool (teleop_viewer --drive): publishes
+#             teleop/device_state and teleop/tuning; subscribes teleop/*
 #   observer  subscribes teleop/*; publishes nothing
 #   bench     publishes and subscribes bench/* (teleop_bench rtt); no teleop topic
 # Keys are ECDSA P-256 (prime256v1), signatures SHA-256: both supported by Fast DDS 2.9's
@@ -72,10 +75,10 @@ command -v openssl >/dev/null 2>&1 || die "openssl not found (Debian package ope
 dmin="${BASH_REMATCH[1]}"
 dmax="${BASH_REMATCH[2]}"
 [ "$dmin" -le "$dmax" ] && [ "$dmax" -le 232 ] || die "--domains '$domains': need 0 <= MIN <= MAX <= 232"
-[ ${#identities[@]} -gt 0 ] || identities=(server:server master:master observer:observer)
+[ ${#identities[@]} -gt 0 ] || identities=(server:server master:master operator:operator observer:observer)
 for spec in "${identities[@]}"; do
-  [[ "$spec" =~ ^[A-Za-z0-9_.-]+:(server|master|observer|bench)$ ]] ||
-    die "--identity '$spec' is not NAME:ROLE (NAME of letters, digits, _ . -; ROLE server, master, observer or bench)"
+  [[ "$spec" =~ ^[A-Za-z0-9_.-]+:(server|master|operator|observer|bench)$ ]] ||
+    die "--identity '$spec' is not NAME:ROLE (NAME of letters, digits, _ . -; ROLE server, master, operator, observer or bench)"
   [[ "$spec" != ca:* && "$spec" != other:* ]] || die "--identity '$spec': names 'ca' and 'other' are reserved"
 done
 
@@ -146,7 +149,8 @@ EOF
 publish_topics() {
   case "$1" in
     server) echo "teleop/slave_state teleop/scene teleop/mesh_topology teleop/mesh_frame teleop/events teleop/server_stats teleop/slave_state_view teleop/slave_state_monitor teleop/mesh_frame_monitor" ;;
-    master) echo "teleop/master_command teleop/master_state teleop/events teleop/master_state_view teleop/master_state_monitor" ;;
+    master) echo "teleop/master_command teleop/master_state teleop/events teleop/tuning_status teleop/device_command teleop/master_state_view teleop/master_state_monitor" ;;
+    operator) echo "teleop/device_state teleop/tuning" ;;
     observer) echo "" ;;
     bench) echo "bench/*" ;;
   esac

@@ -861,6 +861,8 @@ int main(int argc, char** argv) {
   }
   try {
     validate(o);
+    // driving publishes the device and tuning topics: the secure profiles' operator role
+    if (o.drive) net_flags.default_identity = "operator";
     // An observer must not take the CPU from the control loops on the same machine. Lower the
     // priority before any thread starts (the renderer's, DDS's), so they all inherit it; and
     // keep Mesa's software rasteriser (llvmpipe) on the render thread instead of one thread per

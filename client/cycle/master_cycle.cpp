@@ -78,6 +78,8 @@ void MasterCycle::prepare(double now_s) {
   epoch_seen_ = 0;
   have_epoch_ = false;
   rehomes_ = 0;
+  workspace_violations_ = 0;
+  outside_workspace_ = false;
   std::fill(std::begin(rehomes_by_), std::end(rehomes_by_), 0);
   next_session_id_ = cfg_.session_id;
   reading_ = device_.read();
@@ -199,6 +201,27 @@ void MasterCycle::homing_step(double now_s) {
   }
 }
 
+void MasterCycle::check_workspace(double now_s) {
+  if (!reading_.valid) return;
+  const DeviceSpec& s = device_.spec();
+  const Eigen::Vector3d lo = s.workspace_min_m.array() - kWorkspaceTolerance_m;
+  const Eigen::Vector3d hi = s.workspace_max_m.array() + kWorkspaceTolerance_m;
+  const bool outside = !reading_.position_m.allFinite() ||
+                       (reading_.position_m.array() < lo.array()).any() ||
+                       (reading_.position_m.array() > hi.array()).any();
+  if (outside) {
+    reading_.valid = false;  // a driver fault or a miscalibration: render nothing, hold
+    ++workspace_violations_;
+    if (!outside_workspace_) {
+      safety_.events().push(sim::EventKind::kLimit, sim::Severity::kWarning, now_s - origin_s_,
+                            reading_.position_m.norm(),
+                            "the device reads a position outside the workspace it declared: "
+                            "no force, the slave holds");
+    }
+  }
+  outside_workspace_ = outside;
+}
+
 std::string MasterCycle::tune(const TuningRequestData& request, double now_s) {
   std::string problem = check_tuning(request, tuning_limits_, cfg_.controller.scheme);
   if (!problem.empty()) {
@@ -232,6 +255,7 @@ void MasterCycle::step(double now_s) {
   }
 
   reading_ = device_.read();
+  check_workspace(now_s);
   check_rehome(now_s);
   if (held_) {
     render_nothing(slave_tip_m_, false);  // refused or closing: ask nothing of the slave

@@ -100,6 +100,10 @@ class MasterCycle {
   const TuningLimits& tuning_limits() const { return tuning_limits_; }
   /// Values in force now (current()) and the targets of the newest accepted request (target()).
   const TuningRamp& tuning() const { return tuning_; }
+  /// Cycles whose device reading lay outside the workspace box the device declared (by more
+  /// than kWorkspaceTolerance_m): treated as no reading (zero force, the slave holds).
+  std::uint64_t workspace_violations() const { return workspace_violations_; }
+  static constexpr double kWorkspaceTolerance_m = 0.005;
   std::uint64_t tunings_accepted() const { return tunings_accepted_; }
   std::uint64_t tunings_rejected() const { return tunings_rejected_; }
 
@@ -156,6 +160,7 @@ class MasterCycle {
   /// `target_m` (enabled) or to hold (not enabled); not part of the session's figures.
   void render_nothing(const Eigen::Vector3d& target_m, bool enabled);
   void check_rehome(double now_s);
+  void check_workspace(double now_s);
 
   MasterCycleConfig cfg_;
   HapticDevice& device_;
@@ -201,6 +206,8 @@ class MasterCycle {
   std::uint64_t rehomes_ = 0;
   std::uint64_t rehomes_by_[3] = {0, 0, 0};
   std::uint32_t next_session_id_ = 0;
+  std::uint64_t workspace_violations_ = 0;
+  bool outside_workspace_ = false;
   // live tuning
   TuningLimits tuning_limits_;
   TuningRamp tuning_;

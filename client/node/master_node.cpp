@@ -697,7 +697,8 @@ struct MasterNode::Impl {
         << ", \"max_step_n\": " << json_number(safety.max_step_n())
         << ", \"max_force_rate_n_per_s\": "
         << json_number(cycle.device_spec().max_force_rate_n_per_s)
-        << ", \"rate_limited_cycles\": " << safety.rate_limited_cycles() << "},\n"
+        << ", \"rate_limited_cycles\": " << safety.rate_limited_cycles()
+        << ", \"workspace_violations\": " << cycle.workspace_violations() << "},\n"
         << "  \"rehomes\": {\"total\": " << cycle.rehomes()
         << ", \"link_back\": " << cycle.rehomes(RehomeReason::kLinkBack)
         << ", \"slave_restart\": " << cycle.rehomes(RehomeReason::kSlaveRestart)

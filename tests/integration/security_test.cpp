@@ -14,6 +14,7 @@
 
 #include "common/dds/endpoint.hpp"
 #include "common/util/clock.hpp"
+#include "teleop/idl/DevicePubSubTypes.h"
 #include "teleop/idl/TeleopPubSubTypes.h"
 #include "tests/support/domains.hpp"
 #include "tests/support/integration.hpp"
@@ -196,6 +197,26 @@ TEST_F(Security, ObserverReadsStateButCannotWriteCommands) {
   EXPECT_THROW(
       dds::Writer<SlaveStatePubSubType>(p, dds::topics::kSlaveState, dds::TopicQos::kStream),
       dds::DdsError);
+  // nor retune a master: live tuning is the operator role's (and the master's answers its own)
+  EXPECT_THROW(
+      dds::Writer<TuningRequestPubSubType>(p, dds::topics::kTuning, dds::TopicQos::kReliableStream),
+      dds::DdsError);
+  EXPECT_THROW(
+      dds::Writer<TuningStatusPubSubType>(p, dds::topics::kTuningStatus, dds::TopicQos::kLatched),
+      dds::DdsError);
+  {
+    // an operator (a device driver, teleop_viewer --drive) may write the device state and
+    // tuning requests, and still not commands
+    Listener op(secure_options(domain, dir_, "operator", "sec_operator"));
+    auto& po = op.participant();
+    EXPECT_NO_THROW(dds::Writer<TuningRequestPubSubType>(po, dds::topics::kTuning,
+                                                         dds::TopicQos::kReliableStream));
+    EXPECT_NO_THROW(
+        dds::Writer<DeviceStatePubSubType>(po, "teleop/device_state", dds::TopicQos::kStream));
+    EXPECT_THROW(dds::Writer<MasterCommandPubSubType>(po, dds::topics::kMasterCommand,
+                                                      dds::TopicQos::kStream),
+                 dds::DdsError);
+  }
   // the same through the raw API: access control refuses the DataWriter
   auto* topic = p.topic(dds::topics::kMasterCommand,
                         eprosima::fastdds::dds::TypeSupport(new MasterCommandPubSubType()));
@@ -269,7 +290,7 @@ TEST_F(Security, BadSecurityFilesExit2NamingFlagPathAndWhat) {
           "sec_bad3");
   EXPECT_EQ(rc, 2) << err;
   EXPECT_NE(err.find("no identity 'alice'"), std::string::npos) << err;
-  EXPECT_NE(err.find("master, observer, server"), std::string::npos) << err;
+  EXPECT_NE(err.find("master, observer, operator, server"), std::string::npos) << err;
 
   // a copy of the folder without the master's key, and with a garbage permissions CA
   const std::string copy = temp_path("sec", "copy");

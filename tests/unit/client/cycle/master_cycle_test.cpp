@@ -358,5 +358,42 @@ TEST(MasterCycle, LiveDelayChangeSlewsWithoutStallingTheChannel) {
   EXPECT_EQ(cycle.forward().counters().lost_overflow, 0u);
 }
 
+// The workspace the device declares is enforced: a reading outside it (a driver fault, a
+// miscalibration) renders nothing and commands a hold, is counted, and raises one event.
+TEST(MasterCycle, AReadingOutsideTheDeclaredWorkspaceRendersNothingAndHolds) {
+  SimulatedDeviceParams outside = holding_device(Eigen::Vector3d(0.3, 0.0, 0.0));  // box +-0.2 m
+  outside.clamp_to_workspace = false;  // no hard stop: a driver that reports beyond its box
+  SimulatedDevice device(outside);
+  ServoLink link(Eigen::Vector3d(0.6, 0.0, 0.5));
+  link.contact_force_n = Eigen::Vector3d(0.0, 0.0, 4.0);
+  MasterCycle cycle(config("force-position"), device, link);
+  cycle.start(0.0);
+  for (int i = 0; i < 100; ++i) {
+    cycle.step(i * 1e-3);
+    cycle.finish(i * 1e-3);
+    EXPECT_EQ(cycle.device_force_n(), Eigen::Vector3d::Zero());
+    EXPECT_FALSE(link.sent.back().enabled);
+  }
+  EXPECT_EQ(cycle.workspace_violations(), 100u);
+  int events = 0;
+  sim::SimEvent e;
+  while (cycle.safety().events().pop(e)) {
+    if (e.kind == sim::EventKind::kLimit) ++events;
+  }
+  EXPECT_EQ(events, 1);
+  // inside the box (within the 5 mm tolerance) nothing is counted
+  SimulatedDevice inside(holding_device(Eigen::Vector3d(0.204, 0.0, 0.0)));
+  ServoLink link2(Eigen::Vector3d(0.6, 0.0, 0.5));
+  link2.contact_force_n = Eigen::Vector3d(0.0, 0.0, 4.0);
+  MasterCycle ok(config("force-position"), inside, link2);
+  ok.start(0.0);
+  for (int i = 0; i < 100; ++i) {
+    ok.step(i * 1e-3);
+    ok.finish(i * 1e-3);
+  }
+  EXPECT_EQ(ok.workspace_violations(), 0u);
+  EXPECT_GT(ok.device_force_n().norm(), 1.0);
+}
+
 }  // namespace
 }  // namespace teleop::master

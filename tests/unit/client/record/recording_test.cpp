@@ -118,7 +118,12 @@ TEST(RawType, KeyOfAKeyedTopicMatchesTheGeneratedOne) {
 }
 
 TEST(TopicTable, EveryDesignTopicWithItsQos) {
-  EXPECT_EQ(known_topics().size(), 15u);
+  EXPECT_EQ(known_topics().size(), 16u);
+  // the master's tuning answers are recorded; the requests are not (playing a recording must
+  // never retune a running master)
+  ASSERT_NE(find_topic("teleop/tuning_status"), nullptr);
+  EXPECT_EQ(find_topic("teleop/tuning_status")->qos, dds::TopicQos::kLatched);
+  EXPECT_EQ(find_topic("teleop/tuning"), nullptr);
   ASSERT_NE(find_topic("teleop/events"), nullptr);
   // the observers' rate-limited copies are recorded (and played) with their own QoS class
   ASSERT_NE(find_topic("teleop/slave_state_monitor"), nullptr);
