@@ -285,11 +285,22 @@ std::string event_json(const EventView& e) {
 }
 
 std::string scene_json(const SceneDescription& d) {
+  // each deformable body's automatic step: its stable step and the sub-steps it takes
+  std::string deformables;
+  for (const SceneObject& o : d.objects()) {
+    if (o.kind() != OBJECT_DEFORMABLE_MESH) continue;
+    deformables += std::string(deformables.empty() ? "" : ", ") +
+                   "{\"id\": " + std::to_string(o.id()) +
+                   ", \"highest_frequency_radps\": " + num(o.highest_frequency_radps()) +
+                   ", \"stable_step_s\": " + num(o.stable_step_s()) +
+                   ", \"substeps\": " + std::to_string(o.substeps()) + "}";
+  }
   return "{\"type\": \"scene\", \"name\": " + json_string(d.name().to_string()) +
          ", \"objects\": " + std::to_string(d.objects().size()) +
          ", \"joints\": " + std::to_string(d.joint_count()) +
          ", \"physics_rate_hz\": " + num(d.physics_rate_hz()) +
-         ", \"tip_radius_m\": " + num(d.tip_radius_m()) + "}";
+         ", \"tip_radius_m\": " + num(d.tip_radius_m()) + ", \"deformables\": [" + deformables +
+         "]}";
 }
 
 }  // namespace teleop::monitor

@@ -1,5 +1,7 @@
 #include "server/node/scene_objects.hpp"
 
+#include <cmath>
+
 #include "common/dds/scene_objects.hpp"
 #include "server/robot/kinematics.hpp"
 
@@ -52,6 +54,11 @@ SceneDescription describe_scene(const sim::WorldModel& model, const sim::WorldDa
     const Eigen::Vector3d centre = x.rowwise().mean();
     copy3(o.position_m(), centre);
     o.size_m()[0] = (x.colwise() - centre).colwise().norm().maxCoeff();
+    // the automatic step: what the body's highest mode allows, and what it takes per step
+    const sim::deformable::DeformableModel& m = model.bodies[i].body;
+    o.highest_frequency_radps(m.omega_max_rad_per_s);
+    o.stable_step_s(std::isfinite(m.stable_step_s) ? m.stable_step_s : -1.0);
+    o.substeps(static_cast<std::uint32_t>(m.substeps_for(1.0 / physics_rate_hz)));
     d.objects().push_back(o);
   }
   // the robot's frames at q = 0, so observers can draw the arm from the joint positions

@@ -184,5 +184,26 @@ TEST(MonitorTui, JsonLinesForScripts) {
       << bad.err();
 }
 
+// The scene line says each deformable body's automatic step (docs/deformable.md): the default
+// scene's sphere is stable at 1 ms, one sub-step.
+TEST(MonitorTui, TheSceneLineSaysEachDeformablesStableStep) {
+  const std::string d = std::to_string(domains::kMonitorScene);
+  Process server(kServerBinary, {"--domain", d, "--quiet"}, "mon_scene_server");
+  Process mon(kMonitorBinary, {"--domain", d, "--json", "--period", "0.5", "--duration", "4"},
+              "mon_scene");
+  ASSERT_EQ(mon.wait_for(60.0), 0) << mon.err();
+  server.signal(SIGINT);
+  server.wait_for(10.0);
+  const std::string out = mon.out();
+  const std::size_t at = out.find("{\"type\": \"scene\"");
+  ASSERT_NE(at, std::string::npos) << out;
+  const std::string line = out.substr(at, out.find('\n', at) - at);
+  EXPECT_NE(line.find("\"deformables\": [{\"id\": 10, \"highest_frequency_radps\": "),
+            std::string::npos)
+      << line;
+  EXPECT_NE(line.find("\"substeps\": 1}]"), std::string::npos) << line;
+  EXPECT_GT(json_value(line, "stable_step_s"), 1e-3) << line;
+}
+
 }  // namespace
 }  // namespace teleop::test

@@ -2,8 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
 #include "common/dds/scene_objects.hpp"
 #include "server/robot/kinematics.hpp"
+#include "server/world/world_model.hpp"
 
 namespace teleop::server {
 namespace {
@@ -34,6 +39,47 @@ TEST(SceneObjects, RobotFramesAreTheChainAtZeroJointAngles) {
   EXPECT_DOUBLE_EQ(scene.objects()[2].mass_kg(), model.links[1].mass_kg);
   // the base stands where the scene file puts it
   EXPECT_NEAR(scene.objects()[0].position_m()[2], 0.672, 1e-12);
+}
+
+/// The deformable objects of the description of the scene in `file`.
+std::vector<SceneObject> deformables_of(const std::string& file) {
+  const sim::WorldModel model = sim::load_world_model(file);
+  const sim::WorldData data = sim::make_world_data(model);
+  const SceneDescription d = describe_scene(model, data, model.physics_rate_hz);
+  std::vector<SceneObject> out;
+  for (const SceneObject& o : d.objects()) {
+    if (o.kind() == OBJECT_DEFORMABLE_MESH) {
+      out.push_back(o);
+    } else {
+      EXPECT_EQ(o.substeps(), 0u);  // only deformables say anything about their step
+    }
+  }
+  return out;
+}
+
+// The automatic step is in the scene description: the highest natural frequency of each body,
+// its integrator's stable step, and the sub-steps it takes per physics step.
+TEST(SceneObjects, DeformablesPublishTheirStableStepAndSubSteps) {
+  const auto def = deformables_of(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
+  ASSERT_EQ(def.size(), 1u);
+  EXPECT_GT(def[0].highest_frequency_radps(), 100.0);
+  EXPECT_GT(def[0].stable_step_s(), 1e-3);  // the default scene runs at 0.92 of its limit
+  EXPECT_EQ(def[0].substeps(), 1u);
+
+  // ten times stiffer than stable at 1 ms: it sub-steps, and says how much
+  const std::string file =
+      (std::filesystem::temp_directory_path() / "scene_objects_stiff.yaml").string();
+  std::ofstream(file) << "planes:\n  - {name: floor, normal: [0, 0, 1]}\n"
+                         "deformables:\n  - body: {level: 1, radius_m: 0.25, centre_m: [0.6, 0, "
+                         "0.25], edge_stiffness_n_per_m: 50000}\n";
+  const auto stiff = deformables_of(file);
+  std::filesystem::remove(file);
+  ASSERT_EQ(stiff.size(), 1u);
+  EXPECT_LT(stiff[0].stable_step_s(), 1e-3);
+  EXPECT_GT(stiff[0].stable_step_s(), 0.0);
+  EXPECT_EQ(stiff[0].substeps(),
+            static_cast<std::uint32_t>(std::ceil(1e-3 / stiff[0].stable_step_s() - 1e-9)));
+  EXPECT_GT(stiff[0].substeps(), 1u);
 }
 
 }  // namespace
