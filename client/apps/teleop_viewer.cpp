@@ -457,12 +457,15 @@ class ViewerApp {
     char name[64];
     const std::time_t t = std::time(nullptr);
     std::strftime(name, sizeof(name), "teleop_viewer_%Y%m%d_%H%M%S.png", std::localtime(&t));
+    const std::string file = save_path_.empty() ? std::string(name) : save_path_;
+    save_path_.clear();
     viewer::Image image;
     target_.read(image);
     target_.bind();
     std::string error;
-    panel_info_.note = viewer::write_png_file(name, image, error) ? std::string("saved ") + name
-                                                                  : "save failed: " + error;
+    panel_info_.note =
+        viewer::write_png_file(file, image, error) ? "saved " + file : "save failed: " + error;
+    std::cerr << "teleop_viewer: " << panel_info_.note << "\n";
   }
 
   void handle_input(const viewer::Layout& layout) {
@@ -644,15 +647,25 @@ class ViewerApp {
           script_key_until_s_ = a.at_s + a.duration_s;
           break;
         case viewer::ScriptAction::Kind::kTune:
-          tuning_form_.master_stiffness_n_per_m = a.master_stiffness_n_per_m;
-          tuning_form_.master_damping_ns_per_m = a.master_damping_ns_per_m;
-          tuning_form_.force_gain = a.force_gain;
-          tuning_form_.slave_stiffness_n_per_m = a.slave_stiffness_n_per_m;
-          tuning_form_.forward_delay_ms = a.forward_delay_ms;
-          tuning_form_.backward_delay_ms = a.backward_delay_ms;
+          // type the script's fields into the form, then press Apply with those fields
+          if (a.fields & TUNE_MASTER_STIFFNESS) {
+            tuning_form_.master_stiffness_n_per_m = a.master_stiffness_n_per_m;
+          }
+          if (a.fields & TUNE_MASTER_DAMPING) {
+            tuning_form_.master_damping_ns_per_m = a.master_damping_ns_per_m;
+          }
+          if (a.fields & TUNE_FORCE_GAIN) tuning_form_.force_gain = a.force_gain;
+          if (a.fields & TUNE_SLAVE_STIFFNESS) {
+            tuning_form_.slave_stiffness_n_per_m = a.slave_stiffness_n_per_m;
+          }
+          if (a.fields & TUNE_FORWARD_DELAY) tuning_form_.forward_delay_ms = a.forward_delay_ms;
+          if (a.fields & TUNE_BACKWARD_DELAY) tuning_form_.backward_delay_ms = a.backward_delay_ms;
           tuning_form_.ramp_s = a.ramp_s;
-          tuning_form_.loaded = true;
-          send_tuning(a.fields);  // what Apply sends, with the script's fields
+          send_tuning(a.fields);
+          break;
+        case viewer::ScriptAction::Kind::kSnapshot:
+          save_path_ = a.path;  // written after the next frame is drawn
+          save_requested_ = true;
           break;
         case viewer::ScriptAction::Kind::kQuit:
           return false;
@@ -771,6 +784,7 @@ class ViewerApp {
   bool show_panel_ = true;
   bool paused_ = false;
   bool save_requested_ = false;
+  std::string save_path_;  ///< where the next save goes ("" = a timestamped name)
 
   SampleWindow frame_ms_;
   std::vector<double> frame_scratch_;

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <mutex>
@@ -582,10 +583,12 @@ struct MasterNode::Impl {
     session_start_ns.store(t0);
     cycle.start_homing(t0_s, tip0, options.homing_s);
     tuning->publish_status(cycle, t0);
-    const auto report_tuning = [this](std::uint8_t severity, const std::string& msg) {
-      event(static_cast<std::uint8_t>(sim::EventKind::kTuning), severity, msg, 0.0);
-      if (!options.quiet && severity == 0) std::cerr << "teleop_master: " << msg << "\n";
-    };
+    // made once: the loop passes it by reference every cycle without building a std::function
+    const std::function<void(std::uint8_t, const std::string&)> report_tuning =
+        [this](std::uint8_t severity, const std::string& msg) {
+          event(static_cast<std::uint8_t>(sim::EventKind::kTuning), severity, msg, 0.0);
+          if (!options.quiet && severity == 0) std::cerr << "teleop_master: " << msg << "\n";
+        };
     std::uint64_t faults_seen = 0;
     OwnershipWatch owner;
     const double grace_s = 0.5 + 2.0 * (options.forward.delay_s + options.backward.delay_s);

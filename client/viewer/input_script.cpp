@@ -106,11 +106,15 @@ std::vector<ScriptAction> parse_input_script_text(const std::string& text,
       for (std::size_t i = 2; i + 1 < tok.size(); i += 2) {
         tune_field(a, tok[i], number(tok[i + 1], where, tok[i]), where);
       }
+    } else if (act == "snapshot") {
+      if (tok.size() != 3) throw config::ConfigError(where + ": expected '<t> snapshot FILE.png'");
+      a.kind = ScriptAction::Kind::kSnapshot;
+      a.path = tok[2];
     } else if (act == "quit") {
       a.kind = ScriptAction::Kind::kQuit;
     } else {
       throw config::ConfigError(where + ": action '" + act +
-                                "' is not one of drag, key, tune, quit");
+                                "' is not one of drag, key, tune, snapshot, quit");
     }
     if ((a.kind == ScriptAction::Kind::kDrag || a.kind == ScriptAction::Kind::kKey) &&
         !(a.duration_s > 0.0 && a.duration_s <= 600.0)) {

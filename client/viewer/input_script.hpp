@@ -13,6 +13,7 @@
 //                                          master_damping_ns_per_m, force_gain,
 //                                          slave_stiffness_n_per_m, forward_delay_ms,
 //                                          backward_delay_ms, ramp_s
+//   <t_s> snapshot <file.png>              save the window as it is drawn next
 //   <t_s> quit                             close the viewer
 //
 // Times count from the first frame after the master's hand is known (MasterState received).
@@ -26,7 +27,7 @@
 namespace teleop::viewer {
 
 struct ScriptAction {
-  enum class Kind { kDrag, kKey, kTune, kQuit };
+  enum class Kind { kDrag, kKey, kTune, kSnapshot, kQuit };
   double at_s = 0.0;
   Kind kind = Kind::kQuit;
   double dx_px = 0.0, dy_px = 0.0;  ///< drag
@@ -37,6 +38,7 @@ struct ScriptAction {
   double master_stiffness_n_per_m = 0.0, master_damping_ns_per_m = 0.0, force_gain = 0.0,
          slave_stiffness_n_per_m = 0.0, forward_delay_ms = 0.0, backward_delay_ms = 0.0;
   double ramp_s = 0.5;
+  std::string path;  ///< snapshot: the PNG to write
   std::string text;  ///< the line, for the log
 };
 

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <mutex>
@@ -74,6 +75,8 @@ TEST(ViewerDrive, ScriptedInputDrivesTheSlaveAndTunesTheMasterLive) {
   const int domain = domains::kViewerDrive;
   const std::string d = std::to_string(domain);
   const std::string script = tmp("script.txt");
+  const std::string picture = tmp("drive.png");
+  std::remove(picture.c_str());
   {
     std::ofstream f(script);
     f << "# press 2 cm into the sphere, tune, drag sideways, come up\n"
@@ -83,6 +86,9 @@ TEST(ViewerDrive, ScriptedInputDrivesTheSlaveAndTunesTheMasterLive) {
          "3.6 tune master_stiffness_n_per_m 500\n"
          "4.0 drag 12 0 0.6\n"
          "5.0 key pageup 0.8\n"
+         "6.2 snapshot "
+      << picture
+      << "\n"
          "6.5 quit\n";
   }
   Process server(kServerBinary, {"--domain", d, "--quiet"}, "drive_server");
@@ -120,7 +126,11 @@ TEST(ViewerDrive, ScriptedInputDrivesTheSlaveAndTunesTheMasterLive) {
   server.signal(SIGINT);
   server.wait_for(10.0);
 
-  // the viewer: it wrote device states at 1 kHz and got the master's force back
+  // the viewer: the scripted snapshot was written, it wrote device states at 1 kHz and got the
+  // master's force back
+  EXPECT_NE(viewer.err().find("saved " + picture), std::string::npos) << viewer.err();
+  std::ifstream png(picture, std::ios::binary | std::ios::ate);
+  EXPECT_GT(static_cast<long>(png.tellg()), 10000L);
   const std::string dj = read_all(drive_json);
   SCOPED_TRACE(dj);
   EXPECT_GT(json_value(dj, "states_written"), 3000.0);

@@ -62,8 +62,9 @@ void field_row(const char* label, double& value, double max, bool enabled, const
 
 std::uint32_t draw_drive_window(const DriveView& drive, double peak_force_n, TuningForm& form,
                                 float view_h) {
-  ImGui::SetNextWindowPos(ImVec2(10.0f, view_h - 10.0f), ImGuiCond_FirstUseEver,
-                          ImVec2(0.0f, 1.0f));
+  // below the overlay in the top-left corner: it grows downwards as the tuning form appears,
+  // and stays inside a view at least 480 px high
+  ImGui::SetNextWindowPos(ImVec2(10.0f, std::min(100.0f, 0.15f * view_h)), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowBgAlpha(0.75f);
   ImGui::Begin("Drive", nullptr,
                ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoSavedSettings);
@@ -81,7 +82,10 @@ std::uint32_t draw_drive_window(const DriveView& drive, double peak_force_n, Tun
     ImGui::TextDisabled("tuning: no master status yet");
   } else {
     const TuningStatus& s = drive.status;
-    if (!form.loaded) {
+    // the values in force: at the first status, and again after each answer (an applied request
+    // shows its targets, a rejected one puts back what is in force)
+    if (!form.loaded || s.request_seq() != form.answered) {
+      form.answered = s.request_seq();
       form.master_stiffness_n_per_m = s.master_stiffness_n_per_m();
       form.master_damping_ns_per_m = s.master_damping_ns_per_m();
       form.force_gain = s.force_gain();

@@ -13,7 +13,8 @@ namespace teleop::viewer {
 
 /// The tuning form's values (delays in ms, as shown).
 struct TuningForm {
-  bool loaded = false;  ///< filled from a status once
+  bool loaded = false;         ///< filled from a status
+  std::uint64_t answered = 0;  ///< request_seq of the status it was last filled from
   double master_stiffness_n_per_m = 0.0, master_damping_ns_per_m = 0.0, force_gain = 0.0,
          slave_stiffness_n_per_m = 0.0, forward_delay_ms = 0.0, backward_delay_ms = 0.0;
   double ramp_s = 0.5;
@@ -29,8 +30,8 @@ void draw_drive_overlay(const OrbitCamera& camera, float view_w, float view_h,
                         const Eigen::Vector3d& hand_world_m, const DriveView& drive,
                         double force_scale_m_per_n, bool dragging);
 
-/// Draws the "Drive" window in the 3-D view's bottom-left corner. Returns the TUNE_* bits to
-/// send when Apply was pressed (0 otherwise); the form keeps what was typed.
+/// Draws the "Drive" window in the 3-D view's top-left corner, below the overlay. Returns the
+/// TUNE_* bits to send when Apply was pressed (0 otherwise); the form keeps what was typed.
 std::uint32_t draw_drive_window(const DriveView& drive, double peak_force_n, TuningForm& form,
                                 float view_h);
 

@@ -84,9 +84,9 @@ TEST(HandDrive, TheTargetStaysInTheWorkspaceAndTheHandleIsSpeedAndAccelerationLi
 TEST(InputScript, ParsesActionsInTimeOrderAndNamesTheLineOfAMistake) {
   const auto a = parse_input_script_text(
       "# a comment\n2 tune force_gain 1.5 ramp_s 0.2\n0.5 key pagedown 0.4\n"
-      "1 drag 10 -5 0.5  # trailing comment\n3 quit\n",
+      "1 drag 10 -5 0.5  # trailing comment\n3 quit\n2.5 snapshot /tmp/x.png\n",
       "s.txt");
-  ASSERT_EQ(a.size(), 4u);
+  ASSERT_EQ(a.size(), 5u);
   EXPECT_EQ(a[0].kind, ScriptAction::Kind::kKey);
   EXPECT_EQ(a[0].key_direction, -Eigen::Vector3d::UnitZ());
   EXPECT_EQ(a[1].kind, ScriptAction::Kind::kDrag);
@@ -95,7 +95,9 @@ TEST(InputScript, ParsesActionsInTimeOrderAndNamesTheLineOfAMistake) {
   EXPECT_EQ(a[2].fields, 4u);
   EXPECT_DOUBLE_EQ(a[2].force_gain, 1.5);
   EXPECT_DOUBLE_EQ(a[2].ramp_s, 0.2);
-  EXPECT_EQ(a[3].kind, ScriptAction::Kind::kQuit);
+  EXPECT_EQ(a[3].kind, ScriptAction::Kind::kSnapshot);
+  EXPECT_EQ(a[3].path, "/tmp/x.png");
+  EXPECT_EQ(a[4].kind, ScriptAction::Kind::kQuit);
   const auto error = [](const std::string& text) {
     try {
       parse_input_script_text(text, "s.txt");
@@ -104,7 +106,8 @@ TEST(InputScript, ParsesActionsInTimeOrderAndNamesTheLineOfAMistake) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(error("\n1 jump\n").find("s.txt:2: action 'jump' is not one of drag, key, tune, quit"),
+  EXPECT_NE(error("\n1 jump\n")
+                .find("s.txt:2: action 'jump' is not one of drag, key, tune, snapshot, quit"),
             std::string::npos);
   EXPECT_NE(error("1 key space 1\n").find("s.txt:1: key 'space' is not one of"), std::string::npos);
   EXPECT_NE(error("1 tune force_gain fast\n").find("s.txt:1: force_gain 'fast' is not a number"),
