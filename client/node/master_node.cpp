@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -98,6 +99,33 @@ inline const char* session_verdict(const SessionMetrics& m, const SessionReport&
   return rep.refused && rep.issued == 0 ? "refused" : verdict_name(m.verdict());
 }
 
+/// One driver at a time on teleop/device_state: the first writer is the device until it has been
+/// silent for kSilentNs; samples of any other writer meanwhile are ignored and counted (a second
+/// driver or a second driving viewer must not move the master's hand). Called from the reader's
+/// thread.
+class DeviceDriverLatch {
+ public:
+  static constexpr std::int64_t kSilentNs = 100'000'000;
+  bool accept(const eprosima::fastrtps::rtps::InstanceHandle_t& writer, std::int64_t now_ns) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (seen_ns_ == 0 || now_ns - seen_ns_ > kSilentNs) {
+      driver_ = writer;
+    } else if (writer != driver_) {
+      ignored_.fetch_add(1);
+      return false;
+    }
+    seen_ns_ = now_ns;
+    return true;
+  }
+  std::uint64_t ignored() const { return ignored_.load(); }
+
+ private:
+  std::mutex mutex_;
+  eprosima::fastrtps::rtps::InstanceHandle_t driver_;
+  std::int64_t seen_ns_ = 0;
+  std::atomic<std::uint64_t> ignored_{0};
+};
+
 /// The master's side of ownership during a run (watch_ownership()).
 struct OwnershipWatch {
   bool refused = false;        // another master owns the slave: the cycle holds
@@ -126,6 +154,8 @@ struct MasterNode::Impl {
   std::unique_ptr<dds::Writer<DeviceCommandPubSubType>> device_command_writer;
   std::unique_ptr<dds::Reader<DeviceStatePubSubType>> device_state_reader;
   dds::Mailbox<DeviceState> device_box;
+  DeviceDriverLatch device_driver;  // one driver at a time on teleop/device_state
+  bool device_foreign_reported = false;
   std::uint64_t event_seq = 0;
   std::unique_ptr<CsvWriter> log;
   // the server's health: ServerStats counters and fault events received during the session
@@ -200,8 +230,8 @@ struct MasterNode::Impl {
           participant, "teleop/device_command", dds::TopicQos::kStream);
       device_state_reader = std::make_unique<dds::Reader<DeviceStatePubSubType>>(
           participant, "teleop/device_state", dds::TopicQos::kStream,
-          [this](const DeviceState& s, const eprosima::fastdds::dds::SampleInfo&) {
-            device_box.put(s);
+          [this](const DeviceState& s, const eprosima::fastdds::dds::SampleInfo& info) {
+            if (device_driver.accept(info.publication_handle, now_ns())) device_box.put(s);
           });
     }
   }
@@ -604,6 +634,11 @@ struct MasterNode::Impl {
       if (external && device_box.take_if_newer(device_sample, device_seen)) {
         external->on_sample(from_idl(device_sample));
       }
+      if (external && !device_foreign_reported && device_driver.ignored() > 0) {
+        device_foreign_reported = true;
+        event(static_cast<std::uint8_t>(sim::EventKind::kOwnership), 1,
+              "ignoring teleop/device_state from a second driver while the first one is live", 0.0);
+      }
       tuning->poll(cycle, now_s, now, report_tuning);
       cycle.step(now_s);
       entry_time_s[cycle.command_seq() % kEntryRing] = now_s;
@@ -663,6 +698,7 @@ struct MasterNode::Impl {
         << "  \"rate_hz\": " << json_number(options.rate_hz) << ",\n"
         << "  \"scheme\": \"" << cycle.config().controller.scheme << "\",\n"
         << "  \"device\": \"" << options.device << "\",\n"
+        << "  \"device_samples_ignored\": " << device_driver.ignored() << ",\n"
         << "  \"script\": \"" << options.script << "\",\n"
         << "  \"issued\": " << rep.issued << ",\n"
         << "  \"dropped_by_channel\": " << rep.dropped << ",\n"

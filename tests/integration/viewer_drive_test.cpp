@@ -18,6 +18,7 @@
 
 #include "common/dds/endpoint.hpp"
 #include "common/util/clock.hpp"
+#include "teleop/idl/DevicePubSubTypes.h"
 #include "teleop/idl/TeleopPubSubTypes.h"
 #include "tests/support/domains.hpp"
 #include "tests/support/integration.hpp"
@@ -121,7 +122,30 @@ TEST(ViewerDrive, ScriptedInputDrivesTheSlaveAndTunesTheMasterLive) {
                   "--height",
                   "540"},
                  "drive_viewer");
-  ASSERT_EQ(viewer.wait_for(60.0), 0) << viewer.err();
+  // a second driver joins while the viewer drives: its samples (a hand 10 cm up) must be ignored
+  std::atomic<bool> stop_rogue{false};
+  std::thread rogue([&] {
+    dds::Participant rp(dds::ParticipantOptions{"loopback", domain, "rogue-driver"});
+    dds::Writer<DeviceStatePubSubType> w(rp, "teleop/device_state", dds::TopicQos::kStream);
+    const auto t0 = now_ns();
+    DeviceState s;
+    s.position_m()[2] = 0.1;
+    s.orientation_wxyz()[0] = 1.0;
+    s.engaged(true);
+    std::uint64_t seq = 1000000;
+    while (!stop_rogue.load() && seconds_between(t0, now_ns()) < 7.0) {
+      if (seconds_between(t0, now_ns()) > 4.5) {  // after the viewer has become the driver
+        s.seq(++seq);
+        s.time_ns(now_ns());
+        w.write(s);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  });
+  const int viewer_rc = viewer.wait_for(60.0);
+  stop_rogue = true;
+  rogue.join();
+  ASSERT_EQ(viewer_rc, 0) << viewer.err();
   ASSERT_EQ(master.wait_for(40.0), 0) << master.err();
   server.signal(SIGINT);
   server.wait_for(10.0);
@@ -159,6 +183,10 @@ TEST(ViewerDrive, ScriptedInputDrivesTheSlaveAndTunesTheMasterLive) {
   EXPECT_NE(master.err().find("master_stiffness_n_per_m is not used by the force-position"),
             std::string::npos);
   EXPECT_NE(master.err().find("force_gain 1 -> 1.5 over 0.5 s"), std::string::npos);
+  // the second driver's samples were ignored, counted, and said once
+  EXPECT_GT(json_value(mj, "device_samples_ignored"), 50.0);
+  EXPECT_NE(master.err().find("ignoring teleop/device_state from a second driver"),
+            std::string::npos);
   // the session starts in contact (the keys pressed during homing): the force fades in, and the
   // drag in contact changes it smoothly (a step would be ~0.5 N; the rate bound is 1 N a cycle)
   EXPECT_LT(json_nested(mj, "safety", "max_step_n"), 0.25);
