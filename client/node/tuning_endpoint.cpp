@@ -52,10 +52,12 @@ void TuningEndpoint::on_request(const TuningRequest& r) {
   }
   queue_[(head_ + count_) % kQueue] = p;
   ++count_;
+  pending_.store(count_);
 }
 
 int TuningEndpoint::poll(MasterCycle& cycle, double now_s, std::int64_t now_ns,
                          const std::function<void(std::uint8_t, const std::string&)>& report) {
+  if (pending_.load() == 0) return 0;  // the common case: no lock, nothing to do
   int handled = 0;
   for (;;) {
     Pending p;
@@ -65,6 +67,7 @@ int TuningEndpoint::poll(MasterCycle& cycle, double now_s, std::int64_t now_ns,
       p = queue_[head_];
       head_ = (head_ + 1) % kQueue;
       --count_;
+      pending_.store(count_);
     }
     ++handled;
     const TuningValues before = cycle.tuning().current();

@@ -60,6 +60,7 @@ class TuningEndpoint {
   static constexpr std::size_t kQueue = 16;
   std::array<Pending, kQueue> queue_{};
   std::size_t head_ = 0, count_ = 0;
+  std::atomic<std::size_t> pending_{0};  // = count_, read by poll() without the lock
   std::atomic<std::uint64_t> received_{0}, ignored_{0}, dropped_{0};
   // the newest answer
   std::uint64_t answer_seq_ = 0;

@@ -35,7 +35,7 @@ TEST(VendorSdkDevice, DeclaresItsSpecFromTheSdkInSiUnits) {
   EXPECT_DOUBLE_EQ(s.max_force_n, 3.3);
   EXPECT_DOUBLE_EQ(s.max_continuous_force_n, 0.88);
   EXPECT_NEAR(s.max_stiffness_n_per_m, 1260.0, 1e-9);  // 1.26 N/mm
-  EXPECT_NEAR(s.max_damping_ns_per_m, 2.5, 1e-12);      // 0.0025 N s/mm
+  EXPECT_NEAR(s.max_damping_ns_per_m, 2.5, 1e-12);     // 0.0025 N s/mm
   EXPECT_EQ(dev.state(), DeviceLifecycle::kInactive);
 }
 

@@ -73,8 +73,7 @@ void VendorSdkDevice::activate() {
       hdScheduleAsynchronous(servo_callback, this, HD_MAX_SCHEDULER_PRIORITY));
   hdStartScheduler();
   if (const HDErrorInfo e = hdGetError(); HD_DEVICE_ERROR(e)) {
-    throw config::ConfigError("--device vendor: cannot start the servo loop: " +
-                              hd_error_text(e));
+    throw config::ConfigError("--device vendor: cannot start the servo loop: " + hd_error_text(e));
   }
   state_ = DeviceLifecycle::kActive;
 }
