@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "common/config/config.hpp"
+#include "teleop/idl/Teleop.h"
 
 namespace teleop::viewer {
 
@@ -38,22 +39,22 @@ Eigen::Vector3d key_direction(const std::string& key, const std::string& where) 
 
 void tune_field(ScriptAction& a, const std::string& field, double v, const std::string& where) {
   if (field == "master_stiffness_n_per_m") {
-    a.fields |= 1;
+    a.fields |= TUNE_MASTER_STIFFNESS;
     a.master_stiffness_n_per_m = v;
   } else if (field == "master_damping_ns_per_m") {
-    a.fields |= 2;
+    a.fields |= TUNE_MASTER_DAMPING;
     a.master_damping_ns_per_m = v;
   } else if (field == "force_gain") {
-    a.fields |= 4;
+    a.fields |= TUNE_FORCE_GAIN;
     a.force_gain = v;
   } else if (field == "slave_stiffness_n_per_m") {
-    a.fields |= 8;
+    a.fields |= TUNE_SLAVE_STIFFNESS;
     a.slave_stiffness_n_per_m = v;
   } else if (field == "forward_delay_ms") {
-    a.fields |= 16;
+    a.fields |= TUNE_FORWARD_DELAY;
     a.forward_delay_ms = v;
   } else if (field == "backward_delay_ms") {
-    a.fields |= 32;
+    a.fields |= TUNE_BACKWARD_DELAY;
     a.backward_delay_ms = v;
   } else if (field == "ramp_s") {
     a.ramp_s = v;
