@@ -19,23 +19,23 @@ PressSetup build_press_setup(const PressScenario& s) {
   out.device.script.tremor_amplitude_m = s.tremor_m;
 
   // slave: point tool tracking the command; object on the floor
-  PointSlaveParams& sp = out.slave;
+  sim::ToolModel& sp = out.slave;
   sp.radius_m = kToolRadius;
-  SlaveObstacle floor;
-  floor.kind = SlaveObstacle::Kind::kPlane;
+  sim::Obstacle floor;
+  floor.kind = sim::Obstacle::Kind::kPlane;
   floor.offset_m = 0.0;
   floor.id = 0;
   sp.add(floor);
-  SlaveObstacle obj;
+  sim::Obstacle obj;
   obj.stiffness_n_per_m = s.env_stiffness_n_per_m;
   obj.damping_ns_per_m = s.env_damping_ns_per_m;
   obj.id = 1;
   if (s.environment == Environment::kSphere) {
-    obj.kind = SlaveObstacle::Kind::kSphere;
+    obj.kind = sim::Obstacle::Kind::kSphere;
     obj.centre_m = Eigen::Vector3d(0.0, 0.0, kSphereRadius);
     obj.radius_m = kSphereRadius;
   } else {
-    obj.kind = SlaveObstacle::Kind::kPlane;
+    obj.kind = sim::Obstacle::Kind::kPlane;
     obj.normal = Eigen::Vector3d::UnitZ();
     obj.offset_m = 2.0 * kSphereRadius;  // a stiff surface at the sphere's top height
   }
@@ -127,10 +127,8 @@ void fill_metrics(const SessionMetrics& m, PressResult& r) {
   r.stiffness_ratio = m.stiffness_ratio();
 }
 
-PressResult run_press(const PressScenario& s) {
-  const PressSetup setup = build_press_setup(s);
+PressResult run_press(const PressScenario& s, const PressSetup& setup, SlaveSimulator& slave) {
   SimulatedDevice device(setup.device);
-  PointSlave slave(setup.slave);
   LoopbackSession session(setup.loop, device, slave);
   session.start();
   double max_ctrl = 0.0;

@@ -1,7 +1,7 @@
 #pragma once
 // The paper's Fig. 13 task as an in-process scenario: an operator (SimulatedDevice) approaches
-// the top of an object, presses into it, slips sideways and departs, teleoperating a point
-// slave through delayed channels. The object is either the elastic sphere (a soft linear
+// the top of an object, presses into it, slips sideways and departs, teleoperating a slave
+// tool through delayed channels. The object is either the elastic sphere (a soft linear
 // spring, k ~ 500-2e4 N/m, radius 0.25 m on the floor) or a stiff wall (a plane at the same
 // height, k = 2e4 N/m). Used by the tests and by `teleop_bench delay`.
 #include <string>
@@ -9,6 +9,7 @@
 #include "client/analysis/stability_analysis.hpp"
 #include "client/device/simulated_device.hpp"
 #include "client/sim/loopback_session.hpp"
+#include "common/sim/tool.hpp"
 
 namespace teleop::master {
 
@@ -40,7 +41,9 @@ struct PressScenario {
 /// A built scenario: device, slave and loop configuration, ready to run.
 struct PressSetup {
   SimulatedDeviceParams device;
-  PointSlaveParams slave;
+  /// The slave's tool law and its obstacles (floor and object): the world the slave steps is
+  /// sim::tool_world_model(slave, ...) (server/node/world_slave.hpp runs it in-process).
+  sim::ToolModel slave;
   LoopbackConfig loop;
 };
 
@@ -84,7 +87,9 @@ void fill_metrics(const SessionMetrics& m, PressResult& r);
 /// Sets analytic_margin_s, analytic_stable and passive_scheme of `r` for `s`.
 void fill_analytic(const PressScenario& s, const PressSetup& setup, PressResult& r);
 
-/// Builds and runs one scenario. Allocates (setup); the loop itself does not.
-PressResult run_press(const PressScenario& s);
+/// Runs one scenario built by build_press_setup(s) against `slave`, a slave simulating
+/// setup.slave's world (the callers that link the server use server::WorldSlave; see
+/// tests/support/press_world.hpp). The loop itself allocates nothing.
+PressResult run_press(const PressScenario& s, const PressSetup& setup, SlaveSimulator& slave);
 
 }  // namespace teleop::master

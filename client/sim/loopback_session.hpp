@@ -13,7 +13,7 @@
 #include <string>
 
 #include "client/cycle/master_cycle.hpp"
-#include "client/sim/slave_model.hpp"
+#include "common/control/slave_simulator.hpp"
 
 namespace teleop::master {
 

@@ -1,7 +1,7 @@
 #pragma once
 // Model-mediated teleoperation (docs/control.md, "Model-mediated"): a local model of what the
-// slave's tip touches, estimated where the physics runs (the server's cycle, the in-process
-// point slave) and sent with every slave state; the master renders its force from its own
+// slave's tip touches, estimated where the physics runs (the server's cycle, networked or
+// in-process) and sent with every slave state; the master renders its force from its own
 // position against the model, at its own rate, so the felt contact does not wait for the network.
 //
 // The model is a half-space in tip-centre coordinates of the slave frame (the frame master

@@ -1,7 +1,7 @@
 #pragma once
 // The slave side of the passivity-based schemes, in one place for every slave: the server's
-// worlds (networked sessions), the in-process PointSlave (LoopbackSession, `teleop_bench
-// delay`) and the bench's tool-scene slave. No DDS here: the callers convert their command and
+// ServerCycle, networked or in-process (server::WorldSlave under LoopbackSession, `teleop_bench
+// delay`). No DDS here: the callers convert their command and
 // state types to the plain structs below.
 //
 //   wave variables (SCHEME_WAVE_VARIABLES): the forward wave integral/energy -> WaveSlavePort

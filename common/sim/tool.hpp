@@ -1,7 +1,7 @@
 #pragma once
 // The slave law of a free spherical tool: the one law behind the server's tool-only scene, the
-// tool slave of tool + deformable scenes, and the in-process slave of the master-side tests and
-// the delay sweep (client/sim/tool_slave.hpp).
+// tool slave of tool + deformable scenes, and so of the in-process slave of the master-side
+// tests and the delay sweep (server/node/world_slave.hpp steps the same world).
 //
 // A tool of mass m and radius r tracks the commanded pose under a saturated PD (K_ps, B_ps,
 // velocity feed-forward, optional gravity compensation) and meets penalty obstacles:

@@ -1,6 +1,8 @@
 // teleop_experiment contact-force-curve: the tip, moved kinematically, presses into the
 // deformable sphere (radius 0.25 m, level 4, the default mass-spring model, resting on the
-// floor under gravity) to 30 mm and is withdrawn, at several speeds. The reaction force
+// floor under gravity) to 30 mm and is withdrawn, at several speeds. The world is a tool world
+// with the sphere as its one body, advanced by world_step (the tool a kinematic probe,
+// WorldCommand::kinematic), as the server advances its scene. The reaction force
 // against the deformation reproduces the paper's Figs. 16-17; a linear law F = k x and the
 // Hertz law F = c x^(3/2) are fitted to the same data for comparison.
 #include <Eigen/Core>
@@ -16,6 +18,8 @@
 #include "common/util/registry.hpp"
 #include "server/collision/tip_mesh_contact.hpp"
 #include "server/deformable/deformable.hpp"
+#include "server/world/world.hpp"
+#include "server/world/world_model.hpp"
 
 namespace {
 
@@ -87,19 +91,28 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
     teleop::sim::Plane floor;
     floor.id = 0;
     floor.name = "floor";
-    const auto mesh = df::make_mesh_for(params);
-    const df::DeformableModel model = df::make_model(mesh, params, {floor});
-    df::DeformableState state = df::make_state(model);
+    // the world: a kinematic tool of radius tip_r, far above, and the sphere on the floor
+    teleop::sim::ToolModel tool;
+    tool.radius_m = tip_r;
+    teleop::sim::WorldModel world =
+        teleop::sim::tool_world_model(tool, Eigen::Vector3d(0.0, 0.0, 2.0), 1.0 / dt);
+    teleop::sim::DeformableBodyModel& body = world.bodies.emplace_back();
+    body.body = df::make_model(df::make_mesh_for(params), params, {floor});
+    body.contact = cp;
+    teleop::sim::WorldData data = teleop::sim::make_world_data(world);
     teleop::sim::EventQueue events;
-    // settle on the floor
-    for (int i = 0; i < 1500; ++i) df::step(model, state, dt, &events);
+    teleop::sim::WorldCommand cmd;
+    cmd.kinematic = true;
+    cmd.position_m = data.out.tip_position_m;
+    // settle on the floor (the tip too far away to touch)
+    for (int i = 0; i < 1500; ++i) teleop::sim::world_step(world, data, cmd, dt, events);
+    const df::DeformableState& state = data.bodies[0].state;
     double top = -1e9;
     for (int i = 0; i < state.x.cols(); ++i) top = std::max(top, state.x(2, i));
 
-    tc::TipMeshContact contact(cp);
-    contact.reset(state.x, model.mesh.triangles);
     Eigen::Vector3d tip(0.0, 0.0, top + tip_r + 0.005);
-    Eigen::Vector3d prev = tip;
+    teleop::sim::place_tool(world, data, tip);
+    const tc::TipMeshContact& contact = data.bodies[0].contact;
     double t = 0.0, z_touch = NAN;
     int phase = 0, hold_steps = 0;
     std::vector<double> xs, fs;
@@ -111,9 +124,10 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
       if (phase == 0) vel.z() = -speed;
       if (phase == 2) vel.z() = speed;
       tip += vel * dt;
-      state.f_ext.setZero();
-      const tc::TipContactResult res =
-          contact.update(state.x, &state.v, prev, tip, tip_r, vel, dt, state.f_ext);
+      cmd.position_m = tip;
+      cmd.velocity_mps = vel;
+      teleop::sim::world_step(world, data, cmd, dt, events);
+      const tc::TipContactResult& res = data.bodies[0].last;
       if (res.in_contact && std::isnan(z_touch)) z_touch = res.entry_point_m.z() + tip_r;
       const double deformation = std::isnan(z_touch) ? 0.0 : std::max(0.0, z_touch - tip.z());
       const double deflection =
@@ -131,9 +145,6 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
       peak = std::max(peak, res.force_on_tip_n.norm());
       if (phase == 0 && deformation >= target_depth) phase = 1;
       if (phase == 1 && ++hold_steps >= 100) phase = 2;
-      if (state.sleeping && res.in_contact) df::wake(state);
-      df::step(model, state, dt, &events);
-      prev = tip;
       t += dt;
       if (phase == 2 && !res.in_contact && tip.z() > z_touch + 0.005) break;
     }

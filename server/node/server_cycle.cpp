@@ -35,9 +35,23 @@ ServerCycle::ServerCycle(const sim::WorldModel& model, double dt_s, double comma
 mmt::SurfacePrior ServerCycle::nearest_surface(const Eigen::Vector3d& tip_m) {
   const double r = model_.tip_radius_m();
   mmt::SurfacePrior best;
-  for (const sim::Plane& p : model_.planes) {
-    best = mmt::nearer(best, mmt::plane_prior(p.id, p.normal, p.offset_m, r, tip_m,
-                                              p.stiffness_n_per_m, p.damping_ns_per_m));
+  if (model_.has_robot()) {
+    for (const sim::Plane& p : model_.planes) {
+      best = mmt::nearer(best, mmt::plane_prior(p.id, p.normal, p.offset_m, r, tip_m,
+                                                p.stiffness_n_per_m, p.damping_ns_per_m));
+    }
+  } else {
+    // the tool's obstacles: the scene's planes, in order, and rigid spheres of worlds built in
+    // code (sim::tool_world_model)
+    const sim::ToolModel& t = model_.tool;
+    for (int i = 0; i < t.obstacle_count; ++i) {
+      const sim::Obstacle& o = t.obstacles[static_cast<std::size_t>(i)];
+      best = mmt::nearer(best, o.kind == sim::Obstacle::Kind::kPlane
+                                   ? mmt::plane_prior(o.id, o.normal, o.offset_m, r, tip_m,
+                                                      o.stiffness_n_per_m, o.damping_ns_per_m)
+                                   : mmt::sphere_prior(o.id, o.centre_m, o.radius_m, r, tip_m,
+                                                       o.stiffness_n_per_m, o.damping_ns_per_m));
+    }
   }
   for (std::size_t i = 0; i < spheres_.size(); ++i) {
     BodySphere& b = spheres_[i];

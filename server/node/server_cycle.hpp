@@ -35,6 +35,10 @@ class ServerCycle {
   /// passivity port (wave variables / TDPA turn the command into the tool's target), world step.
   void step(std::int64_t t_ns, sim::EventQueue& events);
 
+  /// Changes the physics period [s] (an in-process slave stepped at another rate).
+  void set_period_s(double dt_s) { dt_s_ = dt_s; }
+  double period_s() const { return dt_s_; }
+
   const sim::WorldModel& model() const { return model_; }
   const sim::WorldData& data() const { return data_; }
   const sim::WorldOutput& output() const { return data_.out; }

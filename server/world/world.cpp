@@ -158,7 +158,47 @@ void step_slave(const WorldModel& model, WorldData& d, const WorldCommand& cmd_i
   }
 }
 
+/// A kinematic tool goes where it is told (before the contacts are resolved along its path);
+/// a non-finite command leaves it where it is, at rest, with a fault event.
+void move_kinematic_tool(WorldData& d, const WorldCommand& cmd, double dt_s, EventQueue& events) {
+  ToolState& t = d.tool;
+  const bool finite = cmd.position_m.allFinite() && cmd.velocity_mps.allFinite() &&
+                      cmd.orientation.coeffs().allFinite();
+  if (finite) {
+    t.position_m = cmd.position_m;
+    t.velocity_mps = cmd.velocity_mps;
+    t.orientation = cmd.orientation.normalized();
+  } else {
+    t.velocity_mps.setZero();
+    events.push(EventKind::kFault, Severity::kError, d.out.sim_time_s, 0.0,
+                "world: non-finite kinematic command; the tool stays where it is");
+  }
+  t.angular_velocity_radps.setZero();
+  t.contact_force_n.setZero();
+  t.tracking_force_n.setZero();
+  t.penetration_m = 0.0;
+  t.contact_object = -1;
+  t.sim_time_s += dt_s;
+  read_slave(d, d.out);
+}
+
 }  // namespace
+
+bool place_tool(const WorldModel& model, WorldData& d, const Eigen::Vector3d& position_m) {
+  if (d.robot) return false;
+  const double t = d.tool.sim_time_s;
+  d.tool = tool_state_at(position_m);
+  d.tool.sim_time_s = t;
+  read_slave(d, d.out);
+  d.tip_prev_m = position_m;
+  d.deformable_force_n.setZero();
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    DeformableBodyData& b = d.bodies[i];
+    b.contact.reset(b.state.x, model.bodies[i].body.mesh.triangles);
+    b.last = collision::TipContactResult{};
+  }
+  return true;
+}
 
 WorldData make_world_data(const WorldModel& model) {
   WorldData d;
@@ -196,12 +236,21 @@ void track_plane_contact(int& current, int plane, double sim_time_s, EventQueue&
 
 void world_step(const WorldModel& model, WorldData& d, const WorldCommand& cmd, double dt_s,
                 EventQueue& events) {
+  const bool kinematic = cmd.kinematic && !d.robot;
+  if (kinematic) {
+    // a prescribed probe moves first: its contacts are resolved along the path it was given
+    const std::int64_t t0 = now_ns();
+    move_kinematic_tool(d, cmd, dt_s, events);
+    d.cost.slave_us = static_cast<double>(now_ns() - t0) * 1e-3;
+  }
   // 1-2. tip against each deformable body, then the bodies
   const BodiesOnTip on_tip = step_bodies(model, d, dt_s, events);
   // 3. the slave
-  const std::int64_t t0 = now_ns();
-  step_slave(model, d, cmd, dt_s, events);
-  d.cost.slave_us = static_cast<double>(now_ns() - t0) * 1e-3;
+  if (!kinematic) {
+    const std::int64_t t0 = now_ns();
+    step_slave(model, d, cmd, dt_s, events);
+    d.cost.slave_us = static_cast<double>(now_ns() - t0) * 1e-3;
+  }
   // 4. outputs: the deformable contact adds to the planes' force on the tip
   WorldOutput& out = d.out;
   read_slave(d, out);
@@ -215,7 +264,8 @@ void world_step(const WorldModel& model, WorldData& d, const WorldCommand& cmd, 
   out.in_contact = out.in_contact || on_tip.deepest_id >= 0;
   out.deformation_m = on_tip.deformation_m;
   // the robot's joint-space PD has no Cartesian force to report: quasi-static estimate
-  out.tracking_force_n = d.robot ? Eigen::Vector3d(-out.contact_force_n) : d.tool.tracking_force_n;
+  out.tracking_force_n =
+      d.robot || kinematic ? Eigen::Vector3d(-out.contact_force_n) : d.tool.tracking_force_n;
 }
 
 }  // namespace teleop::sim

@@ -3,8 +3,9 @@
 //
 //   world_step(model, data, command, dt, events)
 //
-// is the only way any program advances a scene: the server node, the world benchmark and the
-// world's unit tests. It serves every scene the loader accepts: tool-only, tool + deformable
+// is the only way any program advances a scene: the server node (ServerCycle), the in-process
+// sessions (server/node/world_slave.hpp), the experiments, the world benchmark and the world's
+// unit tests. It serves every scene the loader accepts: tool-only, tool + deformable
 // bodies, robot, robot + deformable bodies. One step (dt):
 //   1. each body's f_ext is cleared; the tip-mesh contact of each body is updated along the
 //      tip's path of the last step (eq. 8 / continuous detection), giving the force on the tip
@@ -14,7 +15,8 @@
 //      and untouched);
 //   3. the slave steps with the summed deformable contact force as an external tip force
 //      (robot: tau = J^T gamma, eq. 4, planes acting on tip and links in ODE; tool: the law of
-//      common/sim/tool.hpp, planes as its obstacles);
+//      common/sim/tool.hpp, planes as its obstacles; a kinematic tool, WorldCommand::kinematic,
+//      is moved to the command before step 1 instead);
 //   4. outputs: tip state, total environment force on the tip (planes + bodies), penetration,
 //      and contact begin/end events for every object, deformable or plane.
 // Allocation-free after make_world_data(); deterministic for the same inputs. Faults (a
@@ -42,6 +44,10 @@ struct WorldCommand {
   Eigen::Vector3d angular_velocity_radps = Eigen::Vector3d::Zero();
   double kp_override_n_per_m = 0.0;  ///< >0 overrides the slave's position gain [N/m]
   bool hold = false;                 ///< hold the current pose (watchdog, clutch)
+  /// Tool slave only (experiments; never from the network): a prescribed probe. The tip is
+  /// put at position_m with velocity_mps first, then the contacts are resolved along its path
+  /// and the bodies step; its planes do not act on it, the bodies' reaction is its force.
+  bool kinematic = false;
 };
 
 /// State of the slave after a step.
@@ -99,6 +105,11 @@ WorldData make_world_data(const WorldModel& model);
 /// kContactBegin for the one it touches (value: the plane id); `current` becomes `plane`.
 /// world_step calls it every step; so do callers that step a slave on its own (robot-reach).
 void track_plane_contact(int& current, int plane, double sim_time_s, EventQueue& events);
+
+/// Puts the tool slave at rest at `position_m` [m] without a step (its clock kept) and resets
+/// each body's tip contact on the body's present nodes: a jump breaks continuous detection.
+/// Returns false (nothing changed) for a robot scene. Allocates (contact structures).
+bool place_tool(const WorldModel& model, WorldData& data, const Eigen::Vector3d& position_m);
 
 /// Advances the world by dt [s] towards `cmd`. Allocation-free; events go to `events`.
 void world_step(const WorldModel& model, WorldData& data, const WorldCommand& cmd, double dt_s,

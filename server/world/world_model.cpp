@@ -544,4 +544,27 @@ WorldModel load_world_model(const std::string& file) {
   return parse_world_model(config::Node::load_file(file));
 }
 
+WorldModel tool_world_model(const ToolModel& tool, const Eigen::Vector3d& start_m, double rate_hz) {
+  WorldModel m;
+  m.name = "tool (in code)";
+  m.slave = SlaveKind::kTool;
+  m.physics_rate_hz = rate_hz;
+  m.gravity_mps2 = tool.gravity_mps2;
+  m.tool = tool;
+  m.tool_start_m = start_m;
+  for (int i = 0; i < tool.obstacle_count; ++i) {
+    const Obstacle& o = tool.obstacles[static_cast<std::size_t>(i)];
+    if (o.kind != Obstacle::Kind::kPlane) continue;
+    Plane p;
+    p.id = o.id;
+    p.name = "plane " + std::to_string(o.id);
+    p.normal = o.normal;
+    p.offset_m = o.offset_m;
+    p.stiffness_n_per_m = o.stiffness_n_per_m;
+    p.damping_ns_per_m = o.damping_ns_per_m;
+    m.planes.push_back(p);
+  }
+  return m;
+}
+
 }  // namespace teleop::sim

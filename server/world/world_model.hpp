@@ -81,6 +81,12 @@ WorldModel load_world_model(const std::string& file);
 /// @throws config::ConfigError.
 WorldModel parse_world_model(const config::Node& root);
 
+/// A tool-only world built in code (no file): the tool law `tool` with its obstacles (planes,
+/// also listed as the world's planes, and rigid spheres, which only a tool can meet), starting
+/// at `start_m`, at `rate_hz`. The in-process sessions' press scenes are such worlds.
+WorldModel tool_world_model(const ToolModel& tool, const Eigen::Vector3d& start_m,
+                            double rate_hz = 1000.0);
+
 /// Safety factor on every stability limit the rate check uses (as the deformable body's
 /// automatic step, deformable::kStableStepSafety).
 constexpr double kRateSafety = 0.95;

@@ -12,8 +12,10 @@
 // force-position, gain = K_f). Their "theory" is passivity: stable at every delay
 // (theory_stable = 1); for tdpa the analytic margin column holds the base law's margin.
 //
-// The wall cases also run with the server's own tool-only scene (teleop::sim::tool_step) as
-// the slave, to show the in-process point slave gives the same verdicts.
+// Every run steps the server's own world in-process (server::WorldSlave: the watchdog, the
+// passivity port and world_step of ServerCycle) on the scenario's tool world. The wall cases
+// run twice (rows "point" and "tool_scene", names kept from when these were two slaves) and
+// must agree.
 //
 // Writes delay_map.csv, delay_boundary.csv (first delay margin vs gain), delay_theory.csv
 // (exact stable/unstable grid of the linear model), delay_summary.json; chart delay_map.png.
@@ -29,15 +31,17 @@
 #include "common/util/csv.hpp"
 #include "common/util/registry.hpp"
 #include "common/util/stats.hpp"
+#include "tests/support/press_world.hpp"
 
 namespace {
 
 using namespace teleop::master;
 using namespace teleop;
 
-/// The server's tool law is the point slave's law now (common/sim/tool.hpp): the "tool_scene"
-/// rows run the same slave and stay in the CSV to show the unification changed no result.
-using ToolSceneSlave = PointSlave;
+/// Every run's slave is the server's own cycle on the scenario's tool world (WorldSlave:
+/// ServerCycle + world_step); the "tool_scene" rows (the wall cases run a second time, without
+/// the extra figures run_press collects) stay in the CSV to show the runs are reproducible.
+using teleop::server::WorldSlave;
 
 /// A figure for the CSV; "nan" where it was not measured.
 std::string num(double v) { return std::isfinite(v) ? teleop::format_number(v) : "nan"; }
@@ -49,10 +53,10 @@ struct RunRow {
 };
 
 PressResult run_with(const PressScenario& s, bool tool_scene) {
-  if (!tool_scene) return run_press(s);
+  if (!tool_scene) return teleop::test::run_press_world(s);
   const PressSetup setup = build_press_setup(s);
   SimulatedDevice device(setup.device);
-  ToolSceneSlave slave(setup.slave);
+  WorldSlave slave(teleop::test::press_world(setup), setup.loop.dt_s);
   LoopbackSession session(setup.loop, device, slave);
   session.run();
   PressResult r;
@@ -327,7 +331,7 @@ int run_delay_bench(const teleop::CommandArgs& args) {
     ts.jitter_s = 0.002;
     const PressSetup setup = build_press_setup(ts);
     SimulatedDevice dev(setup.device);
-    PointSlave slave(setup.slave);
+    WorldSlave slave(teleop::test::press_world(setup), setup.loop.dt_s);
     LoopbackSession session(setup.loop, dev, slave);
     session.start();
     std::vector<double> step_us;
@@ -373,7 +377,8 @@ int run_delay_bench(const teleop::CommandArgs& args) {
   std::ofstream((args.out_dir / "delay_summary.json").string()) << json;
   std::printf(
       "delay sweep: %zu runs in %.2f s; simulation agrees with the analytic margin in "
-      "%d/%d runs (position-position, force-position); tool scene = point slave in %d/%d wall "
+      "%d/%d runs (position-position, force-position); wall runs repeated (rows tool_scene) agree "
+      "in %d/%d "
       "runs; loop step p50 %.2f us, p99 %.2f us (wave %.2f / %.2f, tdpa %.2f / %.2f)\n",
       rows.size(), sweep_s, agree, judged, tool_agree, tool_pairs, st.p50, st.p99, st_wave.p50,
       st_wave.p99, st_tdpa.p50, st_tdpa.p99);

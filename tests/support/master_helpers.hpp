@@ -3,7 +3,6 @@
 #include <string>
 
 #include "client/analysis/press_scenario.hpp"
-#include "client/sim/slave_model.hpp"
 #include "common/sim/tool.hpp"
 
 namespace teleop::test {
@@ -37,23 +36,14 @@ struct SteadyContact {
   }
 };
 
-/// A wall at z = 0.5 m seen by both slaves the master side runs against: the in-process
-/// PointSlave and the server's tool scene, with the same stiffness and damping, so tests can
-/// drive them with the same commands and require the same motion.
-struct WallOnBothSlaves {
-  using PointSlaveParams = teleop::master::PointSlaveParams;
-  using SlaveObstacle = teleop::master::SlaveObstacle;
-
-  PointSlaveParams point;       ///< build a PointSlave from it
-  teleop::sim::ToolModel tool;  ///< the server's tool scene with the same plane
-
-  WallOnBothSlaves() {
-    SlaveObstacle wall;
-    wall.kind = SlaveObstacle::Kind::kPlane;
-    wall.offset_m = 0.5;
-    point.add(wall);
-    tool = point;  // one law now: the server's tool is the point slave's model
-  }
-};
+/// The tool law with a wall at z = 0.5 m (k 2e4 N/m, b 50 N s/m) as its one obstacle.
+inline teleop::sim::ToolModel wall_tool() {
+  teleop::sim::ToolModel tool;
+  teleop::sim::Obstacle wall;
+  wall.kind = teleop::sim::Obstacle::Kind::kPlane;
+  wall.offset_m = 0.5;
+  tool.add(wall);
+  return tool;
+}
 
 }  // namespace teleop::test

@@ -12,11 +12,11 @@
 #include "client/control/safety.hpp"
 #include "client/device/simulated_device.hpp"
 #include "client/sim/loopback_session.hpp"
-#include "client/sim/slave_model.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/sim/tool.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/master_helpers.hpp"
+#include "tests/support/press_world.hpp"
 
 using namespace teleop::master;
 using namespace teleop;

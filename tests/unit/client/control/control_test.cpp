@@ -12,11 +12,11 @@
 #include "client/control/safety.hpp"
 #include "client/device/simulated_device.hpp"
 #include "client/sim/loopback_session.hpp"
-#include "client/sim/slave_model.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/sim/tool.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/master_helpers.hpp"
+#include "tests/support/press_world.hpp"
 
 using namespace teleop::master;
 using namespace teleop;
@@ -37,7 +37,7 @@ TEST(PositionPosition, TracksInFreeMotionAtZeroDelay) {
   setup.device.script.tremor_amplitude_m = 0.0;
   setup.loop.duration_s = 4.0;
   SimulatedDevice dev(setup.device);
-  PointSlave slave(setup.slave);
+  teleop::server::WorldSlave slave(teleop::test::press_world(setup));
   LoopbackSession session(setup.loop, dev, slave);
   session.run();
   const SessionMetrics& m = session.metrics();
@@ -51,7 +51,7 @@ TEST(PositionPosition, TracksInFreeMotionAtZeroDelay) {
 TEST(PositionPosition, FeltForceMatchesContactForceInSteadyContact) {
   SteadyContact sc(scenario("position-position", Environment::kSphere, 2000, 400, 0.0));
   SimulatedDevice dev(sc.setup.device);
-  PointSlave slave(sc.setup.slave);
+  teleop::server::WorldSlave slave(teleop::test::press_world(sc.setup));
   LoopbackSession session(sc.setup.loop, dev, slave);
   session.run();
   const Eigen::Vector3d f_dev = session.device_force_n();
@@ -68,7 +68,7 @@ TEST(ForcePosition, RendersSpringForceStatically) {
     SteadyContact sc(scenario("force-position", Environment::kWall, k, 1.0, 0.0));
     sc.setup.slave.obstacles[1].damping_ns_per_m = 5.0;
     SimulatedDevice dev(sc.setup.device);
-    PointSlave slave(sc.setup.slave);
+    teleop::server::WorldSlave slave(teleop::test::press_world(sc.setup));
     LoopbackSession session(sc.setup.loop, dev, slave);
     session.run();
     const double x = slave.sample().penetration_m;
@@ -172,7 +172,7 @@ TEST(Controller, UpdateAndWholeLoopAllocateNothing) {
     s.jitter_s = 0.002;
     const PressSetup setup = build_press_setup(s);
     SimulatedDevice dev(setup.device);
-    PointSlave slave(setup.slave);
+    teleop::server::WorldSlave slave(teleop::test::press_world(setup));
     LoopbackSession session(setup.loop, dev, slave);
     session.start();
     for (int i = 0; i < 100; ++i) session.step();  // warm up

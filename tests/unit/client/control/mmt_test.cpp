@@ -8,8 +8,8 @@
 #include "client/analysis/press_scenario.hpp"
 #include "client/control/bilateral_controller.hpp"
 #include "client/sim/loopback_session.hpp"
-#include "client/sim/slave_model.hpp"
 #include "tests/support/master_helpers.hpp"
+#include "tests/support/press_world.hpp"
 
 namespace teleop::master {
 namespace {
@@ -45,7 +45,7 @@ Feel hold(const std::string& scheme, Environment env, double k_env, double delay
   sc.setup.device.script.step_time_s = 0.3;
   sc.setup.device.script.tremor_amplitude_m = 0.0;
   SimulatedDevice device(sc.setup.device);
-  PointSlave slave(sc.setup.slave);
+  teleop::server::WorldSlave slave(teleop::test::press_world(sc.setup));
   LoopbackSession session(sc.setup.loop, device, slave);
   session.start();
   const double top = 0.55;  // tip centre touching the top of the object
@@ -157,7 +157,7 @@ PressResult hostile_press(const std::string& scheme, const std::string& base) {
     c->burst_p_bad_to_good = 0.2;
   }
   SimulatedDevice device(setup.device);
-  PointSlave slave(setup.slave);
+  teleop::server::WorldSlave slave(teleop::test::press_world(setup));
   LoopbackSession session(setup.loop, device, slave);
   session.run();
   const SessionMetrics& m = session.metrics();

@@ -11,7 +11,6 @@
 #include "client/control/bilateral_controller.hpp"
 #include "client/device/simulated_device.hpp"
 #include "client/sim/loopback_session.hpp"
-#include "client/sim/slave_model.hpp"
 #include "common/control/slave_port.hpp"
 #include "common/control/time_domain_passivity.hpp"
 #include "common/control/wave_variables.hpp"
@@ -20,6 +19,7 @@
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/config_error.hpp"
 #include "tests/support/master_helpers.hpp"
+#include "tests/support/press_world.hpp"
 
 using namespace teleop::master;
 using namespace teleop;
@@ -53,7 +53,7 @@ struct RunResult {
 
 RunResult run(const PressSetup& setup) {
   SimulatedDevice dev(setup.device);
-  PointSlave slave(setup.slave);
+  teleop::server::WorldSlave slave(teleop::test::press_world(setup));
   LoopbackSession session(setup.loop, dev, slave);
   session.run();
   const SessionMetrics& m = session.metrics();
@@ -285,7 +285,7 @@ TEST(WaveVariables, MatchedTerminationAbsorbsTheEchoOfFreeMotion) {
     setup.device.script.tremor_amplitude_m = 0.0;
     setup.loop.duration_s = 2.0;
     SimulatedDevice dev(setup.device);
-    PointSlave slave(setup.slave);
+    teleop::server::WorldSlave slave(teleop::test::press_world(setup));
     LoopbackSession session(setup.loop, dev, slave);
     session.start();
     double sum = 0.0;
@@ -304,9 +304,8 @@ TEST(WaveVariables, MatchedTerminationAbsorbsTheEchoOfFreeMotion) {
 }
 
 TEST(WaveVariables, BadWaveNeverReachesThePhysicsAndIsCounted) {
-  PointSlaveParams p;
-  PointSlave slave(p);
-  slave.reset(Vector3d(0, 0, 0.6));
+  teleop::server::WorldSlave slave(
+      teleop::sim::tool_world_model(teleop::sim::ToolModel{}, Vector3d(0, 0, 0.6)));
   SlaveCommand c;
   c.scheme = SchemeId::kWaveVariables;
   c.passivity_session = 7;
@@ -351,14 +350,11 @@ TEST(WaveVariables, BadWaveNeverReachesThePhysicsAndIsCounted) {
   EXPECT_EQ(slave.port().rejected(), 80u);
 }
 
-TEST(WaveVariables, ToolSceneAndPointSlaveRunTheSameSlavePort) {
-  // the server's tool step and the in-process point slave, both behind the one slave port
-  const teleop::test::WallOnBothSlaves wall;
-  PointSlave mine(wall.point);
-  const teleop::sim::ToolModel& tm = wall.tool;
-  teleop::sim::ToolState ts;
-  ts.position_m = Vector3d(0, 0, 0.56);
-  mine.reset(ts.position_m);
+TEST(WaveVariables, TheInProcessSlaveIsTheSlavePortThenTheToolLaw) {
+  // the in-process slave (the server's cycle) against the port and the tool law written out
+  const teleop::sim::ToolModel tm = teleop::test::wall_tool();
+  teleop::sim::ToolState ts = teleop::sim::tool_state_at(Vector3d(0, 0, 0.56));
+  teleop::server::WorldSlave mine(teleop::sim::tool_world_model(tm, ts.position_m));
   pv::SlavePassivityPort port;
   bool touched = false;
   for (SchemeId scheme : {SchemeId::kWaveVariables, SchemeId::kTimeDomainPassivity}) {
@@ -479,7 +475,7 @@ TEST(Tdpa, ObserversNeverGoBelowToleranceOnceTheControllerActs) {
     s.safety = false;  // let the loop run as it is
     const PressSetup setup = build_press_setup(s);
     SimulatedDevice dev(setup.device);
-    PointSlave slave(setup.slave);
+    teleop::server::WorldSlave slave(teleop::test::press_world(setup));
     LoopbackSession session(setup.loop, dev, slave);
     session.start();
     // the network's energy from the ports' power variables: -F_m . v_m at the master, and
@@ -559,7 +555,7 @@ TEST(Tdpa, PressTaskAtTheDefaultGainIsStableAtEveryDelay) {
   for (double d : {0.05, 0.1, 0.2}) {
     for (Environment env : {Environment::kSphere, Environment::kWall}) {
       PressScenario s = scenario("tdpa", env, env == Environment::kWall ? 2.0e4 : 2000.0, 400, d);
-      const PressResult r = run_press(s);
+      const PressResult r = teleop::test::run_press_world(s);
       EXPECT_FALSE(r.analytic_stable) << d;  // the base loop alone is not
       if (d <= 0.1) {
         EXPECT_EQ(r.verdict, Verdict::kStable) << d << " " << r.reason;
@@ -626,7 +622,7 @@ TEST(Passivity, HotPathsAllocateNothing) {
     s.jitter_s = 0.002;
     const PressSetup setup = build_press_setup(s);
     SimulatedDevice dev(setup.device);
-    PointSlave slave(setup.slave);
+    teleop::server::WorldSlave slave(teleop::test::press_world(setup));
     LoopbackSession session(setup.loop, dev, slave);
     session.start();
     for (int i = 0; i < 100; ++i) session.step();  // warm up

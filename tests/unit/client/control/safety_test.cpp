@@ -12,11 +12,11 @@
 #include "client/control/safety.hpp"
 #include "client/device/simulated_device.hpp"
 #include "client/sim/loopback_session.hpp"
-#include "client/sim/slave_model.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/sim/tool.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/master_helpers.hpp"
+#include "tests/support/press_world.hpp"
 
 using namespace teleop::master;
 using namespace teleop;
@@ -79,7 +79,7 @@ TEST(Safety, LostLinkInTheLoopFadesDeviceForce) {
   SteadyContact sc(scenario("force-position", Environment::kSphere, 2000, 1.0, 0.0));
   sc.setup.loop.duration_s = 2.5;
   SimulatedDevice dev(sc.setup.device);
-  PointSlave slave(sc.setup.slave);
+  teleop::server::WorldSlave slave(teleop::test::press_world(sc.setup));
   LoopbackSession session(sc.setup.loop, dev, slave);
   session.start();
   while (session.time_s() < 1.5) session.step();

@@ -12,11 +12,11 @@
 #include "client/control/safety.hpp"
 #include "client/device/simulated_device.hpp"
 #include "client/sim/loopback_session.hpp"
-#include "client/sim/slave_model.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/sim/tool.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/master_helpers.hpp"
+#include "tests/support/press_world.hpp"
 
 using namespace teleop::master;
 using namespace teleop;
@@ -33,7 +33,7 @@ TEST(Verdict, TheoryUnstableConfigurationIsReportedUnstableAndForceStaysInSpec) 
   const DelayMargin dm = task_delay_margin(press_loop_model(s, setup));
   ASSERT_LT(dm.one_way_s, 0.1) << "theory must call it unstable";
   SimulatedDevice dev(setup.device);
-  PointSlave slave(setup.slave);
+  teleop::server::WorldSlave slave(teleop::test::press_world(setup));
   LoopbackSession session(setup.loop, dev, slave);
   session.start();
   double max_written = 0.0;
@@ -55,7 +55,7 @@ TEST(Verdict, TheoryStableConfigurationIsReportedStable) {
   PressScenario s = scenario("position-position", Environment::kWall, 2.0e4, 400.0, 0.01);
   const PressSetup setup = build_press_setup(s);
   ASSERT_GT(task_delay_margin(press_loop_model(s, setup)).one_way_s, 0.01);
-  const PressResult r = run_press(s);
+  const PressResult r = teleop::test::run_press_world(s);
   EXPECT_EQ(r.verdict, Verdict::kStable) << r.reason;
   EXPECT_FALSE(r.safety_cut);
   EXPECT_GT(r.contact_time_s, 1.0);
@@ -74,9 +74,11 @@ TEST(Verdict, SimulationAgreesWithTheAnalyticDelayMargin) {
     const double margin = task_delay_margin(press_loop_model(s, build_press_setup(s))).one_way_s;
     ASSERT_TRUE(std::isfinite(margin)) << c.scheme;
     s.one_way_delay_s = 0.5 * margin;
-    EXPECT_EQ(run_press(s).verdict, Verdict::kStable) << c.scheme << " margin " << margin;
+    EXPECT_EQ(teleop::test::run_press_world(s).verdict, Verdict::kStable)
+        << c.scheme << " margin " << margin;
     s.one_way_delay_s = 1.6 * margin;
-    EXPECT_EQ(run_press(s).verdict, Verdict::kUnstable) << c.scheme << " margin " << margin;
+    EXPECT_EQ(teleop::test::run_press_world(s).verdict, Verdict::kUnstable)
+        << c.scheme << " margin " << margin;
   }
 }
 
@@ -96,7 +98,7 @@ TEST(Verdict, StabilitySwitchesOfTheTheoryAreSeenInSimulation) {
     SteadyContact sc(s);
     sc.setup.loop.duration_s = 10.0;
     SimulatedDevice dev(sc.setup.device);
-    PointSlave slave(sc.setup.slave);
+    teleop::server::WorldSlave slave(teleop::test::press_world(sc.setup));
     LoopbackSession session(sc.setup.loop, dev, slave);
     session.run();
     EXPECT_EQ(session.metrics().verdict() == Verdict::kStable, theory)
@@ -112,7 +114,7 @@ TEST(Verdict, LossesAreReportedInTheSummary) {
   setup.loop.backward.burst_p_good_to_bad = 0.02;
   setup.loop.backward.burst_p_bad_to_good = 0.2;
   SimulatedDevice dev(setup.device);
-  PointSlave slave(setup.slave);
+  teleop::server::WorldSlave slave(teleop::test::press_world(setup));
   LoopbackSession session(setup.loop, dev, slave);
   session.run();
   EXPECT_NEAR(session.metrics().forward_loss(), 0.1, 0.02);

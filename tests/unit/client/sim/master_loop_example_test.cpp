@@ -1,8 +1,8 @@
 // The master loop as the DDS node wires it, written out by hand (no LoopbackSession): this is
 // the usage example of docs/control.md, kept compiling and correct by being a test. The
-// "network" here is a pair of DelayChannels and an in-process PointSlave; in the node the
-// forward channel's output goes to the MasterCommand writer and the SlaveState reader feeds
-// the backward channel.
+// "network" here is a pair of DelayChannels and the server's cycle in-process (WorldSlave); in
+// the node the forward channel's output goes to the MasterCommand writer and the SlaveState
+// reader feeds the backward channel.
 #include <gtest/gtest.h>
 
 #include "client/control/bilateral_controller.hpp"
@@ -10,7 +10,8 @@
 #include "client/device/simulated_device.hpp"
 #include "client/metrics/session_metrics.hpp"
 #include "client/net/delay_channel.hpp"
-#include "client/sim/slave_model.hpp"
+#include "server/node/world_slave.hpp"
+#include "server/world/world_model.hpp"
 #include "tests/support/alloc_counter.hpp"
 
 using namespace teleop::master;
@@ -41,15 +42,15 @@ TEST(MasterLoopExample, HandWiredLoopPressesTheSphere) {
   safety.configure(SafetyParams{}, device.spec());
   SessionMetrics metrics;
 
-  PointSlaveParams sp;  // stands in for teleop_server
-  SlaveObstacle sphere;
-  sphere.kind = SlaveObstacle::Kind::kSphere;
+  teleop::sim::ToolModel sp;  // the world teleop_server would step
+  teleop::sim::Obstacle sphere;
+  sphere.kind = teleop::sim::Obstacle::Kind::kSphere;
   sphere.centre_m = Eigen::Vector3d(0.0, 0.0, 0.25);
   sphere.stiffness_n_per_m = 2000.0;
   sphere.damping_ns_per_m = 5.0;
   sp.add(sphere);
-  PointSlave slave(sp);
-  slave.reset(cp.workspace.to_slave_position(device.read().position_m));
+  teleop::server::WorldSlave slave(teleop::sim::tool_world_model(
+      sp, cp.workspace.to_slave_position(device.read().position_m), 1.0 / 1e-3));
   SlaveCommand at_slave;
   at_slave.enabled = false;
 

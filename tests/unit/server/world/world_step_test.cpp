@@ -7,6 +7,7 @@
 #include <string>
 
 #include "server/world/world.hpp"
+#include "server/world/world_model.hpp"
 #include "tests/support/alloc_counter.hpp"
 
 namespace teleop::sim {
@@ -288,6 +289,83 @@ TEST(WorldStepRobotSphere, DeterministicAndAllocationFreeThroughAPress) {
   EXPECT_EQ(a.out.tip_position_m, b.out.tip_position_m);
   EXPECT_EQ(a.out.contact_force_n, b.out.contact_force_n);
   EXPECT_EQ(a.bodies[0].state.x, b.bodies[0].state.x);
+}
+
+// --- a kinematic tool (prescribed probe, the contact experiments) -----------------------------
+
+/// The default scene's sphere under a tool (radius 0.05 m) over the floor, the tool 0.1 m above
+/// the sphere's top.
+WorldModel probe_over_sphere() {
+  ToolModel tool = tool_over_floor();
+  tool.radius_m = 0.05;
+  WorldModel m = tool_world_model(tool, Eigen::Vector3d(0.6, 0.0, 0.65));
+  m.bodies = default_scene().bodies;
+  return m;
+}
+
+TEST(WorldStepKinematic, TheProbeGoesWhereToldAndFeelsOnlyTheBody) {
+  const WorldModel model = probe_over_sphere();
+  ASSERT_EQ(model.planes.size(), 1u);
+  WorldData world = make_world_data(model);
+  EventQueue events;
+  EventCount c;
+  WorldCommand cmd;
+  cmd.kinematic = true;
+  cmd.velocity_mps = Eigen::Vector3d(0.0, 0.0, -0.05);
+  cmd.position_m = world.out.tip_position_m;
+  double deepest_force = 0.0;
+  for (int i = 0; i < 2400; ++i) {  // 0.12 m down at 5 cm/s: 2 cm into the top
+    cmd.position_m += cmd.velocity_mps * 1e-3;
+    world_step(model, world, cmd, 1e-3, events);
+    c.drain(events, model.bodies[0].object_id);
+    ASSERT_EQ(world.out.tip_position_m, cmd.position_m) << i;  // exactly where it was told
+    ASSERT_EQ(world.out.tip_velocity_mps, cmd.velocity_mps);
+    // its force is the body's reaction, and its tracking force balances it
+    ASSERT_EQ(world.out.contact_force_n, world.deformable_force_n);
+    ASSERT_EQ(world.out.tracking_force_n, -world.out.contact_force_n);
+    deepest_force = std::max(deepest_force, world.out.contact_force_n.z());
+  }
+  EXPECT_TRUE(world.out.in_contact);
+  EXPECT_EQ(world.out.contact_object, model.bodies[0].object_id);
+  EXPECT_GT(deepest_force, 0.5);
+  EXPECT_EQ(c.begins, 1);
+  EXPECT_EQ(c.faults, 0);
+  // the planes do not act on a probe: put it into the floor, far from the sphere
+  EXPECT_TRUE(place_tool(model, world, Eigen::Vector3d(-0.6, 0.0, 0.3)));
+  cmd.velocity_mps.setZero();
+  cmd.position_m = Eigen::Vector3d(-0.6, 0.0, -0.02);
+  world_step(model, world, cmd, 1e-3, events);
+  EXPECT_EQ(world.out.contact_force_n, Eigen::Vector3d::Zero());
+  EXPECT_FALSE(world.out.in_contact);
+  // a non-finite probe command leaves it where it is, with a fault
+  cmd.position_m.x() = std::nan("");
+  world_step(model, world, cmd, 1e-3, events);
+  EXPECT_EQ(world.out.tip_position_m, Eigen::Vector3d(-0.6, 0.0, -0.02));
+  c.drain(events, -1);
+  EXPECT_EQ(c.faults, 1);
+}
+
+TEST(WorldStepKinematic, PlaceToolResetsTheContactsAndRobotsRefuse) {
+  const WorldModel model = probe_over_sphere();
+  WorldData world = make_world_data(model);
+  EventQueue events;
+  WorldCommand cmd;
+  cmd.kinematic = true;
+  cmd.position_m = Eigen::Vector3d(0.6, 0.0, 0.53);  // 2 cm into the top
+  for (int i = 0; i < 300; ++i) world_step(model, world, cmd, 1e-3, events);
+  ASSERT_TRUE(world.bodies[0].contact.in_contact());
+  const double t = world.out.sim_time_s;
+  EXPECT_TRUE(place_tool(model, world, Eigen::Vector3d(0.6, 0.0, 0.8)));
+  EXPECT_FALSE(world.bodies[0].contact.in_contact());
+  EXPECT_FALSE(world.bodies[0].last.in_contact);
+  EXPECT_EQ(world.out.tip_position_m, Eigen::Vector3d(0.6, 0.0, 0.8));
+  EXPECT_EQ(world.tip_prev_m, Eigen::Vector3d(0.6, 0.0, 0.8));
+  EXPECT_EQ(world.out.sim_time_s, t);  // no step was taken
+  const WorldModel robot = default_scene();
+  WorldData rd = make_world_data(robot);
+  const Eigen::Vector3d tip = rd.out.tip_position_m;
+  EXPECT_FALSE(place_tool(robot, rd, Eigen::Vector3d(0.6, 0.0, 0.8)));
+  EXPECT_EQ(rd.out.tip_position_m, tip);
 }
 
 TEST(EventQueue, DropsTheOldestWhenFull) {

@@ -1,0 +1,76 @@
+#include "server/node/world_slave.hpp"
+
+#include <cmath>
+#include <utility>
+
+#include "common/control/slave_port.hpp"
+
+namespace teleop::server {
+
+WorldSlave::WorldSlave(sim::WorldModel model, double dt_s, double command_timeout_s)
+    : model_(std::move(model)),
+      dt_s_(dt_s),
+      command_timeout_s_(command_timeout_s < 0.0 ? model_.command_timeout_s : command_timeout_s) {
+  reset(model_.tool_start_m);
+}
+
+void WorldSlave::reset(const Eigen::Vector3d& position_m) {
+  model_.tool_start_m = position_m;
+  cycle_.reset();
+  cycle_.emplace(model_, dt_s_, command_timeout_s_);
+  events_.clear();
+  event_counts_.fill(0);
+  events_total_ = 0;
+  now_ns_ = 0;
+  have_command_ = false;
+  last_seq_ = 0;
+  last_send_time_s_ = 0.0;
+  const sim::WorldOutput& o = cycle_->output();
+  sample_ = SlaveSample{};
+  sample_.position_m = o.tip_position_m;
+  sample_.orientation = o.tip_orientation;
+  sample_.sim_time_s = o.sim_time_s;
+  sample_.valid = true;
+}
+
+void WorldSlave::step(const SlaveCommand& cmd, double dt_s) {
+  if (dt_s != dt_s_) {
+    dt_s_ = dt_s;
+    cycle_->set_period_s(dt_s);
+  }
+  // a new arrival resets the watchdog, as the server's reader does for each accepted command
+  if (!have_command_ || cmd.seq != last_seq_ || cmd.send_time_s != last_send_time_s_) {
+    cycle_->on_command(cmd, now_ns_, std::llround(cmd.send_time_s * 1e9));
+    have_command_ = true;
+    last_seq_ = cmd.seq;
+    last_send_time_s_ = cmd.send_time_s;
+  }
+  cycle_->step(now_ns_, events_);
+  now_ns_ += std::llround(dt_s * 1e9);
+  sim::SimEvent e;
+  while (events_.pop(e)) {
+    ++event_counts_[static_cast<std::size_t>(e.kind)];
+    ++events_total_;
+  }
+
+  // what the master decodes from the server's SlaveState (server/node/state_message.cpp)
+  const sim::WorldOutput& o = cycle_->output();
+  SlaveSample& s = sample_;
+  s.position_m = o.tip_position_m;
+  s.orientation = o.tip_orientation;
+  s.velocity_mps = o.tip_velocity_mps;
+  s.contact_force_n = o.contact_force_n;
+  s.penetration_m = o.penetration_m;
+  s.deformation_m = o.deformation_m;
+  s.in_contact = o.in_contact;
+  s.sim_time_s = o.sim_time_s;
+  s.seq = cycle_->steps();
+  s.command_seq = cmd.seq;
+  s.command_send_time_s = cmd.send_time_s;
+  s.valid = true;
+  passivity::apply_port_report(cycle_->port().report(), s);
+  if (!cycle_->port_active()) s.passivity_session = 0;
+  s.model = cycle_->local_model();
+}
+
+}  // namespace teleop::server
