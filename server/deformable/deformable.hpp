@@ -217,6 +217,19 @@ struct DeformableModel {
   std::vector<float> simd_k, simd_rest, simd_radial_k, simd_radial_rest;
   std::vector<double> simd_dof_mass, simd_dof_inv_mass;  ///< m_i and 1 / m_i per coordinate (3N)
 
+  // co-rotational Navier, explicit and symplectic path (built for that model only): the ring
+  // matrix of node i is A_i = sum_j (x_j - c) D_ij^T + (x_i - c) E_i^T, with c the current
+  // mass-weighted centroid, D_ij = X_j - X_i over the one-ring and E_i = w_i (X_i - c0) -
+  // sum_j D_ij (w_i = sum_j |D_ij|^2 / |X_i - c0|^2, c0 the rest centroid; 3 per node). The
+  // one-ring and the incident edges are tables of corot_width entries per node (node-major;
+  // the largest valence), padded so that every loop has the same length: a padding neighbour
+  // is the node itself with D = 0, a padding edge is edge index E (a force slot kept at zero).
+  // corot_inc holds e (first node) or ~e (second). Per edge its rest vector and rest direction,
+  // each padded to 4 doubles (8 per edge).
+  int corot_width = 0;
+  std::vector<int> corot_nb, corot_inc;
+  std::vector<double> corot_ring_rest, corot_node_e, corot_edge;
+
   // automatic step (estimate_stability(); refreshed by make_model and update_stable_step)
   double omega_max_rad_per_s = 0.0;    ///< highest natural frequency at rest [rad/s]
   double omega_bound_rad_per_s = 0.0;  ///< its Gershgorin upper bound [rad/s]
@@ -298,6 +311,9 @@ struct DeformableState {
   Eigen::Matrix4Xd contact_coef;          ///< (k, c, spring force, friction mu) of each contact
   std::vector<Eigen::Matrix3d> rotation;  ///< co-rotational frame of each node
   std::vector<Eigen::Quaterniond> rotation_q;  ///< warm start of the polar decomposition
+  // co-rotational Navier, explicit and symplectic path: per node 8 doubles (x - c, 0, v, 0),
+  // per node 24 (the frame's columns, then its rows, each padded to 4), per edge 4 (its force)
+  std::vector<double> corot_pack, corot_frame, corot_force;
 
   // kernel simd: per node 8 floats (x, y, z relative to the centre node, -, v relative to its
   // velocity, -), model.simd_stride nodes (the padding at zero)

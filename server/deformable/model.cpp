@@ -280,6 +280,68 @@ teleop::mesh::TriMesh make_mesh_for(const DeformableParams& p) {
   return m;
 }
 
+namespace {
+
+// The co-rotational tables of DeformableModel (corot_*): see deformable.hpp.
+void build_corotational_tables(DeformableModel& m) {
+  const Eigen::Matrix3Xd& X = m.mesh.vertices;
+  const int n = m.node_count;
+  Eigen::Vector3d c0 = Eigen::Vector3d::Zero();
+  for (int i = 0; i < n; ++i) c0 += m.mass_kg(i) * X.col(i);
+  c0 *= 1.0 / m.mass_kg.sum();
+  const auto& off = m.mesh.vertex_neighbour_offsets;
+  const auto& nb = m.mesh.vertex_neighbours;
+  const auto& eoff = m.node_edge_offsets;
+  int w = 0;
+  for (int i = 0; i < n; ++i) {
+    const auto iu = static_cast<std::size_t>(i);
+    w = std::max({w, off[iu + 1] - off[iu], eoff[iu + 1] - eoff[iu]});
+  }
+  m.corot_width = w;
+  const auto wu = static_cast<std::size_t>(w);
+  const auto nu = static_cast<std::size_t>(n);
+  m.corot_nb.assign(nu * wu, 0);
+  m.corot_inc.assign(nu * wu, static_cast<int>(m.edges.cols()));  // padding: the zero slot
+  m.corot_ring_rest.assign(3 * nu * wu, 0.0);
+  m.corot_node_e.assign(3 * nu, 0.0);
+  for (int i = 0; i < n; ++i) {
+    const auto iu = static_cast<std::size_t>(i);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    double len2 = 0.0;
+    std::size_t slot = iu * wu;
+    for (int k = off[iu]; k < off[iu + 1]; ++k, ++slot) {
+      const int j = nb[static_cast<std::size_t>(k)];
+      const Eigen::Vector3d d = X.col(j) - X.col(i);
+      m.corot_nb[slot] = j;
+      for (int c = 0; c < 3; ++c) m.corot_ring_rest[3 * slot + static_cast<std::size_t>(c)] = d[c];
+      sum += d;
+      len2 += d.squaredNorm();
+    }
+    for (; slot < (iu + 1) * wu; ++slot) m.corot_nb[slot] = i;  // D = 0: adds nothing
+    slot = iu * wu;
+    for (int k = eoff[iu]; k < eoff[iu + 1]; ++k, ++slot) {
+      m.corot_inc[slot] = m.node_edges[static_cast<std::size_t>(k)];
+    }
+    const Eigen::Vector3d rx = X.col(i) - c0;
+    const double r2 = rx.squaredNorm();
+    const Eigen::Vector3d e =
+        (r2 > 0.0 ? Eigen::Vector3d((len2 / r2) * rx) : Eigen::Vector3d::Zero()) - sum;
+    for (int c = 0; c < 3; ++c) m.corot_node_e[3 * iu + static_cast<std::size_t>(c)] = e[c];
+  }
+  const auto ne = static_cast<std::size_t>(m.edges.cols());
+  m.corot_edge.assign(8 * ne, 0.0);
+  for (std::size_t e = 0; e < ne; ++e) {
+    const auto ei = static_cast<Eigen::Index>(e);
+    const Eigen::Vector3d d = X.col(m.edges(1, ei)) - X.col(m.edges(0, ei));
+    for (int c = 0; c < 3; ++c) {
+      m.corot_edge[8 * e + static_cast<std::size_t>(c)] = d[c];
+      m.corot_edge[8 * e + 4 + static_cast<std::size_t>(c)] = m.rest_dir(c, ei);
+    }
+  }
+}
+
+}  // namespace
+
 DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformableParams& params,
                            const std::vector<Plane>& planes) {
   check_inputs(mesh, params, planes);
@@ -292,6 +354,7 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
   set_edge_stiffness(m);
   set_radial_and_contact(m, planes);
   if (params.kernel == KernelKind::kSimd) build_simd_tables(m);
+  if (params.model == ModelKind::kNavierCorotational) build_corotational_tables(m);
   update_stable_step(m);
   return m;
 }
@@ -329,6 +392,11 @@ DeformableState make_state(const DeformableModel& m) {
   s.rotation_q.assign(static_cast<std::size_t>(n), Eigen::Quaterniond::Identity());
   if (m.params.kernel == KernelKind::kSimd) {
     s.simd_pack.assign(8 * static_cast<std::size_t>(m.simd_stride), 0.0f);
+  }
+  if (m.params.model == ModelKind::kNavierCorotational) {
+    s.corot_pack.assign(8 * static_cast<std::size_t>(n), 0.0);
+    s.corot_frame.assign(24 * static_cast<std::size_t>(n), 0.0);
+    s.corot_force.assign(4 * static_cast<std::size_t>(ne + 1), 0.0);  // + the zero slot
   }
   s.pin_goal = Eigen::Matrix3Xd::Zero(3, n);
   s.pin_start = Eigen::Matrix3Xd::Zero(3, n);

@@ -51,61 +51,159 @@ TELEOP_HOT_CLONES __attribute__((optimize("O3"))) void inverse_sqrt(const double
   for (int k = 0; k < count; ++k) out[k] = 1.0 / std::sqrt(in[k] + 1e-30);
 }
 
-// Rotational part of A (polar decomposition), warm-started from q: Mueller et al. 2016,
-// "A robust method to extract the rotational part of deformations".
-void extract_rotation(const Mat3& a, Eigen::Quaterniond& q, int max_iterations,
-                      double tolerance_rad) {
+// Rotation matrix of the unit quaternion (w, x, y, z), column-major into r[9].
+TELEOP_ALWAYS_INLINE void quaternion_matrix(double w, double x, double y, double z, double* r) {
+  const double tx = 2.0 * x, ty = 2.0 * y, tz = 2.0 * z;
+  const double twx = tx * w, twy = ty * w, twz = tz * w;
+  const double txx = tx * x, txy = ty * x, txz = tz * x;
+  const double tyy = ty * y, tyz = tz * y, tzz = tz * z;
+  r[0] = 1.0 - (tyy + tzz);
+  r[1] = txy + twz;
+  r[2] = txz - twy;
+  r[3] = txy - twz;
+  r[4] = 1.0 - (txx + tzz);
+  r[5] = tyz + twx;
+  r[6] = txz + twy;
+  r[7] = tyz - twx;
+  r[8] = 1.0 - (txx + tyy);
+}
+
+// Rotational part of A (a[9], column-major; polar decomposition), warm-started from q (r[9]
+// holding its matrix, column-major, on entry) and written to q and r. It maximises tr(R^T A) (as
+// Mueller et al. 2016, "A robust method to extract the rotational part of deformations"), by Newton
+// steps: with R <- exp([d]x) R, C = A R^T, tr(R^T A) ~ tr C + g . d - d^T H d / 2 for g = (C21 -
+// C12, C02 - C20, C10 - C01) and H = tr(C) I - sym(C), so d = H^-1 g (quadratic convergence: one or
+// two steps from the last frame). Where H is not positive definite (far from the maximum) the step
+// is Mueller's, d = g / |tr C| (an ascent step). It stops when a step is below the tolerance, or
+// after a Newton step whose square is (its remaining error). Plain scalar arithmetic; the matrix of
+// the last check is the result when it converged.
+TELEOP_ALWAYS_INLINE void extract_rotation(const double* a, Eigen::Quaterniond& q_io,
+                                           int max_iterations, double tolerance_rad, double* r) {
+  double qw = q_io.w(), qx = q_io.x(), qy = q_io.y(), qz = q_io.z();
+  bool converged = false;
   for (int it = 0; it < max_iterations; ++it) {
-    const Mat3 r = q.toRotationMatrix();
-    const Vec3 num = r.col(0).cross(a.col(0)) + r.col(1).cross(a.col(1)) + r.col(2).cross(a.col(2));
-    const double den =
-        std::fabs(r.col(0).dot(a.col(0)) + r.col(1).dot(a.col(1)) + r.col(2).dot(a.col(2))) + 1e-12;
-    const Vec3 omega = num / den;
-    const double w = omega.norm();
-    if (!(w > tolerance_rad)) break;  // converged
+    if (it > 0) quaternion_matrix(qw, qx, qy, qz, r);  // on entry r is q's matrix already
+    // C = A R^T: C_ij = sum_k A_ik R_jk
+    double c[3][3];
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) c[i][j] = a[i] * r[j] + a[3 + i] * r[3 + j] + a[6 + i] * r[6 + j];
+    }
+    const double gx = c[2][1] - c[1][2], gy = c[0][2] - c[2][0], gz = c[1][0] - c[0][1];
+    const double tr = c[0][0] + c[1][1] + c[2][2];
+    const double h00 = tr - c[0][0], h11 = tr - c[1][1], h22 = tr - c[2][2];
+    const double h01 = -0.5 * (c[0][1] + c[1][0]), h02 = -0.5 * (c[0][2] + c[2][0]),
+                 h12 = -0.5 * (c[1][2] + c[2][1]);
+    // adjugate of the symmetric H, and its determinant
+    const double m00 = h11 * h22 - h12 * h12, m01 = h02 * h12 - h01 * h22,
+                 m02 = h01 * h12 - h02 * h11, m11 = h00 * h22 - h02 * h02,
+                 m12 = h01 * h02 - h00 * h12, m22 = h00 * h11 - h01 * h01;
+    const double det = h00 * m00 + h01 * m01 + h02 * m02;
+    double ox, oy, oz;
+    const bool newton = h00 > 0.0 && m22 > 0.0 && det > 1e-9 * tr * tr * tr;
+    if (newton) {
+      const double inv_det = 1.0 / det;
+      ox = (m00 * gx + m01 * gy + m02 * gz) * inv_det;
+      oy = (m01 * gx + m11 * gy + m12 * gz) * inv_det;
+      oz = (m02 * gx + m12 * gy + m22 * gz) * inv_det;
+    } else {
+      const double inv_den = 1.0 / (std::fabs(tr) + 1e-12);
+      ox = gx * inv_den;
+      oy = gy * inv_den;
+      oz = gz * inv_den;
+    }
+    const double w = std::sqrt(ox * ox + oy * oy + oz * oz);
+    if (!(w > tolerance_rad)) {
+      converged = true;  // r is the matrix of q
+      break;
+    }
+    double dw, dx, dy, dz;
     if (w < 0.05) {
       // small increment: first-order quaternion (no trigonometry), then normalised
-      const Eigen::Quaterniond dq(1.0, 0.5 * omega.x(), 0.5 * omega.y(), 0.5 * omega.z());
-      q = dq * q;
+      dw = 1.0;
+      dx = 0.5 * ox;
+      dy = 0.5 * oy;
+      dz = 0.5 * oz;
     } else {
-      q = Eigen::Quaterniond(Eigen::AngleAxisd(w, omega / w)) * q;
+      // a large one (a cold start): the exact rotation, at most a quarter turn at a time
+      const double ang = std::min(w, 0.5 * M_PI);
+      const double sh = std::sin(0.5 * ang) / w;
+      dw = std::cos(0.5 * ang);
+      dx = sh * ox;
+      dy = sh * oy;
+      dz = sh * oz;
     }
-    q.normalize();
+    // q <- dq * q (Hamilton product), normalised
+    const double nw = dw * qw - dx * qx - dy * qy - dz * qz;
+    const double nqx = dw * qx + dx * qw + dy * qz - dz * qy;
+    const double nqy = dw * qy - dx * qz + dy * qw + dz * qx;
+    const double nqz = dw * qz + dx * qy - dy * qx + dz * qw;
+    const double inv_norm = 1.0 / std::sqrt(nw * nw + nqx * nqx + nqy * nqy + nqz * nqz);
+    qw = nw * inv_norm;
+    qx = nqx * inv_norm;
+    qy = nqy * inv_norm;
+    qz = nqz * inv_norm;
+    // a Newton step leaves an error of the order of its square: below the tolerance, no check
+    if (newton && w * w <= tolerance_rad) break;
   }
+  if (!converged) quaternion_matrix(qw, qx, qy, qz, r);
+  q_io = Eigen::Quaterniond(qw, qx, qy, qz);
 }
 
 // Co-rotational frames: per node, the rotation of its one-ring (plus the direction to the
 // centroid, so that a nearly flat ring still fixes all three axes).
-void update_rotations(const DeformableModel& m, DeformableState& s, int max_iterations,
-                      double tolerance_rad) {
-  const Eigen::Matrix3Xd& X = m.mesh.vertices;
+TELEOP_ALWAYS_INLINE void update_rotations(const DeformableModel& m, DeformableState& s,
+                                           int max_iterations, double tolerance_rad) {
+  const double* X = m.mesh.vertices.data();
+  const double* x = s.x.data();
   const int n = m.node_count;
-  Vec3 c = Vec3::Zero(), c0 = Vec3::Zero();
+  double c[3] = {0.0, 0.0, 0.0}, c0[3] = {0.0, 0.0, 0.0}, msum = 0.0;
   for (int i = 0; i < n; ++i) {
-    c += m.mass_kg(i) * s.x.col(i);
-    c0 += m.mass_kg(i) * X.col(i);
+    const double mi = m.mass_kg(i);
+    for (int k = 0; k < 3; ++k) {
+      c[k] += mi * x[3 * i + k];
+      c0[k] += mi * X[3 * i + k];
+    }
+    msum += mi;
   }
-  const double inv = 1.0 / m.mass_kg.sum();
-  c *= inv;
-  c0 *= inv;
+  const double inv = 1.0 / msum;
+  for (int k = 0; k < 3; ++k) {
+    c[k] *= inv;
+    c0[k] *= inv;
+  }
   const auto& off = m.mesh.vertex_neighbour_offsets;
   const auto& nb = m.mesh.vertex_neighbours;
+  double* rot = s.rotation.front().data();  // n column-major 3 x 3 blocks, contiguous
   for (int i = 0; i < n; ++i) {
-    Mat3 a = Mat3::Zero();
-    const Vec3 xi = s.x.col(i), Xi = X.col(i);
+    double a[9] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    const double* xi = x + 3 * i;
+    const double* Xi = X + 3 * i;
     double len2 = 0.0;
     for (int k = off[static_cast<std::size_t>(i)]; k < off[static_cast<std::size_t>(i) + 1]; ++k) {
       const int j = nb[static_cast<std::size_t>(k)];
-      const Vec3 dX = X.col(j) - Xi;
-      a.noalias() += (s.x.col(j) - xi) * dX.transpose();
-      len2 += dX.squaredNorm();
+      const double* xj = x + 3 * j;
+      const double* Xj = X + 3 * j;
+      const double D[3] = {Xj[0] - Xi[0], Xj[1] - Xi[1], Xj[2] - Xi[2]};
+      const double d[3] = {xj[0] - xi[0], xj[1] - xi[1], xj[2] - xi[2]};
+      for (int col = 0; col < 3; ++col) {
+        a[3 * col] += d[0] * D[col];
+        a[3 * col + 1] += d[1] * D[col];
+        a[3 * col + 2] += d[2] * D[col];
+      }
+      len2 += D[0] * D[0] + D[1] * D[1] + D[2] * D[2];
     }
-    const Vec3 rX = Xi - c0;
-    const double r2 = rX.squaredNorm();
-    if (r2 > 0.0) a.noalias() += (len2 / r2) * (xi - c) * rX.transpose();
-    extract_rotation(a, s.rotation_q[static_cast<std::size_t>(i)], max_iterations, tolerance_rad);
-    s.rotation[static_cast<std::size_t>(i)] =
-        s.rotation_q[static_cast<std::size_t>(i)].toRotationMatrix();
+    const double rX[3] = {Xi[0] - c0[0], Xi[1] - c0[1], Xi[2] - c0[2]};
+    const double r2 = rX[0] * rX[0] + rX[1] * rX[1] + rX[2] * rX[2];
+    if (r2 > 0.0) {
+      const double wgt = len2 / r2;
+      const double rx[3] = {wgt * (xi[0] - c[0]), wgt * (xi[1] - c[1]), wgt * (xi[2] - c[2])};
+      for (int col = 0; col < 3; ++col) {
+        a[3 * col] += rx[0] * rX[col];
+        a[3 * col + 1] += rx[1] * rX[col];
+        a[3 * col + 2] += rx[2] * rX[col];
+      }
+    }
+    extract_rotation(a, s.rotation_q[static_cast<std::size_t>(i)], max_iterations, tolerance_rad,
+                     rot + 9 * i);
   }
 }
 
@@ -210,8 +308,8 @@ TELEOP_ALWAYS_INLINE void navier_linear_edge_forces(const DeformableModel& m, De
   }
 }
 
-// Co-rotational Navier edge forces into s.edge_force (the frames updated first), and with
-// flags.jacobian the implicit blocks.
+// Co-rotational Navier edge forces into s.edge_force (the frames updated first) and the implicit
+// blocks (implicit Euler; the explicit and symplectic steps take corotational_edges below).
 TELEOP_ALWAYS_INLINE void navier_corotational_edge_forces(const DeformableModel& m,
                                                           DeformableState& s, ForceFlags flags) {
   const int ne = static_cast<int>(m.edges.cols());
@@ -233,10 +331,140 @@ TELEOP_ALWAYS_INLINE void navier_corotational_edge_forces(const DeformableModel&
     const Vec3 loc = a * g + (b * g.dot(u0)) * u0;
     const Vec3 f = r.col(0) * loc.x() + r.col(1) * loc.y() + r.col(2) * loc.z();
     s.edge_force.col(e) = f;
-    if (flags.jacobian) {
-      s.edge_dir.col(e) = (r * u0).normalized();
-      s.edge_coef.col(e) << a, b, beta * a, beta * b;
+    s.edge_dir.col(e) = (r * u0).normalized();
+    s.edge_coef.col(e) << a, b, beta * a, beta * b;
+  }
+}
+
+// --- co-rotational Navier, explicit and symplectic path ---------------------------------------
+// Four doubles at a time with GCC's vector extensions: 3-vectors padded to 4 lanes (AVX2 in the
+// x86-64-v3 clone, two SSE2 halves in the default one). Per node, the positions relative to the
+// centroid and the velocities are packed (8 doubles), the ring matrix is built column by column
+// from the model's rest tables, and its rotation is extracted as before (warm-started, scalar);
+// the frame is stored as columns and rows. Per edge, R = (R_i + R_j) / 2 from both, R^T q from
+// the rows and R loc from the columns: no horizontal work but the one dot product g . u0.
+// (the helpers are always inlined: no vector crosses a call, whatever -Wpsabi says of the ABI)
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef double V4 __attribute__((vector_size(32)));
+typedef double V4u __attribute__((vector_size(32), aligned(8), may_alias));
+
+TELEOP_ALWAYS_INLINE V4 load4(const double* p) { return *reinterpret_cast<const V4u*>(p); }
+TELEOP_ALWAYS_INLINE void store4(double* p, V4 v) { *reinterpret_cast<V4u*>(p) = v; }
+
+// Positions relative to the mass-weighted centroid, and velocities, into s.corot_pack.
+TELEOP_ALWAYS_INLINE void pack_corotational(const DeformableModel& m, DeformableState& s) {
+  const int n = m.node_count;
+  const double* x = s.x.data();
+  const double* v = s.v.data();
+  double c[3] = {0.0, 0.0, 0.0}, msum = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double mi = m.mass_kg(i);
+    for (int k = 0; k < 3; ++k) c[k] += mi * x[3 * i + k];
+    msum += mi;
+  }
+  const double inv = 1.0 / msum;
+  for (int k = 0; k < 3; ++k) c[k] *= inv;
+  double* p = s.corot_pack.data();
+  for (int i = 0; i < n; ++i) {
+    double* pi = p + 8 * i;
+    for (int k = 0; k < 3; ++k) {
+      pi[k] = x[3 * i + k] - c[k];
+      pi[4 + k] = v[3 * i + k];
     }
+    pi[3] = pi[7] = 0.0;
+  }
+}
+
+// Every node's frame from its ring matrix, into s.corot_frame (and s.rotation, for the energy).
+TELEOP_ALWAYS_INLINE void corotational_frames(const DeformableModel& m, DeformableState& s,
+                                              int max_iterations, double tolerance_rad) {
+  const int n = m.node_count;
+  const int w = m.corot_width;
+  const int* nb = m.corot_nb.data();
+  const double* p = s.corot_pack.data();
+  const double* rest = m.corot_ring_rest.data();
+  const double* ee = m.corot_node_e.data();
+  double* frame = s.corot_frame.data();
+  double* rot = s.rotation.front().data();
+  for (int i = 0; i < n; ++i) {
+    const V4 yi = load4(p + 8 * i);
+    const double* e = ee + 3 * i;
+    V4 a0 = yi * e[0], a1 = yi * e[1], a2 = yi * e[2];
+    for (int k = i * w; k < (i + 1) * w; ++k) {  // same length for every node (padded)
+      const V4 yj = load4(p + 8 * nb[k]);
+      const double* d = rest + 3 * k;
+      a0 += yj * d[0];
+      a1 += yj * d[1];
+      a2 += yj * d[2];
+    }
+    const double a[9] = {a0[0], a0[1], a0[2], a1[0], a1[1], a1[2], a2[0], a2[1], a2[2]};
+    double* r = rot + 9 * i;
+    extract_rotation(a, s.rotation_q[static_cast<std::size_t>(i)], max_iterations, tolerance_rad,
+                     r);
+    // R / 2: an edge's frame (R_i + R_j) / 2 is then one sum
+    double* f = frame + 24 * i;
+    const V4 c0 = 0.5 * V4{r[0], r[1], r[2], 0.0}, c1 = 0.5 * V4{r[3], r[4], r[5], 0.0},
+             c2 = 0.5 * V4{r[6], r[7], r[8], 0.0};
+    const V4 w0 = 0.5 * V4{r[0], r[3], r[6], 0.0}, w1 = 0.5 * V4{r[1], r[4], r[7], 0.0},
+             w2 = 0.5 * V4{r[2], r[5], r[8], 0.0};
+    store4(f, c0);
+    store4(f + 4, c1);
+    store4(f + 8, c2);
+    store4(f + 12, w0);
+    store4(f + 16, w1);
+    store4(f + 20, w2);
+  }
+}
+
+// Edge forces f = R (a g + b (g . u0) u0), g = R^T q - D, q = (x_j - x_i) + beta (v_j - v_i),
+// R = (R_i + R_j) / 2, into s.corot_force; then, per node, the sum over its edges into s.work_f.
+TELEOP_ALWAYS_INLINE void corotational_edges(const DeformableModel& m, DeformableState& s) {
+  const double beta = m.params.stiffness_damping_s;
+  const double* p = s.corot_pack.data();
+  const double* frame = s.corot_frame.data();
+  const double* ed = m.corot_edge.data();
+  const int* ep = m.edges.data();
+  const double* ka = m.edge_k_iso.data();
+  const double* kb = m.edge_k_dir.data();
+  double* out = s.corot_force.data();
+  const int ne = static_cast<int>(m.edges.cols());
+  for (int e = 0; e < ne; ++e) {
+    const int i = ep[2 * e], j = ep[2 * e + 1];
+    const double* fi = frame + 24 * i;
+    const double* fj = frame + 24 * j;
+    const double* pi = p + 8 * i;
+    const double* pj = p + 8 * j;
+    const V4 q = (load4(pj) - load4(pi)) + beta * (load4(pj + 4) - load4(pi + 4));
+    // the frames hold R / 2 (corotational_frames): their sum is R
+    const V4 t = (load4(fi + 12) + load4(fj + 12)) * q[0] +
+                 (load4(fi + 16) + load4(fj + 16)) * q[1] +
+                 (load4(fi + 20) + load4(fj + 20)) * q[2];
+    const V4 g = t - load4(ed + 8 * e);
+    const V4 u = load4(ed + 8 * e + 4);
+    const V4 gu = g * u;
+    const double bg = kb[e] * (gu[0] + gu[1] + gu[2]);
+    const V4 loc = ka[e] * g + bg * u;
+    const V4 f = (load4(fi) + load4(fj)) * loc[0] + (load4(fi + 4) + load4(fj + 4)) * loc[1] +
+                 (load4(fi + 8) + load4(fj + 8)) * loc[2];
+    store4(out + 4 * e, f);
+  }
+  // per node, + the force of the edges it is the first node of, - the others' (branch-free:
+  // the sign from the code's top bit; padding entries read the zero slot)
+  const int n = m.node_count;
+  const int w = m.corot_width;
+  const int* inc = m.corot_inc.data();
+  double* fp = s.work_f.data();
+  for (int i = 0; i < n; ++i) {
+    V4 sum = {0.0, 0.0, 0.0, 0.0};
+    for (int k = i * w; k < (i + 1) * w; ++k) {
+      const int code = inc[k];
+      const int neg = code >> 31;  // -1 for ~e, else 0
+      const double sign = static_cast<double>(neg | 1);
+      sum += sign * load4(out + 4 * (code ^ neg));
+    }
+    fp[3 * i] += sum[0];
+    fp[3 * i + 1] += sum[1];
+    fp[3 * i + 2] += sum[2];
   }
 }
 
@@ -397,10 +625,19 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
       navier_linear_edge_forces(m, s, flags);
       break;
     case ModelKind::kNavierCorotational:
-      navier_corotational_edge_forces(m, s, flags);
+      if (!flags.jacobian) {
+        // explicit and symplectic: the vector path, which gathers its own edge forces
+        pack_corotational(m, s);
+        corotational_frames(m, s, flags.rotation_iterations, flags.rotation_tolerance_rad);
+        corotational_edges(m, s);
+      } else {
+        navier_corotational_edge_forces(m, s, flags);
+      }
       break;
   }
-  gather_edge_forces(m, s);
+  if (m.params.model != ModelKind::kNavierCorotational || flags.jacobian) {
+    gather_edge_forces(m, s);
+  }
 
   // radial springs to the centre node
   if (m.has_centre) add_radial_forces(m, s, flags);
