@@ -2,7 +2,8 @@
 //   [--stepper step|quick]
 // The PUMA 560 slave tip follows a commanded path through the default scene: it descends to
 // the floor and presses on it, lifts, turns its tool toward the side wall, presses on the wall
-// and returns home. Writes robot_reach.csv (time series), robot_reach_events.csv and
+// and returns home. The world (arm and planes) is advanced by world_step, as the server
+// advances its scene. Writes robot_reach.csv (time series), robot_reach_events.csv and
 // robot_reach_summary.csv, then the chart robot_reach.png.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -18,15 +19,14 @@
 #include "common/util/registry.hpp"
 #include "server/robot/robot_sim.hpp"
 #include "server/world/world.hpp"
+#include "server/world/world_model.hpp"
 
 namespace {
 
-using teleop::sim::track_plane_contact;
 using teleop::sim::robot::ControlMode;
 using teleop::sim::robot::RobotInput;
 using teleop::sim::robot::RobotModel;
 using teleop::sim::robot::RobotSim;
-using teleop::sim::robot::RobotSimOptions;
 
 /// One waypoint of the commanded tip path.
 struct Waypoint {
@@ -181,11 +181,20 @@ int run_robot_reach(const teleop::CommandArgs& args) {
     throw teleop::config::ConfigError(scene + ": robot-reach needs a 6-joint arm; it has " +
                                       std::to_string(model.n));
   }
-  const std::vector<teleop::sim::Plane> planes = teleop::sim::robot::default_robot_planes();
-  RobotSimOptions opt;
-  opt.stepper = stepper == "quick" ? teleop::sim::robot::OdeStepper::kWorldQuickStep
-                                   : teleop::sim::robot::OdeStepper::kWorldStep;
-  RobotSim sim(model, planes, opt);
+  // the world: the arm and the default scene's planes, advanced by world_step as the server
+  // advances its scene
+  teleop::sim::WorldModel world;
+  world.name = "robot-reach";
+  world.slave = teleop::sim::SlaveKind::kRobot;
+  world.robot = model;
+  world.planes = teleop::sim::robot::default_robot_planes();
+  world.robot_options.stepper = stepper == "quick" ? teleop::sim::robot::OdeStepper::kWorldQuickStep
+                                                   : teleop::sim::robot::OdeStepper::kWorldStep;
+  teleop::sim::WorldData data = teleop::sim::make_world_data(world);
+  const RobotSim& sim = *data.robot;
+  const std::vector<teleop::sim::Plane>& planes = world.planes;
+  // world commands are relative to the tip's home orientation
+  const Eigen::Quaterniond home_inv = data.home_orientation.inverse();
   teleop::sim::EventQueue events;
 
   const double dt = 1e-3;
@@ -205,7 +214,6 @@ int run_robot_reach(const teleop::CommandArgs& args) {
                            {"t_s", "kind", "value", "message"});
 
   double t = 0.0;
-  int plane_contact = -1;
   ReachStats stats;
   RobotInput in;
   in.mode = ControlMode::kTrackPose;
@@ -217,11 +225,12 @@ int run_robot_reach(const teleop::CommandArgs& args) {
     const int steps = static_cast<int>(std::lround(total / dt));
     for (int k = 0; k < steps; ++k) {
       set_target(a, b, move, (k + 1) * dt, in);
-      sim.step(in, dt, &events);
-      // the arm reports no contact events of its own (the world does): the same tracking here
-      track_plane_contact(plane_contact,
-                          sim.state().tip_in_contact ? sim.state().tip_contact_plane : -1,
-                          sim.state().sim_time_s, events);
+      teleop::sim::WorldCommand cmd;
+      cmd.position_m = in.target_position_m;
+      cmd.orientation = home_inv * in.target_orientation;
+      cmd.velocity_mps = in.target_velocity_mps;
+      cmd.angular_velocity_radps = home_inv * in.target_angular_velocity_radps;
+      teleop::sim::world_step(world, data, cmd, dt, events);  // plane contact events included
       t += dt;
       record_step(sim, planes, b, in, t, w, stats, csv);
       teleop::sim::SimEvent e;

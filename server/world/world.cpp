@@ -182,6 +182,22 @@ void move_kinematic_tool(WorldData& d, const WorldCommand& cmd, double dt_s, Eve
   read_slave(d, d.out);
 }
 
+// Contact events of the tip against the planes: from the plane it touched in the last step
+// (`current`, -1 none) to `plane` now, a kContactEnd for the one it left and a kContactBegin for
+// the one it touches (value: the plane id); `current` becomes `plane`.
+void track_plane_contact(int& current, int plane, double sim_time_s, EventQueue& events) {
+  if (plane == current) return;
+  if (current >= 0) {
+    events.push(EventKind::kContactEnd, Severity::kInfo, sim_time_s, current,
+                "tip leaves the plane");
+  }
+  if (plane >= 0) {
+    events.push(EventKind::kContactBegin, Severity::kInfo, sim_time_s, plane,
+                "tip touches the plane");
+  }
+  current = plane;
+}
+
 }  // namespace
 
 bool place_tool(const WorldModel& model, WorldData& d, const Eigen::Vector3d& position_m) {
@@ -203,7 +219,7 @@ bool place_tool(const WorldModel& model, WorldData& d, const Eigen::Vector3d& po
 WorldData make_world_data(const WorldModel& model) {
   WorldData d;
   if (model.has_robot()) {
-    d.robot = std::make_unique<robot::RobotSim>(*model.robot, model.planes);
+    d.robot = std::make_unique<robot::RobotSim>(*model.robot, model.planes, model.robot_options);
     // commanded orientations are relative to the tip's home orientation: identity = home
     d.home_orientation = Eigen::Quaterniond(d.robot->state().tip_pose.rotation());
   } else {
@@ -219,19 +235,6 @@ WorldData make_world_data(const WorldModel& model) {
   read_slave(d, d.out);
   d.tip_prev_m = d.out.tip_position_m;
   return d;
-}
-
-void track_plane_contact(int& current, int plane, double sim_time_s, EventQueue& events) {
-  if (plane == current) return;
-  if (current >= 0) {
-    events.push(EventKind::kContactEnd, Severity::kInfo, sim_time_s, current,
-                "tip leaves the plane");
-  }
-  if (plane >= 0) {
-    events.push(EventKind::kContactBegin, Severity::kInfo, sim_time_s, plane,
-                "tip touches the plane");
-  }
-  current = plane;
 }
 
 void world_step(const WorldModel& model, WorldData& d, const WorldCommand& cmd, double dt_s,

@@ -100,12 +100,6 @@ struct WorldData {
 /// Everything that changes, at the scene's initial state. Allocates (ODE, meshes, trees).
 WorldData make_world_data(const WorldModel& model);
 
-/// Contact events of the slave's tip against the planes: from the plane it touched in the last
-/// step (`current`, -1 none) to `plane` now, a kContactEnd for the one it left and a
-/// kContactBegin for the one it touches (value: the plane id); `current` becomes `plane`.
-/// world_step calls it every step; so do callers that step a slave on its own (robot-reach).
-void track_plane_contact(int& current, int plane, double sim_time_s, EventQueue& events);
-
 /// Puts the tool slave at rest at `position_m` [m] without a step (its clock kept) and resets
 /// each body's tip contact on the body's present nodes: a jump breaks continuous detection.
 /// Returns false (nothing changed) for a robot scene. Allocates (contact structures).

@@ -21,6 +21,7 @@
 #include "server/deformable/deformable.hpp"
 #include "server/deformable/model_select.hpp"
 #include "server/robot/robot_model.hpp"
+#include "server/robot/robot_sim.hpp"
 
 namespace teleop::sim {
 
@@ -54,6 +55,9 @@ struct WorldModel {
   Eigen::Vector3d world_max_m{10.0, 10.0, 10.0};
   ToolModel tool;                          ///< the tool slave (planes as its obstacles)
   std::optional<robot::RobotModel> robot;  ///< the robot slave (kind: robot)
+  /// How ODE steps the robot (the server's defaults; `teleop_experiment robot-reach --stepper`
+  /// changes the stepper).
+  robot::RobotSimOptions robot_options;
   std::vector<Plane> planes;
   std::vector<DeformableBodyModel> bodies;
 
