@@ -375,44 +375,195 @@ TELEOP_ALWAYS_INLINE void pack_corotational(const DeformableModel& m, Deformable
   }
 }
 
-// Every node's frame from its ring matrix, into s.corot_frame (and s.rotation, for the energy).
+typedef long long V4i __attribute__((vector_size(32)));
+
+// Rows a, b, c, d of a 4 x 4 block to its columns.
+TELEOP_ALWAYS_INLINE void transpose4(V4& a, V4& b, V4& c, V4& d) {
+  const V4 t0 = __builtin_shuffle(a, b, V4i{0, 4, 1, 5});
+  const V4 t1 = __builtin_shuffle(a, b, V4i{2, 6, 3, 7});
+  const V4 t2 = __builtin_shuffle(c, d, V4i{0, 4, 1, 5});
+  const V4 t3 = __builtin_shuffle(c, d, V4i{2, 6, 3, 7});
+  a = __builtin_shuffle(t0, t2, V4i{0, 1, 4, 5});
+  b = __builtin_shuffle(t0, t2, V4i{2, 3, 6, 7});
+  c = __builtin_shuffle(t1, t3, V4i{0, 1, 4, 5});
+  d = __builtin_shuffle(t1, t3, V4i{2, 3, 6, 7});
+}
+
+// Node i's ring matrix A_i as its three columns (x, y, z, 0).
+TELEOP_ALWAYS_INLINE void ring_matrix(const DeformableModel& m, const double* p, int i, V4& a0,
+                                      V4& a1, V4& a2) {
+  const int w = m.corot_width;
+  const V4 yi = load4(p + 8 * i);
+  const double* e = m.corot_node_e.data() + 3 * i;
+  a0 = yi * e[0];
+  a1 = yi * e[1];
+  a2 = yi * e[2];
+  const int* nb = m.corot_nb.data();
+  const double* rest = m.corot_ring_rest.data();
+  for (int k = i * w; k < (i + 1) * w; ++k) {  // same length for every node (padded)
+    const V4 yj = load4(p + 8 * nb[k]);
+    const double* d = rest + 3 * k;
+    a0 += yj * d[0];
+    a1 += yj * d[1];
+    a2 += yj * d[2];
+  }
+}
+
+// R / 2 as columns then rows, each padded to 4 (an edge's frame (R_i + R_j) / 2 is one sum).
+TELEOP_ALWAYS_INLINE void store_frame(double* f, const double* r) {
+  store4(f, 0.5 * V4{r[0], r[1], r[2], 0.0});
+  store4(f + 4, 0.5 * V4{r[3], r[4], r[5], 0.0});
+  store4(f + 8, 0.5 * V4{r[6], r[7], r[8], 0.0});
+  store4(f + 12, 0.5 * V4{r[0], r[3], r[6], 0.0});
+  store4(f + 16, 0.5 * V4{r[1], r[4], r[7], 0.0});
+  store4(f + 20, 0.5 * V4{r[2], r[5], r[8], 0.0});
+}
+
+// The rotation matrix of the quaternions (w, x, y, z) of four nodes (lanes), column-major r[9].
+TELEOP_ALWAYS_INLINE void quaternion_matrix4(V4 w, V4 x, V4 y, V4 z, V4* r) {
+  const V4 tx = 2.0 * x, ty = 2.0 * y, tz = 2.0 * z;
+  const V4 twx = tx * w, twy = ty * w, twz = tz * w;
+  const V4 txx = tx * x, txy = ty * x, txz = tz * x;
+  const V4 tyy = ty * y, tyz = tz * y, tzz = tz * z;
+  r[0] = 1.0 - (tyy + tzz);
+  r[1] = txy + twz;
+  r[2] = txz - twy;
+  r[3] = txy - twz;
+  r[4] = 1.0 - (txx + tzz);
+  r[5] = tyz + twx;
+  r[6] = txz + twy;
+  r[7] = tyz - twx;
+  r[8] = 1.0 - (txx + tyy);
+}
+
+// extract_rotation for four nodes at once (lanes; a[9] their ring matrices, q[4] their warm
+// starts), in the common case only: every lane has converged at the check or converges by one
+// Newton step below 0.05 rad whose square is within the tolerance. The same arithmetic as one
+// iteration of extract_rotation. Returns false, having changed nothing, when some lane is not
+// in that case (the caller takes the scalar path for the four).
+TELEOP_ALWAYS_INLINE bool newton_step4(const V4* a, V4* q, double tolerance_rad, V4* r) {
+  quaternion_matrix4(q[0], q[1], q[2], q[3], r);
+  V4 c[3][3];
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) c[i][j] = a[i] * r[j] + a[3 + i] * r[3 + j] + a[6 + i] * r[6 + j];
+  }
+  const V4 gx = c[2][1] - c[1][2], gy = c[0][2] - c[2][0], gz = c[1][0] - c[0][1];
+  const V4 tr = c[0][0] + c[1][1] + c[2][2];
+  const V4 h00 = tr - c[0][0], h11 = tr - c[1][1], h22 = tr - c[2][2];
+  const V4 h01 = -0.5 * (c[0][1] + c[1][0]), h02 = -0.5 * (c[0][2] + c[2][0]),
+           h12 = -0.5 * (c[1][2] + c[2][1]);
+  const V4 m00 = h11 * h22 - h12 * h12, m01 = h02 * h12 - h01 * h22, m02 = h01 * h12 - h02 * h11,
+           m11 = h00 * h22 - h02 * h02, m12 = h01 * h02 - h00 * h12, m22 = h00 * h11 - h01 * h01;
+  const V4 det = h00 * m00 + h01 * m01 + h02 * m02;
+  const V4i newton = (h00 > 0.0) & (m22 > 0.0) & (det > 1e-9 * tr * tr * tr);
+  const V4 inv_det = 1.0 / det;
+  V4 abs_tr;
+  for (int l = 0; l < 4; ++l) abs_tr[l] = std::fabs(tr[l]);
+  const V4 inv_den = 1.0 / (abs_tr + 1e-12);
+  const V4 ox = newton ? (m00 * gx + m01 * gy + m02 * gz) * inv_det : gx * inv_den;
+  const V4 oy = newton ? (m01 * gx + m11 * gy + m12 * gz) * inv_det : gy * inv_den;
+  const V4 oz = newton ? (m02 * gx + m12 * gy + m22 * gz) * inv_det : gz * inv_den;
+  const V4 w2 = ox * ox + oy * oy + oz * oz;
+  const V4i converged = !(w2 > tolerance_rad * tolerance_rad);
+  const V4i ok = converged | (newton & (w2 < 0.05 * 0.05) & (w2 <= tolerance_rad));
+  if (!(ok[0] && ok[1] && ok[2] && ok[3])) return false;
+  // q <- dq * q with dq = (1, d / 2), normalised, where not converged
+  const V4 dx = 0.5 * ox, dy = 0.5 * oy, dz = 0.5 * oz;
+  const V4 nw = q[0] - dx * q[1] - dy * q[2] - dz * q[3];
+  const V4 nx = q[1] + dx * q[0] + dy * q[3] - dz * q[2];
+  const V4 ny = q[2] - dx * q[3] + dy * q[0] + dz * q[1];
+  const V4 nz = q[3] + dx * q[2] - dy * q[1] + dz * q[0];
+  const V4 n2 = nw * nw + nx * nx + ny * ny + nz * nz;
+  V4 inv_norm;
+  for (int l = 0; l < 4; ++l) inv_norm[l] = 1.0 / std::sqrt(n2[l]);
+  q[0] = converged ? q[0] : nw * inv_norm;
+  q[1] = converged ? q[1] : nx * inv_norm;
+  q[2] = converged ? q[2] : ny * inv_norm;
+  q[3] = converged ? q[3] : nz * inv_norm;
+  V4 rn[9];
+  quaternion_matrix4(q[0], q[1], q[2], q[3], rn);
+  for (int k = 0; k < 9; ++k) r[k] = converged ? r[k] : rn[k];
+  return true;
+}
+
+// Every node's frame from its ring matrix, into s.corot_frame (and s.rotation, for the energy
+// and the next warm start). Four nodes at a time where one Newton step settles all four
+// (newton_step4), else (and for the last n mod 4 nodes) node by node with extract_rotation.
 TELEOP_ALWAYS_INLINE void corotational_frames(const DeformableModel& m, DeformableState& s,
                                               int max_iterations, double tolerance_rad) {
   const int n = m.node_count;
-  const int w = m.corot_width;
-  const int* nb = m.corot_nb.data();
   const double* p = s.corot_pack.data();
-  const double* rest = m.corot_ring_rest.data();
-  const double* ee = m.corot_node_e.data();
   double* frame = s.corot_frame.data();
   double* rot = s.rotation.front().data();
-  for (int i = 0; i < n; ++i) {
-    const V4 yi = load4(p + 8 * i);
-    const double* e = ee + 3 * i;
-    V4 a0 = yi * e[0], a1 = yi * e[1], a2 = yi * e[2];
-    for (int k = i * w; k < (i + 1) * w; ++k) {  // same length for every node (padded)
-      const V4 yj = load4(p + 8 * nb[k]);
-      const double* d = rest + 3 * k;
-      a0 += yj * d[0];
-      a1 += yj * d[1];
-      a2 += yj * d[2];
+  Eigen::Quaterniond* qs = s.rotation_q.data();
+  const auto scalar_node = [&](int i, const double* a) {
+    extract_rotation(a, qs[i], max_iterations, tolerance_rad, rot + 9 * i);
+    store_frame(frame + 24 * i, rot + 9 * i);
+  };
+  int i = 0;
+  for (; i + 4 <= n && max_iterations >= 1; i += 4) {
+    V4 col[3][4];  // [column][lane]
+    for (int l = 0; l < 4; ++l) ring_matrix(m, p, i + l, col[0][l], col[1][l], col[2][l]);
+    V4 a[9];  // a[3 c + r] = A_rc of the four nodes
+    for (int c = 0; c < 3; ++c) {
+      transpose4(col[c][0], col[c][1], col[c][2], col[c][3]);
+      a[3 * c] = col[c][0];
+      a[3 * c + 1] = col[c][1];
+      a[3 * c + 2] = col[c][2];
     }
+    V4 q[4];
+    for (int l = 0; l < 4; ++l) {
+      const Eigen::Quaterniond& ql = qs[i + l];
+      q[0][l] = ql.w();
+      q[1][l] = ql.x();
+      q[2][l] = ql.y();
+      q[3][l] = ql.z();
+    }
+    V4 r[9];
+    if (!newton_step4(a, q, tolerance_rad, r)) {
+      for (int l = 0; l < 4; ++l) {
+        const double al[9] = {a[0][l], a[1][l], a[2][l], a[3][l], a[4][l],
+                              a[5][l], a[6][l], a[7][l], a[8][l]};
+        scalar_node(i + l, al);
+      }
+      continue;
+    }
+    // back to one node per vector: columns c[k][l] and rows w[k][l] of R / 2 for node i + l
+    const V4 zero = {0.0, 0.0, 0.0, 0.0};
+    V4 c[3][4], w[3][4];
+    for (int k = 0; k < 3; ++k) {
+      c[k][0] = 0.5 * r[3 * k];
+      c[k][1] = 0.5 * r[3 * k + 1];
+      c[k][2] = 0.5 * r[3 * k + 2];
+      c[k][3] = zero;
+      transpose4(c[k][0], c[k][1], c[k][2], c[k][3]);
+      w[k][0] = 0.5 * r[k];
+      w[k][1] = 0.5 * r[3 + k];
+      w[k][2] = 0.5 * r[6 + k];
+      w[k][3] = zero;
+      transpose4(w[k][0], w[k][1], w[k][2], w[k][3]);
+    }
+    for (int l = 0; l < 4; ++l) {
+      qs[i + l] = Eigen::Quaterniond(q[0][l], q[1][l], q[2][l], q[3][l]);
+      double* f = frame + 24 * (i + l);
+      for (int k = 0; k < 3; ++k) {
+        store4(f + 4 * k, c[k][l]);
+        store4(f + 12 + 4 * k, w[k][l]);
+      }
+      // the full matrix (2 R / 2, exact) into s.rotation: two overlapping stores, then 3 values
+      double* rl = rot + 9 * (i + l);
+      store4(rl, 2.0 * c[0][l]);
+      store4(rl + 3, 2.0 * c[1][l]);
+      rl[6] = 2.0 * c[2][l][0];
+      rl[7] = 2.0 * c[2][l][1];
+      rl[8] = 2.0 * c[2][l][2];
+    }
+  }
+  for (; i < n; ++i) {
+    V4 a0, a1, a2;
+    ring_matrix(m, p, i, a0, a1, a2);
     const double a[9] = {a0[0], a0[1], a0[2], a1[0], a1[1], a1[2], a2[0], a2[1], a2[2]};
-    double* r = rot + 9 * i;
-    extract_rotation(a, s.rotation_q[static_cast<std::size_t>(i)], max_iterations, tolerance_rad,
-                     r);
-    // R / 2: an edge's frame (R_i + R_j) / 2 is then one sum
-    double* f = frame + 24 * i;
-    const V4 c0 = 0.5 * V4{r[0], r[1], r[2], 0.0}, c1 = 0.5 * V4{r[3], r[4], r[5], 0.0},
-             c2 = 0.5 * V4{r[6], r[7], r[8], 0.0};
-    const V4 w0 = 0.5 * V4{r[0], r[3], r[6], 0.0}, w1 = 0.5 * V4{r[1], r[4], r[7], 0.0},
-             w2 = 0.5 * V4{r[2], r[5], r[8], 0.0};
-    store4(f, c0);
-    store4(f + 4, c1);
-    store4(f + 8, c2);
-    store4(f + 12, w0);
-    store4(f + 16, w1);
-    store4(f + 20, w2);
+    scalar_node(i, a);
   }
 }
 
