@@ -51,12 +51,25 @@ TELEOP_HOT_CLONES __attribute__((optimize("O3"))) void inverse_sqrt(const double
   for (int k = 0; k < count; ++k) out[k] = 1.0 / std::sqrt(in[k] + 1e-30);
 }
 
-// Rotation matrix of the unit quaternion (w, x, y, z), column-major into r[9].
-TELEOP_ALWAYS_INLINE void quaternion_matrix(double w, double x, double y, double z, double* r) {
-  const double tx = 2.0 * x, ty = 2.0 * y, tz = 2.0 * z;
-  const double twx = tx * w, twy = ty * w, twz = tz * w;
-  const double txx = tx * x, txy = ty * x, txz = tz * x;
-  const double tyy = ty * y, tyz = tz * y, tzz = tz * z;
+// Four doubles per vector (GCC's vector extensions: AVX2 in the x86-64-v3 clone, two SSE2 halves
+// in the baseline one), for the co-rotational passes below.
+// (the helpers are always inlined: no vector crosses a call, whatever -Wpsabi says of the ABI)
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef double V4 __attribute__((vector_size(32)));
+typedef double V4u __attribute__((vector_size(32), aligned(8), may_alias));
+
+TELEOP_ALWAYS_INLINE V4 load4(const double* p) { return *reinterpret_cast<const V4u*>(p); }
+TELEOP_ALWAYS_INLINE void store4(double* p, V4 v) { *reinterpret_cast<V4u*>(p) = v; }
+typedef long long V4i __attribute__((vector_size(32)));
+
+// Rotation matrix of the unit quaternion (w, x, y, z), column-major into r[9]: of one node
+// (T = double) or of four (T = V4, one node per lane).
+template <class T>
+TELEOP_ALWAYS_INLINE void quaternion_matrix(T w, T x, T y, T z, T* r) {
+  const T tx = 2.0 * x, ty = 2.0 * y, tz = 2.0 * z;
+  const T twx = tx * w, twy = ty * w, twz = tz * w;
+  const T txx = tx * x, txy = ty * x, txz = tz * x;
+  const T tyy = ty * y, tyz = tz * y, tzz = tz * z;
   r[0] = 1.0 - (tyy + tzz);
   r[1] = txy + twz;
   r[2] = txz - twy;
@@ -66,6 +79,39 @@ TELEOP_ALWAYS_INLINE void quaternion_matrix(double w, double x, double y, double
   r[6] = txz + twy;
   r[7] = tyz - twx;
   r[8] = 1.0 - (txx + tyy);
+}
+
+TELEOP_ALWAYS_INLINE double abs_of(double x) { return std::fabs(x); }
+TELEOP_ALWAYS_INLINE V4 abs_of(V4 x) {
+  for (int l = 0; l < 4; ++l) x[l] = std::fabs(x[l]);
+  return x;
+}
+
+// The step d of extract_rotation from the frame r (the matrix of q) for the ring matrix a (both
+// column-major): Newton's where H is positive definite (`newton` set), else Mueller's. One node
+// (T = double, B = bool) or four (T = V4, B = V4i, one node per lane).
+template <class T, class B>
+TELEOP_ALWAYS_INLINE void rotation_step(const T* a, const T* r, T& ox, T& oy, T& oz, B& newton) {
+  // C = A R^T: C_ij = sum_k A_ik R_jk
+  T c[3][3];
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) c[i][j] = a[i] * r[j] + a[3 + i] * r[3 + j] + a[6 + i] * r[6 + j];
+  }
+  const T gx = c[2][1] - c[1][2], gy = c[0][2] - c[2][0], gz = c[1][0] - c[0][1];
+  const T tr = c[0][0] + c[1][1] + c[2][2];
+  const T h00 = tr - c[0][0], h11 = tr - c[1][1], h22 = tr - c[2][2];
+  const T h01 = -0.5 * (c[0][1] + c[1][0]), h02 = -0.5 * (c[0][2] + c[2][0]),
+          h12 = -0.5 * (c[1][2] + c[2][1]);
+  // adjugate of the symmetric H, and its determinant
+  const T m00 = h11 * h22 - h12 * h12, m01 = h02 * h12 - h01 * h22, m02 = h01 * h12 - h02 * h11,
+          m11 = h00 * h22 - h02 * h02, m12 = h01 * h02 - h00 * h12, m22 = h00 * h11 - h01 * h01;
+  const T det = h00 * m00 + h01 * m01 + h02 * m02;
+  newton = (h00 > 0.0) & (m22 > 0.0) & (det > 1e-9 * tr * tr * tr);
+  const T inv_det = 1.0 / det;
+  const T inv_den = 1.0 / (abs_of(tr) + 1e-12);
+  ox = newton ? (m00 * gx + m01 * gy + m02 * gz) * inv_det : gx * inv_den;
+  oy = newton ? (m01 * gx + m11 * gy + m12 * gz) * inv_det : gy * inv_den;
+  oz = newton ? (m02 * gx + m12 * gy + m22 * gz) * inv_det : gz * inv_den;
 }
 
 // Rotational part of A (a[9], column-major; polar decomposition), warm-started from q (r[9]
@@ -83,34 +129,9 @@ TELEOP_ALWAYS_INLINE void extract_rotation(const double* a, Eigen::Quaterniond& 
   bool converged = false;
   for (int it = 0; it < max_iterations; ++it) {
     if (it > 0) quaternion_matrix(qw, qx, qy, qz, r);  // on entry r is q's matrix already
-    // C = A R^T: C_ij = sum_k A_ik R_jk
-    double c[3][3];
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) c[i][j] = a[i] * r[j] + a[3 + i] * r[3 + j] + a[6 + i] * r[6 + j];
-    }
-    const double gx = c[2][1] - c[1][2], gy = c[0][2] - c[2][0], gz = c[1][0] - c[0][1];
-    const double tr = c[0][0] + c[1][1] + c[2][2];
-    const double h00 = tr - c[0][0], h11 = tr - c[1][1], h22 = tr - c[2][2];
-    const double h01 = -0.5 * (c[0][1] + c[1][0]), h02 = -0.5 * (c[0][2] + c[2][0]),
-                 h12 = -0.5 * (c[1][2] + c[2][1]);
-    // adjugate of the symmetric H, and its determinant
-    const double m00 = h11 * h22 - h12 * h12, m01 = h02 * h12 - h01 * h22,
-                 m02 = h01 * h12 - h02 * h11, m11 = h00 * h22 - h02 * h02,
-                 m12 = h01 * h02 - h00 * h12, m22 = h00 * h11 - h01 * h01;
-    const double det = h00 * m00 + h01 * m01 + h02 * m02;
     double ox, oy, oz;
-    const bool newton = h00 > 0.0 && m22 > 0.0 && det > 1e-9 * tr * tr * tr;
-    if (newton) {
-      const double inv_det = 1.0 / det;
-      ox = (m00 * gx + m01 * gy + m02 * gz) * inv_det;
-      oy = (m01 * gx + m11 * gy + m12 * gz) * inv_det;
-      oz = (m02 * gx + m12 * gy + m22 * gz) * inv_det;
-    } else {
-      const double inv_den = 1.0 / (std::fabs(tr) + 1e-12);
-      ox = gx * inv_den;
-      oy = gy * inv_den;
-      oz = gz * inv_den;
-    }
+    bool newton;
+    rotation_step(a, r, ox, oy, oz, newton);
     const double w = std::sqrt(ox * ox + oy * oy + oz * oz);
     if (!(w > tolerance_rad)) {
       converged = true;  // r is the matrix of q
@@ -343,13 +364,6 @@ TELEOP_ALWAYS_INLINE void navier_corotational_edge_forces(const DeformableModel&
 // from the model's rest tables, and its rotation is extracted as before (warm-started, scalar);
 // the frame is stored as columns and rows. Per edge, R = (R_i + R_j) / 2 from both, R^T q from
 // the rows and R loc from the columns: no horizontal work but the one dot product g . u0.
-// (the helpers are always inlined: no vector crosses a call, whatever -Wpsabi says of the ABI)
-#pragma GCC diagnostic ignored "-Wpsabi"
-typedef double V4 __attribute__((vector_size(32)));
-typedef double V4u __attribute__((vector_size(32), aligned(8), may_alias));
-
-TELEOP_ALWAYS_INLINE V4 load4(const double* p) { return *reinterpret_cast<const V4u*>(p); }
-TELEOP_ALWAYS_INLINE void store4(double* p, V4 v) { *reinterpret_cast<V4u*>(p) = v; }
 
 // Positions relative to the mass-weighted centroid, and velocities, into s.corot_pack.
 TELEOP_ALWAYS_INLINE void pack_corotational(const DeformableModel& m, DeformableState& s) {
@@ -374,8 +388,6 @@ TELEOP_ALWAYS_INLINE void pack_corotational(const DeformableModel& m, Deformable
     pi[3] = pi[7] = 0.0;
   }
 }
-
-typedef long long V4i __attribute__((vector_size(32)));
 
 // Rows a, b, c, d of a 4 x 4 block to its columns.
 TELEOP_ALWAYS_INLINE void transpose4(V4& a, V4& b, V4& c, V4& d) {
@@ -419,50 +431,16 @@ TELEOP_ALWAYS_INLINE void store_frame(double* f, const double* r) {
   store4(f + 20, 0.5 * V4{r[2], r[5], r[8], 0.0});
 }
 
-// The rotation matrix of the quaternions (w, x, y, z) of four nodes (lanes), column-major r[9].
-TELEOP_ALWAYS_INLINE void quaternion_matrix4(V4 w, V4 x, V4 y, V4 z, V4* r) {
-  const V4 tx = 2.0 * x, ty = 2.0 * y, tz = 2.0 * z;
-  const V4 twx = tx * w, twy = ty * w, twz = tz * w;
-  const V4 txx = tx * x, txy = ty * x, txz = tz * x;
-  const V4 tyy = ty * y, tyz = tz * y, tzz = tz * z;
-  r[0] = 1.0 - (tyy + tzz);
-  r[1] = txy + twz;
-  r[2] = txz - twy;
-  r[3] = txy - twz;
-  r[4] = 1.0 - (txx + tzz);
-  r[5] = tyz + twx;
-  r[6] = txz + twy;
-  r[7] = tyz - twx;
-  r[8] = 1.0 - (txx + tyy);
-}
-
 // extract_rotation for four nodes at once (lanes; a[9] their ring matrices, q[4] their warm
 // starts), in the common case only: every lane has converged at the check or converges by one
 // Newton step below 0.05 rad whose square is within the tolerance. The same arithmetic as one
 // iteration of extract_rotation. Returns false, having changed nothing, when some lane is not
 // in that case (the caller takes the scalar path for the four).
 TELEOP_ALWAYS_INLINE bool newton_step4(const V4* a, V4* q, double tolerance_rad, V4* r) {
-  quaternion_matrix4(q[0], q[1], q[2], q[3], r);
-  V4 c[3][3];
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) c[i][j] = a[i] * r[j] + a[3 + i] * r[3 + j] + a[6 + i] * r[6 + j];
-  }
-  const V4 gx = c[2][1] - c[1][2], gy = c[0][2] - c[2][0], gz = c[1][0] - c[0][1];
-  const V4 tr = c[0][0] + c[1][1] + c[2][2];
-  const V4 h00 = tr - c[0][0], h11 = tr - c[1][1], h22 = tr - c[2][2];
-  const V4 h01 = -0.5 * (c[0][1] + c[1][0]), h02 = -0.5 * (c[0][2] + c[2][0]),
-           h12 = -0.5 * (c[1][2] + c[2][1]);
-  const V4 m00 = h11 * h22 - h12 * h12, m01 = h02 * h12 - h01 * h22, m02 = h01 * h12 - h02 * h11,
-           m11 = h00 * h22 - h02 * h02, m12 = h01 * h02 - h00 * h12, m22 = h00 * h11 - h01 * h01;
-  const V4 det = h00 * m00 + h01 * m01 + h02 * m02;
-  const V4i newton = (h00 > 0.0) & (m22 > 0.0) & (det > 1e-9 * tr * tr * tr);
-  const V4 inv_det = 1.0 / det;
-  V4 abs_tr;
-  for (int l = 0; l < 4; ++l) abs_tr[l] = std::fabs(tr[l]);
-  const V4 inv_den = 1.0 / (abs_tr + 1e-12);
-  const V4 ox = newton ? (m00 * gx + m01 * gy + m02 * gz) * inv_det : gx * inv_den;
-  const V4 oy = newton ? (m01 * gx + m11 * gy + m12 * gz) * inv_det : gy * inv_den;
-  const V4 oz = newton ? (m02 * gx + m12 * gy + m22 * gz) * inv_det : gz * inv_den;
+  quaternion_matrix(q[0], q[1], q[2], q[3], r);
+  V4 ox, oy, oz;
+  V4i newton;
+  rotation_step(a, r, ox, oy, oz, newton);
   const V4 w2 = ox * ox + oy * oy + oz * oz;
   const V4i converged = !(w2 > tolerance_rad * tolerance_rad);
   const V4i ok = converged | (newton & (w2 < 0.05 * 0.05) & (w2 <= tolerance_rad));
@@ -481,7 +459,7 @@ TELEOP_ALWAYS_INLINE bool newton_step4(const V4* a, V4* q, double tolerance_rad,
   q[2] = converged ? q[2] : ny * inv_norm;
   q[3] = converged ? q[3] : nz * inv_norm;
   V4 rn[9];
-  quaternion_matrix4(q[0], q[1], q[2], q[3], rn);
+  quaternion_matrix(q[0], q[1], q[2], q[3], rn);
   for (int k = 0; k < 9; ++k) r[k] = converged ? r[k] : rn[k];
   return true;
 }
