@@ -229,7 +229,7 @@ int run_delay_bench(const teleop::CommandArgs& args) {
                   num(row.r.environment_stiffness_n_per_m),
                   num(row.r.stiffness_ratio)});
   }
-  // tool-scene vs point slave on the same wall runs
+  // the repeated wall runs ("tool_scene" rows) against the first ones ("point"): same verdict
   for (std::size_t i = 0; i < rows.size(); ++i) {
     if (rows[i].slave != "tool_scene") continue;
     for (std::size_t j = 0; j < rows.size(); ++j) {
