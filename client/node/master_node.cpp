@@ -870,6 +870,7 @@ MasterNode::MasterNode(const MasterOptions& options)
 MasterNode::~MasterNode() = default;
 int MasterNode::run() {
   double waited_s = 0.0;
+  MasterOptions options = impl_options_;
   for (;;) {
     const int status = impl_->run(waited_s);
     if (status != kReconnect) return status;
@@ -878,8 +879,11 @@ int MasterNode::run() {
       std::cerr << "teleop_master: no answer from a server over TCP for "
                 << impl_->options.reconnect_s << " s: reconnecting\n";
     }
+    // each new participant waits twice as long as the last: a handshake that is merely slow (DDS
+    // Security's authentication on a loaded machine) is not cut off again and again
+    options.reconnect_s *= 2.0;
     impl_.reset();
-    impl_ = std::make_unique<Impl>(impl_options_);
+    impl_ = std::make_unique<Impl>(options);
   }
 }
 
