@@ -221,14 +221,16 @@ struct DeformableModel {
   // matrix of node i is A_i = sum_j (x_j - c) D_ij^T + (x_i - c) E_i^T, with c the current
   // mass-weighted centroid, D_ij = X_j - X_i over the one-ring and E_i = w_i (X_i - c0) -
   // sum_j D_ij (w_i = sum_j |D_ij|^2 / |X_i - c0|^2, c0 the rest centroid; 3 per node). The
-  // one-ring and the incident edges are tables of corot_width entries per node (node-major;
-  // the largest valence), padded so that every loop has the same length: a padding neighbour
-  // is the node itself with D = 0, a padding edge is edge index E (a force slot kept at zero).
-  // corot_inc holds e (first node) or ~e (second). Per edge its rest vector and rest direction,
-  // each padded to 4 doubles (8 per edge).
+  // one-ring is a table of corot_width entries per node (node-major; the largest valence),
+  // padded so that every loop has the same length: a padding neighbour is the node itself with
+  // D = 0. The same rest vectors for four nodes at a time (nodes 4g .. 4g + 3, one per lane):
+  // corot_ring_rest4[12 (g w + k) + 4 c + l] = D_{4g+l, k}[c], corot_node_e4[12 g + 4 c + l] =
+  // E_{4g+l}[c]. Per edge its rest vector and rest direction, each padded to 4 doubles (8 per
+  // edge).
   int corot_width = 0;
-  std::vector<int> corot_nb, corot_inc;
+  std::vector<int> corot_nb;
   std::vector<double> corot_ring_rest, corot_node_e, corot_edge;
+  std::vector<double> corot_ring_rest4, corot_node_e4;
 
   // automatic step (estimate_stability(); refreshed by make_model and update_stable_step)
   double omega_max_rad_per_s = 0.0;    ///< highest natural frequency at rest [rad/s]
@@ -312,7 +314,8 @@ struct DeformableState {
   std::vector<Eigen::Matrix3d> rotation;  ///< co-rotational frame of each node
   std::vector<Eigen::Quaterniond> rotation_q;  ///< warm start of the polar decomposition
   // co-rotational Navier, explicit and symplectic path: per node 8 doubles (x - c, 0, v, 0),
-  // per node 24 (the frame's columns, then its rows, each padded to 4), per edge 4 (its force)
+  // per node 24 (the frame's columns, then its rows, each padded to 4), per node 4 (the edge
+  // reactions gathered so far in a step)
   std::vector<double> corot_pack, corot_frame, corot_force;
 
   // kernel simd: per node 8 floats (x, y, z relative to the centre node, -, v relative to its

@@ -17,8 +17,9 @@ struct KernelSums {
 /// The same forces and per-node update as the scalar kernel; the edge and radial forces are
 /// evaluated in single precision on structure-of-arrays copies (positions relative to the centre
 /// node), vectorised over nodes, and the integration is in double. Pinned-node velocities must
-/// already be set (step_impl does). Allocates nothing.
-void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double h,
+/// already be set (step_impl does). `loads_zero`: every f_ext entry is zero (scan_loads), so
+/// the kernel need not read them. Allocates nothing.
+void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double h, bool loads_zero,
                            KernelSums& sums);
 
 }  // namespace teleop::sim::deformable::detail

@@ -301,7 +301,6 @@ void build_corotational_tables(DeformableModel& m) {
   const auto wu = static_cast<std::size_t>(w);
   const auto nu = static_cast<std::size_t>(n);
   m.corot_nb.assign(nu * wu, 0);
-  m.corot_inc.assign(nu * wu, static_cast<int>(m.edges.cols()));  // padding: the zero slot
   m.corot_ring_rest.assign(3 * nu * wu, 0.0);
   m.corot_node_e.assign(3 * nu, 0.0);
   for (int i = 0; i < n; ++i) {
@@ -318,15 +317,27 @@ void build_corotational_tables(DeformableModel& m) {
       len2 += d.squaredNorm();
     }
     for (; slot < (iu + 1) * wu; ++slot) m.corot_nb[slot] = i;  // D = 0: adds nothing
-    slot = iu * wu;
-    for (int k = eoff[iu]; k < eoff[iu + 1]; ++k, ++slot) {
-      m.corot_inc[slot] = m.node_edges[static_cast<std::size_t>(k)];
-    }
     const Eigen::Vector3d rx = X.col(i) - c0;
     const double r2 = rx.squaredNorm();
     const Eigen::Vector3d e =
         (r2 > 0.0 ? Eigen::Vector3d((len2 / r2) * rx) : Eigen::Vector3d::Zero()) - sum;
     for (int c = 0; c < 3; ++c) m.corot_node_e[3 * iu + static_cast<std::size_t>(c)] = e[c];
+  }
+  // the same, four nodes per group, lane-major (the last n mod 4 nodes have no group)
+  const std::size_t groups = nu / 4;
+  m.corot_ring_rest4.assign(12 * groups * wu, 0.0);
+  m.corot_node_e4.assign(12 * groups, 0.0);
+  for (std::size_t g = 0; g < groups; ++g) {
+    for (std::size_t l = 0; l < 4; ++l) {
+      const std::size_t i = 4 * g + l;
+      for (std::size_t c = 0; c < 3; ++c) {
+        m.corot_node_e4[12 * g + 4 * c + l] = m.corot_node_e[3 * i + c];
+        for (std::size_t k = 0; k < wu; ++k) {
+          m.corot_ring_rest4[12 * (g * wu + k) + 4 * c + l] =
+              m.corot_ring_rest[3 * (i * wu + k) + c];
+        }
+      }
+    }
   }
   const auto ne = static_cast<std::size_t>(m.edges.cols());
   m.corot_edge.assign(8 * ne, 0.0);
@@ -396,7 +407,7 @@ DeformableState make_state(const DeformableModel& m) {
   if (m.params.model == ModelKind::kNavierCorotational) {
     s.corot_pack.assign(8 * static_cast<std::size_t>(n), 0.0);
     s.corot_frame.assign(24 * static_cast<std::size_t>(n), 0.0);
-    s.corot_force.assign(4 * static_cast<std::size_t>(ne + 1), 0.0);  // + the zero slot
+    s.corot_force.assign(4 * static_cast<std::size_t>(n), 0.0);  // edge reactions per node
   }
   s.pin_goal = Eigen::Matrix3Xd::Zero(3, n);
   s.pin_start = Eigen::Matrix3Xd::Zero(3, n);

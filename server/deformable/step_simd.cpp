@@ -5,14 +5,16 @@
 // evaluated twice, once from each end, with exactly opposite results: d_ji = -d_ij bit for bit),
 // so neighbouring nodes are independent and 8 of them are computed at once:
 //   1. pack: per node 8 floats (position relative to the centre node, 0, velocity relative to its
-//      velocity, 0), so a node is one 32-byte load (the AoS double state stays the state);
+//      velocity, 0), so a node is one 32-byte load (the AoS double state stays the state); with
+//      AVX2 a node's x and v are one 4-double load each, converted and stored as one vector;
 //   2. internal forces in float: per block of 8 nodes, their packs and, per neighbour slot (the
 //      ELL table of the model, slot-major, padded with the node itself at k = 0), their
 //      neighbours' packs, each 8 x 8 block transposed in registers (AVX2; cheaper than gather
 //      instructions here), radial springs and edges; the centre node's reaction summed in double;
 //   3. integration in double per node: gravity, drag, f_ext, plane contact (springs, then the
 //      damping/friction impulses), held nodes, the post-step sums: as in the scalar kernel.
-// Without AVX2 and FMA (checked once at run time) a portable loop does the same arithmetic.
+// Without AVX2 and FMA (checked once at run time) a portable loop does the same operations (but
+// 1 / length by an exact square root and division, not the AVX2 path's estimate + Newton step).
 // Single precision in the forces: positions relative to the centre (|x| < ~1 m) carry 6e-8 m of
 // rounding, a spring force error of k * 6e-8 m (1e-5 N at k = 150 N/m); the accuracy table of
 // docs/deformable.md shows the effect on the trajectory.
@@ -126,17 +128,79 @@ __attribute__((target("avx2,fma"))) inline void transpose8(__m256* r) {
   r[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
 }
 
-// spring_scale for 8 springs at once (the same operations; FMA where the compiler may contract)
+// spring_scale for 8 springs at once, with 1 / l from the CPU's reciprocal square-root estimate
+// (12 bits) and one Newton step: at most 2.0e-7 relative error (1.7 float ulps; measured over
+// 1.6e7 lengths from 1e-6 to 10 m), against 1e-7 for the exact sqrt and division of the portable
+// path, which took 5 % of the step more. The estimate is the CPU's (its table may differ between
+// CPU makers, so may the last bits of a force); on one machine the result is deterministic.
 __attribute__((target("avx2,fma"))) inline __m256 spring_scale8(__m256 dx, __m256 dy, __m256 dz,
                                                                 __m256 ex, __m256 ey, __m256 ez,
                                                                 __m256 k, __m256 l0, __m256 beta) {
   const __m256 l2 = _mm256_fmadd_ps(
       dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_fmadd_ps(dx, dx, _mm256_set1_ps(1e-30f))));
-  const __m256 inv_l = _mm256_div_ps(_mm256_set1_ps(1.0f), _mm256_sqrt_ps(l2));
+  const __m256 y0 = _mm256_rsqrt_ps(l2);  // ~12 bits; one Newton step: ~23 bits
+  const __m256 inv_l =
+      _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(0.5f), y0),
+                    _mm256_fnmadd_ps(_mm256_mul_ps(l2, y0), y0, _mm256_set1_ps(3.0f)));
   const __m256 rate =
       _mm256_mul_ps(_mm256_fmadd_ps(ez, dz, _mm256_fmadd_ps(ey, dy, _mm256_mul_ps(ex, dx))), inv_l);
   const __m256 stretch = _mm256_fmsub_ps(l2, inv_l, l0);
   return _mm256_mul_ps(_mm256_mul_ps(k, _mm256_fmadd_ps(beta, rate, stretch)), inv_l);
+}
+
+// Four nodes' (X, Y, Z) to x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3 in o[0..2].
+__attribute__((target("avx2,fma"))) inline void aos(__m256d X, __m256d Y, __m256d Z, __m256d* o) {
+  const __m256d a = _mm256_unpacklo_pd(X, Y);  // x0 y0 x2 y2
+  const __m256d b = _mm256_unpackhi_pd(X, Y);  // x1 y1 x3 y3
+  const __m256d d = _mm256_unpacklo_pd(Z, b);  // z0 x1 z2 x3
+  const __m256d e = _mm256_unpackhi_pd(b, Z);  // y1 z1 y3 z3
+  o[0] = _mm256_permute2f128_pd(a, d, 0x20);
+  o[1] = _mm256_permute2f128_pd(e, a, 0x30);
+  o[2] = _mm256_permute2f128_pd(d, e, 0x31);
+}
+
+// Step 3b's arithmetic on the 3N coordinates (blocks of 12 = 4 nodes, three vectors carrying the
+// x/y/z pattern): f = f_int + f_ext + m (g + alpha v_mean - alpha v), then v += h f / m.
+struct FlatUpdate {
+  __m256d g[3];
+  __m256d alpha, h;
+  const double* fext;
+  const double* dm;
+  const double* dim;
+  double* v;
+  double* f;
+};
+
+__attribute__((target("avx2,fma"))) inline FlatUpdate flat_update(const DeformableModel& m,
+                                                                  DeformableState& s, double h,
+                                                                  const double* gp) {
+  FlatUpdate u;
+  u.g[0] = _mm256_setr_pd(gp[0], gp[1], gp[2], gp[0]);
+  u.g[1] = _mm256_setr_pd(gp[1], gp[2], gp[0], gp[1]);
+  u.g[2] = _mm256_setr_pd(gp[2], gp[0], gp[1], gp[2]);
+  u.alpha = _mm256_set1_pd(m.params.mass_damping_per_s);
+  u.h = _mm256_set1_pd(h);
+  u.fext = s.f_ext.data();
+  u.dm = m.simd_dof_mass.data();
+  u.dim = m.simd_dof_inv_mass.data();
+  u.v = s.v.data();
+  u.f = s.force.data();
+  return u;
+}
+
+// Coordinates q .. q + 11 (q a multiple of 12) with their internal forces f[0..2].
+__attribute__((target("avx2,fma"))) inline void flat_update12(const FlatUpdate& u, int q0,
+                                                              const __m256d* f) {
+  for (int t = 0; t < 3; ++t) {
+    const int q = q0 + 4 * t;
+    const __m256d vq = _mm256_loadu_pd(u.v + q);
+    const __m256d ft = _mm256_add_pd(
+        _mm256_add_pd(f[t], _mm256_loadu_pd(u.fext + q)),
+        _mm256_mul_pd(_mm256_loadu_pd(u.dm + q), _mm256_fnmadd_pd(u.alpha, vq, u.g[t])));
+    _mm256_storeu_pd(u.f + q, ft);
+    _mm256_storeu_pd(u.v + q,
+                     _mm256_fmadd_pd(_mm256_mul_pd(u.h, _mm256_loadu_pd(u.dim + q)), ft, vq));
+  }
 }
 
 // AVX2 path: 8 nodes at a time; each node's 8 packed floats (and each neighbour's) are one
@@ -184,10 +248,23 @@ __attribute__((target("avx2,fma"))) Internal internal_forces_avx2(const Deformab
       fy = _mm256_fmadd_ps(se, dy, fy);
       fz = _mm256_fmadd_ps(se, dz, fz);
     }
+    if (i + 8 <= n) {  // 8 nodes' forces to 24 doubles, x y z per node, in registers
+      __m256d lo[3], hi[3];
+      aos(_mm256_cvtps_pd(_mm256_castps256_ps128(fx)), _mm256_cvtps_pd(_mm256_castps256_ps128(fy)),
+          _mm256_cvtps_pd(_mm256_castps256_ps128(fz)), lo);
+      aos(_mm256_cvtps_pd(_mm256_extractf128_ps(fx, 1)),
+          _mm256_cvtps_pd(_mm256_extractf128_ps(fy, 1)),
+          _mm256_cvtps_pd(_mm256_extractf128_ps(fz, 1)), hi);
+      for (int t = 0; t < 3; ++t) {
+        _mm256_storeu_pd(f + 3 * i + 4 * t, lo[t]);
+        _mm256_storeu_pd(f + 3 * i + 12 + 4 * t, hi[t]);
+      }
+      continue;
+    }
     _mm256_store_ps(out[0], fx);
     _mm256_store_ps(out[1], fy);
     _mm256_store_ps(out[2], fz);
-    const int lanes = std::min(8, n - i);
+    const int lanes = n - i;
     for (int l = 0; l < lanes; ++l) {
       f[3 * (i + l)] = static_cast<double>(out[0][l]);
       f[3 * (i + l) + 1] = static_cast<double>(out[1][l]);
@@ -201,6 +278,45 @@ __attribute__((target("avx2,fma"))) Internal internal_forces_avx2(const Deformab
   Internal r;
   for (int c = 0; c < 3; ++c) r.centre[c] = (sum[c][0] + sum[c][1]) + (sum[c][2] + sum[c][3]);
   return r;
+}
+
+// Step 1 with AVX2: the pack of every node and the mass-weighted velocity sum (the same
+// operations as pack_all_portable: a double subtraction rounded to float, mul then add in order,
+// so the two give the same bits). A node's x and v are one 4-double load each (the last node's by
+// a masked load: nothing is read past the state).
+__attribute__((target("avx2,fma"))) void pack_all_avx2(const DeformableModel& m, DeformableState& s,
+                                                       const double* c, const double* cv,
+                                                       double* vm) {
+  const int n = m.node_count;
+  const double* x = s.x.data();
+  const double* v = s.v.data();
+  const double* mp = m.mass_kg.data();
+  float* pk = s.simd_pack.data();
+  const __m256d c4 = _mm256_setr_pd(c[0], c[1], c[2], 0.0);
+  const __m256d cv4 = _mm256_setr_pd(cv[0], cv[1], cv[2], 0.0);
+  const __m256i first3 = _mm256_setr_epi64x(-1, -1, -1, 0);
+  __m256d sum = _mm256_setzero_pd();
+  for (int i = 0; i < n; ++i) {
+    __m256d xi, vi;
+    if (i + 1 < n) {
+      xi = _mm256_loadu_pd(x + 3 * i);
+      vi = _mm256_loadu_pd(v + 3 * i);
+    } else {
+      xi = _mm256_maskload_pd(x + 3 * i, first3);
+      vi = _mm256_maskload_pd(v + 3 * i, first3);
+    }
+    const __m128 px = _mm256_cvtpd_ps(_mm256_sub_pd(xi, c4));
+    const __m128 pv = _mm256_cvtpd_ps(_mm256_sub_pd(vi, cv4));
+    // lanes 3 and 7 (the next node's x and v, or zero) set to zero
+    _mm256_storeu_ps(pk + 8 * i,
+                     _mm256_blend_ps(_mm256_set_m128(pv, px), _mm256_setzero_ps(), 0x88));
+    sum = _mm256_add_pd(sum, _mm256_mul_pd(_mm256_set1_pd(mp[i]), vi));
+  }
+  alignas(32) double out[4];
+  _mm256_store_pd(out, sum);
+  vm[0] = out[0];
+  vm[1] = out[1];
+  vm[2] = out[2];
 }
 
 // Chosen once: the AVX2 path where the CPU has AVX2 and FMA.
@@ -361,40 +477,31 @@ TELEOP_AVX2_INLINE int flat_contacts(const DeformableModel& m, DeformableState& 
   return nc;
 }
 
-// Flat step 3b: f = f_int + f_ext + m (g + alpha v_mean - alpha v), then v += h f / m, over the
-// 3N coordinates (blocks of 12, then the rest one at a time).
+// Flat step 3b (see FlatUpdate): blocks of 12 coordinates, then the rest one at a time. Without
+// loads (`loads_zero`) f_ext is not read.
 TELEOP_AVX2_INLINE void flat_forces_velocities(const DeformableModel& m, DeformableState& s,
-                                               double h, double vmx, double vmy, double vmz) {
+                                               double h, const double* gp, bool loads_zero) {
   const int n3 = 3 * m.node_count;
-  const DeformableParams& p = m.params;
-  double* v = s.v.data();
-  double* f = s.force.data();  // in: the internal forces; out: the total
-  const double* fext = s.f_ext.data();
-  const double* dm = m.simd_dof_mass.data();
-  const double* dim = m.simd_dof_inv_mass.data();
-  const double alpha = p.mass_damping_per_s;
-  const double gp[3] = {p.gravity_mps2.x() + alpha * vmx, p.gravity_mps2.y() + alpha * vmy,
-                        p.gravity_mps2.z() + alpha * vmz};
-  const __m256d g[3] = {_mm256_setr_pd(gp[0], gp[1], gp[2], gp[0]),
-                        _mm256_setr_pd(gp[1], gp[2], gp[0], gp[1]),
-                        _mm256_setr_pd(gp[2], gp[0], gp[1], gp[2])};
-  const __m256d va = _mm256_set1_pd(alpha), vh = _mm256_set1_pd(h);
+  const FlatUpdate u = flat_update(m, s, h, gp);
   const int blocks = n3 / 12 * 12;
   for (int q0 = 0; q0 < blocks; q0 += 12) {
     for (int t = 0; t < 3; ++t) {
       const int q = q0 + 4 * t;
-      const __m256d vq = _mm256_loadu_pd(v + q);
-      const __m256d ft =
-          _mm256_add_pd(_mm256_add_pd(_mm256_loadu_pd(f + q), _mm256_loadu_pd(fext + q)),
-                        _mm256_mul_pd(_mm256_loadu_pd(dm + q), _mm256_fnmadd_pd(va, vq, g[t])));
-      _mm256_storeu_pd(f + q, ft);
-      _mm256_storeu_pd(v + q, _mm256_fmadd_pd(_mm256_mul_pd(vh, _mm256_loadu_pd(dim + q)), ft, vq));
+      const __m256d vq = _mm256_loadu_pd(u.v + q);
+      __m256d ft = _mm256_loadu_pd(u.f + q);
+      if (!loads_zero) ft = _mm256_add_pd(ft, _mm256_loadu_pd(u.fext + q));
+      ft = _mm256_add_pd(
+          ft, _mm256_mul_pd(_mm256_loadu_pd(u.dm + q), _mm256_fnmadd_pd(u.alpha, vq, u.g[t])));
+      _mm256_storeu_pd(u.f + q, ft);
+      _mm256_storeu_pd(u.v + q,
+                       _mm256_fmadd_pd(_mm256_mul_pd(u.h, _mm256_loadu_pd(u.dim + q)), ft, vq));
     }
   }
+  const double alpha = m.params.mass_damping_per_s;
   for (int q = blocks; q < n3; ++q) {
-    const double ft = f[q] + fext[q] + dm[q] * (gp[q % 3] - alpha * v[q]);
-    f[q] = ft;
-    v[q] += h * dim[q] * ft;
+    const double ft = u.f[q] + u.fext[q] + u.dm[q] * (gp[q % 3] - alpha * u.v[q]);
+    u.f[q] = ft;
+    u.v[q] += h * u.dim[q] * ft;
   }
 }
 
@@ -499,21 +606,37 @@ TELEOP_AVX2_INLINE void flat_positions_sums(const DeformableModel& m, Deformable
 //   and v += h f / m; the contact springs, then the contact impulses; x += h v with the sums in
 //   per-lane partial sums (a fixed order: deterministic).
 // The same physics as integrate_nodes (the rounding differs: the m g' - alpha m v form).
+// (One pass doing all of it per block of 12 was measured 5-7 % slower at levels 4 and 5.)
 __attribute__((target("avx2,fma"))) void integrate_flat_avx2(const DeformableModel& m,
                                                              DeformableState& s, double h,
-                                                             double vmx, double vmy, double vmz,
+                                                             const double* gp, bool loads_zero,
                                                              KernelSums& sums) {
   const int nc = flat_contacts(m, s);  // at the old positions
-  flat_forces_velocities(m, s, h, vmx, vmy, vmz);
+  flat_forces_velocities(m, s, h, gp, loads_zero);
   flat_contact_impulses(m, s, h, nc);
   flat_positions_sums(m, s, h, sums);
+}
+
+// Steps 2 and 3 when no node is held. (Fusing step 3b into the force loop, while a block's forces
+// are in registers, was measured 1-4 % slower at levels 4 and 5: more live registers there.)
+__attribute__((target("avx2,fma"))) Internal step_flat_avx2(const DeformableModel& m,
+                                                            DeformableState& s, double h,
+                                                            double vmx, double vmy, double vmz,
+                                                            bool loads_zero, KernelSums& sums) {
+  const DeformableParams& p = m.params;
+  const double alpha = p.mass_damping_per_s;
+  const double gp[3] = {p.gravity_mps2.x() + alpha * vmx, p.gravity_mps2.y() + alpha * vmy,
+                        p.gravity_mps2.z() + alpha * vmz};
+  const Internal internal = internal_forces_avx2(m, s);
+  integrate_flat_avx2(m, s, h, gp, loads_zero, sums);
+  return internal;
 }
 #undef TELEOP_AVX2_INLINE
 #endif
 
 }  // namespace
 
-void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double h,
+void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double h, bool loads_zero,
                            KernelSums& sums) {
   const int n = m.node_count;
   const DeformableParams& p = m.params;
@@ -526,13 +649,22 @@ void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double 
   const double* v = s.v.data();
   const double* mp = m.mass_kg.data();
   float* pk = s.simd_pack.data();
-  double vmx = 0.0, vmy = 0.0, vmz = 0.0;
-  for (int i = 0; i < n; ++i) {
-    pack_node(x + 3 * i, v + 3 * i, c, cv, pk + 8 * i);
-    vmx += mp[i] * v[3 * i];
-    vmy += mp[i] * v[3 * i + 1];
-    vmz += mp[i] * v[3 * i + 2];
+  double vm[3] = {0.0, 0.0, 0.0};
+#ifdef TELEOP_HAVE_AVX2_PATH
+  if (use_avx2()) {
+    pack_all_avx2(m, s, c, cv, vm);
+  } else {
+#endif
+    for (int i = 0; i < n; ++i) {
+      pack_node(x + 3 * i, v + 3 * i, c, cv, pk + 8 * i);
+      vm[0] += mp[i] * v[3 * i];
+      vm[1] += mp[i] * v[3 * i + 1];
+      vm[2] += mp[i] * v[3 * i + 2];
+    }
+#ifdef TELEOP_HAVE_AVX2_PATH
   }
+#endif
+  double vmx = vm[0], vmy = vm[1], vmz = vm[2];
   const double alpha = p.mass_damping_per_s;
   const double inv_total = 1.0 / m.total_mass_kg;
   vmx = (vmx + m.centre_mass_kg * cv[0]) * inv_total;
@@ -540,18 +672,15 @@ void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double 
   vmz = (vmz + m.centre_mass_kg * cv[2]) * inv_total;
 
 #ifdef TELEOP_HAVE_AVX2_PATH
-  const Internal internal =
-      use_avx2() ? internal_forces_avx2(m, s) : internal_forces_portable(m, s);
-#else
-  const Internal internal = internal_forces_portable(m, s);
-#endif
-#ifdef TELEOP_HAVE_AVX2_PATH
+  Internal internal;
   if (s.pinned_count == 0 && use_avx2()) {
-    integrate_flat_avx2(m, s, h, vmx, vmy, vmz, sums);
+    internal = step_flat_avx2(m, s, h, vmx, vmy, vmz, loads_zero, sums);
   } else {
+    internal = use_avx2() ? internal_forces_avx2(m, s) : internal_forces_portable(m, s);
     integrate_nodes(m, s, h, vmx, vmy, vmz, sums);
   }
 #else
+  const Internal internal = internal_forces_portable(m, s);
   integrate_nodes(m, s, h, vmx, vmy, vmz, sums);
 #endif
 
