@@ -188,21 +188,6 @@ __attribute__((target("avx2,fma"))) inline FlatUpdate flat_update(const Deformab
   return u;
 }
 
-// Coordinates q .. q + 11 (q a multiple of 12) with their internal forces f[0..2].
-__attribute__((target("avx2,fma"))) inline void flat_update12(const FlatUpdate& u, int q0,
-                                                              const __m256d* f) {
-  for (int t = 0; t < 3; ++t) {
-    const int q = q0 + 4 * t;
-    const __m256d vq = _mm256_loadu_pd(u.v + q);
-    const __m256d ft = _mm256_add_pd(
-        _mm256_add_pd(f[t], _mm256_loadu_pd(u.fext + q)),
-        _mm256_mul_pd(_mm256_loadu_pd(u.dm + q), _mm256_fnmadd_pd(u.alpha, vq, u.g[t])));
-    _mm256_storeu_pd(u.f + q, ft);
-    _mm256_storeu_pd(u.v + q,
-                     _mm256_fmadd_pd(_mm256_mul_pd(u.h, _mm256_loadu_pd(u.dim + q)), ft, vq));
-  }
-}
-
 // AVX2 path: 8 nodes at a time; each node's 8 packed floats (and each neighbour's) are one
 // 32-byte load, the 8 x 8 block transposed to coordinates in registers (cheaper here than
 // gather instructions: measured 16 against 27-40 us for the force pass at level 4).
@@ -281,9 +266,9 @@ __attribute__((target("avx2,fma"))) Internal internal_forces_avx2(const Deformab
 }
 
 // Step 1 with AVX2: the pack of every node and the mass-weighted velocity sum (the same
-// operations as pack_all_portable: a double subtraction rounded to float, mul then add in order,
-// so the two give the same bits). A node's x and v are one 4-double load each (the last node's by
-// a masked load: nothing is read past the state).
+// operations as the portable loop in step_mass_spring_simd: a double subtraction rounded to
+// float, mul then add in node order, so the two give the same bits). A node's x and v are one
+// 4-double load each (the last node's by a masked load: nothing is read past the state).
 __attribute__((target("avx2,fma"))) void pack_all_avx2(const DeformableModel& m, DeformableState& s,
                                                        const double* c, const double* cv,
                                                        double* vm) {
