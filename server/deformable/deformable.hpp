@@ -225,8 +225,7 @@ struct DeformableModel {
   // padded so that every loop has the same length: a padding neighbour is the node itself with
   // D = 0. The same rest vectors for four nodes at a time (nodes 4g .. 4g + 3, one per lane):
   // corot_ring_rest4[12 (g w + k) + 4 c + l] = D_{4g+l, k}[c], corot_node_e4[12 g + 4 c + l] =
-  // E_{4g+l}[c]. Per edge its rest vector and rest direction, each padded to 4 doubles (8 per
-  // edge).
+  // E_{4g+l}[c]. Per edge its rest vector D and 1 / |D|^2 (4 doubles per edge).
   int corot_width = 0;
   std::vector<int> corot_nb;
   std::vector<double> corot_ring_rest, corot_node_e, corot_edge;
@@ -313,9 +312,9 @@ struct DeformableState {
   Eigen::Matrix4Xd contact_coef;          ///< (k, c, spring force, friction mu) of each contact
   std::vector<Eigen::Matrix3d> rotation;  ///< co-rotational frame of each node
   std::vector<Eigen::Quaterniond> rotation_q;  ///< warm start of the polar decomposition
-  // co-rotational Navier, explicit and symplectic path: per node 8 doubles (x - c, 0, v, 0),
-  // per node 24 (the frame's columns, then its rows, each padded to 4), per node 4 (the edge
-  // reactions gathered so far in a step)
+  // co-rotational Navier, explicit and symplectic path: 4 doubles per node (x - c, 0), then 4
+  // per node (q = x - c + beta v, 0); per node 24 (the frame's columns, then its rows, each
+  // padded to 4); per node 4 (the edge reactions gathered so far in a step)
   std::vector<double> corot_pack, corot_frame, corot_force;
 
   // kernel simd: per node 8 floats (x, y, z relative to the centre node, -, v relative to its

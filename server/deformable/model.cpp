@@ -340,14 +340,12 @@ void build_corotational_tables(DeformableModel& m) {
     }
   }
   const auto ne = static_cast<std::size_t>(m.edges.cols());
-  m.corot_edge.assign(8 * ne, 0.0);
+  m.corot_edge.assign(4 * ne, 0.0);
   for (std::size_t e = 0; e < ne; ++e) {
     const auto ei = static_cast<Eigen::Index>(e);
     const Eigen::Vector3d d = X.col(m.edges(1, ei)) - X.col(m.edges(0, ei));
-    for (int c = 0; c < 3; ++c) {
-      m.corot_edge[8 * e + static_cast<std::size_t>(c)] = d[c];
-      m.corot_edge[8 * e + 4 + static_cast<std::size_t>(c)] = m.rest_dir(c, ei);
-    }
+    for (int c = 0; c < 3; ++c) m.corot_edge[4 * e + static_cast<std::size_t>(c)] = d[c];
+    m.corot_edge[4 * e + 3] = 1.0 / d.squaredNorm();
   }
 }
 
@@ -405,7 +403,7 @@ DeformableState make_state(const DeformableModel& m) {
     s.simd_pack.assign(8 * static_cast<std::size_t>(m.simd_stride), 0.0f);
   }
   if (m.params.model == ModelKind::kNavierCorotational) {
-    s.corot_pack.assign(8 * static_cast<std::size_t>(n), 0.0);
+    s.corot_pack.assign(8 * static_cast<std::size_t>(n), 0.0);  // x - c, then q (4 + 4 per node)
     s.corot_frame.assign(24 * static_cast<std::size_t>(n), 0.0);
     s.corot_force.assign(4 * static_cast<std::size_t>(n), 0.0);  // edge reactions per node
   }
