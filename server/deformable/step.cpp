@@ -579,13 +579,13 @@ TELEOP_ALWAYS_INLINE void corotational_frames(const DeformableModel& m, Deformab
 
 // Edge forces f = R (a g + b (g . u0) u0), g = R^T q - D, q = (x_j - x_i) + beta (v_j - v_i),
 // R = (R_i + R_j) / 2, with (g . u0) u0 = (g . D) D / |D|^2 (the model's table holds D and
-// 1 / |D|^2: 4 doubles per edge, where D and u0 took 8; 4-6 % faster at levels 4-5). Node by node
-// over the edges whose first node it is (the edges are sorted by first node, i < j): node i's pack
-// and frame stay in registers, the force is summed for i and its reaction subtracted from j's
-// accumulator (acc, 4 doubles per node, zero before node 0). When node i is reached every edge
-// where it is the second node has been counted: the return value is node i's complete edge force
-// (x, y, z, 0). (Before, each edge's force went to an array and every node gathered its incident
-// edges with signs: 5 % slower at level 4.)
+// 1 / |D|^2: 4 doubles per edge, where D and u0 took 8; with q packed per node, 3 % faster at
+// levels 4 and 5). Node by node over the edges whose first node it is (the edges are sorted by
+// first node, i < j): node i's pack and frame stay in registers, the force is summed for i and
+// its reaction subtracted from j's accumulator (acc, 4 doubles per node, zero before node 0).
+// When node i is reached every edge where it is the second node has been counted: the return
+// value is node i's complete edge force (x, y, z, 0). (Before, each edge's force went to an array
+// and every node gathered its incident edges with signs: 5 % slower at level 4.)
 TELEOP_ALWAYS_INLINE V4 corotational_node_edges(const DeformableModel& m, const DeformableState& s,
                                                 int i, double* __restrict acc) {
   const double* __restrict pq = s.corot_pack.data() + 4 * static_cast<std::ptrdiff_t>(m.node_count);
