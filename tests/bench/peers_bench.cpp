@@ -18,6 +18,12 @@
 // by face area), the world step. Not matchable: Bullet's stiffness is a position-based
 // correction fraction (kLST in [0, 1], here 1, its stiffest) applied piterations times per step,
 // not N/m; its volume is kept by a gas pressure kPR / V on every node (no radial springs).
+// Bullet solves its links one after another (Gauss-Seidel), so its result depends on their order:
+// its constraints are shuffled by its own randomizeConstraints() (a fixed seed, as Bullet's demos
+// do; --bullet-randomize 0 keeps the mesh's order). Measured: on the icosphere in our vertex
+// order (reverse Cuthill-McKee, tri_mesh.hpp) unshuffled, Bullet's level-5 body blows up at 1 ms
+// and at 0.25 ms and its level-4 centroid drifts by 1.4-8.4 mm; shuffled, it is stable at both
+// levels with the accuracy it had on the earlier creation-order mesh.
 // Rounds: every round runs every configuration once in rotating order (interleaved); the step
 // times of all rounds are pooled (median, p99); the accuracy figures come from round 1 (all
 // engines are deterministic).
@@ -134,7 +140,8 @@ Trace run_ours(int level, double dt, double t_end, double sample_dt, KernelKind 
 }
 
 #ifdef TELEOP_HAVE_BULLET
-double g_bullet_pressure = 2.0;          // kPR [J]: p = kPR / V on every node (--bullet-kpr)
+bool g_bullet_randomize = true;  // randomizeConstraints() before the run (--bullet-randomize 0|1)
+double g_bullet_pressure = 2.0;  // kPR [J]: p = kPR / V on every node (--bullet-kpr)
 constexpr double kOurDrag_per_s = 10.0;  // our mass_damping_per_s default: Bullet's kDP = it x dt
 
 /// Bullet's soft body on the same mesh, mass and step.
@@ -170,6 +177,7 @@ Trace run_bullet(int level, double dt, double t_end, double sample_dt, int piter
   sb->m_cfg.kPR = static_cast<btScalar>(g_bullet_pressure);
   sb->m_cfg.kDP = static_cast<btScalar>(kOurDrag_per_s * dt);  // v *= 1 - kDP each step
   sb->setTotalMass(static_cast<btScalar>(kMass_kg), true);
+  if (g_bullet_randomize) sb->randomizeConstraints();
   world->addSoftBody(sb);
   // Bullet recomputes its runtime constants (and resets the links' rest lengths to the current
   // positions) on the first step after setTotalMass: do it now, at the rest shape
@@ -231,6 +239,7 @@ int bench_peers(const teleop::CommandArgs& a) {
 #ifdef TELEOP_HAVE_BULLET
   const int piterations = std::stoi(a.option("--bullet-piterations", "1"));  // 1: its default
   g_bullet_pressure = std::stod(a.option("--bullet-kpr", "2"));
+  g_bullet_randomize = a.option("--bullet-randomize", "1") != "0";
 #endif
   std::vector<Config> configs;
   for (int level : levels) {
