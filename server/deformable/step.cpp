@@ -1398,9 +1398,8 @@ TELEOP_ALWAYS_INLINE void report_blow_up(const DeformableModel& m, const Deforma
 
 TELEOP_HOT_CLONES
 StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
-                     teleop::sim::EventQueue* events, bool allow_fused) {
+                     teleop::sim::EventQueue* events, bool allow_fused, LoadScan loads) {
   const int n = m.node_count;
-  const LoadScan loads = scan_loads(s.f_ext);
   if (!(h > 0.0) || !std::isfinite(h) || !loads.finite) {
     if (events) {
       events->push(EventKind::kFault, Severity::kWarning, s.sim_time_s, h,
@@ -1490,8 +1489,11 @@ namespace {
 // linearly from where they are to their targets (each sub-step ends on its share of the way), the
 // first fault or bad input ends the step. Allocation-free: the caller's targets are kept in
 // s.pin_goal while the sub-steps overwrite s.pin_target.
+// f_ext is the caller's and does not change during a step: scanned once (scan_loads) for all
+// its sub-steps.
 StepStatus step_substeps(const DeformableModel& m, DeformableState& s, double dt, int n,
                          teleop::sim::EventQueue* events, bool allow_fused) {
+  const LoadScan loads = scan_loads(s.f_ext);
   const double h = dt / n;
   if (!s.substeps_announced && events != nullptr && std::isfinite(dt)) {
     const int needed = m.substeps_needed(dt);
@@ -1536,7 +1538,7 @@ StepStatus step_substeps(const DeformableModel& m, DeformableState& s, double dt
                                      frac * (s.pin_goal.col(i) - s.pin_start.col(i)));
       }
     }
-    const StepStatus st = step_impl(m, s, h, events, allow_fused);
+    const StepStatus st = step_impl(m, s, h, events, allow_fused, loads);
     if (st == StepStatus::kFaultReset || st == StepStatus::kBadInput) {
       result = st;
       break;
@@ -1564,7 +1566,7 @@ StepStatus step(const DeformableModel& m, DeformableState& s, double h,
                    "symplectic_euler or implicit_euler");
       s.substeps_announced = true;
     }
-    return step_impl(m, s, h, events, true);
+    return step_impl(m, s, h, events, true, scan_loads(s.f_ext));
   }
   return step_substeps(m, s, h, n, events, true);
 }
@@ -1574,7 +1576,7 @@ StepStatus detail::step_general(const DeformableModel& m, DeformableState& s, do
   const int n = m.substeps_for(h);
   if (n <= 1) {
     s.last_substeps = 1;
-    return step_impl(m, s, h, events, false);
+    return step_impl(m, s, h, events, false, scan_loads(s.f_ext));
   }
   return step_substeps(m, s, h, n, events, false);
 }
@@ -1582,7 +1584,7 @@ StepStatus detail::step_general(const DeformableModel& m, DeformableState& s, do
 StepStatus detail::step_once(const DeformableModel& m, DeformableState& s, double h,
                              teleop::sim::EventQueue* events) {
   s.last_substeps = 1;
-  return step_impl(m, s, h, events, true);
+  return step_impl(m, s, h, events, true, scan_loads(s.f_ext));
 }
 
 }  // namespace teleop::sim::deformable
