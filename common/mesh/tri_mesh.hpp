@@ -57,7 +57,9 @@ int icosphere_triangle_count(int level);
 /// An icosahedron subdivided `level` times (each triangle into four, new points moved onto
 /// the sphere), scaled to `radius_m` and centred at `centre_m`; adjacency built.
 /// level 0: 12 vertices, 20 triangles; level 4 (the paper's sphere): 2562 / 5120 / 7680 edges;
-/// level 6: 40962 vertices. @throws MeshError if level is outside [0, 6] or radius <= 0.
+/// level 6: 40962 vertices. Vertices 0-11 are the icosahedron's corners (the same points at every
+/// level), the others in reverse Cuthill-McKee order (neighbours close in memory); triangles
+/// sorted by their smallest vertex. @throws MeshError if level is outside [0, 6] or radius <= 0.
 TriMesh make_icosphere(int level, double radius_m, const Eigen::Vector3d& centre_m);
 
 /// Options for load_mesh.

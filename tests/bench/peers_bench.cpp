@@ -239,7 +239,13 @@ int bench_peers(const teleop::CommandArgs& a) {
 #ifdef TELEOP_HAVE_BULLET
   const int piterations = std::stoi(a.option("--bullet-piterations", "1"));  // 1: its default
   g_bullet_pressure = std::stod(a.option("--bullet-kpr", "2"));
-  g_bullet_randomize = a.option("--bullet-randomize", "1") != "0";
+  const std::string randomize = a.option("--bullet-randomize", "1");
+  if (randomize != "0" && randomize != "1") {
+    std::fprintf(stderr, "teleop_bench peers: --bullet-randomize %s: allowed values 0, 1\n",
+                 randomize.c_str());
+    return 2;
+  }
+  g_bullet_randomize = randomize == "1";
 #endif
   std::vector<Config> configs;
   for (int level : levels) {

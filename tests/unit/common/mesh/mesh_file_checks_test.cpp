@@ -80,7 +80,7 @@ TEST(MeshFileChecks, PlyHeadersOutsideTheGrammarAreRefusedBeforeAssimp) {
   const TriMesh m = load_mesh_from_memory(tet.data(), tet.size(), "ply", "tet.ply");
   EXPECT_EQ(m.triangle_count(), 4);
   // no end_header, an unknown keyword, a property before any element
-  for (const std::string bad :
+  for (const std::string& bad :
        {std::string("ply\nformat ascii 1.0\nelement vertex 4\n"),
         std::string("ply\nformat ascii 1.0\nelemant vertex 4\nend_header\n"),
         std::string("ply\nformat ascii 1.0\nproperty float x\nend_header\n")}) {
