@@ -32,6 +32,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -262,7 +263,7 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   if (v != std::string::npos) r.verdict = m.substr(v + 12, m.find('"', v + 12) - (v + 12));
   // the master's end stops the commands: the server's watchdog trips once then, by design
   const double trips = json_value(s, "watchdog_trips");
-  r.watchdog_trips = std::isnan(trips) ? NAN : std::max(0.0, trips - 1.0);
+  r.watchdog_trips = std::isnan(trips) ? trips : std::max(0.0, trips - 1.0);
   r.server_step_p99_us = json_nested(s, "step_us", "p99");
   r.server_overruns = json_value(s, "overruns");
   r.monitor_state_hz = median(monitor_rates);
@@ -271,7 +272,8 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   r.server_step_p50_us = json_nested(s, "step_us", "p50");
   const auto part_p99 = [&](const char* part) {
     const auto at = s.find(std::string("\"") + part + "\": {");
-    return at == std::string::npos ? NAN : json_value(s.substr(at), "p99");
+    return at == std::string::npos ? std::numeric_limits<double>::quiet_NaN()
+                                   : json_value(s.substr(at), "p99");
   };
   r.collision_p99_us = part_p99("collision");
   r.deformable_p99_us = part_p99("deformable");
@@ -312,7 +314,7 @@ int live_bench(const CommandArgs& args, const Binaries& bin, const fs::path& wor
                 {"realtime", "observers", "round", "load1", "server_steps", "server_overruns",
                  "server_overrun_percent", "server_step_us_p50", "server_step_us_p99",
                  "collision_us_p99", "deformable_us_p99", "slave_us_p99", "publish_us_p99",
-                 "rtt_ms_p99", "master_overruns", "link_losses", "verdict"});
+                 "rtt_ms_p99", "master_overruns", "link_losses", "watchdog_trips", "verdict"});
   for (int round = 1; round <= static_cast<int>(rounds); ++round) {
     for (const int prio : prios) {
       for (const int n : counts) {
@@ -331,10 +333,12 @@ int live_bench(const CommandArgs& args, const Binaries& bin, const fs::path& wor
         std::printf(
             "live rt %2d %2d observers round %d load %.2f: server step p50 %.1f p99 %.1f "
             "us, overruns %.0f of %.0f (%.3f %%), parts p99 collision %.1f deformable "
-            "%.1f slave %.1f publish %.1f us; master rtt p99 %.3f ms overruns %.0f\n",
+            "%.1f slave %.1f publish %.1f us; master rtt p99 %.3f ms overruns %.0f; link losses "
+            "%.0f, watchdog trips %.0f; verdict %s\n",
             prio, n, round, r.load1, r.server_step_p50_us, r.server_step_p99_us, r.server_overruns,
             r.server_steps, pct, r.collision_p99_us, r.deformable_p99_us, r.slave_p99_us,
-            r.publish_p99_us, r.rtt_p99, r.master_overruns);
+            r.publish_p99_us, r.rtt_p99, r.master_overruns, r.link_losses, r.watchdog_trips,
+            r.verdict.c_str());
         std::fflush(stdout);
       }
     }

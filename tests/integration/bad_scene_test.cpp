@@ -81,7 +81,9 @@ TEST(BadScene, ServerExits2NamingFileFieldAndValue) {
     Process s(kServerBinary, args, "badscene" + std::to_string(k++));
     EXPECT_EQ(s.wait_for(30.0), 2) << c.name << "\n" << s.err();
     const std::string err = s.err();
-    if (c.extra_args.empty()) EXPECT_NE(err.find(file), std::string::npos) << c.name << ": " << err;
+    if (c.extra_args.empty()) {
+      EXPECT_NE(err.find(file), std::string::npos) << c.name << ": " << err;
+    }
     for (const std::string& e : c.expected) {
       EXPECT_NE(err.find(e), std::string::npos) << c.name << ": '" << e << "' not in " << err;
     }
