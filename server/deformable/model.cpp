@@ -67,11 +67,11 @@ void build_simd_tables(DeformableModel& m) {
                             static_cast<std::size_t>(i);
       if (slot < static_cast<int>(ring.size())) {
         const int e = ring[static_cast<std::size_t>(slot)].second;
-        m.simd_neighbour[o] = ring[static_cast<std::size_t>(slot)].first;
+        m.simd_neighbour[o] = 8 * ring[static_cast<std::size_t>(slot)].first;
         m.simd_k[o] = static_cast<float>(m.edge_k_iso(e));
         m.simd_rest[o] = static_cast<float>(m.rest_length_m(e));
       } else {
-        m.simd_neighbour[o] = i;  // itself: zero length, k = 0, no force
+        m.simd_neighbour[o] = 8 * i;  // itself: zero length, k = 0, no force
       }
     }
   }

@@ -90,7 +90,7 @@ Internal internal_forces_portable(const DeformableModel& m, DeformableState& s) 
     for (int slot = 0; slot < width; ++slot) {
       const std::size_t o = static_cast<std::size_t>(slot) * static_cast<std::size_t>(stride) +
                             static_cast<std::size_t>(i);
-      const float* b = pk + 8 * m.simd_neighbour[o];
+      const float* b = pk + m.simd_neighbour[o];
       const float dx = b[0] - a[0], dy = b[1] - a[1], dz = b[2] - a[2];
       const float se = spring_scale(dx, dy, dz, b[4] - a[4], b[5] - a[5], b[6] - a[6], m.simd_k[o],
                                     m.simd_rest[o], beta);
@@ -129,23 +129,28 @@ __attribute__((target("avx2,fma"))) inline void transpose8(__m256* r) {
 }
 
 // spring_scale for 8 springs at once, with 1 / l from the CPU's reciprocal square-root estimate
-// (12 bits) and one Newton step: at most 2.0e-7 relative error (1.7 float ulps; measured over
-// 1.6e7 lengths from 1e-6 to 10 m), against 1e-7 for the exact sqrt and division of the portable
-// path, which took 5 % of the step more. The estimate is the CPU's (its table may differ between
-// CPU makers, so may the last bits of a force); on one machine the result is deterministic.
+// y0 (12 bits) and one Newton step, 1 / l = y0 u with u = 1.5 - 0.5 l2 y0^2: at most 2.0e-7
+// relative error (1.7 float ulps; measured over 1.6e7 lengths from 1e-6 to 10 m), against 1e-7
+// for the exact sqrt and division of the portable path, which took 5 % of the step more. The
+// same value as spring_scale, arranged for a short dependency chain after the estimate:
+//   (k (l - l0) + beta k rate) / l = (k y0 u) ((l2 + beta (e . d)) y0 u - l0),
+// with l2 + beta (e . d) and 0.5 l2 formed while the estimate is computed and k y0, w y0 beside
+// the Newton factor u (14 cycles of latency after the estimate instead of 24: the force pass is
+// bound by these chains, not by its instruction count). The estimate is the CPU's (its table may
+// differ between CPU makers, so may the last bits of a force); on one machine the result is
+// deterministic.
 __attribute__((target("avx2,fma"))) inline __m256 spring_scale8(__m256 dx, __m256 dy, __m256 dz,
                                                                 __m256 ex, __m256 ey, __m256 ez,
                                                                 __m256 k, __m256 l0, __m256 beta) {
-  const __m256 l2 = _mm256_fmadd_ps(
-      dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_fmadd_ps(dx, dx, _mm256_set1_ps(1e-30f))));
+  const __m256 l2 = _mm256_add_ps(_mm256_fmadd_ps(dx, dx, _mm256_set1_ps(1e-30f)),
+                                  _mm256_fmadd_ps(dz, dz, _mm256_mul_ps(dy, dy)));
   const __m256 y0 = _mm256_rsqrt_ps(l2);  // ~12 bits; one Newton step: ~23 bits
-  const __m256 inv_l =
-      _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(0.5f), y0),
-                    _mm256_fnmadd_ps(_mm256_mul_ps(l2, y0), y0, _mm256_set1_ps(3.0f)));
-  const __m256 rate =
-      _mm256_mul_ps(_mm256_fmadd_ps(ez, dz, _mm256_fmadd_ps(ey, dy, _mm256_mul_ps(ex, dx))), inv_l);
-  const __m256 stretch = _mm256_fmsub_ps(l2, inv_l, l0);
-  return _mm256_mul_ps(_mm256_mul_ps(k, _mm256_fmadd_ps(beta, rate, stretch)), inv_l);
+  const __m256 dot = _mm256_fmadd_ps(ez, dz, _mm256_fmadd_ps(ey, dy, _mm256_mul_ps(ex, dx)));
+  const __m256 w = _mm256_fmadd_ps(beta, dot, l2);
+  const __m256 half_l2 = _mm256_mul_ps(_mm256_set1_ps(0.5f), l2);
+  const __m256 u = _mm256_fnmadd_ps(_mm256_mul_ps(half_l2, y0), y0, _mm256_set1_ps(1.5f));
+  const __m256 ky = _mm256_mul_ps(k, y0), wy = _mm256_mul_ps(w, y0);
+  return _mm256_mul_ps(_mm256_mul_ps(ky, u), _mm256_fmsub_ps(wy, u, l0));
 }
 
 // Four nodes' (X, Y, Z) to x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3 in o[0..2].
@@ -222,7 +227,7 @@ __attribute__((target("avx2,fma"))) Internal internal_forces_avx2(const Deformab
     for (int slot = 0; slot < width; ++slot) {
       const int o = slot * stride + i;
       __m256 b[8];
-      for (int l = 0; l < 8; ++l) b[l] = _mm256_loadu_ps(pk + 8 * nb[o + l]);
+      for (int l = 0; l < 8; ++l) b[l] = _mm256_loadu_ps(pk + nb[o + l]);
       transpose8(b);
       const __m256 dx = _mm256_sub_ps(b[0], a[0]), dy = _mm256_sub_ps(b[1], a[1]),
                    dz = _mm256_sub_ps(b[2], a[2]);
