@@ -320,6 +320,11 @@ struct DeformableState {
   // kernel simd: per node 8 floats (x, y, z relative to the centre node, -, v relative to its
   // velocity, -), model.simd_stride nodes (the padding at zero)
   std::vector<float> simd_pack;
+  // set by a sub-step of the simd kernel that wrote simd_pack (and the mass-weighted velocity
+  // sum simd_vm) for the next sub-step of the same step() call; cleared when a step() call
+  // starts, so it never outlives the call (x and v may be changed between calls)
+  bool simd_pack_fresh = false;
+  double simd_vm[3] = {0.0, 0.0, 0.0};
 
   // automatic step
   int last_substeps = 1;            ///< sub-steps of the last step() call

@@ -18,8 +18,10 @@ struct KernelSums {
 /// evaluated in single precision on structure-of-arrays copies (positions relative to the centre
 /// node), vectorised over nodes, and the integration is in double. Pinned-node velocities must
 /// already be set (step_impl does). `loads_zero`: every f_ext entry is zero (scan_loads), so
-/// the kernel need not read them. Allocates nothing.
+/// the kernel need not read them. `pack_next`: another sub-step of this step() call follows, so
+/// the position pass also writes the next sub-step's pack (s.simd_pack_fresh: that sub-step
+/// skips its pack pass; the same bits as packing again). Allocates nothing.
 void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double h, bool loads_zero,
-                           KernelSums& sums);
+                           bool pack_next, KernelSums& sums);
 
 }  // namespace teleop::sim::deformable::detail

@@ -1398,7 +1398,8 @@ TELEOP_ALWAYS_INLINE void report_blow_up(const DeformableModel& m, const Deforma
 
 TELEOP_HOT_CLONES
 StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
-                     teleop::sim::EventQueue* events, bool allow_fused, LoadScan loads) {
+                     teleop::sim::EventQueue* events, bool allow_fused, LoadScan loads,
+                     bool more_substeps = false) {
   const int n = m.node_count;
   if (!(h > 0.0) || !std::isfinite(h) || !loads.finite) {
     if (events) {
@@ -1424,7 +1425,7 @@ StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
   NodeSums sums;
   if (allow_fused && m.params.kernel == KernelKind::kSimd) {
     detail::KernelSums ks;
-    detail::step_mass_spring_simd(m, s, h, loads.zero, ks);
+    detail::step_mass_spring_simd(m, s, h, loads.zero, more_substeps, ks);
     sums.fastest2 = ks.fastest2;
     sums.sum_x = ks.sum_x;
     sums.sum_v = ks.sum_v;
@@ -1462,6 +1463,7 @@ StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
     ++s.fault_count;
     if (events) report_blow_up(m, s, fastest2, finite, *events);
     reset_to_rest(m, s);
+    s.simd_pack_fresh = false;
     return StepStatus::kFaultReset;
   }
   s.last_good_centroid = mx / m.total_mass_kg;
@@ -1474,6 +1476,7 @@ StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
       s.sleeping = true;
       s.v.setZero();
       s.centre_v.setZero();
+      s.simd_pack_fresh = false;  // the pack holds the velocities before this
     }
   } else {
     s.still_time_s = 0.0;
@@ -1494,6 +1497,7 @@ namespace {
 StepStatus step_substeps(const DeformableModel& m, DeformableState& s, double dt, int n,
                          teleop::sim::EventQueue* events, bool allow_fused) {
   const LoadScan loads = scan_loads(s.f_ext);
+  s.simd_pack_fresh = false;  // x and v may have been changed since the last call
   const double h = dt / n;
   if (!s.substeps_announced && events != nullptr && std::isfinite(dt)) {
     const int needed = m.substeps_needed(dt);
@@ -1538,7 +1542,7 @@ StepStatus step_substeps(const DeformableModel& m, DeformableState& s, double dt
                                      frac * (s.pin_goal.col(i) - s.pin_start.col(i)));
       }
     }
-    const StepStatus st = step_impl(m, s, h, events, allow_fused, loads);
+    const StepStatus st = step_impl(m, s, h, events, allow_fused, loads, k < n);
     if (st == StepStatus::kFaultReset || st == StepStatus::kBadInput) {
       result = st;
       break;
@@ -1550,6 +1554,7 @@ StepStatus step_substeps(const DeformableModel& m, DeformableState& s, double dt
     }
   }
   if (any_pin) s.pin_target = s.pin_goal;
+  s.simd_pack_fresh = false;  // never outlives the call
   return result;
 }
 

@@ -1,7 +1,8 @@
 // Google Benchmark: one step of the deformable sphere per level, model and integrator.
 //   teleop_microbench --benchmark_filter=Deformable
 // The body is kept awake and disturbed (a node 5 mm out, released) so every step does work.
-// The steps below level 5 need no sub-steps (counter `substeps` = 1): one step is timed.
+// The steps below level 5 need no sub-steps (counter `substeps` = 1): one step is timed. The
+// _1ms variants time a 1 ms world step at level 5, which the automatic step splits in 3.
 //   --benchmark_repetitions=10 adds median, min and max over the repetitions.
 #include <benchmark/benchmark.h>
 
@@ -15,7 +16,7 @@ namespace {
 using namespace teleop::sim::deformable;
 
 void run_step(benchmark::State& bs, ModelKind model, IntegratorKind integ,
-              KernelKind kernel = KernelKind::kScalar) {
+              KernelKind kernel = KernelKind::kScalar, double world_dt = 0.0) {
   DeformableParams p;
   p.model = model;
   p.integrator = integ;
@@ -27,8 +28,10 @@ void run_step(benchmark::State& bs, ModelKind model, IntegratorKind integ,
   // a stable step for every level: w_max grows with each level (~1 / edge length, and faster
   // with the stiffness-proportional damping), so above level 4 the step is divided by 4 per
   // level; the `faults` counter must stay 0 for the timing to mean anything
-  const double dt = (integ == IntegratorKind::kExplicitEuler ? 0.1e-3 : 1e-3) /
-                    static_cast<double>(1 << (2 * std::max(0, p.level - 4)));
+  // (world_dt > 0: that step, sub-stepped by the automatic step as a world step would be)
+  const double dt = world_dt > 0.0 ? world_dt
+                                   : (integ == IntegratorKind::kExplicitEuler ? 0.1e-3 : 1e-3) /
+                                         static_cast<double>(1 << (2 * std::max(0, p.level - 4)));
   const DeformableModel m = make_model(make_mesh_for(p), p, {});
   DeformableState s = make_state(m);
   s.x.col(0) += 0.005 * (s.x.col(0) - m.rest_centre_m).normalized();
@@ -47,6 +50,13 @@ void BM_Deformable_MassSpring_Symplectic(benchmark::State& bs) {
 }
 void BM_Deformable_MassSpring_Symplectic_Simd(benchmark::State& bs) {
   run_step(bs, ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, KernelKind::kSimd);
+}
+// A 1 ms world step, sub-stepped where the level needs it (level 5: 3 sub-steps)
+void BM_Deformable_MassSpring_Symplectic_1ms(benchmark::State& bs) {
+  run_step(bs, ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, KernelKind::kScalar, 1e-3);
+}
+void BM_Deformable_MassSpring_Symplectic_Simd_1ms(benchmark::State& bs) {
+  run_step(bs, ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, KernelKind::kSimd, 1e-3);
 }
 void BM_Deformable_MassSpring_Implicit(benchmark::State& bs) {
   run_step(bs, ModelKind::kMassSpring, IntegratorKind::kImplicitEuler);
@@ -74,6 +84,8 @@ BENCHMARK(BM_Deformable_MassSpring_Symplectic_Simd)
     ->Unit(benchmark::kMicrosecond)
     ->ComputeStatistics("min", min_of)
     ->ComputeStatistics("max", max_of);
+BENCHMARK(BM_Deformable_MassSpring_Symplectic_1ms)->Arg(5)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Deformable_MassSpring_Symplectic_Simd_1ms)->Arg(5)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Deformable_MassSpring_Implicit)->DenseRange(1, 5)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Deformable_NavierLinear_Symplectic)->DenseRange(1, 6)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Deformable_NavierCorot_Symplectic)->DenseRange(1, 5)->Unit(benchmark::kMicrosecond);

@@ -517,6 +517,63 @@ TEST(SimdKernel, MatchesTheGeneralPasses) {
   EXPECT_LT(worst_f, 1e-3);       // [N] (contact forces reach ~10 N)
 }
 
+// Within one sub-stepped step the simd kernel packs the next sub-step's positions and velocities
+// in its position pass instead of in a pass of its own: the same bits as three single steps of
+// a third, through a throw at the floor and wall, a point load, and a body falling asleep and
+// being woken by a load. (Held nodes take the per-node pass, which packs for itself; step()
+// also moves their targets in equal shares over the sub-steps, so they are not compared here.)
+TEST(SimdKernel, FusedPackOfSubStepsIsBitIdenticalToSingleSteps) {
+  DeformableParams p = small_params(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, 3);
+  p.kernel = KernelKind::kSimd;
+  p.min_substeps = 3;
+  p.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
+  p.centre_m = Eigen::Vector3d(0.0, 0.0, 0.26);
+  p.sleep_time_s = 0.05;
+  p.sleep_speed_mps = 0.05;
+  teleop::sim::Plane floor;
+  floor.friction = 0.4;
+  teleop::sim::Plane wall;
+  wall.normal = Eigen::Vector3d(-1, 0, 0);
+  wall.offset_m = -0.27;
+  const DeformableModel m = build(p, {floor, wall});
+  ASSERT_EQ(m.substeps_for(1e-3), 3);
+  DeformableState a = make_state(m);
+  a.v.row(0).setConstant(0.3);
+  a.centre_v.x() = 0.3;
+  DeformableState b = a;
+  const double h = 1e-3 / 3;
+  int slept = 0, woke = 0;
+  for (int k = 0; k < 3000; ++k) {
+    for (DeformableState* s : {&a, &b}) {
+      s->f_ext.setZero();
+      if (k >= 200 && k < 500) s->f_ext.col(5) = Eigen::Vector3d(0.0, 2.0, -1.0);
+      if (k == 2500) s->f_ext.col(7) = Eigen::Vector3d(0.0, 0.0, -3.0);  // wakes it
+    }
+    const StepStatus sa = step(m, a, 1e-3, nullptr);
+    StepStatus sb = StepStatus::kOk;
+    for (int j = 0; j < 3; ++j) {
+      sb = detail::step_once(m, b, h, nullptr);
+      if (sb == StepStatus::kSleeping) {
+        b.sim_time_s += (2 - j) * h;  // step() sleeps through the rest of the call
+        break;
+      }
+    }
+    if (sa != StepStatus::kSleeping) {
+      ASSERT_EQ(sa, sb) << k;
+    }
+    woke += slept > 0 && !a.sleeping ? 1 : 0;
+    slept += a.sleeping ? 1 : 0;
+    ASSERT_TRUE(a.x == b.x) << k;
+    ASSERT_TRUE(a.v == b.v) << k;
+    ASSERT_TRUE(a.centre_x == b.centre_x) << k;
+    ASSERT_TRUE(a.centre_v == b.centre_v) << k;
+    ASSERT_FALSE(a.simd_pack_fresh) << k;  // never outlives a step() call
+  }
+  EXPECT_GT(slept, 0);  // it did fall asleep, and the load at 2500 woke it
+  EXPECT_GT(woke, 0);
+  EXPECT_EQ(a.fault_count, 0u);
+}
+
 // Same rules as the other kernels: no allocation, deterministic, momentum of a free body kept.
 TEST(SimdKernel, AllocatesNothingAndIsDeterministic) {
   DeformableParams p = small_params(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, 4);
