@@ -30,6 +30,13 @@ const char* to_string(IntegratorKind kind) {
   return "?";
 }
 
+KernelKind default_kernel(ModelKind model, IntegratorKind integrator) {
+  return model == ModelKind::kMassSpring && integrator == IntegratorKind::kSymplecticEuler &&
+                 simd_kernel_vectorised()
+             ? KernelKind::kSimd
+             : KernelKind::kScalar;
+}
+
 const char* to_string(KernelKind kind) {
   switch (kind) {
     case KernelKind::kScalar:
@@ -99,8 +106,9 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
       "model", "mass_spring", {"mass_spring", "navier_linear", "navier_corotational"}));
   p.integrator = parse_integrator_kind(node.choice_or(
       "integrator", "symplectic_euler", {"explicit_euler", "symplectic_euler", "implicit_euler"}));
-  p.kernel = node.choice_or("kernel", "scalar", {"scalar", "simd"}) == "simd" ? KernelKind::kSimd
-                                                                              : KernelKind::kScalar;
+  p.kernel = !node.has("kernel") ? default_kernel(p.model, p.integrator)
+             : node.choice("kernel", {"scalar", "simd"}) == "simd" ? KernelKind::kSimd
+                                                                   : KernelKind::kScalar;
   if (p.kernel == KernelKind::kSimd &&
       (p.model != ModelKind::kMassSpring || p.integrator != IntegratorKind::kSymplecticEuler)) {
     node.fail("kernel",

@@ -786,3 +786,15 @@ void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double 
 }
 
 }  // namespace teleop::sim::deformable::detail
+
+namespace teleop::sim::deformable {
+
+bool simd_kernel_vectorised() {
+#ifdef TELEOP_HAVE_AVX2_PATH
+  return detail::use_avx2();
+#else
+  return false;
+#endif
+}
+
+}  // namespace teleop::sim::deformable

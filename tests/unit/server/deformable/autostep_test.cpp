@@ -466,6 +466,21 @@ TEST(AutoStep, ParamsAreValidated) {
   DeformableParams navier = p;
   navier.model = ModelKind::kNavierLinear;
   EXPECT_THROW(build(navier), ConfigError);
+  // no `kernel`: simd for mass_spring + symplectic_euler where the CPU runs its AVX2 path,
+  // scalar for every other model and integrator; `kernel: scalar` is kept
+  const auto kernel_of = [](const std::string& yaml) {
+    const Node n = Node::parse(yaml, "k.yaml");
+    return load_deformable_params(n.at("deformable")).kernel;
+  };
+  EXPECT_EQ(kernel_of("deformable: {level: 2}"),
+            simd_kernel_vectorised() ? KernelKind::kSimd : KernelKind::kScalar);
+  EXPECT_EQ(kernel_of("deformable: {level: 2, kernel: scalar}"), KernelKind::kScalar);
+  EXPECT_EQ(kernel_of("deformable: {level: 2, model: navier_linear}"), KernelKind::kScalar);
+  EXPECT_EQ(kernel_of("deformable: {level: 2, integrator: implicit_euler}"), KernelKind::kScalar);
+#if defined(__x86_64__)
+  EXPECT_EQ(simd_kernel_vectorised(),
+            __builtin_cpu_supports("avx2") != 0 && __builtin_cpu_supports("fma") != 0);
+#endif
 }
 
 // ---------------------------------------------------------------------------------------------

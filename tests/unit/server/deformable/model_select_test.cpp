@@ -346,7 +346,9 @@ TEST(ModelTable, TheAutoSceneLoadsThroughTheWorldLoader) {
       load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
   EXPECT_TRUE(d.bodies[0].auto_summary.empty());
   EXPECT_EQ(d.bodies[0].body.params.min_substeps, 1);
-  EXPECT_EQ(d.bodies[0].body.params.kernel, KernelKind::kScalar);
+  // no `kernel` in it: the default kernel (simd where the CPU has AVX2 and FMA)
+  EXPECT_EQ(d.bodies[0].body.params.kernel,
+            default_kernel(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler));
   EXPECT_EQ(d.bodies[0].body.node_count, 2562);
 }
 
