@@ -1524,8 +1524,15 @@ StepStatus step_substeps(const DeformableModel& m, DeformableState& s, double dt
   }
   s.last_substeps = n;
   const int nodes = m.node_count;
-  bool any_pin = false;
-  for (int i = 0; i < nodes && !any_pin; ++i) any_pin = s.pinned[static_cast<std::size_t>(i)] != 0;
+  bool any_pin = false;  // eight flags at a time: usually no node is held
+  const std::uint8_t* flags = s.pinned.data();
+  int i0 = 0;
+  for (; i0 + 8 <= nodes && !any_pin; i0 += 8) {
+    std::uint64_t word;
+    std::memcpy(&word, flags + i0, sizeof word);
+    any_pin = word != 0;
+  }
+  for (; i0 < nodes && !any_pin; ++i0) any_pin = flags[i0] != 0;
   if (any_pin) {
     s.pin_goal = s.pin_target;  // same size: no allocation
     s.pin_start = s.x;          // where the held nodes start (same size: no allocation)
