@@ -611,30 +611,34 @@ TELEOP_AVX2_INLINE void flat_positions_sums(const DeformableModel& m, Deformable
     cvpat[1] = _mm256_setr_pd(cv[1], cv[2], cv[0], cv[1]);
     cvpat[2] = _mm256_setr_pd(cv[2], cv[0], cv[1], cv[2]);
   }
-  double top[4] = {0.0, 0.0, 0.0, 0.0};
-  alignas(32) double vv[12];
+  __m256d top = _mm256_setzero_pd();  // lane l: the largest squared speed of node l of a block
   for (int q0 = 0; q0 < blocks; q0 += 12) {
-    __m256d xs[3], vs[3];
+    __m256d xs[3], vs[3], v2s[3];
     for (int t = 0; t < 3; ++t) {
       const int q = q0 + 4 * t;
       const __m256d vq = _mm256_loadu_pd(v + q);
       const __m256d xq = _mm256_fmadd_pd(vh, vq, _mm256_loadu_pd(x + q));
       _mm256_storeu_pd(x + q, xq);
       const __m256d v2 = _mm256_mul_pd(vq, vq);
-      _mm256_store_pd(vv + 4 * t, v2);
       ax[t] = _mm256_add_pd(ax[t], xq);
       av[t] = _mm256_add_pd(av[t], v2);
       am[t] = _mm256_fmadd_pd(_mm256_loadu_pd(dm + q), xq, am[t]);
       xs[t] = xq;
       vs[t] = vq;
+      v2s[t] = v2;
     }
+    // the 4 nodes' squared speeds (x^2 + y^2) + z^2: a = x^2 of nodes 0-3, b = y^2, c = z^2
+    // gathered from a0 a1 a2 a3 | b0 b1 b2 b3 | c0 c1 c2 c3 (the squares of the 12 coordinates)
+    const __m256d sa = _mm256_permute4x64_pd(
+        _mm256_blend_pd(_mm256_blend_pd(v2s[0], v2s[1], 0x4), v2s[2], 0x2), 0x6C);  // 0 3 2 1
+    const __m256d sb = _mm256_permute4x64_pd(
+        _mm256_blend_pd(_mm256_blend_pd(v2s[1], v2s[0], 0x2), v2s[2], 0x4), 0xB1);  // 1 0 3 2
+    const __m256d sc = _mm256_permute4x64_pd(
+        _mm256_blend_pd(_mm256_blend_pd(v2s[2], v2s[0], 0x4), v2s[1], 0x2), 0xC6);  // 2 1 0 3
+    top = _mm256_max_pd(_mm256_add_pd(_mm256_add_pd(sa, sb), sc), top);  // sp2 > top ? sp2 : top
     if (kPack) {
       momentum_block(dm + q0, vs, acc);
       pack_block(xs, vs, cpat, cvpat, pk + 8 * (q0 / 3));
-    }
-    for (int l = 0; l < 4; ++l) {
-      const double sp2 = vv[3 * l] + vv[3 * l + 1] + vv[3 * l + 2];
-      top[l] = sp2 > top[l] ? sp2 : top[l];
     }
   }
   alignas(32) double lane[3][3][4];
@@ -643,7 +647,9 @@ TELEOP_AVX2_INLINE void flat_positions_sums(const DeformableModel& m, Deformable
     _mm256_store_pd(lane[1][t], av[t]);
     _mm256_store_pd(lane[2][t], am[t]);
   }
-  double fastest2 = std::max(std::max(top[0], top[1]), std::max(top[2], top[3]));
+  alignas(32) double tops[4];
+  _mm256_store_pd(tops, top);
+  double fastest2 = std::max(std::max(tops[0], tops[1]), std::max(tops[2], tops[3]));
   double sum_x = 0.0, sum_v = 0.0, mx[3] = {0.0, 0.0, 0.0};
   for (int j = 0; j < 12; ++j) {  // coordinate j of the block is component j % 3
     sum_x += lane[0][j / 4][j % 4];
