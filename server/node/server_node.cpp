@@ -190,9 +190,24 @@ struct ServerNode::Impl {
                   options.rate_hz, options.dds.domain, options.dds.profile.c_str());
     publish_event(start);
     if (!options.quiet) std::cerr << "teleop_server: " << start.message << "\n";
-    for (const sim::DeformableBodyModel& b : model.bodies) {  // the automatic model's choice
-      if (b.auto_summary.empty()) continue;
-      sim::SimEvent choice{};
+    for (const sim::DeformableBodyModel& b : model.bodies) {
+      if (b.auto_summary.empty()) {  // a body fixed by the scene: what runs it, kernel included
+        const sim::deformable::DeformableParams& p = b.body.params;
+        const bool simd = p.kernel == sim::deformable::KernelKind::kSimd;
+        sim::SimEvent body{};
+        std::snprintf(body.message, sizeof(body.message),
+                      "deformable %d: %s %s, kernel %s%s, %d nodes, %d sub-step(s) per step",
+                      b.object_id, sim::deformable::to_string(p.model),
+                      sim::deformable::to_string(p.integrator), sim::deformable::to_string(p.kernel),
+                      simd ? (sim::deformable::simd_kernel_vectorised() ? " (AVX2)" : " (portable)")
+                           : "",
+                      b.body.node_count, b.body.substeps_for(1.0 / options.rate_hz));
+        body.value = static_cast<double>(b.object_id);
+        publish_event(body);
+        if (!options.quiet) std::cerr << "teleop_server: " << body.message << "\n";
+        continue;
+      }
+      sim::SimEvent choice{};  // the automatic model's choice
       std::snprintf(choice.message, sizeof(choice.message), "deformable %d %s", b.object_id,
                     b.auto_summary.c_str());
       choice.value = static_cast<double>(b.object_id);

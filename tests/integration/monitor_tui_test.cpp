@@ -9,6 +9,7 @@
 #include <memory>
 #include <thread>
 
+#include "server/deformable/deformable.hpp"
 #include "tests/support/domains.hpp"
 #include "tests/support/integration.hpp"
 #include "tests/support/process.hpp"
@@ -203,6 +204,15 @@ TEST(MonitorTui, TheSceneLineSaysEachDeformablesStableStep) {
       << line;
   EXPECT_NE(line.find("\"substeps\": 1}]"), std::string::npos) << line;
   EXPECT_GT(json_value(line, "stable_step_s"), 1e-3) << line;
+  // and an info event says what runs the body: the scene names no kernel, so it is the default
+  // one (simd where the CPU has AVX2 and FMA)
+  const std::string kernel = sim::deformable::to_string(sim::deformable::default_kernel(
+      sim::deformable::ModelKind::kMassSpring, sim::deformable::IntegratorKind::kSymplecticEuler));
+  EXPECT_NE(out.find("\"message\": \"deformable 10: mass_spring symplectic_euler, kernel " + kernel +
+                     (kernel == std::string("simd") ? " (AVX2)" : "") +
+                     ", 2562 nodes, 1 sub-step(s) per step\""),
+            std::string::npos)
+      << out;
 }
 
 }  // namespace
