@@ -221,8 +221,8 @@ struct DeformableModel {
 
   // kernel simd: the first neighbours of every node, padded to the largest valence (padding:
   // the node itself with k = 0), slot-major: entry [slot * simd_stride + i]
-  int simd_width = 0;   ///< largest valence
-  int simd_stride = 0;  ///< node count rounded up to 16
+  int simd_width = 0;               ///< largest valence
+  int simd_stride = 0;              ///< node count rounded up to 16
   std::vector<int> simd_neighbour;  ///< the neighbour's pack offset in floats: 8 x its index
   std::vector<float> simd_k, simd_rest, simd_radial_k, simd_radial_rest;
   std::vector<double> simd_dof_mass, simd_dof_inv_mass;  ///< m_i and 1 / m_i per coordinate (3N)

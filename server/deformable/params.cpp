@@ -30,6 +30,17 @@ const char* to_string(IntegratorKind kind) {
   return "?";
 }
 
+// Here rather than in step_simd.cpp so that the scene loader alone (the fuzz build) has it; the
+// kernel's AVX2 path (step_simd.cpp) exists under the same condition and asks this.
+bool simd_kernel_vectorised() {
+#if defined(__GNUC__) && defined(__x86_64__)
+  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return yes;
+#else
+  return false;
+#endif
+}
+
 KernelKind default_kernel(ModelKind model, IntegratorKind integrator) {
   return model == ModelKind::kMassSpring && integrator == IntegratorKind::kSymplecticEuler &&
                  simd_kernel_vectorised()

@@ -335,10 +335,7 @@ __attribute__((target("avx2,fma"))) void pack_all_avx2(const DeformableModel& m,
 }
 
 // Chosen once: the AVX2 path where the CPU has AVX2 and FMA.
-bool use_avx2() {
-  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  return yes;
-}
+bool use_avx2() { return simd_kernel_vectorised(); }
 #endif
 
 // Plane contact of one node after its velocity update, as in step.cpp: damping as an implicit
@@ -558,6 +555,17 @@ struct NextPack {
   double vm[3];
 };
 
+// Four nodes' (x, y, z) rounded to float, f = x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3, to
+// node[l] = (x_l, y_l, z_l, 0).
+TELEOP_AVX2_INLINE void split_block(const __m128* f, __m128* node) {
+  const __m128 zero = _mm_setzero_ps();
+  const __m128i a = _mm_castps_si128(f[0]), b = _mm_castps_si128(f[1]), c = _mm_castps_si128(f[2]);
+  node[0] = _mm_blend_ps(f[0], zero, 8);
+  node[1] = _mm_blend_ps(_mm_castsi128_ps(_mm_alignr_epi8(b, a, 12)), zero, 8);
+  node[2] = _mm_blend_ps(_mm_castsi128_ps(_mm_alignr_epi8(c, b, 8)), zero, 8);
+  node[3] = _mm_castsi128_ps(_mm_srli_si128(c, 4));
+}
+
 // Four nodes' packs from the three vectors of their new x (xq) and v (vq), coordinates x0 y0 z0
 // x1 | y1 z1 x2 y2 | z2 x3 y3 z3: each rounded to float and split into 4 x (x, y, z, 0).
 TELEOP_AVX2_INLINE void pack_block(const __m256d* xq, const __m256d* vq, const __m256d* cpat,
@@ -567,24 +575,9 @@ TELEOP_AVX2_INLINE void pack_block(const __m256d* xq, const __m256d* vq, const _
     xf[t] = _mm256_cvtpd_ps(_mm256_sub_pd(xq[t], cpat[t]));
     vf[t] = _mm256_cvtpd_ps(_mm256_sub_pd(vq[t], cvpat[t]));
   }
-  const __m128 zero = _mm_setzero_ps();
   __m128 nx[4], nv[4];
-  {
-    const __m128i a = _mm_castps_si128(xf[0]), b = _mm_castps_si128(xf[1]),
-                  c = _mm_castps_si128(xf[2]);
-    nx[0] = _mm_blend_ps(xf[0], zero, 8);
-    nx[1] = _mm_blend_ps(_mm_castsi128_ps(_mm_alignr_epi8(b, a, 12)), zero, 8);
-    nx[2] = _mm_blend_ps(_mm_castsi128_ps(_mm_alignr_epi8(c, b, 8)), zero, 8);
-    nx[3] = _mm_castsi128_ps(_mm_srli_si128(c, 4));
-  }
-  {
-    const __m128i a = _mm_castps_si128(vf[0]), b = _mm_castps_si128(vf[1]),
-                  c = _mm_castps_si128(vf[2]);
-    nv[0] = _mm_blend_ps(vf[0], zero, 8);
-    nv[1] = _mm_blend_ps(_mm_castsi128_ps(_mm_alignr_epi8(b, a, 12)), zero, 8);
-    nv[2] = _mm_blend_ps(_mm_castsi128_ps(_mm_alignr_epi8(c, b, 8)), zero, 8);
-    nv[3] = _mm_castsi128_ps(_mm_srli_si128(c, 4));
-  }
+  split_block(xf, nx);
+  split_block(vf, nv);
   for (int l = 0; l < 4; ++l) _mm256_storeu_ps(pk + 8 * l, _mm256_set_m128(nv[l], nx[l]));
 }
 
@@ -792,15 +785,3 @@ void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double 
 }
 
 }  // namespace teleop::sim::deformable::detail
-
-namespace teleop::sim::deformable {
-
-bool simd_kernel_vectorised() {
-#ifdef TELEOP_HAVE_AVX2_PATH
-  return detail::use_avx2();
-#else
-  return false;
-#endif
-}
-
-}  // namespace teleop::sim::deformable

@@ -208,8 +208,8 @@ TEST(MonitorTui, TheSceneLineSaysEachDeformablesStableStep) {
   // one (simd where the CPU has AVX2 and FMA)
   const std::string kernel = sim::deformable::to_string(sim::deformable::default_kernel(
       sim::deformable::ModelKind::kMassSpring, sim::deformable::IntegratorKind::kSymplecticEuler));
-  EXPECT_NE(out.find("\"message\": \"deformable 10: mass_spring symplectic_euler, kernel " + kernel +
-                     (kernel == std::string("simd") ? " (AVX2)" : "") +
+  EXPECT_NE(out.find("\"message\": \"deformable 10: mass_spring symplectic_euler, kernel " +
+                     kernel + (kernel == std::string("simd") ? " (AVX2)" : "") +
                      ", 2562 nodes, 1 sub-step(s) per step\""),
             std::string::npos)
       << out;

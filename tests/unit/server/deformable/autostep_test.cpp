@@ -491,14 +491,7 @@ TEST(AutoStep, ParamsAreValidated) {
 TEST(SimdKernel, MatchesTheGeneralPasses) {
   DeformableParams p = small_params(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, 3);
   p.kernel = KernelKind::kSimd;
-  p.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
-  p.centre_m = Eigen::Vector3d(0.0, 0.0, 0.26);
-  teleop::sim::Plane floor;
-  floor.friction = 0.4;
-  teleop::sim::Plane wall;
-  wall.normal = Eigen::Vector3d(-1, 0, 0);
-  wall.offset_m = -0.27;
-  const DeformableModel m = build(p, {floor, wall});
+  const DeformableModel m = build_on_floor_by_wall(p);
   DeformableState simd = make_state(m);
   simd.v.row(0).setConstant(0.3);  // thrown at the wall
   simd.centre_v.x() = 0.3;
@@ -541,16 +534,9 @@ TEST(SimdKernel, FusedPackOfSubStepsIsBitIdenticalToSingleSteps) {
   DeformableParams p = small_params(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, 3);
   p.kernel = KernelKind::kSimd;
   p.min_substeps = 3;
-  p.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
-  p.centre_m = Eigen::Vector3d(0.0, 0.0, 0.26);
   p.sleep_time_s = 0.05;
   p.sleep_speed_mps = 0.05;
-  teleop::sim::Plane floor;
-  floor.friction = 0.4;
-  teleop::sim::Plane wall;
-  wall.normal = Eigen::Vector3d(-1, 0, 0);
-  wall.offset_m = -0.27;
-  const DeformableModel m = build(p, {floor, wall});
+  const DeformableModel m = build_on_floor_by_wall(p);
   ASSERT_EQ(m.substeps_for(1e-3), 3);
   DeformableState a = make_state(m);
   a.v.row(0).setConstant(0.3);

@@ -559,14 +559,7 @@ TEST(Contact, WallStopsAndReturnsTheSphere) {
 // load, a held node, the floor and a wall with friction. Measured: 3e-16 m, 7e-14 m/s, 8e-14 N.
 TEST(FusedStep, MatchesTheGeneralPasses) {
   DeformableParams p = small_params(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler, 3);
-  p.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
-  p.centre_m = Eigen::Vector3d(0.0, 0.0, 0.26);
-  teleop::sim::Plane floor;
-  floor.friction = 0.4;
-  teleop::sim::Plane wall;
-  wall.normal = Eigen::Vector3d(-1, 0, 0);
-  wall.offset_m = -0.27;
-  const DeformableModel m = build(p, {floor, wall});
+  const DeformableModel m = build_on_floor_by_wall(p);
   DeformableState fused = make_state(m);
   fused.v.row(0).setConstant(0.3);  // thrown at the wall
   fused.centre_v.x() = 0.3;

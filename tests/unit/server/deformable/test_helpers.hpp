@@ -31,6 +31,19 @@ inline DeformableModel build(const DeformableParams& p, const std::vector<Plane>
   return make_model(make_mesh_for(p), p, planes);
 }
 
+/// The kernels' obstacle course: gravity, the body 1 cm above a floor with friction 0.4, and a
+/// wall at x = 0.27 m (facing -x) 2 cm from its side; returns the model built on them.
+inline DeformableModel build_on_floor_by_wall(DeformableParams p) {
+  p.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
+  p.centre_m = Eigen::Vector3d(0.0, 0.0, 0.26);
+  Plane floor;
+  floor.friction = 0.4;
+  Plane wall;
+  wall.normal = Eigen::Vector3d(-1, 0, 0);
+  wall.offset_m = -0.27;
+  return build(p, {floor, wall});
+}
+
 /// Largest deviation of the shape from the rest shape, translation removed [m].
 inline double shape_error(const DeformableModel& m, const DeformableState& s) {
   const Eigen::Vector3d c = s.x.rowwise().mean();
