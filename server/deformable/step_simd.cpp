@@ -6,7 +6,8 @@
 // so neighbouring nodes are independent and 8 of them are computed at once:
 //   1. pack: per node 8 floats (position relative to the centre node, 0, velocity relative to its
 //      velocity, 0), so a node is one 32-byte load (the AoS double state stays the state); with
-//      AVX2 a node's x and v are one 4-double load each, converted and stored as one vector;
+//      AVX2 a node's x and v are one 4-double load each, converted and stored as one vector
+//      (within a sub-stepped step the previous sub-step's position pass has already done it);
 //   2. internal forces in float: per block of 8 nodes, their packs and, per neighbour slot (the
 //      ELL table of the model, slot-major, padded with the node itself at k = 0), their
 //      neighbours' packs, each 8 x 8 block transposed in registers (AVX2; cheaper than gather
