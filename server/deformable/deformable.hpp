@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "common/config/config.hpp"
+#include "common/mesh/tet_mesh.hpp"
 #include "common/mesh/tri_mesh.hpp"
 #include "common/sim/events.hpp"
 #include "common/sim/plane.hpp"
@@ -39,6 +40,9 @@ enum class ModelKind : std::uint8_t {
   kMassSpring = 0,          ///< edge springs + radial springs to a centre node
   kNavierLinear = 1,        ///< eq. (2), linear strain (the paper's tested model)
   kNavierCorotational = 2,  ///< eq. (2) measured in each edge's rotated rest frame
+  /// Volumetric: linear tetrahedra, co-rotated per element, material in SI (server/deformable/
+  /// fem.hpp). The surface the other parts of the world see is the tet mesh's boundary.
+  kFem = 3,
 };
 
 /// Time integrator.
@@ -60,7 +64,7 @@ enum class KernelKind : std::uint8_t {
   kSimd = 1,
 };
 
-/// "mass_spring", "navier_linear", "navier_corotational".
+/// "mass_spring", "navier_linear", "navier_corotational", "fem".
 const char* to_string(ModelKind kind);
 /// "explicit_euler", "symplectic_euler", "implicit_euler".
 const char* to_string(IntegratorKind kind);
@@ -87,12 +91,19 @@ struct DeformableParams {
   /// A scene file without `kernel` gets default_kernel(model, integrator) instead.
   KernelKind kernel = KernelKind::kScalar;
 
-  // geometry: an icosphere unless mesh_file is set
-  int level = 4;                                           ///< icosphere subdivision [0, 6]
+  // geometry: an icosphere unless mesh_file is set (model fem: the shipped ball tet mesh of
+  // `level`, unless tet_mesh_file or mesh_file is set)
+  /// Icosphere subdivision [0, 6]; model fem: the shipped ball mesh [1, 4] (default 2)
+  int level = 4;
   double radius_m = 0.25;                                  ///< icosphere radius [m]
   Eigen::Vector3d centre_m = Eigen::Vector3d(0, 0, 0.25);  ///< icosphere centre / mesh offset [m]
   std::string mesh_file;                                   ///< OBJ/STL/PLY; empty: icosphere
   double mesh_scale = 1.0;                                 ///< file units to metres
+  /// Model fem: a gmsh MSH 2.2 tetrahedral mesh (scaled by mesh_scale, offset by centre_m)
+  std::string tet_mesh_file;
+  /// Model fem with mesh_file: the surface is filled with tetrahedra up to this edge [m] by gmsh;
+  /// 0: a sixth of the cube root of the enclosed volume.
+  double tet_max_edge_m = 0.0;
 
   // mass
   double mass_kg = 2.0;  ///< total mass [kg] (density = mass / enclosed volume)
@@ -128,6 +139,11 @@ struct DeformableParams {
   double contact_frequency_rad_per_s = 600.0;
   double contact_damping_ratio = 0.7;  ///< zeta [-]
   bool friction = true;                ///< Coulomb friction with the planes' coefficients
+  /// Model fem: contact of the surface with planes and with the tip as a pressure per depth,
+  /// node i's spring k_i = this * (area of node i), integrated implicitly per node (stable at
+  /// any value; the force converges with the mesh). 0: 1000 E / (1 - nu^2) / (body size),
+  /// body size = cube root of the volume [Pa/m].
+  double contact_pressure_stiffness_pa_per_m = 0.0;
 
   // implicit Euler's conjugate-gradient solve
   int cg_max_iterations = 60;  ///< fixed upper bound on iterations per step
@@ -241,6 +257,21 @@ struct DeformableModel {
   std::vector<double> corot_ring_rest, corot_node_e, corot_edge;
   std::vector<double> corot_ring_rest4, corot_node_e4;
 
+  // model fem: the volumetric mesh. All nodes (the surface's node_count first, then the
+  // interior) are the columns of the state's x, v, f_ext, force, pinned and pin_target;
+  // mass_kg / inv_mass / area_m2 / contact_k / contact_c cover the surface nodes.
+  struct Fem {
+    int node_count = 0;                  ///< all nodes
+    int tet_count = 0;
+    Eigen::Matrix3Xd rest;               ///< rest positions of all nodes [m]
+    Eigen::Matrix4Xi tets;               ///< positive orientation
+    std::vector<double> dm_inv;          ///< per tet 9: Dm^-1 column-major, Dm = [X1-X0 X2-X0 X3-X0]
+    Eigen::VectorXd volume_m3;           ///< per tet
+    Eigen::VectorXd mass_kg, inv_mass;   ///< lumped, all nodes (a quarter of each tet's mass)
+    Eigen::Matrix3Xd precond;            ///< diagonal of the rest stiffness (CG preconditioner)
+    double pressure_stiffness_pa_per_m = 0.0;  ///< plane and tip contact [Pa/m]
+  } fem;
+
   // automatic step (estimate_stability(); refreshed by make_model and update_stable_step)
   double omega_max_rad_per_s = 0.0;    ///< highest natural frequency at rest [rad/s]
   double omega_bound_rad_per_s = 0.0;  ///< its Gershgorin upper bound [rad/s]
@@ -254,12 +285,28 @@ struct DeformableModel {
   int substeps_for(double dt_s) const;
   /// Like substeps_for without the params.max_substeps cap (what stability would need).
   int substeps_needed(double dt_s) const;
+  /// Columns of the state's x, v, f_ext, pinned: the surface nodes, and for model fem the
+  /// interior nodes after them.
+  int state_node_count() const {
+    return params.model == ModelKind::kFem ? fem.node_count : node_count;
+  }
 };
 
 /// Builds the model from a closed mesh (rest shape), parameters and the rigid planes (at most
-/// 8). @throws config::ConfigError for parameters out of range, mesh::MeshError for a bad mesh.
+/// 8). @throws config::ConfigError for parameters out of range (model fem: it needs a
+/// tetrahedral mesh), mesh::MeshError for a bad mesh.
 DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformableParams& params,
                            const std::vector<Plane>& planes = {});
+/// Model fem from a tetrahedral mesh (its boundary is the model's mesh).
+DeformableModel make_model(const teleop::mesh::TetMesh& mesh, const DeformableParams& params,
+                           const std::vector<Plane>& planes = {});
+/// The model the parameters describe, with the geometry make_mesh_for / make_tet_mesh_for give.
+DeformableModel make_model(const DeformableParams& params, const std::vector<Plane>& planes = {});
+
+/// Model fem: the tetrahedral mesh the parameters describe: tet_mesh_file, else mesh_file
+/// filled by gmsh (tet_max_edge_m), else the shipped ball of `level` (1-4) scaled to radius_m
+/// and centred at centre_m. @throws mesh::MeshError.
+teleop::mesh::TetMesh make_tet_mesh_for(const DeformableParams& params);
 
 /// Estimates the highest natural frequency of the model at rest and its integrator's stable step
 /// (docs/deformable.md, "Automatic step"). Allocates: for make_model, not the hot loop.
@@ -326,6 +373,22 @@ struct DeformableState {
   // per node (q = x - c + beta v, 0); per node 24 (the frame's columns, then its rows, each
   // padded to 4); per node 4 (the edge reactions gathered so far in a step)
   std::vector<double> corot_pack, corot_frame, corot_force;
+
+  // model fem: per tet its frame (quaternion warm start, 4; its matrix, 9, column-major); the
+  // implicit solve's contact count (s.contact_*: plane contacts, then the tip's as ~node)
+  std::vector<double> fem_q, fem_r;
+  int fem_contacts = 0;
+  /// Model fem: a rigid sphere the surface nodes are kept out of within step() (the slave's
+  /// tip): its centre moves linearly from tip_from_m to tip_to_m over the step. Set by the
+  /// caller before step(); tip_radius_m <= 0: none.
+  double tip_radius_m = 0.0;
+  Eigen::Vector3d tip_from_m = Eigen::Vector3d::Zero(), tip_to_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d tip_velocity_mps = Eigen::Vector3d::Zero();
+  /// Outputs of the last step (model fem): the force of the body on the sphere [N] (mean over
+  /// the sub-steps), the surface nodes it touched at the end, the deepest node [m].
+  Eigen::Vector3d tip_force_n = Eigen::Vector3d::Zero();
+  int tip_node_count = 0;
+  double tip_depth_m = 0.0;
 
   // kernel simd: per node 8 floats (x, y, z relative to the centre node, -, v relative to its
   // velocity, -), model.simd_stride nodes (the padding at zero)

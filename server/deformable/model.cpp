@@ -1,10 +1,12 @@
 // Building the deformable model (masses, springs, Navier coefficients) and its state.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <utility>
 #include <vector>
 
 #include "server/deformable/deformable.hpp"
+#include "server/deformable/fem.hpp"
 
 namespace teleop::sim::deformable {
 
@@ -353,6 +355,10 @@ void build_corotational_tables(DeformableModel& m) {
 
 DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformableParams& params,
                            const std::vector<Plane>& planes) {
+  if (params.model == ModelKind::kFem) {
+    bad("model fem needs a tetrahedral mesh: build it with make_model(params, planes) or "
+        "make_model(tet_mesh, params, planes)");
+  }
   check_inputs(mesh, params, planes);
   DeformableModel m;
   m.params = params;
@@ -368,7 +374,54 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
   return m;
 }
 
+DeformableModel make_model(const teleop::mesh::TetMesh& tets, const DeformableParams& params,
+                           const std::vector<Plane>& planes) {
+  if (params.model != ModelKind::kFem) {
+    bad(std::string("a tetrahedral mesh is for model fem, not ") + to_string(params.model));
+  }
+  check_inputs(tets.surface, params, planes);
+  check_range("contact_pressure_stiffness_pa_per_m", params.contact_pressure_stiffness_pa_per_m,
+              0.0, 1e15);
+  DeformableModel m;
+  m.params = params;
+  m.mesh = tets.surface;
+  m.node_count = tets.surface_vertex_count;
+  set_radial_and_contact(m, planes);  // planes (the springs are the FEM's, set below)
+  m.radial_k.resize(0);
+  m.radial_rest_m.resize(0);
+  detail::build_fem(m, tets);
+  update_stable_step(m);
+  return m;
+}
+
+DeformableModel make_model(const DeformableParams& params, const std::vector<Plane>& planes) {
+  if (params.model == ModelKind::kFem) return make_model(make_tet_mesh_for(params), params, planes);
+  return make_model(make_mesh_for(params), params, planes);
+}
+
+teleop::mesh::TetMesh make_tet_mesh_for(const DeformableParams& p) {
+  if (!p.tet_mesh_file.empty()) {
+    return teleop::mesh::load_tet_mesh(p.tet_mesh_file, p.mesh_scale, p.centre_m);
+  }
+  if (!p.mesh_file.empty()) {
+    const teleop::mesh::TriMesh surface = make_mesh_for(p);
+    const double edge = p.tet_max_edge_m > 0.0
+                            ? p.tet_max_edge_m
+                            : std::cbrt(std::fabs(teleop::mesh::enclosed_volume(surface))) / 6.0;
+    std::error_code ec;
+    const std::string tmp = std::filesystem::temp_directory_path(ec).string();
+    return teleop::mesh::tetrahedralize(surface, edge, ec ? std::string("/tmp") : tmp);
+  }
+  return teleop::mesh::ball_tet_mesh(p.level, p.radius_m, p.centre_m);
+}
+
 DeformableState make_state(const DeformableModel& m) {
+  if (m.params.model == ModelKind::kFem) {
+    DeformableState s;
+    detail::init_fem_state(m, s);
+    s.last_good_centroid = centroid(m, s);
+    return s;
+  }
   const int n = m.node_count;
   const int ne = static_cast<int>(m.edges.cols());
   DeformableState s;
@@ -414,6 +467,7 @@ DeformableState make_state(const DeformableModel& m) {
 }
 
 Eigen::Vector3d centroid(const DeformableModel& m, const DeformableState& s) {
+  if (m.params.model == ModelKind::kFem) return s.x * m.fem.mass_kg / m.total_mass_kg;
   Eigen::Vector3d c = s.x * m.mass_kg;
   c += m.centre_mass_kg * s.centre_x;
   return c / m.total_mass_kg;
@@ -426,12 +480,17 @@ Eigen::Vector3d body_centre(const DeformableModel& m, const DeformableState& s) 
 
 double kinetic_energy(const DeformableModel& m, const DeformableState& s) {
   double e = 0.0;
+  if (m.params.model == ModelKind::kFem) {
+    for (int i = 0; i < m.fem.node_count; ++i) e += m.fem.mass_kg(i) * s.v.col(i).squaredNorm();
+    return 0.5 * e;
+  }
   for (int i = 0; i < m.node_count; ++i) e += m.mass_kg(i) * s.v.col(i).squaredNorm();
   e += m.centre_mass_kg * s.centre_v.squaredNorm();
   return 0.5 * e;
 }
 
 double elastic_energy(const DeformableModel& m, const DeformableState& s) {
+  if (m.params.model == ModelKind::kFem) return detail::fem_elastic_energy(m, s);
   double e = 0.0;
   const Eigen::Matrix3Xd& X = m.mesh.vertices;
   for (int k = 0; k < m.edges.cols(); ++k) {
@@ -465,6 +524,9 @@ double elastic_energy(const DeformableModel& m, const DeformableState& s) {
 double potential_energy(const DeformableModel& m, const DeformableState& s) {
   double e = elastic_energy(m, s);
   const Eigen::Vector3d& g = m.params.gravity_mps2;
+  if (m.params.model == ModelKind::kFem) {
+    for (int i = m.node_count; i < m.fem.node_count; ++i) e -= m.fem.mass_kg(i) * g.dot(s.x.col(i));
+  }
   for (int i = 0; i < m.node_count; ++i) {
     e -= m.mass_kg(i) * g.dot(s.x.col(i));
     for (int k = 0; k < m.plane_count; ++k) {

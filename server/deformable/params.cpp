@@ -14,6 +14,8 @@ const char* to_string(ModelKind kind) {
       return "navier_linear";
     case ModelKind::kNavierCorotational:
       return "navier_corotational";
+    case ModelKind::kFem:
+      return "fem";
   }
   return "?";
 }
@@ -59,13 +61,13 @@ const char* to_string(KernelKind kind) {
 }
 
 ModelKind parse_model_kind(const std::string& name) {
-  for (auto k :
-       {ModelKind::kMassSpring, ModelKind::kNavierLinear, ModelKind::kNavierCorotational}) {
+  for (auto k : {ModelKind::kMassSpring, ModelKind::kNavierLinear,
+                 ModelKind::kNavierCorotational, ModelKind::kFem}) {
     if (name == to_string(k)) return k;
   }
   throw config::ConfigError("deformable model '" + name +
-                            "' is unknown; choose mass_spring, navier_linear or "
-                            "navier_corotational");
+                            "' is unknown; choose mass_spring, navier_linear, "
+                            "navier_corotational or fem");
 }
 
 IntegratorKind parse_integrator_kind(const std::string& name) {
@@ -91,6 +93,9 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
                             "centre_m",
                             "mesh_file",
                             "mesh_scale",
+                            "tet_mesh_file",
+                            "tet_max_edge_m",
+                            "contact_pressure_stiffness_pa_per_m",
                             "mass_kg",
                             "density_kg_per_m3",
                             "centre_mass_fraction",
@@ -114,7 +119,8 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
                             "min_substeps"});
   DeformableParams p;
   p.model = parse_model_kind(node.choice_or(
-      "model", "mass_spring", {"mass_spring", "navier_linear", "navier_corotational"}));
+      "model", "mass_spring", {"mass_spring", "navier_linear", "navier_corotational", "fem"}));
+  const bool fem = p.model == ModelKind::kFem;
   p.integrator = parse_integrator_kind(node.choice_or(
       "integrator", "symplectic_euler", {"explicit_euler", "symplectic_euler", "implicit_euler"}));
   p.kernel = !node.has("kernel") ? default_kernel(p.model, p.integrator)
@@ -125,7 +131,8 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
     node.fail("kernel",
               "simd is implemented for model mass_spring with integrator symplectic_euler only");
   }
-  p.level = static_cast<int>(node.integer_or("level", p.level, 0, 6));
+  p.level = fem ? static_cast<int>(node.integer_or("level", 2, 1, teleop::mesh::kMaxBallTetLevel))
+              : static_cast<int>(node.integer_or("level", p.level, 0, 6));
 #ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
   // fuzz builds only (tests/fuzz): a level-6 body takes 0.2 s to build; level 2 takes 1 ms
   p.level = std::min(p.level, 2);
@@ -137,6 +144,14 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   p.centre_m = Eigen::Vector3d(c[0], c[1], c[2]);
   p.mesh_file = node.string_or("mesh_file", "");
   p.mesh_scale = node.number_or("mesh_scale", 1.0, 1e-6, 1e6);
+  p.tet_mesh_file = node.string_or("tet_mesh_file", "");
+  if (!fem && !p.tet_mesh_file.empty()) node.fail("tet_mesh_file", "is for model fem only");
+  if (!p.tet_mesh_file.empty() && !p.mesh_file.empty()) {
+    node.fail("tet_mesh_file", "give either mesh_file (filled by gmsh) or tet_mesh_file, not both");
+  }
+  p.tet_max_edge_m = node.number_or("tet_max_edge_m", 0.0, 0.0, 100.0);
+  p.contact_pressure_stiffness_pa_per_m = node.number_or(
+      "contact_pressure_stiffness_pa_per_m", 0.0, 0.0, 1e15);
   if (node.has("mass_kg") && node.has("density_kg_per_m3")) {
     node.fail("density_kg_per_m3", "give either mass_kg or density_kg_per_m3, not both");
   }
@@ -154,9 +169,13 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
       node.number_or("radial_stiffness_n_per_m3", radial_default, 0.0, 1e10);
   p.youngs_modulus_pa = node.number_or("youngs_modulus_pa", p.youngs_modulus_pa, 1.0, 1e10);
   p.poisson_ratio = node.number_or("poisson_ratio", p.poisson_ratio, 0.0, 0.49);
-  p.stiffness_damping_s = node.number_or("stiffness_damping_s", p.stiffness_damping_s, 0.0, 1.0);
+  // model fem: Rayleigh damping beta K + alpha M (alpha relative to the mean velocity); lighter
+  // defaults than the surface models' (zeta 0.05 on the default ball's lowest modes)
+  p.stiffness_damping_s =
+      node.number_or("stiffness_damping_s", fem ? 1e-4 : p.stiffness_damping_s, 0.0, 1.0);
   p.radial_damping_s = node.number_or("radial_damping_s", p.radial_damping_s, 0.0, 1.0);
-  p.mass_damping_per_s = node.number_or("mass_damping_per_s", p.mass_damping_per_s, 0.0, 1e3);
+  p.mass_damping_per_s =
+      node.number_or("mass_damping_per_s", fem ? 5.0 : p.mass_damping_per_s, 0.0, 1e3);
   const auto g = node.numbers_or(
       "gravity_mps2", {p.gravity_mps2.x(), p.gravity_mps2.y(), p.gravity_mps2.z()}, -100.0, 100.0);
   if (g.size() != 3) node.fail("gravity_mps2", "must be a list of 3 numbers [m/s^2]");

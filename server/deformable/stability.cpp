@@ -17,6 +17,7 @@
 #include <limits>
 
 #include "server/deformable/deformable.hpp"
+#include "server/deformable/fem.hpp"
 
 namespace teleop::sim::deformable {
 
@@ -63,6 +64,7 @@ double hashed_unit(std::uint64_t k) {
 }  // namespace
 
 double gershgorin_omega_bound(const DeformableModel& m) {
+  if (m.params.model == ModelKind::kFem) return std::sqrt(detail::fem_gershgorin_lambda(m));
   // Block Gershgorin on M^-1 K (3x3 blocks, spectral norms): lambda <= max over block rows of
   // (||K_ii|| + sum_j ||K_ij||) / m_i. An edge block a I + b u u^T has norm a + b and appears on
   // the diagonal of both ends and once off it; a radial spring k_r u u^T on node i's diagonal,
@@ -103,6 +105,7 @@ double integrator_step_limit(const DeformableModel& m, double wmax, double zeta)
       // C = beta_e K_e + beta_r K_r + alpha M, 2 zeta / w = psi^T C psi / psi^T K psi >=
       // min(beta_e, beta_r) over the spring kinds present: sufficient for all modes at once.
       double tau = inf;
+      if (m.params.model == ModelKind::kFem) tau = prm.stiffness_damping_s;
       if (m.edge_k_iso.size() > 0 && m.edge_k_iso.maxCoeff() > 0.0) {
         tau = std::min(tau, prm.stiffness_damping_s);
       }
@@ -119,19 +122,28 @@ double integrator_step_limit(const DeformableModel& m, double wmax, double zeta)
 
 StabilityEstimate estimate_stability(const DeformableModel& m) {
   StabilityEstimate out;
-  const int n = m.node_count;
+  const bool fem = m.params.model == ModelKind::kFem;
+  const int n = fem ? m.fem.node_count : m.node_count;
   const int dofs = 3 * n + (m.has_centre ? 3 : 0);
   out.omega_bound_rad_per_s = gershgorin_omega_bound(m);
   Eigen::VectorXd inv_sqrt_m(dofs);
-  for (int i = 0; i < n; ++i)
-    inv_sqrt_m.segment<3>(3 * i).setConstant(1.0 / std::sqrt(m.mass_kg(i)));
+  for (int i = 0; i < n; ++i) {
+    inv_sqrt_m.segment<3>(3 * i).setConstant(
+        1.0 / std::sqrt(fem ? m.fem.mass_kg(i) : m.mass_kg(i)));
+  }
   if (m.has_centre) inv_sqrt_m.tail<3>().setConstant(1.0 / std::sqrt(m.centre_mass_kg));
 
-  // y = A q = M^-1/2 K M^-1/2 q, with the edge and radial parts apart (for the damping ratio)
+  // y = A q = M^-1/2 K M^-1/2 q, with the edge and radial parts apart (for the damping ratio;
+  // model fem: all of it elastic)
   Eigen::VectorXd p(dofs), ke(dofs), kr(dofs);
   auto apply = [&](const Eigen::VectorXd& q, Eigen::VectorXd& ye, Eigen::VectorXd& yr) {
     p = inv_sqrt_m.cwiseProduct(q);
-    apply_rest_stiffness(m, p, ke, kr);
+    if (fem) {
+      detail::fem_apply_rest_stiffness(m, p, ke);
+      kr.setZero(dofs);
+    } else {
+      apply_rest_stiffness(m, p, ke, kr);
+    }
     ye = inv_sqrt_m.cwiseProduct(ke);
     yr = inv_sqrt_m.cwiseProduct(kr);
   };

@@ -7,7 +7,9 @@
 #include <cstring>
 
 #include "server/deformable/deformable.hpp"
+#include "server/deformable/fem.hpp"
 #include "server/deformable/kernels.hpp"
+#include "server/deformable/rotation.hpp"
 
 // Not under the sanitizers: their instrumentation of the ifunc resolvers runs before the
 // sanitizer runtime is initialised and crashes the program at load time.
@@ -32,6 +34,15 @@ namespace {
 
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
+using detail::abs_of;
+using detail::extract_rotation;
+using detail::load4;
+using detail::quaternion_matrix;
+using detail::rotation_step;
+using detail::store4;
+using detail::V4;
+using detail::V4i;
+using detail::V4u;
 
 /// What compute_forces adds.
 struct ForceFlags {
@@ -49,125 +60,6 @@ TELEOP_HOT_CLONES __attribute__((optimize("O3"))) void inverse_sqrt(const double
                                                                     double* __restrict out,
                                                                     int count) {
   for (int k = 0; k < count; ++k) out[k] = 1.0 / std::sqrt(in[k] + 1e-30);
-}
-
-// Four doubles per vector (GCC's vector extensions: AVX2 in the x86-64-v3 clone, two SSE2 halves
-// in the baseline one), for the co-rotational passes below.
-// (the helpers are always inlined: no vector crosses a call, whatever -Wpsabi says of the ABI)
-#pragma GCC diagnostic ignored "-Wpsabi"
-typedef double V4 __attribute__((vector_size(32)));
-typedef double V4u __attribute__((vector_size(32), aligned(8), may_alias));
-
-TELEOP_ALWAYS_INLINE V4 load4(const double* p) { return *reinterpret_cast<const V4u*>(p); }
-TELEOP_ALWAYS_INLINE void store4(double* p, V4 v) { *reinterpret_cast<V4u*>(p) = v; }
-typedef long long V4i __attribute__((vector_size(32)));
-
-// Rotation matrix of the unit quaternion (w, x, y, z), column-major into r[9]: of one node
-// (T = double) or of four (T = V4, one node per lane).
-template <class T>
-TELEOP_ALWAYS_INLINE void quaternion_matrix(T w, T x, T y, T z, T* r) {
-  const T tx = 2.0 * x, ty = 2.0 * y, tz = 2.0 * z;
-  const T twx = tx * w, twy = ty * w, twz = tz * w;
-  const T txx = tx * x, txy = ty * x, txz = tz * x;
-  const T tyy = ty * y, tyz = tz * y, tzz = tz * z;
-  r[0] = 1.0 - (tyy + tzz);
-  r[1] = txy + twz;
-  r[2] = txz - twy;
-  r[3] = txy - twz;
-  r[4] = 1.0 - (txx + tzz);
-  r[5] = tyz + twx;
-  r[6] = txz + twy;
-  r[7] = tyz - twx;
-  r[8] = 1.0 - (txx + tyy);
-}
-
-TELEOP_ALWAYS_INLINE double abs_of(double x) { return std::fabs(x); }
-TELEOP_ALWAYS_INLINE V4 abs_of(V4 x) {
-  for (int l = 0; l < 4; ++l) x[l] = std::fabs(x[l]);
-  return x;
-}
-
-// The step d of extract_rotation from the frame r (the matrix of q) for the ring matrix a (both
-// column-major): Newton's where H is positive definite (`newton` set), else Mueller's. One node
-// (T = double, B = bool) or four (T = V4, B = V4i, one node per lane).
-template <class T, class B>
-TELEOP_ALWAYS_INLINE void rotation_step(const T* a, const T* r, T& ox, T& oy, T& oz, B& newton) {
-  // C = A R^T: C_ij = sum_k A_ik R_jk
-  T c[3][3];
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) c[i][j] = a[i] * r[j] + a[3 + i] * r[3 + j] + a[6 + i] * r[6 + j];
-  }
-  const T gx = c[2][1] - c[1][2], gy = c[0][2] - c[2][0], gz = c[1][0] - c[0][1];
-  const T tr = c[0][0] + c[1][1] + c[2][2];
-  const T h00 = tr - c[0][0], h11 = tr - c[1][1], h22 = tr - c[2][2];
-  const T h01 = -0.5 * (c[0][1] + c[1][0]), h02 = -0.5 * (c[0][2] + c[2][0]),
-          h12 = -0.5 * (c[1][2] + c[2][1]);
-  // adjugate of the symmetric H, and its determinant
-  const T m00 = h11 * h22 - h12 * h12, m01 = h02 * h12 - h01 * h22, m02 = h01 * h12 - h02 * h11,
-          m11 = h00 * h22 - h02 * h02, m12 = h01 * h02 - h00 * h12, m22 = h00 * h11 - h01 * h01;
-  const T det = h00 * m00 + h01 * m01 + h02 * m02;
-  newton = (h00 > 0.0) & (m22 > 0.0) & (det > 1e-9 * tr * tr * tr);
-  const T inv_det = 1.0 / det;
-  const T inv_den = 1.0 / (abs_of(tr) + 1e-12);
-  ox = newton ? (m00 * gx + m01 * gy + m02 * gz) * inv_det : gx * inv_den;
-  oy = newton ? (m01 * gx + m11 * gy + m12 * gz) * inv_det : gy * inv_den;
-  oz = newton ? (m02 * gx + m12 * gy + m22 * gz) * inv_det : gz * inv_den;
-}
-
-// Rotational part of A (a[9], column-major; polar decomposition), warm-started from q (r[9]
-// holding its matrix, column-major, on entry) and written to q and r. It maximises tr(R^T A) (as
-// Mueller et al. 2016, "A robust method to extract the rotational part of deformations"), by Newton
-// steps: with R <- exp([d]x) R, C = A R^T, tr(R^T A) ~ tr C + g . d - d^T H d / 2 for g = (C21 -
-// C12, C02 - C20, C10 - C01) and H = tr(C) I - sym(C), so d = H^-1 g (quadratic convergence: one or
-// two steps from the last frame). Where H is not positive definite (far from the maximum) the step
-// is Mueller's, d = g / |tr C| (an ascent step). It stops when a step is below the tolerance, or
-// after a Newton step whose square is (its remaining error). Plain scalar arithmetic; the matrix of
-// the last check is the result when it converged.
-TELEOP_ALWAYS_INLINE void extract_rotation(const double* a, Eigen::Quaterniond& q_io,
-                                           int max_iterations, double tolerance_rad, double* r) {
-  double qw = q_io.w(), qx = q_io.x(), qy = q_io.y(), qz = q_io.z();
-  bool converged = false;
-  for (int it = 0; it < max_iterations; ++it) {
-    if (it > 0) quaternion_matrix(qw, qx, qy, qz, r);  // on entry r is q's matrix already
-    double ox, oy, oz;
-    bool newton;
-    rotation_step(a, r, ox, oy, oz, newton);
-    const double w = std::sqrt(ox * ox + oy * oy + oz * oz);
-    if (!(w > tolerance_rad)) {
-      converged = true;  // r is the matrix of q
-      break;
-    }
-    double dw, dx, dy, dz;
-    if (w < 0.05) {
-      // small increment: first-order quaternion (no trigonometry), then normalised
-      dw = 1.0;
-      dx = 0.5 * ox;
-      dy = 0.5 * oy;
-      dz = 0.5 * oz;
-    } else {
-      // a large one (a cold start): the exact rotation, at most a quarter turn at a time
-      const double ang = std::min(w, 0.5 * M_PI);
-      const double sh = std::sin(0.5 * ang) / w;
-      dw = std::cos(0.5 * ang);
-      dx = sh * ox;
-      dy = sh * oy;
-      dz = sh * oz;
-    }
-    // q <- dq * q (Hamilton product), normalised
-    const double nw = dw * qw - dx * qx - dy * qy - dz * qz;
-    const double nqx = dw * qx + dx * qw + dy * qz - dz * qy;
-    const double nqy = dw * qy - dx * qz + dy * qw + dz * qx;
-    const double nqz = dw * qz + dx * qy - dy * qx + dz * qw;
-    const double inv_norm = 1.0 / std::sqrt(nw * nw + nqx * nqx + nqy * nqy + nqz * nqz);
-    qw = nw * inv_norm;
-    qx = nqx * inv_norm;
-    qy = nqy * inv_norm;
-    qz = nqz * inv_norm;
-    // a Newton step leaves an error of the order of its square: below the tolerance, no check
-    if (newton && w * w <= tolerance_rad) break;
-  }
-  if (!converged) quaternion_matrix(qw, qx, qy, qz, r);
-  q_io = Eigen::Quaterniond(qw, qx, qy, qz);
 }
 
 // Co-rotational frames: per node, the rotation of its one-ring (plus the direction to the
@@ -802,6 +694,8 @@ void compute_forces(const DeformableModel& m, DeformableState& s, double h, Forc
         navier_corotational_edge_forces(m, s, flags);
       }
       break;
+    case ModelKind::kFem:
+      break;  // fem_step (fem.cpp) computes its own forces
   }
   if (m.params.model != ModelKind::kNavierCorotational || flags.jacobian) {
     gather_edge_forces(m, s);
@@ -1306,13 +1200,31 @@ TELEOP_HOT_CLONES __attribute__((optimize("O3"))) LoadScan scan_loads(const Eige
 bool loaded(const DeformableModel& m, const DeformableState& s, bool loads_zero) {
   if (s.wake_request) return true;
   if (!loads_zero) return true;
-  for (int i = 0; i < m.node_count; ++i) {
+  for (int i = 0; i < m.state_node_count(); ++i) {
     if (s.pinned[static_cast<std::size_t>(i)] && s.pin_target.col(i) != s.x.col(i)) return true;
   }
   return false;
 }
 
 void reset_to_rest(const DeformableModel& m, DeformableState& s) {
+  if (m.params.model == ModelKind::kFem) {
+    const Vec3 shift = s.last_good_centroid - m.rest_centre_m;
+    s.x = m.fem.rest;
+    s.x.colwise() += shift;
+    s.v.setZero();
+    for (int i = 0; i < m.fem.node_count; ++i) {
+      if (s.pinned[static_cast<std::size_t>(i)] && s.pin_target.col(i).allFinite()) {
+        s.x.col(i) = s.pin_target.col(i);
+      }
+    }
+    for (int t = 0; t < m.fem.tet_count; ++t) {
+      double* q = s.fem_q.data() + 4 * t;
+      q[0] = 1.0;
+      q[1] = q[2] = q[3] = 0.0;
+    }
+    s.still_time_s = 0.0;
+    return;
+  }
   const Vec3 shift =
       s.last_good_centroid -
       (m.mesh.vertices * m.mass_kg + m.centre_mass_kg * m.rest_centre_m) / m.total_mass_kg;
@@ -1334,6 +1246,12 @@ void reset_to_rest(const DeformableModel& m, DeformableState& s) {
 }  // namespace
 
 void internal_forces(const DeformableModel& m, DeformableState& s, Eigen::Matrix3Xd& out) {
+  if (m.params.model == ModelKind::kFem) {
+    detail::fem_internal_forces(m, s, 200, 1e-13);
+    if (out.cols() != m.fem.node_count) out.resize(3, m.fem.node_count);
+    out = s.work_f.leftCols(m.fem.node_count);
+    return;
+  }
   ForceFlags flags;
   flags.external = false;
   flags.contact = false;
@@ -1353,8 +1271,9 @@ TELEOP_ALWAYS_INLINE bool drive_held_nodes(const DeformableModel& m, DeformableS
   bool pin_moving = false;
   s.pinned_count = 0;
   const std::uint8_t* flags = s.pinned.data();
-  for (int i = 0; i < m.node_count; ++i) {
-    if (i + 8 <= m.node_count) {  // eight flags at once: usually no node is held
+  const int nodes = m.state_node_count();
+  for (int i = 0; i < nodes; ++i) {
+    if (i + 8 <= nodes) {  // eight flags at once: usually no node is held
       std::uint64_t word;
       std::memcpy(&word, flags + i, sizeof word);
       if (word == 0) {
@@ -1380,7 +1299,7 @@ TELEOP_ALWAYS_INLINE void report_blow_up(const DeformableModel& m, const Deforma
                                          double fastest2, bool finite,
                                          teleop::sim::EventQueue& events) {
   int fastest = 0;
-  for (int i = 0; i < m.node_count; ++i) {
+  for (int i = 0; i < m.state_node_count(); ++i) {
     const double sp2 = s.v.col(i).squaredNorm();
     if (!std::isfinite(sp2) || !s.x.col(i).allFinite()) {
       fastest = i;
@@ -1399,7 +1318,7 @@ TELEOP_ALWAYS_INLINE void report_blow_up(const DeformableModel& m, const Deforma
 TELEOP_HOT_CLONES
 StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
                      teleop::sim::EventQueue* events, bool allow_fused, LoadScan loads,
-                     bool more_substeps = false) {
+                     bool more_substeps = false, double tip_alpha = 1.0) {
   const int n = m.node_count;
   if (!(h > 0.0) || !std::isfinite(h) || !loads.finite) {
     if (events) {
@@ -1423,7 +1342,14 @@ StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
   const bool pin_moving = drive_held_nodes(m, s, h);
 
   NodeSums sums;
-  if (allow_fused && m.params.kernel == KernelKind::kSimd) {
+  if (m.params.model == ModelKind::kFem) {
+    detail::KernelSums ks;
+    detail::fem_step(m, s, h, tip_alpha, ks);
+    sums.fastest2 = ks.fastest2;
+    sums.sum_x = ks.sum_x;
+    sums.sum_v = ks.sum_v;
+    sums.mx = Vec3(ks.mx[0], ks.mx[1], ks.mx[2]);
+  } else if (allow_fused && m.params.kernel == KernelKind::kSimd) {
     detail::KernelSums ks;
     detail::step_mass_spring_simd(m, s, h, loads.zero, more_substeps, ks);
     sums.fastest2 = ks.fastest2;
@@ -1470,7 +1396,9 @@ StepStatus step_impl(const DeformableModel& m, DeformableState& s, double h,
 
   // sleeping: still, unloaded and no held node moving for sleep_time_s
   const double sleep2 = m.params.sleep_speed_mps * m.params.sleep_speed_mps;
-  if (fastest2 < sleep2 && s.centre_v.squaredNorm() < sleep2 && !pin_moving && loads.zero) {
+  const bool tip_present = m.params.model == ModelKind::kFem && s.tip_radius_m > 0.0;
+  if (fastest2 < sleep2 && s.centre_v.squaredNorm() < sleep2 && !pin_moving && loads.zero &&
+      !tip_present) {
     s.still_time_s += h;
     if (s.still_time_s >= m.params.sleep_time_s) {
       s.sleeping = true;
@@ -1523,7 +1451,7 @@ StepStatus step_substeps(const DeformableModel& m, DeformableState& s, double dt
     s.substeps_announced = true;
   }
   s.last_substeps = n;
-  const int nodes = m.node_count;
+  const int nodes = m.state_node_count();
   bool any_pin = false;  // eight flags at a time: usually no node is held
   const std::uint8_t* flags = s.pinned.data();
   int i0 = 0;
@@ -1549,7 +1477,8 @@ StepStatus step_substeps(const DeformableModel& m, DeformableState& s, double dt
                                      frac * (s.pin_goal.col(i) - s.pin_start.col(i)));
       }
     }
-    const StepStatus st = step_impl(m, s, h, events, allow_fused, loads, k < n);
+    const StepStatus st =
+        step_impl(m, s, h, events, allow_fused, loads, k < n, static_cast<double>(k) / n);
     if (st == StepStatus::kFaultReset || st == StepStatus::kBadInput) {
       result = st;
       break;
@@ -1567,8 +1496,10 @@ StepStatus step_substeps(const DeformableModel& m, DeformableState& s, double dt
 
 }  // namespace
 
-StepStatus step(const DeformableModel& m, DeformableState& s, double h,
-                teleop::sim::EventQueue* events) {
+namespace {
+
+StepStatus step_any(const DeformableModel& m, DeformableState& s, double h,
+                    teleop::sim::EventQueue* events) {
   const int n = m.substeps_for(h);
   if (n <= 1) {
     s.last_substeps = 1;
@@ -1581,6 +1512,25 @@ StepStatus step(const DeformableModel& m, DeformableState& s, double h,
     return step_impl(m, s, h, events, true, scan_loads(s.f_ext));
   }
   return step_substeps(m, s, h, n, events, true);
+}
+
+}  // namespace
+
+StepStatus step(const DeformableModel& m, DeformableState& s, double h,
+                teleop::sim::EventQueue* events) {
+  if (m.params.model != ModelKind::kFem) return step_any(m, s, h, events);
+  // the tip sphere's reaction: impulses summed over the sub-steps, then the mean force
+  s.tip_force_n.setZero();
+  s.tip_node_count = 0;
+  s.tip_depth_m = 0.0;
+  if (s.tip_radius_m > 0.0 && s.sleeping) wake(s);  // a tip near the body: it may be touched
+  const StepStatus st = step_any(m, s, h, events);
+  if (st == StepStatus::kOk && h > 0.0) {
+    s.tip_force_n /= h;
+  } else {
+    s.tip_force_n.setZero();
+  }
+  return st;
 }
 
 StepStatus detail::step_general(const DeformableModel& m, DeformableState& s, double h,

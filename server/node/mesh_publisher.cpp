@@ -17,7 +17,10 @@ MeshPublisher::MeshPublisher(const sim::WorldModel& model, const sim::WorldData&
         static_cast<std::uint64_t>(std::llround(model.visual_rate_hz / monitor_rate_hz));
   }
   if (data.bodies.empty()) return;
-  for (const sim::DeformableBodyData& b : data.bodies) back_.push_back(b.state.x);
+  // the surface nodes only (a volumetric body's interior nodes follow them in state.x)
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
+    back_.push_back(data.bodies[i].state.x.leftCols(model.bodies[i].body.node_count));
+  }
   front_ = back_;
   thread_ = std::thread([this] { run(); });
 }
@@ -35,7 +38,9 @@ void MeshPublisher::offer(const sim::WorldData& data, double sim_time_s) {
   if (!thread_.joinable()) return;
   std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
   if (!lock.owns_lock()) return;  // publisher busy swapping: skip this frame, never block
-  for (std::size_t i = 0; i < back_.size(); ++i) back_[i] = data.bodies[i].state.x;
+  for (std::size_t i = 0; i < back_.size(); ++i) {
+    back_[i] = data.bodies[i].state.x.leftCols(back_[i].cols());  // same size: no allocation
+  }
   ++frame_no_;
   time_s_ = sim_time_s;
   pending_ = true;

@@ -75,6 +75,55 @@ struct BodiesOnTip {
   double deformation_m = 0.0;
 };
 
+/// A body in contact: its force on the tip, the indentation since the touch, the deepest body.
+void add_body_on_tip(const DeformableBodyData& b, const Eigen::Vector3d& tip_now,
+                     BodiesOnTip& on_tip, int object_id, Eigen::Vector3d& force_on_tip_n) {
+  if (!b.last.in_contact) return;
+  force_on_tip_n += b.last.force_on_tip_n;
+  on_tip.deformation_m =
+      std::max(on_tip.deformation_m, (b.touch_centre_m - tip_now).dot(b.touch_normal));
+  if (b.last.penetration_m > on_tip.deepest_m) {
+    on_tip.deepest_m = b.last.penetration_m;
+    on_tip.deepest_id = object_id;
+  }
+}
+
+void push_touch_event(const DeformableBodyData& b, int object_id, double t_s,
+                      EventQueue& events) {
+  events.push(b.last.in_contact ? EventKind::kContactBegin : EventKind::kContactEnd,
+              Severity::kInfo, t_s, object_id,
+              b.last.in_contact ? "tip touches the deformable body" : "tip leaves the deformable body");
+}
+
+/// Model fem: the contact result of the body's own step (its nodes kept out of the tip sphere):
+/// force, normal (along the force), deepest node, nodes touched; the touch point when it began.
+void read_fem_contact(DeformableBodyData& b, const Eigen::Vector3d& tip_now, double r,
+                      deformable::StepStatus st) {
+  const bool was = b.last.in_contact;
+  collision::TipContactResult res;
+  const deformable::DeformableState& s = b.state;
+  const double fn = s.tip_force_n.norm();
+  res.fault = st == deformable::StepStatus::kFaultReset;
+  res.in_contact = !res.fault && s.tip_node_count > 0 && fn > 0.0;
+  if (res.in_contact) {
+    res.force_on_tip_n = s.tip_force_n;
+    res.normal = s.tip_force_n / fn;
+    res.normal_force_n = fn;
+    res.penetration_m = s.tip_depth_m;
+    res.max_node_depth_m = s.tip_depth_m;
+    res.node_contacts = s.tip_node_count;
+    res.contact_point_m = tip_now - r * res.normal;
+    if (!was) {
+      b.touch_centre_m = tip_now;
+      b.touch_normal = res.normal;
+    }
+    res.entry_point_m = b.touch_centre_m - r * b.touch_normal;
+  }
+  res.began = res.in_contact && !was;
+  res.ended = was && !res.in_contact;
+  b.last = res;
+}
+
 /// Steps 1-2: tip against each body (contact, reaction, events), then each body.
 BodiesOnTip step_bodies(const WorldModel& model, WorldData& d, double dt_s, EventQueue& events) {
   const Eigen::Vector3d tip_now = d.out.tip_position_m;
@@ -88,6 +137,21 @@ BodiesOnTip step_bodies(const WorldModel& model, WorldData& d, double dt_s, Even
     DeformableBodyData& b = d.bodies[i];
     b.state.f_ext.setZero();
     const bool was = b.last.in_contact;
+    if (bm.body.params.model == deformable::ModelKind::kFem) {
+      // the body keeps the tip sphere out of its surface within its own (sub-)steps
+      const std::int64_t t1 = now_ns();
+      const bool near = tip_may_reach(b.state.x, d.tip_prev_m, tip_now, r);
+      b.state.tip_radius_m = near ? r : 0.0;
+      b.state.tip_from_m = d.tip_prev_m;
+      b.state.tip_to_m = tip_now;
+      b.state.tip_velocity_mps = tip_vel;
+      const deformable::StepStatus st = deformable::step(bm.body, b.state, dt_s, &events);
+      d.cost.deformable_us += static_cast<double>(now_ns() - t1) * 1e-3;
+      read_fem_contact(b, tip_now, r, st);
+      add_body_on_tip(b, tip_now, on_tip, bm.object_id, d.deformable_force_n);
+      if (b.last.in_contact != was) push_touch_event(b, bm.object_id, d.out.sim_time_s, events);
+      continue;
+    }
     // out of contact and clear of the body's box: the tree refit and the query are skipped
     // (about 20 us at level 4)
     const std::int64_t t0 = now_ns();
@@ -101,24 +165,14 @@ BodiesOnTip step_bodies(const WorldModel& model, WorldData& d, double dt_s, Even
                   "tip-mesh contact saw non-finite data: contact dropped, force zero");
     }
     if (b.last.in_contact) {
-      d.deformable_force_n += b.last.force_on_tip_n;
       // the paper's x = |P(w) - P0|: how far the tip has gone in since it touched, along the
       // surface normal at the entry point
-      const Eigen::Vector3d touch_centre = b.last.entry_point_m + r * b.last.normal;
-      on_tip.deformation_m =
-          std::max(on_tip.deformation_m, (touch_centre - tip_now).dot(b.last.normal));
-      if (b.last.penetration_m > on_tip.deepest_m) {
-        on_tip.deepest_m = b.last.penetration_m;
-        on_tip.deepest_id = bm.object_id;
-      }
+      b.touch_centre_m = b.last.entry_point_m + r * b.last.normal;
+      b.touch_normal = b.last.normal;
+      add_body_on_tip(b, tip_now, on_tip, bm.object_id, d.deformable_force_n);
       if (b.state.sleeping) deformable::wake(b.state);
     }
-    if (b.last.in_contact != was) {
-      events.push(
-          b.last.in_contact ? EventKind::kContactBegin : EventKind::kContactEnd, Severity::kInfo,
-          d.out.sim_time_s, bm.object_id,
-          b.last.in_contact ? "tip touches the deformable body" : "tip leaves the deformable body");
-    }
+    if (b.last.in_contact != was) push_touch_event(b, bm.object_id, d.out.sim_time_s, events);
     const std::int64_t t1 = now_ns();
     const deformable::StepStatus st = deformable::step(bm.body, b.state, dt_s, &events);
     d.cost.deformable_us += static_cast<double>(now_ns() - t1) * 1e-3;

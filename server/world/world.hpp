@@ -83,6 +83,10 @@ struct DeformableBodyData {
   deformable::DeformableState state;
   collision::TipMeshContact contact;
   collision::TipContactResult last;  ///< the contact of the last step
+  /// Model fem (the body keeps the tip out itself): where the tip's centre was and the
+  /// surface normal when the touch began, for the indentation since then.
+  Eigen::Vector3d touch_centre_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d touch_normal = Eigen::Vector3d::UnitZ();
 };
 
 struct WorldData {

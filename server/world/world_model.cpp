@@ -418,8 +418,10 @@ DeformableBodyModel parse_deformable_body(const config::Node& n, const WorldMode
       explicit_params.mesh_file = relative_to(s.file, mesh_given).string();
     }
     try {
-      b.body = deformable::make_model(deformable::make_mesh_for(explicit_params), explicit_params,
-                                      s.planes);
+      if (!explicit_params.tet_mesh_file.empty()) {
+        explicit_params.tet_mesh_file = relative_to(s.file, explicit_params.tet_mesh_file).string();
+      }
+      b.body = deformable::make_model(explicit_params, s.planes);
     } catch (const mesh::MeshError& e) {
       if (mesh_given.empty()) body.fail("", e.what());
       body.fail("mesh_file", "value '" + mesh_given + "': " + e.what());

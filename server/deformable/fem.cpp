@@ -1,0 +1,607 @@
+// The volumetric model (model fem): rest data, the co-rotated tetrahedron force law, implicit
+// node contact with planes and the tip sphere, and the three integrators. See fem.hpp.
+#include "server/deformable/fem.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "server/deformable/rotation.hpp"
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
+    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+#define TELEOP_FEM_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define TELEOP_FEM_CLONES
+#endif
+
+namespace teleop::sim::deformable::detail {
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+[[noreturn]] void bad(const std::string& what) {
+  throw config::ConfigError("deformable parameters (model fem): " + what);
+}
+
+// Polar-decomposition iterations per element and step, and the increment at which they stop.
+constexpr int kRotationIterations = 8;
+constexpr double kRotationTolerance = 1e-7;
+
+// c = a b for column-major 3x3 matrices.
+inline void mul33(const double* a, const double* b, double* c) {
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      c[3 * j + i] = a[i] * b[3 * j] + a[3 + i] * b[3 * j + 1] + a[6 + i] * b[3 * j + 2];
+    }
+  }
+}
+
+// c = a^T b (column-major).
+inline void mul33_tn(const double* a, const double* b, double* c) {
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      c[3 * j + i] = a[3 * i] * b[3 * j] + a[3 * i + 1] * b[3 * j + 1] + a[3 * i + 2] * b[3 * j + 2];
+    }
+  }
+}
+
+// The edge matrix [q1 - q0, q2 - q0, q3 - q0] (column-major) of the nodes `ix` of field q (3 x N).
+inline void edge_matrix(const double* q, const int* ix, double* d) {
+  const double* q0 = q + 3 * ix[0];
+  for (int c = 0; c < 3; ++c) {
+    const double* qc = q + 3 * ix[c + 1];
+    d[3 * c] = qc[0] - q0[0];
+    d[3 * c + 1] = qc[1] - q0[1];
+    d[3 * c + 2] = qc[2] - q0[2];
+  }
+}
+
+// Linear-elastic stress of the rotated gradient G (= R^T F - I, or its rate): sigma = 2 mu
+// sym(G) + lambda tr(G) I, written symmetric into sig (column-major). scale_trace: G's trace
+// offset (1 for R^T F, whose identity is subtracted here; 0 for a rate or a perturbation).
+inline void linear_stress(const double* g, double mu, double lambda, double identity,
+                          double* sig) {
+  const double e00 = g[0] - identity, e11 = g[4] - identity, e22 = g[8] - identity;
+  const double tr = e00 + e11 + e22;
+  sig[0] = 2.0 * mu * e00 + lambda * tr;
+  sig[4] = 2.0 * mu * e11 + lambda * tr;
+  sig[8] = 2.0 * mu * e22 + lambda * tr;
+  sig[1] = sig[3] = mu * (g[1] + g[3]);
+  sig[2] = sig[6] = mu * (g[2] + g[6]);
+  sig[5] = sig[7] = mu * (g[5] + g[7]);
+}
+
+// Adds the nodal forces of first Piola stress P (column-major) of a tetrahedron of volume vol
+// and rest inverse B: f_j = -vol P B(j-1, :)^T for j = 1..3, f_0 = -(f_1 + f_2 + f_3); `sign`
+// -1 gives K p instead (the force's negative).
+inline void scatter_forces(const double* p, const double* b, double vol, const int* ix,
+                           double sign, double* out) {
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+  for (int j = 0; j < 3; ++j) {
+    // column j of P B^T: sum_k P(:, k) B(j, k)
+    const double bj0 = b[j], bj1 = b[3 + j], bj2 = b[6 + j];
+    const double hx = -sign * vol * (p[0] * bj0 + p[3] * bj1 + p[6] * bj2);
+    const double hy = -sign * vol * (p[1] * bj0 + p[4] * bj1 + p[7] * bj2);
+    const double hz = -sign * vol * (p[2] * bj0 + p[5] * bj1 + p[8] * bj2);
+    double* o = out + 3 * ix[j + 1];
+    o[0] += hx;
+    o[1] += hy;
+    o[2] += hz;
+    s0 += hx;
+    s1 += hy;
+    s2 += hz;
+  }
+  double* o0 = out + 3 * ix[0];
+  o0[0] -= s0;
+  o0[1] -= s1;
+  o0[2] -= s2;
+}
+
+// Elastic and damping forces of every tetrahedron, added to out (3 x N): frames refreshed in
+// s.fem_q / s.fem_r.
+TELEOP_FEM_CLONES
+void element_forces(const DeformableModel& m, DeformableState& s, double beta, int iterations,
+                    double tolerance, double* out) {
+  const DeformableModel::Fem& f = m.fem;
+  const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
+  const double* x = s.x.data();
+  const double* v = s.v.data();
+  for (int t = 0; t < f.tet_count; ++t) {
+    const int* ix = f.tets.col(t).data();
+    const double* b = f.dm_inv.data() + 9 * t;
+    double ds[9], fg[9], g[9], sig[9], p[9];
+    edge_matrix(x, ix, ds);
+    mul33(ds, b, fg);  // F = Ds Dm^-1
+    double* r = s.fem_r.data() + 9 * t;
+    double* qd = s.fem_q.data() + 4 * t;
+    Eigen::Quaterniond q(qd[0], qd[1], qd[2], qd[3]);
+    extract_rotation(fg, q, iterations, tolerance, r);
+    qd[0] = q.w();
+    qd[1] = q.x();
+    qd[2] = q.y();
+    qd[3] = q.z();
+    mul33_tn(r, fg, g);  // R^T F
+    if (beta > 0.0) {
+      double dv[9], fd[9], gd[9];
+      edge_matrix(v, ix, dv);
+      mul33(dv, b, fd);
+      mul33_tn(r, fd, gd);
+      for (int k = 0; k < 9; ++k) g[k] += beta * gd[k];
+    }
+    linear_stress(g, mu, lambda, 1.0, sig);
+    mul33(r, sig, p);  // P = R sigma
+    scatter_forces(p, b, f.volume_m3(t), ix, 1.0, out);
+  }
+}
+
+// out = K p at the current frames (rotate = true) or at rest (false); p and out 3 x N.
+TELEOP_FEM_CLONES
+void apply_stiffness(const DeformableModel& m, const double* frames, const double* pv,
+                     double* out) {
+  const DeformableModel::Fem& f = m.fem;
+  const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
+  for (int t = 0; t < f.tet_count; ++t) {
+    const int* ix = f.tets.col(t).data();
+    const double* b = f.dm_inv.data() + 9 * t;
+    double dp[9], df[9], g[9], sig[9], p[9];
+    edge_matrix(pv, ix, dp);
+    mul33(dp, b, df);
+    if (frames != nullptr) {
+      const double* r = frames + 9 * t;
+      mul33_tn(r, df, g);
+      linear_stress(g, mu, lambda, 0.0, sig);
+      mul33(r, sig, p);
+      scatter_forces(p, b, f.volume_m3(t), ix, -1.0, out);
+    } else {
+      linear_stress(df, mu, lambda, 0.0, sig);
+      scatter_forces(sig, b, f.volume_m3(t), ix, -1.0, out);
+    }
+  }
+}
+
+// One node's contact along unit normal n with an obstacle moving at normal speed vo: depth d0
+// (> 0 inside) at the start of the step, spring k, damper c, node mass mi. Backward Euler on the
+// node: m (vn' - vn) = h (k (d0 - h (vn' - vo)) + c (vo - vn')). Returns the normal impulse
+// (>= 0: a contact pushes, never pulls) and updates the node's velocity.
+inline double node_contact(const Vec3& n, double d0, double vo, double k, double c, double mi,
+                           double h, Vec3& vi) {
+  const double vn = n.dot(vi);
+  const double vn_new = (mi * vn + h * k * (d0 + h * vo) + h * c * vo) / (mi + h * h * k + h * c);
+  const double j = mi * (vn_new - vn);
+  if (!(j > 0.0)) return 0.0;
+  vi += (vn_new - vn) * n;
+  return j;
+}
+
+// Coulomb friction of a contact with normal impulse jn: the tangential impulse <= mu jn, never
+// more than stops the sliding (relative to an obstacle at rest).
+inline void node_friction(const Vec3& n, double jn, double mu, double mi, Vec3& vi) {
+  const Vec3 vt = vi - n.dot(vi) * n;
+  const double st = vt.norm();
+  if (st > 1e-12) vi -= (std::min(mu * jn, mi * st) / (mi * st)) * vt;
+}
+
+// The tip sphere's centre at fraction a of the caller's step.
+inline Vec3 tip_centre(const DeformableState& s, double a) {
+  return s.tip_from_m + a * (s.tip_to_m - s.tip_from_m);
+}
+
+// Explicit and symplectic Euler: contacts of the surface nodes as implicit per-node impulses on
+// s.v (positions at the start of the step), the tip's reaction into s.tip_force_n (impulse).
+void contact_impulses(const DeformableModel& m, DeformableState& s, double h, double tip_alpha) {
+  const int ns = m.node_count;
+  const DeformableParams& p = m.params;
+  const bool tip = s.tip_radius_m > 0.0;
+  const Vec3 c = tip ? tip_centre(s, tip_alpha) : Vec3::Zero();
+  const double r = s.tip_radius_m, r2 = r * r;
+  int touching = 0, plane_contacts = 0;
+  double deepest = 0.0;
+  for (int i = 0; i < ns; ++i) {
+    if (!s.pinned.empty() && s.pinned[static_cast<std::size_t>(i)]) continue;
+    const double mi = m.mass_kg(i), k = m.contact_k(i), cd = m.contact_c(i);
+    Vec3 vi = s.v.col(i);
+    const Vec3 xi = s.x.col(i);
+    for (int pl = 0; pl < m.plane_count; ++pl) {
+      const Plane& plane = m.planes[static_cast<std::size_t>(pl)];
+      const double d0 = plane.offset_m - plane.normal.dot(xi);
+      if (d0 <= 0.0) continue;
+      const double j = node_contact(plane.normal, d0, 0.0, k, cd, mi, h, vi);
+      if (j > 0.0 && p.friction && plane.friction > 0.0) {
+        node_friction(plane.normal, j, plane.friction, mi, vi);
+      }
+      s.plane_force_n += (j / h) * plane.normal;
+      ++plane_contacts;
+    }
+    if (tip) {
+      const Vec3 e = xi - c;
+      const double e2 = e.squaredNorm();
+      if (e2 < r2 && e2 > 0.0) {
+        const double dist = std::sqrt(e2);
+        const Vec3 n = e / dist;
+        const double j = node_contact(n, r - dist, n.dot(s.tip_velocity_mps), k, cd, mi, h, vi);
+        s.tip_force_n -= j * n;  // impulse on the tip; step() divides by the step
+        ++touching;
+        deepest = std::max(deepest, r - dist);
+      }
+    }
+    s.v.col(i) = vi;
+  }
+  s.contact_count = plane_contacts;
+  s.tip_node_count = touching;
+  s.tip_depth_m = deepest;
+}
+
+// Implicit Euler: the contacts of the surface nodes as springs in the system. Records each one
+// (node, normal, (k, c, depth, obstacle normal speed)); the tip's are flagged by a negative
+// node index (~i).
+void collect_contacts(const DeformableModel& m, DeformableState& s, double tip_alpha) {
+  const int ns = m.node_count;
+  const bool tip = s.tip_radius_m > 0.0;
+  const Vec3 c = tip ? tip_centre(s, tip_alpha) : Vec3::Zero();
+  const double r = s.tip_radius_m, r2 = r * r;
+  int nc = 0, touching = 0, plane_contacts = 0;
+  double deepest = 0.0;
+  const int cap = static_cast<int>(s.contact_node.size());
+  for (int i = 0; i < ns && nc < cap; ++i) {
+    if (!s.pinned.empty() && s.pinned[static_cast<std::size_t>(i)]) continue;
+    const Vec3 xi = s.x.col(i);
+    for (int pl = 0; pl < m.plane_count && nc < cap; ++pl) {
+      const Plane& plane = m.planes[static_cast<std::size_t>(pl)];
+      const double d0 = plane.offset_m - plane.normal.dot(xi);
+      if (d0 <= 0.0) continue;
+      s.contact_node[static_cast<std::size_t>(nc)] = i;
+      s.contact_normal.col(nc) = plane.normal;
+      s.contact_coef.col(nc) << m.contact_k(i), m.contact_c(i), d0, 0.0;
+      ++nc;
+      ++plane_contacts;
+    }
+    if (tip && nc < cap) {
+      const Vec3 e = xi - c;
+      const double e2 = e.squaredNorm();
+      if (e2 < r2 && e2 > 0.0) {
+        const double dist = std::sqrt(e2);
+        const Vec3 n = e / dist;
+        s.contact_node[static_cast<std::size_t>(nc)] = ~i;
+        s.contact_normal.col(nc) = n;
+        s.contact_coef.col(nc) << m.contact_k(i), m.contact_c(i), r - dist,
+            n.dot(s.tip_velocity_mps);
+        ++nc;
+        ++touching;
+        deepest = std::max(deepest, r - dist);
+      }
+    }
+  }
+  s.fem_contacts = nc;
+  s.contact_count = plane_contacts;
+  s.tip_node_count = touching;
+  s.tip_depth_m = deepest;
+}
+
+// y = A p for A = (1 + h alpha) M + (h beta + h^2) K + sum_contacts (h c + h^2 k) n n^T, held
+// nodes' rows and columns replaced by the identity (their dv is fixed at 0).
+void apply_system(const DeformableModel& m, DeformableState& s, const Eigen::Matrix3Xd& p,
+                  Eigen::Matrix3Xd& y, double h) {
+  const DeformableModel::Fem& f = m.fem;
+  const int n = f.node_count;
+  const double a = 1.0 + h * m.params.mass_damping_per_s;
+  const double kk = h * m.params.stiffness_damping_s + h * h;
+  y.leftCols(n).setZero();
+  apply_stiffness(m, s.fem_r.data(), p.data(), y.data());
+  for (int i = 0; i < n; ++i) y.col(i) = a * f.mass_kg(i) * p.col(i) + kk * y.col(i);
+  for (int c = 0; c < s.fem_contacts; ++c) {
+    const int code = s.contact_node[static_cast<std::size_t>(c)];
+    const int i = code >= 0 ? code : ~code;
+    const Vec3 nn = s.contact_normal.col(c);
+    const double w = h * s.contact_coef(1, c) + h * h * s.contact_coef(0, c);
+    y.col(i) += (w * nn.dot(p.col(i))) * nn;
+  }
+  for (int i = 0; i < n; ++i) {
+    if (s.pinned[static_cast<std::size_t>(i)]) y.col(i) = p.col(i);
+  }
+}
+
+// Implicit Euler: (1 + h alpha) M + (h beta + h^2) K + contacts) dv = h (f - h K v + contact
+// forces), K at the current frames, by Jacobi-preconditioned conjugate gradients; then x += h v.
+void implicit_step(const DeformableModel& m, DeformableState& s, double h, double tip_alpha) {
+  const DeformableModel::Fem& f = m.fem;
+  const int n = f.node_count;
+  collect_contacts(m, s, tip_alpha);
+  Eigen::Matrix3Xd& b = s.work_b;
+  Eigen::Matrix3Xd& ap = s.work_ap;
+  ap.leftCols(n).setZero();
+  apply_stiffness(m, s.fem_r.data(), s.v.data(), ap.data());  // K v
+  b.leftCols(n) = h * (s.work_f.leftCols(n) - h * ap.leftCols(n));
+  for (int c = 0; c < s.fem_contacts; ++c) {
+    const int code = s.contact_node[static_cast<std::size_t>(c)];
+    const int i = code >= 0 ? code : ~code;
+    const Vec3 nn = s.contact_normal.col(c);
+    const double k = s.contact_coef(0, c), cd = s.contact_coef(1, c), d0 = s.contact_coef(2, c),
+                 vo = s.contact_coef(3, c);
+    // spring at the step's start plus the obstacle's motion over the step, damper on v
+    const double fn = k * (d0 + h * vo) + cd * vo - (h * k + cd) * nn.dot(s.v.col(i));
+    b.col(i) += h * fn * nn;
+  }
+  Eigen::Matrix3Xd& dg = s.work_diag;
+  const double a = 1.0 + h * m.params.mass_damping_per_s;
+  const double kk = h * m.params.stiffness_damping_s + h * h;
+  for (int i = 0; i < n; ++i) {
+    dg.col(i) = (a * f.mass_kg(i) + kk * f.precond.col(i).array()).matrix();
+  }
+  for (int c = 0; c < s.fem_contacts; ++c) {
+    const int code = s.contact_node[static_cast<std::size_t>(c)];
+    const int i = code >= 0 ? code : ~code;
+    const Vec3 nn = s.contact_normal.col(c);
+    const double w = h * s.contact_coef(1, c) + h * h * s.contact_coef(0, c);
+    dg.col(i) += w * nn.cwiseProduct(nn);
+  }
+  for (int i = 0; i < n; ++i) {
+    if (s.pinned[static_cast<std::size_t>(i)]) {
+      b.col(i).setZero();
+      dg.col(i).setOnes();
+    }
+  }
+  auto dgi = dg.leftCols(n).cwiseInverse();
+  Eigen::Matrix3Xd& dv = s.work_dv;
+  Eigen::Matrix3Xd& r = s.work_r;
+  Eigen::Matrix3Xd& z = s.work_z;
+  Eigen::Matrix3Xd& pp = s.work_p;
+  dv.leftCols(n).setZero();
+  r.leftCols(n) = b.leftCols(n);
+  z.leftCols(n) = r.leftCols(n).cwiseProduct(dgi);
+  pp.leftCols(n) = z.leftCols(n);
+  double rz = (r.leftCols(n).array() * z.leftCols(n).array()).sum();
+  const double rz0 = rz;
+  const double tol2 = m.params.cg_tolerance * m.params.cg_tolerance;
+  int it = 0;
+  while (it < m.params.cg_max_iterations && rz > tol2 * rz0 && rz0 > 0.0) {
+    apply_system(m, s, pp, ap, h);
+    const double pap = (pp.leftCols(n).array() * ap.leftCols(n).array()).sum();
+    if (!(pap > 0.0)) break;
+    const double alpha = rz / pap;
+    dv.leftCols(n) += alpha * pp.leftCols(n);
+    r.leftCols(n) -= alpha * ap.leftCols(n);
+    z.leftCols(n) = r.leftCols(n).cwiseProduct(dgi);
+    const double rz_new = (r.leftCols(n).array() * z.leftCols(n).array()).sum();
+    pp.leftCols(n) = z.leftCols(n) + (rz_new / rz) * pp.leftCols(n);
+    rz = rz_new;
+    ++it;
+  }
+  s.cg_iterations = it;
+  s.cg_residual = rz0 > 0.0 ? std::sqrt(std::max(rz, 0.0) / rz0) : 0.0;
+  for (int i = 0; i < n; ++i) {
+    if (!s.pinned[static_cast<std::size_t>(i)]) s.v.col(i) += dv.col(i);
+  }
+  // the contact forces the solve applied (at the new velocities), a contact pushing only
+  for (int c = 0; c < s.fem_contacts; ++c) {
+    const int code = s.contact_node[static_cast<std::size_t>(c)];
+    const int i = code >= 0 ? code : ~code;
+    const Vec3 nn = s.contact_normal.col(c);
+    const double k = s.contact_coef(0, c), cd = s.contact_coef(1, c), d0 = s.contact_coef(2, c),
+                 vo = s.contact_coef(3, c);
+    const double vn = nn.dot(s.v.col(i));
+    const double fn = std::max(0.0, k * (d0 - h * (vn - vo)) + cd * (vo - vn));
+    if (code >= 0) {
+      s.plane_force_n += fn * nn;
+    } else {
+      s.tip_force_n -= (h * fn) * nn;
+    }
+  }
+  for (int i = 0; i < n; ++i) s.x.col(i) += h * s.v.col(i);
+}
+
+}  // namespace
+
+void build_fem(DeformableModel& m, const teleop::mesh::TetMesh& tm) {
+  DeformableModel::Fem& f = m.fem;
+  const DeformableParams& p = m.params;
+  f.node_count = tm.node_count();
+  f.tet_count = tm.tet_count();
+  f.rest = tm.vertices;
+  f.tets = tm.tets;
+  f.dm_inv.assign(9 * static_cast<std::size_t>(f.tet_count), 0.0);
+  f.volume_m3.resize(f.tet_count);
+  double volume = 0.0;
+  for (int t = 0; t < f.tet_count; ++t) {
+    Eigen::Matrix3d dm;
+    for (int c = 0; c < 3; ++c) dm.col(c) = f.rest.col(f.tets(c + 1, t)) - f.rest.col(f.tets(0, t));
+    const double vol = dm.determinant() / 6.0;
+    if (!(vol > 0.0)) bad("tetrahedron " + std::to_string(t) + " has no positive volume");
+    f.volume_m3(t) = vol;
+    volume += vol;
+    Eigen::Map<Eigen::Matrix3d>(f.dm_inv.data() + 9 * t) = dm.inverse();
+  }
+  // material
+  const double E = p.youngs_modulus_pa, nu = p.poisson_ratio;
+  m.lame_lambda_pa = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  m.lame_mu_pa = E / (2.0 * (1.0 + nu));
+  m.volume_m3 = volume;
+  m.total_mass_kg = p.density_kg_per_m3 > 0.0 ? p.density_kg_per_m3 * volume : p.mass_kg;
+  m.density_kg_per_m3 = m.total_mass_kg / volume;
+  // lumped masses: a quarter of each tetrahedron's
+  f.mass_kg = Eigen::VectorXd::Zero(f.node_count);
+  for (int t = 0; t < f.tet_count; ++t) {
+    for (int k = 0; k < 4; ++k) f.mass_kg(f.tets(k, t)) += 0.25 * m.density_kg_per_m3 * f.volume_m3(t);
+  }
+  f.inv_mass = f.mass_kg.cwiseInverse();
+  m.rest_centre_m = f.rest * f.mass_kg / m.total_mass_kg;
+  m.has_centre = false;
+  m.centre_mass_kg = 0.0;
+  const int ns = m.node_count;
+  m.mass_kg = f.mass_kg.head(ns);
+  m.inv_mass = f.inv_mass.head(ns);
+  // node areas of the surface (a third of each adjacent triangle)
+  m.area_m2 = Eigen::VectorXd::Zero(ns);
+  const auto& X = m.mesh.vertices;
+  for (int t = 0; t < m.mesh.triangle_count(); ++t) {
+    const int a = m.mesh.triangles(0, t), b = m.mesh.triangles(1, t), c = m.mesh.triangles(2, t);
+    const double area = 0.5 * (X.col(b) - X.col(a)).cross(X.col(c) - X.col(a)).norm();
+    m.area_m2(a) += area / 3.0;
+    m.area_m2(b) += area / 3.0;
+    m.area_m2(c) += area / 3.0;
+  }
+  // contact: pressure per depth on each node's area, damped at contact_damping_ratio
+  const double size = std::cbrt(volume);
+  f.pressure_stiffness_pa_per_m = p.contact_pressure_stiffness_pa_per_m > 0.0
+                                      ? p.contact_pressure_stiffness_pa_per_m
+                                      : 1000.0 * E / (1.0 - nu * nu) / size;
+  m.contact_k = f.pressure_stiffness_pa_per_m * m.area_m2;
+  m.contact_c = (2.0 * p.contact_damping_ratio) * (m.contact_k.cwiseProduct(m.mass_kg)).cwiseSqrt();
+  // diagonal of the rest stiffness: K_jj = V (mu |b_j|^2 I + (lambda + mu) b_j b_j^T)
+  f.precond = Eigen::Matrix3Xd::Zero(3, f.node_count);
+  const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
+  for (int t = 0; t < f.tet_count; ++t) {
+    const Eigen::Map<const Eigen::Matrix3d> b(f.dm_inv.data() + 9 * t);
+    Vec3 grad[4];
+    for (int j = 0; j < 3; ++j) grad[j + 1] = b.row(j).transpose();
+    grad[0] = -(grad[1] + grad[2] + grad[3]);
+    for (int k = 0; k < 4; ++k) {
+      const Vec3& g = grad[k];
+      f.precond.col(f.tets(k, t)) +=
+          f.volume_m3(t) * (mu * g.squaredNorm() * Vec3::Ones() + (lambda + mu) * g.cwiseProduct(g));
+    }
+  }
+}
+
+void init_fem_state(const DeformableModel& m, DeformableState& s) {
+  const DeformableModel::Fem& f = m.fem;
+  const int n = f.node_count;
+  s.x = f.rest;
+  s.v = Eigen::Matrix3Xd::Zero(3, n);
+  s.f_ext = Eigen::Matrix3Xd::Zero(3, n);
+  s.pinned.assign(static_cast<std::size_t>(n), 0);
+  s.pin_target = s.x;
+  s.force = Eigen::Matrix3Xd::Zero(3, n);
+  for (Eigen::Matrix3Xd* w : {&s.work_f, &s.work_dv, &s.work_r, &s.work_z, &s.work_p, &s.work_ap,
+                              &s.work_diag, &s.work_b}) {
+    *w = Eigen::Matrix3Xd::Zero(3, n + 1);
+  }
+  const int cap = m.node_count * (m.plane_count + 1);
+  s.contact_node.assign(static_cast<std::size_t>(cap), 0);
+  s.contact_normal = Eigen::Matrix3Xd::Zero(3, cap);
+  s.contact_coef = Eigen::Matrix4Xd::Zero(4, cap);
+  s.fem_q.assign(4 * static_cast<std::size_t>(f.tet_count), 0.0);
+  s.fem_r.assign(9 * static_cast<std::size_t>(f.tet_count), 0.0);
+  for (int t = 0; t < f.tet_count; ++t) {
+    s.fem_q[4 * static_cast<std::size_t>(t)] = 1.0;
+    for (int k = 0; k < 3; ++k) s.fem_r[9 * static_cast<std::size_t>(t) + 4 * k] = 1.0;
+  }
+  s.pin_goal = Eigen::Matrix3Xd::Zero(3, n);
+  s.pin_start = Eigen::Matrix3Xd::Zero(3, n);
+}
+
+void fem_internal_forces(const DeformableModel& m, DeformableState& s, int rotation_iterations,
+                         double rotation_tolerance_rad) {
+  const int n = m.fem.node_count;
+  s.work_f.leftCols(n).setZero();
+  element_forces(m, s, m.params.stiffness_damping_s, rotation_iterations, rotation_tolerance_rad,
+                 s.work_f.data());
+}
+
+TELEOP_FEM_CLONES
+void fem_step(const DeformableModel& m, DeformableState& s, double h, double tip_alpha,
+              KernelSums& sums) {
+  const DeformableModel::Fem& f = m.fem;
+  const DeformableParams& p = m.params;
+  const int n = f.node_count;
+  Eigen::Matrix3Xd& F = s.work_f;
+  // internal forces (elastic + stiffness damping), then gravity, drag and the caller's loads
+  F.leftCols(n).setZero();
+  element_forces(m, s, p.stiffness_damping_s, kRotationIterations, kRotationTolerance, F.data());
+  const double alpha = p.mass_damping_per_s;
+  Vec3 vmean = Vec3::Zero();
+  if (alpha > 0.0) {
+    for (int i = 0; i < n; ++i) vmean += f.mass_kg(i) * s.v.col(i);
+    vmean /= m.total_mass_kg;
+  }
+  for (int i = 0; i < n; ++i) {
+    const double mi = f.mass_kg(i);
+    F.col(i) += mi * p.gravity_mps2 - (alpha * mi) * (s.v.col(i) - vmean) + s.f_ext.col(i);
+  }
+  s.force = F.leftCols(n);
+  s.plane_force_n.setZero();
+  const auto kind = p.integrator;
+  if (kind == IntegratorKind::kImplicitEuler) {
+    implicit_step(m, s, h, tip_alpha);
+  } else {
+    if (kind == IntegratorKind::kExplicitEuler) {
+      // positions with the velocities at the start; contacts then act on the new velocities
+      for (int i = 0; i < n; ++i) s.x.col(i) += h * s.v.col(i);
+    }
+    for (int i = 0; i < n; ++i) {
+      if (!s.pinned[static_cast<std::size_t>(i)]) s.v.col(i) += (h * f.inv_mass(i)) * F.col(i);
+    }
+    contact_impulses(m, s, h, tip_alpha);
+    if (kind == IntegratorKind::kSymplecticEuler) {
+      for (int i = 0; i < n; ++i) s.x.col(i) += h * s.v.col(i);
+    }
+  }
+  // held nodes onto their targets; the sums of the post-step checks
+  double fastest2 = 0.0, sum_x = 0.0, sum_v = 0.0;
+  Vec3 mx = Vec3::Zero();
+  for (int i = 0; i < n; ++i) {
+    if (s.pinned[static_cast<std::size_t>(i)]) s.x.col(i) = s.pin_target.col(i);
+    const double sp2 = s.v.col(i).squaredNorm();
+    fastest2 = sp2 > fastest2 ? sp2 : fastest2;
+    sum_x += s.x.col(i).sum();
+    sum_v += sp2;
+    mx += f.mass_kg(i) * s.x.col(i);
+  }
+  sums.fastest2 = fastest2;
+  sums.sum_x = sum_x;
+  sums.sum_v = sum_v;
+  sums.mx[0] = mx.x();
+  sums.mx[1] = mx.y();
+  sums.mx[2] = mx.z();
+}
+
+void fem_apply_rest_stiffness(const DeformableModel& m, const Eigen::VectorXd& p,
+                              Eigen::VectorXd& y) {
+  y.setZero(p.size());
+  apply_stiffness(m, nullptr, p.data(), y.data());
+}
+
+double fem_gershgorin_lambda(const DeformableModel& m) {
+  const DeformableModel::Fem& f = m.fem;
+  const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
+  Eigen::VectorXd row = Eigen::VectorXd::Zero(f.node_count);
+  for (int t = 0; t < f.tet_count; ++t) {
+    const Eigen::Map<const Eigen::Matrix3d> b(f.dm_inv.data() + 9 * t);
+    Vec3 grad[4];
+    for (int j = 0; j < 3; ++j) grad[j + 1] = b.row(j).transpose();
+    grad[0] = -(grad[1] + grad[2] + grad[3]);
+    // ||K_ij|| <= V (mu |g_i.g_j| + (lambda + mu) |g_i| |g_j|)
+    for (int i = 0; i < 4; ++i) {
+      for (int j = 0; j < 4; ++j) {
+        row(f.tets(i, t)) += f.volume_m3(t) * (mu * std::fabs(grad[i].dot(grad[j])) +
+                                               (lambda + mu) * grad[i].norm() * grad[j].norm());
+      }
+    }
+  }
+  return row.cwiseProduct(f.inv_mass).maxCoeff();
+}
+
+double fem_elastic_energy(const DeformableModel& m, const DeformableState& s) {
+  const DeformableModel::Fem& f = m.fem;
+  const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
+  double e = 0.0;
+  for (int t = 0; t < f.tet_count; ++t) {
+    const int* ix = f.tets.col(t).data();
+    const double* b = f.dm_inv.data() + 9 * t;
+    double ds[9], fg[9], g[9];
+    edge_matrix(s.x.data(), ix, ds);
+    mul33(ds, b, fg);
+    mul33_tn(s.fem_r.data() + 9 * t, fg, g);
+    double eps[9];
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) eps[3 * j + i] = 0.5 * (g[3 * j + i] + g[3 * i + j]) - (i == j ? 1.0 : 0.0);
+    }
+    double ee = 0.0;
+    for (double x : eps) ee += x * x;
+    const double tr = eps[0] + eps[4] + eps[8];
+    e += f.volume_m3(t) * (mu * ee + 0.5 * lambda * tr * tr);
+  }
+  return e;
+}
+
+}  // namespace teleop::sim::deformable::detail
