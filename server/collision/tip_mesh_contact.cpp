@@ -34,6 +34,8 @@ void TipMeshContact::reset(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xi& tr
   node_contacts_ = 0;
 }
 
+void TipMeshContact::set_node_areas(const Eigen::VectorXd& area_m2) { node_area_m2_ = area_m2; }
+
 Eigen::Vector3d TipMeshContact::anchor_position(const Eigen::Matrix3Xd& x) const {
   // the exact surface point: barycentric on the anchor triangle
   const Eigen::Matrix3Xi& t = topo_.triangles();
@@ -275,8 +277,12 @@ TELEOP_TIP_INLINE Eigen::Vector3d TipMeshContact::node_penalty(
       if (v != nullptr) rate = -(v->col(vi) - tip_velocity_mps).dot(u);
       const double ramp =
           params_.damping_ramp_m > 0.0 ? std::min(1.0, depth / params_.damping_ramp_m) : 1.0;
-      const double mag = std::max(0.0, params_.node_stiffness_n_per_m * depth +
-                                           params_.node_damping_ns_per_m * ramp * rate);
+      // a pressure per depth: the node's share of the surface over the reference area
+      const double w = params_.node_reference_area_m2 > 0.0 && vi < node_area_m2_.size()
+                           ? node_area_m2_(vi) / params_.node_reference_area_m2
+                           : 1.0;
+      const double mag = std::max(0.0, w * (params_.node_stiffness_n_per_m * depth +
+                                            params_.node_damping_ns_per_m * ramp * rate));
       if (node_contacts_ < static_cast<int>(node_list_.size())) {
         node_list_[static_cast<std::size_t>(node_contacts_)] = vi;
         node_force_.col(node_contacts_) = mag * u;

@@ -69,6 +69,12 @@ struct TipContactParams {
   double node_stiffness_n_per_m = 200.0;
   /// Damping of each node penalty (compression only, ramped in) [N s/m]; >= k_node dt / 2.
   double node_damping_ns_per_m = 0.2;
+  /// Node area the two values above are for [m^2]: node i's penalty is scaled by
+  /// A_i / this (A_i its area at rest, set_node_areas), so the penalty is a pressure per depth
+  /// and the force on the tip does not grow as the mesh is refined. The default is the mean
+  /// node area of the paper's level-4 sphere (radius 0.25 m). 0: the same penalty on every
+  /// node whatever its area.
+  double node_reference_area_m2 = 3.06e-4;
 };
 
 /// Outcome of one contact update.
@@ -118,6 +124,10 @@ class TipMeshContact {
                           const Eigen::Vector3d& tip_prev_m, const Eigen::Vector3d& tip_now_m,
                           double tip_radius_m, const Eigen::Vector3d& tip_velocity_mps, double dt_s,
                           Eigen::Matrix3Xd& node_forces_n);
+
+  /// The nodes' areas at rest [m^2] (size: the mesh's nodes), for node_reference_area_m2;
+  /// kept across reset(). Allocates.
+  void set_node_areas(const Eigen::VectorXd& area_m2);
 
   /// Forgets the current contact (the next update detects afresh).
   void release() { in_contact_ = false; }
@@ -189,6 +199,7 @@ class TipMeshContact {
   std::vector<int> hit_tris_;         ///< scratch: triangles near the tip
   std::vector<std::uint32_t> stamp_;  ///< scratch: node visited marks
   std::uint32_t stamp_counter_ = 0;
+  Eigen::VectorXd node_area_m2_;  ///< nodes' rest areas (empty: every node the reference)
   std::vector<int> node_list_;   ///< scratch: nodes inside the tip sphere
   Eigen::Matrix3Xd node_force_;  ///< scratch: their penalty forces [N]
   int node_contacts_ = 0;

@@ -197,11 +197,17 @@ struct ServerNode::Impl {
         sim::SimEvent body{};
         std::snprintf(
             body.message, sizeof(body.message),
-            "deformable %d: %s %s, kernel %s%s, %d nodes, %d sub-step(s) per step", b.object_id,
-            sim::deformable::to_string(p.model), sim::deformable::to_string(p.integrator),
-            sim::deformable::to_string(p.kernel),
+            "deformable %d: %s %s, kernel %s%s, %d nodes%s, %d sub-step(s) per step",
+            b.object_id, sim::deformable::to_string(p.model),
+            sim::deformable::to_string(p.integrator), sim::deformable::to_string(p.kernel),
             simd ? (sim::deformable::simd_kernel_vectorised() ? " (AVX2)" : " (portable)") : "",
-            b.body.node_count, b.body.substeps_for(1.0 / options.rate_hz));
+            b.body.state_node_count(),
+            p.model == sim::deformable::ModelKind::kFem
+                ? (" (" + std::to_string(b.body.node_count) + " on the surface), " +
+                   std::to_string(b.body.fem.tet_count) + " tetrahedra")
+                      .c_str()
+                : "",
+            b.body.substeps_for(1.0 / options.rate_hz));
         body.value = static_cast<double>(b.object_id);
         publish_event(body);
         if (!options.quiet) std::cerr << "teleop_server: " << body.message << "\n";

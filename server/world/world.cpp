@@ -284,6 +284,7 @@ WorldData make_world_data(const WorldModel& model) {
     DeformableBodyData& b = d.bodies.emplace_back();
     b.state = deformable::make_state(bm.body);
     b.contact.set_params(bm.contact);
+    b.contact.set_node_areas(bm.body.area_m2);
     b.contact.reset(b.state.x, bm.body.mesh.triangles);
   }
   read_slave(d, d.out);

@@ -14,7 +14,8 @@ collision::TipContactParams load_tip_contact_params(const config::Node& node) {
   if (!node.defined()) return p;
   node.reject_unknown_keys({"stiffness_n_per_m", "damping_ns_per_m", "damping_ramp_m",
                             "friction_static", "friction_kinetic", "max_force_n", "patch_radius_m",
-                            "patch_blend", "node_stiffness_n_per_m", "node_damping_ns_per_m"});
+                            "patch_blend", "node_stiffness_n_per_m", "node_damping_ns_per_m",
+                            "node_reference_area_m2"});
   p.stiffness_n_per_m = node.number_or("stiffness_n_per_m", p.stiffness_n_per_m, 1.0, 1e7);
   p.damping_ns_per_m = node.number_or("damping_ns_per_m", p.damping_ns_per_m, 0.0, 1e5);
   p.damping_ramp_m = node.number_or("damping_ramp_m", p.damping_ramp_m, 0.0, 0.1);
@@ -31,6 +32,8 @@ collision::TipContactParams load_tip_contact_params(const config::Node& node) {
       node.number_or("node_stiffness_n_per_m", p.node_stiffness_n_per_m, 0.0, 1e6);
   p.node_damping_ns_per_m =
       node.number_or("node_damping_ns_per_m", p.node_damping_ns_per_m, 0.0, 1e4);
+  p.node_reference_area_m2 =
+      node.number_or("node_reference_area_m2", p.node_reference_area_m2, 0.0, 1.0);
   return p;
 }
 

@@ -1,0 +1,181 @@
+// teleop_experiment validate: every deformable model, at several mesh sizes and two materials,
+// measured against physics (server/world/physics_validation.hpp): Hertz contact (the ball on the
+// floor pressed by the tip, with and without its weight; the tip pressing a ball held at its
+// centre), Lamb's S2, T2 and S0 frequencies of a free ball, and the sag under its own weight
+// against the independent CalculiX reference of tests/reference/calculix/ball_reference.csv.
+// Writes validation.csv (one row per model, integrator, mesh, material and quantity) and
+// validation.png (tests/charts/validation.py).
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/util/csv.hpp"
+#include "common/util/registry.hpp"
+#include "server/world/physics_validation.hpp"
+
+namespace {
+
+namespace df = teleop::sim::deformable;
+namespace va = teleop::sim::validation;
+
+// (material, case, quantity, travel_mm) -> value of the CalculiX reference (fine mesh; the
+// geometrically nonlinear solution where there is one, else small strain)
+std::map<std::string, double> read_ccx_reference() {
+  std::map<std::string, double> out, small;
+  const std::string path =
+      std::string(TELEOP_SOURCE_DIR) + "/tests/reference/calculix/ball_reference.csv";
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) f.push_back(cell);
+    if (f.size() < 8 || f[7] != "fine") continue;
+    const std::string key = f[0] + "," + f[1] + "," + f[2] + "," + f[3];
+    const double v = std::strtod(f[4].c_str(), nullptr);
+    (f[6] == "nlgeom" ? out : small)[key] = v;
+  }
+  for (const auto& [k, v] : small) out.emplace(k, v);
+  return out;
+}
+
+std::string travel_key(double travel_m) {
+  if (!(travel_m > 0.0)) return "";
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", travel_m * 1e3);
+  return b;
+}
+
+struct Case {
+  df::ModelKind model;
+  df::IntegratorKind integrator;
+  int level;
+  va::Material material;
+};
+
+int run_validate(const teleop::CommandArgs& args) {
+  std::filesystem::create_directories(args.out_dir);
+  const bool quick = args.quick;
+  const std::vector<double> travels =
+      quick ? std::vector<double>{2e-3, 5e-3} : std::vector<double>{1e-3, 2e-3, 5e-3, 10e-3, 20e-3};
+  const double lamb_s = quick ? 0.6 : 1.0;
+  const auto sym = df::IntegratorKind::kSymplecticEuler;
+  const auto imp = df::IntegratorKind::kImplicitEuler;
+  std::vector<Case> cases;
+  if (quick) {
+    cases = {{df::ModelKind::kFem, sym, 1, va::foam()},
+             {df::ModelKind::kMassSpring, sym, 3, va::foam()}};
+  } else {
+    for (const va::Material& mat : {va::foam(), va::silicone()}) {
+      for (int level : {1, 2, 3}) cases.push_back({df::ModelKind::kFem, sym, level, mat});
+      cases.push_back({df::ModelKind::kFem, imp, 2, mat});
+    }
+    for (int level : {3, 4, 5}) cases.push_back({df::ModelKind::kMassSpring, sym, level, va::foam()});
+    for (auto model : {df::ModelKind::kNavierLinear, df::ModelKind::kNavierCorotational}) {
+      for (int level : {3, 4}) cases.push_back({model, sym, level, va::foam()});
+    }
+  }
+  const auto ccx = read_ccx_reference();
+  teleop::CsvWriter csv((args.out_dir / "validation.csv").string(),
+                        {"model", "integrator", "mesh", "nodes", "tets", "material", "quantity",
+                         "travel_mm", "reference", "value", "error_pct", "reference_source",
+                         "step_us"});
+  auto row = [&](const Case& c, const va::PressResult& r, const std::string& quantity,
+                 double travel_m, double reference, double value, const std::string& source,
+                 double step_us) {
+    const double err = std::isfinite(reference) && reference != 0.0 && std::isfinite(value)
+                           ? 100.0 * (value / reference - 1.0)
+                           : std::numeric_limits<double>::quiet_NaN();
+    csv.row_text({std::string(df::to_string(c.model)), std::string(df::to_string(c.integrator)),
+             "L" + std::to_string(c.level), std::to_string(r.nodes), std::to_string(r.tets),
+             c.material.name, quantity, travel_key(travel_m), teleop::format_number(reference),
+             teleop::format_number(value), teleop::format_number(err), source,
+             teleop::format_number(step_us)});
+  };
+  int failures = 0;
+  for (const Case& c : cases) {
+    const df::DeformableParams p = va::ball_params(c.model, c.integrator, c.level, c.material);
+    const double weight = p.mass_kg * 9.81;
+    std::fprintf(stderr, "validate: %s %s L%d %s\n", df::to_string(c.model),
+                 df::to_string(c.integrator), c.level, c.material.name.c_str());
+    // Lamb
+    va::PressResult shape;  // nodes and tets for the Lamb rows
+    for (auto mode : {va::LambMode::kS2, va::LambMode::kT2, va::LambMode::kS0}) {
+      const double ref = va::lamb_frequency_hz(mode, c.material, va::kBallRadiusM);
+      double us = 0.0;
+      const double f = va::free_vibration_hz(p, mode, lamb_s, ref, &us);
+      const df::DeformableModel m = df::make_model(p);
+      shape.nodes = m.state_node_count();
+      shape.tets = c.model == df::ModelKind::kFem ? m.fem.tet_count : 0;
+      row(c, shape, std::string("lamb_") + va::to_string(mode) + "_hz", 0.0, ref, f, "lamb", us);
+    }
+    // Hertz: on the floor without and with the weight; held at the centre
+    const va::PressResult free =
+        va::press_ball(p, va::Support::kFloor, false, travels, 0.01, quick ? 0.1 : 0.2);
+    failures += free.faults > 0;
+    for (std::size_t k = 0; k < travels.size(); ++k) {
+      const double ref =
+          va::hertz_floor_force_n(c.material, va::kBallRadiusM, va::kTipRadiusM, travels[k], 0.0);
+      row(c, free, "tip_force_floor_n", travels[k], ref, free.force_n[k], "hertz", free.step_us);
+    }
+    const va::PressResult heavy =
+        va::press_ball(p, va::Support::kFloor, true, travels, 0.01, quick ? 0.6 : 1.5);
+    failures += heavy.faults > 0;
+    for (std::size_t k = 0; k < travels.size(); ++k) {
+      const double ref = va::hertz_floor_force_n(c.material, va::kBallRadiusM, va::kTipRadiusM,
+                                                 travels[k], weight);
+      row(c, heavy, "tip_force_floor_weight_n", travels[k], ref, heavy.force_n[k], "hertz",
+          heavy.step_us);
+    }
+    const std::string mat = c.material.name;
+    auto ccx_ref = [&](const std::string& key) {
+      const auto it = ccx.find(key);
+      return it == ccx.end() ? std::numeric_limits<double>::quiet_NaN() : it->second;
+    };
+    row(c, heavy, "sag_top_m", 0.0, ccx_ref(mat + ",sag_floor,top_descent,"), heavy.sag_top_m,
+        "calculix", heavy.step_us);
+    row(c, heavy, "sag_centre_m", 0.0, ccx_ref(mat + ",sag_floor,centre_descent,"),
+        heavy.sag_centre_m, "calculix", heavy.step_us);
+    row(c, heavy, "floor_force_n", 0.0, weight, heavy.floor_force_n, "weight", heavy.step_us);
+    if (c.model == df::ModelKind::kFem) {
+      const va::PressResult held =
+          va::press_ball(p, va::Support::kHeldCentre, false, travels, 0.01, 0.1);
+      failures += held.faults > 0;
+      for (std::size_t k = 0; k < travels.size(); ++k) {
+        row(c, held, "tip_force_held_n", travels[k],
+            va::hertz_tip_force_n(c.material, va::kBallRadiusM, va::kTipRadiusM, travels[k]),
+            held.force_n[k], "hertz", held.step_us);
+        const double cref = ccx_ref(mat + ",tip_centre_held,tip_force," + travel_key(travels[k]));
+        if (std::isfinite(cref)) {
+          row(c, held, "tip_force_held_n", travels[k], cref, held.force_n[k], "calculix",
+              held.step_us);
+        }
+      }
+    }
+  }
+  csv.flush();
+  if (!args.no_chart) {
+    teleop::run_chart_script("validation.py",
+                             {(args.out_dir / "validation.csv").string(),
+                              (args.out_dir / "validation.png").string()});
+  }
+  std::cout << "validate: " << cases.size() << " bodies, " << failures
+            << " runs with faults -> " << (args.out_dir / "validation.csv").string() << "\n";
+  return failures == 0 ? 0 : 1;
+}
+
+}  // namespace
+
+TELEOP_REGISTER_COMMAND(experiments, "validate",
+                        "every deformable model against physics: Hertz contact, Lamb's "
+                        "vibrations, sag (CalculiX); validation.csv and validation.png",
+                        run_validate);
