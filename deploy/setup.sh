@@ -6,6 +6,8 @@
 #                                                 tests/integration/other_vendor_test.cpp)
 #        TELEOP_SETUP_PEERS=0 deploy/setup.sh    (skip the optional peer engines used only by
 #                                                 `teleop_bench peers`: Bullet, MuJoCo)
+#        TELEOP_SETUP_MESHER=0 deploy/setup.sh   (skip gmsh, which fills surface files with
+#                                                 tetrahedra for model fem)
 set -euo pipefail
 
 packages=(
@@ -28,6 +30,13 @@ fi
 # the other-vendor reader of the interoperability test; without it that test skips
 if [ "${TELEOP_SETUP_VENDORS:-1}" = "1" ]; then
   packages+=(cyclonedds-dev cyclonedds-tools)
+fi
+
+# optional: gmsh fills a closed surface file with tetrahedra for a `model: fem` body that names a
+# `mesh_file` (run as a program, never linked; the shipped ball meshes do not need it) and the
+# test of that path; without it such a scene is refused with a message saying so
+if [ "${TELEOP_SETUP_MESHER:-1}" = "1" ]; then
+  packages+=(gmsh)
 fi
 
 # optional, benchmarks only: Bullet's soft body (and MuJoCo 2.2.2, which has no mesh-based soft

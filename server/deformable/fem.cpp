@@ -28,8 +28,13 @@ using Vec3 = Eigen::Vector3d;
 constexpr int kRotationIterations = 8;
 constexpr double kRotationTolerance = 1e-7;
 
-// c = a b for column-major 3x3 matrices.
-inline void mul33(const double* a, const double* b, double* c) {
+// Always inlined: each instruction-set clone of the hot loops keeps its own copy (with AVX2
+// for the four-lane arithmetic).
+#define TELEOP_FEM_INLINE inline __attribute__((always_inline))
+
+// c = a b for column-major 3x3 matrices (of one element, or of four: T = V4, one per lane).
+template <class T>
+TELEOP_FEM_INLINE void mul33(const T* a, const T* b, T* c) {
   for (int j = 0; j < 3; ++j) {
     for (int i = 0; i < 3; ++i) {
       c[3 * j + i] = a[i] * b[3 * j] + a[3 + i] * b[3 * j + 1] + a[6 + i] * b[3 * j + 2];
@@ -38,7 +43,8 @@ inline void mul33(const double* a, const double* b, double* c) {
 }
 
 // c = a^T b (column-major).
-inline void mul33_tn(const double* a, const double* b, double* c) {
+template <class T>
+TELEOP_FEM_INLINE void mul33_tn(const T* a, const T* b, T* c) {
   for (int j = 0; j < 3; ++j) {
     for (int i = 0; i < 3; ++i) {
       c[3 * j + i] = a[3 * i] * b[3 * j] + a[3 * i + 1] * b[3 * j + 1] + a[3 * i + 2] * b[3 * j + 2];
@@ -47,7 +53,7 @@ inline void mul33_tn(const double* a, const double* b, double* c) {
 }
 
 // The edge matrix [q1 - q0, q2 - q0, q3 - q0] (column-major) of the nodes `ix` of field q (3 x N).
-inline void edge_matrix(const double* q, const int* ix, double* d) {
+TELEOP_FEM_INLINE void edge_matrix(const double* q, const int* ix, double* d) {
   const double* q0 = q + 3 * ix[0];
   for (int c = 0; c < 3; ++c) {
     const double* qc = q + 3 * ix[c + 1];
@@ -60,10 +66,10 @@ inline void edge_matrix(const double* q, const int* ix, double* d) {
 // Linear-elastic stress of the rotated gradient G (= R^T F - I, or its rate): sigma = 2 mu
 // sym(G) + lambda tr(G) I, written symmetric into sig (column-major). scale_trace: G's trace
 // offset (1 for R^T F, whose identity is subtracted here; 0 for a rate or a perturbation).
-inline void linear_stress(const double* g, double mu, double lambda, double identity,
-                          double* sig) {
-  const double e00 = g[0] - identity, e11 = g[4] - identity, e22 = g[8] - identity;
-  const double tr = e00 + e11 + e22;
+template <class T>
+TELEOP_FEM_INLINE void linear_stress(const T* g, double mu, double lambda, double identity, T* sig) {
+  const T e00 = g[0] - identity, e11 = g[4] - identity, e22 = g[8] - identity;
+  const T tr = e00 + e11 + e22;
   sig[0] = 2.0 * mu * e00 + lambda * tr;
   sig[4] = 2.0 * mu * e11 + lambda * tr;
   sig[8] = 2.0 * mu * e22 + lambda * tr;
@@ -75,7 +81,7 @@ inline void linear_stress(const double* g, double mu, double lambda, double iden
 // Adds the nodal forces of first Piola stress P (column-major) of a tetrahedron of volume vol
 // and rest inverse B: f_j = -vol P B(j-1, :)^T for j = 1..3, f_0 = -(f_1 + f_2 + f_3); `sign`
 // -1 gives K p instead (the force's negative).
-inline void scatter_forces(const double* p, const double* b, double vol, const int* ix,
+TELEOP_FEM_INLINE void scatter_forces(const double* p, const double* b, double vol, const int* ix,
                            double sign, double* out) {
   double s0 = 0.0, s1 = 0.0, s2 = 0.0;
   for (int j = 0; j < 3; ++j) {
@@ -98,8 +104,131 @@ inline void scatter_forces(const double* p, const double* b, double vol, const i
   o0[2] -= s2;
 }
 
+// The elastic and damping forces of tetrahedra 4g .. 4g + 3, one per lane, added to out: the
+// arithmetic of the scalar loop below in four lanes. Each frame takes one Newton step from its
+// warm start (the steady state needs no more); a lane whose step is not converged after it (the
+// increment's square above the tolerance, or no Newton step) is finished by the scalar
+// iteration.
+TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& s, int g, double beta,
+                          int iterations, double tolerance, double* out) {
+  const DeformableModel::Fem& f = m.fem;
+  const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
+  const double* x = s.x.data();
+  const double* v = s.v.data();
+  const int t0 = 4 * g;
+  const int* ix[4] = {f.tets.col(t0).data(), f.tets.col(t0 + 1).data(), f.tets.col(t0 + 2).data(),
+                      f.tets.col(t0 + 3).data()};
+  V4 ds[9], b[9], fg[9];
+  for (int l = 0; l < 4; ++l) {
+    const double* p0 = x + 3 * ix[l][0];
+    for (int c = 0; c < 3; ++c) {
+      const double* pc = x + 3 * ix[l][c + 1];
+      for (int r = 0; r < 3; ++r) ds[3 * c + r][l] = pc[r] - p0[r];
+    }
+  }
+  const double* b4 = f.dm_inv4.data() + 36 * g;
+  for (int k = 0; k < 9; ++k) b[k] = load4(b4 + 4 * k);
+  mul33(ds, b, fg);
+  // frames: one Newton step from the warm start in four lanes
+  double* qd = s.fem_q.data() + 4 * t0;
+  V4 qw, qx, qy, qz;
+  for (int l = 0; l < 4; ++l) {
+    qw[l] = qd[4 * l];
+    qx[l] = qd[4 * l + 1];
+    qy[l] = qd[4 * l + 2];
+    qz[l] = qd[4 * l + 3];
+  }
+  V4 r[9];
+  quaternion_matrix(qw, qx, qy, qz, r);
+  V4 ox, oy, oz;
+  V4i newton;
+  rotation_step(fg, r, ox, oy, oz, newton);
+  const V4 w2 = ox * ox + oy * oy + oz * oz;
+  const double tol2 = tolerance * tolerance;
+  if (!(w2[0] <= tol2 && w2[1] <= tol2 && w2[2] <= tol2 && w2[3] <= tol2)) {
+    // q <- (1, o / 2) q, normalised, where the increment is above the tolerance
+    const V4 hx = 0.5 * ox, hy = 0.5 * oy, hz = 0.5 * oz;
+    V4 nw = qw - hx * qx - hy * qy - hz * qz;
+    V4 nx = qx + hx * qw + hy * qz - hz * qy;
+    V4 ny = qy - hx * qz + hy * qw + hz * qx;
+    V4 nz = qz + hx * qy - hy * qx + hz * qw;
+    V4 inv;
+    for (int l = 0; l < 4; ++l) inv[l] = 1.0 / std::sqrt(nw[l] * nw[l] + nx[l] * nx[l] + ny[l] * ny[l] + nz[l] * nz[l]);
+    const V4i moved = w2 > tol2;
+    qw = moved ? nw * inv : qw;
+    qx = moved ? nx * inv : qx;
+    qy = moved ? ny * inv : qy;
+    qz = moved ? nz * inv : qz;
+    quaternion_matrix(qw, qx, qy, qz, r);
+    for (int l = 0; l < 4; ++l) {
+      if (newton[l] != 0 && w2[l] <= tolerance) continue;  // a Newton step: error ~ its square
+      double a[9], rl[9];
+      for (int k = 0; k < 9; ++k) {
+        a[k] = fg[k][l];
+        rl[k] = r[k][l];
+      }
+      Eigen::Quaterniond q(qw[l], qx[l], qy[l], qz[l]);
+      extract_rotation(a, q, iterations, tolerance, rl);
+      qw[l] = q.w();
+      qx[l] = q.x();
+      qy[l] = q.y();
+      qz[l] = q.z();
+      for (int k = 0; k < 9; ++k) r[k][l] = rl[k];
+    }
+  }
+  double* rd = s.fem_r.data() + 9 * t0;
+  for (int l = 0; l < 4; ++l) {
+    qd[4 * l] = qw[l];
+    qd[4 * l + 1] = qx[l];
+    qd[4 * l + 2] = qy[l];
+    qd[4 * l + 3] = qz[l];
+    for (int k = 0; k < 9; ++k) rd[9 * l + k] = r[k][l];
+  }
+  V4 gm[9], sig[9], p[9];
+  mul33_tn(r, fg, gm);  // R^T F
+  if (beta > 0.0) {
+    V4 dv[9], fd[9], gd[9];
+    for (int l = 0; l < 4; ++l) {
+      const double* p0 = v + 3 * ix[l][0];
+      for (int c = 0; c < 3; ++c) {
+        const double* pc = v + 3 * ix[l][c + 1];
+        for (int rr = 0; rr < 3; ++rr) dv[3 * c + rr][l] = pc[rr] - p0[rr];
+      }
+    }
+    mul33(dv, b, fd);
+    mul33_tn(r, fd, gd);
+    for (int k = 0; k < 9; ++k) gm[k] += beta * gd[k];
+  }
+  linear_stress(gm, mu, lambda, 1.0, sig);
+  mul33(r, sig, p);  // P = R sigma
+  // node forces -vol P B(j, :)^T, node 0 the negative sum
+  const V4 vol = load4(f.volume4.data() + 4 * g);
+  V4 h[9];
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      h[3 * j + i] = -vol * (p[i] * b[j] + p[3 + i] * b[3 + j] + p[6 + i] * b[6 + j]);
+    }
+  }
+  for (int l = 0; l < 4; ++l) {
+    double sx = 0.0, sy = 0.0, sz = 0.0;
+    for (int j = 0; j < 3; ++j) {
+      double* o = out + 3 * ix[l][j + 1];
+      o[0] += h[3 * j][l];
+      o[1] += h[3 * j + 1][l];
+      o[2] += h[3 * j + 2][l];
+      sx += h[3 * j][l];
+      sy += h[3 * j + 1][l];
+      sz += h[3 * j + 2][l];
+    }
+    double* o0 = out + 3 * ix[l][0];
+    o0[0] -= sx;
+    o0[1] -= sy;
+    o0[2] -= sz;
+  }
+}
+
 // Elastic and damping forces of every tetrahedron, added to out (3 x N): frames refreshed in
-// s.fem_q / s.fem_r.
+// s.fem_q / s.fem_r. Four at a time (element_group), the last tet_count % 4 one by one.
 TELEOP_FEM_CLONES
 void element_forces(const DeformableModel& m, DeformableState& s, double beta, int iterations,
                     double tolerance, double* out) {
@@ -107,7 +236,9 @@ void element_forces(const DeformableModel& m, DeformableState& s, double beta, i
   const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
   const double* x = s.x.data();
   const double* v = s.v.data();
-  for (int t = 0; t < f.tet_count; ++t) {
+  const int groups = f.tet_count / 4;
+  for (int g = 0; g < groups; ++g) element_group(m, s, g, beta, iterations, tolerance, out);
+  for (int t = 4 * groups; t < f.tet_count; ++t) {
     const int* ix = f.tets.col(t).data();
     const double* b = f.dm_inv.data() + 9 * t;
     double ds[9], fg[9], g[9], sig[9], p[9];
@@ -410,6 +541,19 @@ void build_fem(DeformableModel& m, const teleop::mesh::TetMesh& tm) {
     f.volume_m3(t) = vol;
     volume += vol;
     Eigen::Map<Eigen::Matrix3d>(f.dm_inv.data() + 9 * t) = dm.inverse();
+  }
+  const int groups = f.tet_count / 4;
+  f.dm_inv4.assign(36 * static_cast<std::size_t>(groups), 0.0);
+  f.volume4.assign(4 * static_cast<std::size_t>(groups), 0.0);
+  for (int g = 0; g < groups; ++g) {
+    for (int l = 0; l < 4; ++l) {
+      const std::size_t t = 4 * static_cast<std::size_t>(g) + static_cast<std::size_t>(l);
+      for (int k = 0; k < 9; ++k) {
+        f.dm_inv4[36 * static_cast<std::size_t>(g) + 4 * static_cast<std::size_t>(k) +
+                  static_cast<std::size_t>(l)] = f.dm_inv[9 * t + static_cast<std::size_t>(k)];
+      }
+      f.volume4[t] = f.volume_m3(static_cast<Eigen::Index>(t));
+    }
   }
   // material
   const double E = p.youngs_modulus_pa, nu = p.poisson_ratio;

@@ -130,3 +130,22 @@ TEST(TetMesh, ShippedBallsAreClosedFillTheSphereAndAreFinestAtThePoles) {
   }
   EXPECT_THROW(msh::ball_tet_mesh(0, 0.25, Eigen::Vector3d::Zero()), msh::MeshError);
 }
+
+TEST(TetMesh, GmshFillsAClosedSurfaceKeepingItsTriangles) {
+  if (std::system("command -v gmsh > /dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "gmsh is not installed (deploy/setup.sh installs it)";
+  }
+  const msh::TriMesh surface = msh::make_icosphere(2, 0.1, Eigen::Vector3d(0, 0, 0.1));
+  const msh::TetMesh m =
+      msh::tetrahedralize(surface, 0.03, std::filesystem::temp_directory_path().string());
+  EXPECT_EQ(m.surface_vertex_count, surface.vertex_count());
+  EXPECT_EQ(m.surface.triangle_count(), surface.triangle_count());
+  EXPECT_GT(m.node_count(), m.surface_vertex_count);  // interior nodes were added
+  EXPECT_NEAR(msh::total_volume(m), msh::enclosed_volume(surface), 1e-9);
+  for (int t = 0; t < m.tet_count(); ++t) EXPECT_GT(msh::tet_volume(m, t), 0.0);
+  // an open surface is refused with gmsh's reason
+  msh::TriMesh open = surface;
+  open.triangles.conservativeResize(3, open.triangles.cols() - 1);
+  EXPECT_THROW(msh::tetrahedralize(open, 0.03, std::filesystem::temp_directory_path().string()),
+               msh::MeshError);
+}

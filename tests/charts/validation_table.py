@@ -1,0 +1,44 @@
+#!/usr/bin/python3
+"""Prints the CSV of `teleop_experiment validate` as a Markdown table (docs/results.md): one row
+per body, the error against physics of each quantity in %, the sag and the step cost.
+usage: validation_table.py validation.csv"""
+import csv
+import math
+import sys
+
+COLUMNS = [("lamb_S2_hz", "", "S2"), ("lamb_T2_hz", "", "T2"), ("lamb_S0_hz", "", "S0"),
+           ("tip_force_floor_n", "2", "press 2 mm"), ("tip_force_floor_n", "10", "press 10 mm"),
+           ("tip_force_floor_weight_n", "2", "press+weight 2 mm"),
+           ("tip_force_floor_weight_n", "5", "5 mm"), ("tip_force_floor_weight_n", "10", "10 mm"),
+           ("tip_force_floor_weight_n", "20", "20 mm")]
+
+
+def cell(rows, quantity, travel):
+    for r in rows:
+        if r["quantity"] == quantity and r["travel_mm"] == travel and r["reference_source"] != "calculix":
+            e = float(r["error_pct"]) if r["error_pct"] not in ("", "nan") else math.nan
+            return "n/a" if not math.isfinite(e) else f"{e:+.0f}"
+    return "-"
+
+
+def main():
+    rows = list(csv.DictReader(open(sys.argv[1])))
+    bodies = []
+    for r in rows:
+        key = (r["model"], r["integrator"], r["mesh"], r["material"])
+        if key not in bodies:
+            bodies.append(key)
+    print("| body | nodes / tets | " + " | ".join(c[2] for c in COLUMNS) + " | sag (top) | step [us] |")
+    print("|---" * (len(COLUMNS) + 4) + "|")
+    for b in bodies:
+        sub = [r for r in rows if (r["model"], r["integrator"], r["mesh"], r["material"]) == b]
+        integ = "" if b[1] == "symplectic_euler" else " implicit"
+        sag = next((float(r["value"]) for r in sub if r["quantity"] == "sag_top_m"), math.nan)
+        us = next((float(r["step_us"]) for r in sub if r["quantity"] == "sag_top_m"), math.nan)
+        print(f"| {b[0]}{integ} {b[2]} {b[3]} | {sub[0]['nodes']} / {sub[0]['tets']} | " +
+              " | ".join(cell(sub, q, t) for q, t, _ in COLUMNS) +
+              f" | {sag * 1e3:.1f} mm | {us:.0f} |")
+
+
+if __name__ == "__main__":
+    main()
