@@ -80,6 +80,23 @@ IntegratorKind parse_integrator_kind(const std::string& name) {
                             "implicit_euler");
 }
 
+namespace {
+
+// The fields of the volumetric model: its tetrahedral mesh and its contact stiffness.
+void load_volume_fields(const teleop::config::Node& node, DeformableParams& p) {
+  const bool fem = p.model == ModelKind::kFem;
+  p.tet_mesh_file = node.string_or("tet_mesh_file", "");
+  if (!fem && !p.tet_mesh_file.empty()) node.fail("tet_mesh_file", "is for model fem only");
+  if (!p.tet_mesh_file.empty() && !p.mesh_file.empty()) {
+    node.fail("tet_mesh_file", "give either mesh_file (filled by gmsh) or tet_mesh_file, not both");
+  }
+  p.tet_max_edge_m = node.number_or("tet_max_edge_m", 0.0, 0.0, 100.0);
+  p.contact_pressure_stiffness_pa_per_m =
+      node.number_or("contact_pressure_stiffness_pa_per_m", 0.0, 0.0, 1e15);
+}
+
+}  // namespace
+
 DeformableParams load_deformable_params(const teleop::config::Node& node) {
   if (!node.is_map()) {
     throw config::ConfigError(node.file() + ": field '" + node.path() +
@@ -144,14 +161,7 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   p.centre_m = Eigen::Vector3d(c[0], c[1], c[2]);
   p.mesh_file = node.string_or("mesh_file", "");
   p.mesh_scale = node.number_or("mesh_scale", 1.0, 1e-6, 1e6);
-  p.tet_mesh_file = node.string_or("tet_mesh_file", "");
-  if (!fem && !p.tet_mesh_file.empty()) node.fail("tet_mesh_file", "is for model fem only");
-  if (!p.tet_mesh_file.empty() && !p.mesh_file.empty()) {
-    node.fail("tet_mesh_file", "give either mesh_file (filled by gmsh) or tet_mesh_file, not both");
-  }
-  p.tet_max_edge_m = node.number_or("tet_max_edge_m", 0.0, 0.0, 100.0);
-  p.contact_pressure_stiffness_pa_per_m = node.number_or(
-      "contact_pressure_stiffness_pa_per_m", 0.0, 0.0, 1e15);
+  load_volume_fields(node, p);
   if (node.has("mass_kg") && node.has("density_kg_per_m3")) {
     node.fail("density_kg_per_m3", "give either mass_kg or density_kg_per_m3, not both");
   }
