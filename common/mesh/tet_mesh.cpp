@@ -70,8 +70,7 @@ TetMesh make_tet_mesh(const Eigen::Matrix3Xd& vertices, const Eigen::Matrix4Xi& 
     const double vol = signed_volume(vertices, tets(0, t), tets(1, t), tets(2, t), tets(3, t));
     if (!(std::fabs(vol) > 1e-12 * box_volume)) {
       throw MeshError("degenerate tetrahedron " + std::to_string(t) + " at " +
-                      where(vertices.col(tets(0, t))) + ": volume " + std::to_string(vol) +
-                      " m^3");
+                      where(vertices.col(tets(0, t))) + ": volume " + std::to_string(vol) + " m^3");
     }
     if (vol < 0.0) std::swap(tets(1, t), tets(2, t));
   }
@@ -92,8 +91,7 @@ TetMesh make_tet_mesh(const Eigen::Matrix3Xd& vertices, const Eigen::Matrix4Xi& 
       faces.push_back({key, f});
     }
   }
-  std::sort(faces.begin(), faces.end(),
-            [](const Face& x, const Face& y) { return x.key < y.key; });
+  std::sort(faces.begin(), faces.end(), [](const Face& x, const Face& y) { return x.key < y.key; });
   std::vector<std::array<int, 3>> boundary;
   for (std::size_t i = 0; i < faces.size();) {
     std::size_t j = i + 1;
@@ -121,7 +119,8 @@ TetMesh make_tet_mesh(const Eigen::Matrix3Xd& vertices, const Eigen::Matrix4Xi& 
   int next = 0;
   for (int pass = 2; pass >= 1; --pass) {
     for (int i = 0; i < nv; ++i) {
-      if (role[static_cast<std::size_t>(i)] == pass) new_index[static_cast<std::size_t>(i)] = next++;
+      if (role[static_cast<std::size_t>(i)] == pass)
+        new_index[static_cast<std::size_t>(i)] = next++;
     }
   }
   TetMesh out;
@@ -192,7 +191,8 @@ TetMesh load_tet_mesh(const std::string& path, double scale, const Eigen::Vector
         throw fail("MSH version " + std::to_string(version) +
                    " is not supported: write MSH 2.2 (gmsh -format msh22)");
       }
-      if (file_type != 0) throw fail("binary MSH is not supported: write ASCII (gmsh -format msh22)");
+      if (file_type != 0)
+        throw fail("binary MSH is not supported: write ASCII (gmsh -format msh22)");
       have_format = true;
     } else if (line == "$Nodes") {
       if (!next_line()) throw fail("$Nodes has no count");
@@ -223,7 +223,8 @@ TetMesh load_tet_mesh(const std::string& path, double scale, const Eigen::Vector
       if (!next_line()) throw fail("$Elements has no count");
       long long n = -1;
       std::istringstream cs(line);
-      if (!(cs >> n) || n < 1 || n > 8LL * kMaxMeshVertices) throw fail("bad element count '" + line + "'");
+      if (!(cs >> n) || n < 1 || n > 8LL * kMaxMeshVertices)
+        throw fail("bad element count '" + line + "'");
       for (long long k = 0; k < n; ++k) {
         if (!next_line()) throw fail("the file ends inside $Elements");
         std::istringstream is(line);
@@ -324,8 +325,9 @@ TetMesh tetrahedralize(const TriMesh& surface, double max_edge_m, const std::str
       << "Mesh.RandomSeed = 1;\n";
     if (!o || !g) throw MeshError("tetrahedralize: cannot write into " + dir.string());
   }
-  const std::string cmd = "cd '" + dir.string() +
-                          "' && gmsh volume.geo -3 -format msh22 -o volume.msh -v 2 > gmsh.log 2>&1";
+  const std::string cmd =
+      "cd '" + dir.string() +
+      "' && gmsh volume.geo -3 -format msh22 -o volume.msh -v 2 > gmsh.log 2>&1";
   const int rc = std::system(cmd.c_str());
   TetMesh out;
   std::string error;

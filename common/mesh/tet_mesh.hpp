@@ -20,7 +20,8 @@ namespace teleop::mesh {
 /// A tetrahedral mesh with its boundary surface.
 struct TetMesh {
   Eigen::Matrix3Xd vertices;  ///< column per node [m]; boundary nodes first
-  Eigen::Matrix4Xi tets;      ///< column per tetrahedron, positive volume (det(x1-x0, x2-x0, x3-x0) > 0)
+  Eigen::Matrix4Xi
+      tets;  ///< column per tetrahedron, positive volume (det(x1-x0, x2-x0, x3-x0) > 0)
   int surface_vertex_count = 0;  ///< nodes 0 .. surface_vertex_count - 1 lie on the boundary
   /// The boundary: vertices are the first surface_vertex_count nodes, triangles counter-clockwise
   /// seen from outside; a closed manifold (validate_closed_manifold passed).

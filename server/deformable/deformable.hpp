@@ -139,6 +139,10 @@ struct DeformableParams {
   double contact_frequency_rad_per_s = 600.0;
   double contact_damping_ratio = 0.7;  ///< zeta [-]
   bool friction = true;                ///< Coulomb friction with the planes' coefficients
+  /// Model fem: the volumetric strain averaged over each node's tetrahedra (average nodal
+  /// pressure, the remedy for the locking of linear tetrahedra as nu -> 0.5) instead of each
+  /// tetrahedron's own.
+  bool nodal_pressure = false;
   /// Model fem: contact of the surface with planes and with the tip as a pressure per depth,
   /// node i's spring k_i = this * (area of node i), integrated implicitly per node (stable at
   /// any value; the force converges with the mesh). 0: 1000 E / (1 - nu^2) / (body size),
@@ -271,6 +275,7 @@ struct DeformableModel {
     std::vector<double> dm_inv4, volume4;
     Eigen::VectorXd volume_m3;           ///< per tet
     Eigen::VectorXd mass_kg, inv_mass;   ///< lumped, all nodes (a quarter of each tet's mass)
+    Eigen::VectorXd inv_node_volume;     ///< 1 / (a quarter of each adjacent tet's volume) [1/m^3]
     Eigen::Matrix3Xd precond;            ///< diagonal of the rest stiffness (CG preconditioner)
     double pressure_stiffness_pa_per_m = 0.0;  ///< plane and tip contact [Pa/m]
   } fem;
@@ -381,6 +386,8 @@ struct DeformableState {
   // implicit solve's contact count (s.contact_*: plane contacts, then the tip's as ~node)
   std::vector<double> fem_q, fem_r;
   int fem_contacts = 0;
+  // params.nodal_pressure: each tet's volumetric strain, and each node's average of them
+  std::vector<double> fem_theta, fem_node_theta;
   /// Model fem: a rigid sphere the surface nodes are kept out of within step() (the slave's
   /// tip): its centre moves linearly from tip_from_m to tip_to_m over the step. Set by the
   /// caller before step(); tip_radius_m <= 0: none.

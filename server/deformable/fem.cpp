@@ -47,7 +47,8 @@ template <class T>
 TELEOP_FEM_INLINE void mul33_tn(const T* a, const T* b, T* c) {
   for (int j = 0; j < 3; ++j) {
     for (int i = 0; i < 3; ++i) {
-      c[3 * j + i] = a[3 * i] * b[3 * j] + a[3 * i + 1] * b[3 * j + 1] + a[3 * i + 2] * b[3 * j + 2];
+      c[3 * j + i] =
+          a[3 * i] * b[3 * j] + a[3 * i + 1] * b[3 * j + 1] + a[3 * i + 2] * b[3 * j + 2];
     }
   }
 }
@@ -67,7 +68,8 @@ TELEOP_FEM_INLINE void edge_matrix(const double* q, const int* ix, double* d) {
 // sym(G) + lambda tr(G) I, written symmetric into sig (column-major). scale_trace: G's trace
 // offset (1 for R^T F, whose identity is subtracted here; 0 for a rate or a perturbation).
 template <class T>
-TELEOP_FEM_INLINE void linear_stress(const T* g, double mu, double lambda, double identity, T* sig) {
+TELEOP_FEM_INLINE void linear_stress(const T* g, double mu, double lambda, double identity,
+                                     T* sig) {
   const T e00 = g[0] - identity, e11 = g[4] - identity, e22 = g[8] - identity;
   const T tr = e00 + e11 + e22;
   sig[0] = 2.0 * mu * e00 + lambda * tr;
@@ -82,7 +84,7 @@ TELEOP_FEM_INLINE void linear_stress(const T* g, double mu, double lambda, doubl
 // and rest inverse B: f_j = -vol P B(j-1, :)^T for j = 1..3, f_0 = -(f_1 + f_2 + f_3); `sign`
 // -1 gives K p instead (the force's negative).
 TELEOP_FEM_INLINE void scatter_forces(const double* p, const double* b, double vol, const int* ix,
-                           double sign, double* out) {
+                                      double sign, double* out) {
   double s0 = 0.0, s1 = 0.0, s2 = 0.0;
   for (int j = 0; j < 3; ++j) {
     // column j of P B^T: sum_k P(:, k) B(j, k)
@@ -104,15 +106,46 @@ TELEOP_FEM_INLINE void scatter_forces(const double* p, const double* b, double v
   o0[2] -= s2;
 }
 
+// Average nodal pressure (Bonet and Burton's remedy for the volumetric locking of linear
+// tetrahedra; params.nodal_pressure): the volumetric energy sum_a lambda/2 V_a theta_a^2 with
+// theta_a the volume-weighted mean of the volumetric strains theta_e = tr(eps_e) of node a's
+// tetrahedra, in place of each tetrahedron's own lambda/2 V_e theta_e^2. Its force on tetrahedron
+// e's nodes is -V_e p_e R_e grad N_j with p_e = lambda (the mean of theta_a over e's four nodes)
+// (exact: tr(R^T F) has no derivative through the polar factor R). `theta` holds theta_e per
+// tetrahedron, `node_theta` is scratch (a value per node); `sign` -1 gives K p.
+TELEOP_FEM_INLINE void nodal_pressure_forces(const DeformableModel& m, const double* frames,
+                                             const double* theta, double* node_theta, double sign,
+                                             double* out) {
+  const DeformableModel::Fem& f = m.fem;
+  for (int i = 0; i < f.node_count; ++i) node_theta[i] = 0.0;
+  for (int t = 0; t < f.tet_count; ++t) {
+    const double w = 0.25 * f.volume_m3(t) * theta[t];
+    for (int k = 0; k < 4; ++k) node_theta[f.tets(k, t)] += w;
+  }
+  for (int i = 0; i < f.node_count; ++i) node_theta[i] *= f.inv_node_volume(i);
+  const double lambda = m.lame_lambda_pa;
+  for (int t = 0; t < f.tet_count; ++t) {
+    const int* ix = f.tets.col(t).data();
+    const double pe =
+        0.25 * lambda *
+        (node_theta[ix[0]] + node_theta[ix[1]] + node_theta[ix[2]] + node_theta[ix[3]]);
+    double p[9];
+    const double* r = frames != nullptr ? frames + 9 * t : nullptr;
+    for (int k = 0; k < 9; ++k) p[k] = r != nullptr ? pe * r[k] : (k % 4 == 0 ? pe : 0.0);
+    scatter_forces(p, f.dm_inv.data() + 9 * t, f.volume_m3(t), ix, sign, out);
+  }
+}
+
 // The elastic and damping forces of tetrahedra 4g .. 4g + 3, one per lane, added to out: the
 // arithmetic of the scalar loop below in four lanes. Each frame takes one Newton step from its
 // warm start (the steady state needs no more); a lane whose step is not converged after it (the
 // increment's square above the tolerance, or no Newton step) is finished by the scalar
 // iteration.
-TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& s, int g, double beta,
-                          int iterations, double tolerance, double* out) {
+TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& s, int g,
+                                     double beta, int iterations, double tolerance, double* out) {
   const DeformableModel::Fem& f = m.fem;
-  const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
+  const bool nodal = m.params.nodal_pressure;
+  const double mu = m.lame_mu_pa, lambda = nodal ? 0.0 : m.lame_lambda_pa;
   const double* x = s.x.data();
   const double* v = s.v.data();
   const int t0 = 4 * g;
@@ -153,7 +186,8 @@ TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& 
     V4 ny = qy - hx * qz + hy * qw + hz * qx;
     V4 nz = qz + hx * qy - hy * qx + hz * qw;
     V4 inv;
-    for (int l = 0; l < 4; ++l) inv[l] = 1.0 / std::sqrt(nw[l] * nw[l] + nx[l] * nx[l] + ny[l] * ny[l] + nz[l] * nz[l]);
+    for (int l = 0; l < 4; ++l)
+      inv[l] = 1.0 / std::sqrt(nw[l] * nw[l] + nx[l] * nx[l] + ny[l] * ny[l] + nz[l] * nz[l]);
     const V4i moved = w2 > tol2;
     qw = moved ? nw * inv : qw;
     qx = moved ? nx * inv : qx;
@@ -200,6 +234,10 @@ TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& 
     for (int k = 0; k < 9; ++k) gm[k] += beta * gd[k];
   }
   linear_stress(gm, mu, lambda, 1.0, sig);
+  if (nodal) {
+    const V4 theta = gm[0] + gm[4] + gm[8] - 3.0;  // tr(eps) (+ beta its rate)
+    for (int l = 0; l < 4; ++l) s.fem_theta[static_cast<std::size_t>(t0 + l)] = theta[l];
+  }
   mul33(r, sig, p);  // P = R sigma
   // node forces -vol P B(j, :)^T, node 0 the negative sum
   const V4 vol = load4(f.volume4.data() + 4 * g);
@@ -233,7 +271,8 @@ TELEOP_FEM_CLONES
 void element_forces(const DeformableModel& m, DeformableState& s, double beta, int iterations,
                     double tolerance, double* out) {
   const DeformableModel::Fem& f = m.fem;
-  const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
+  const bool nodal = m.params.nodal_pressure;
+  const double mu = m.lame_mu_pa, lambda = nodal ? 0.0 : m.lame_lambda_pa;
   const double* x = s.x.data();
   const double* v = s.v.data();
   const int groups = f.tet_count / 4;
@@ -261,17 +300,21 @@ void element_forces(const DeformableModel& m, DeformableState& s, double beta, i
       for (int k = 0; k < 9; ++k) g[k] += beta * gd[k];
     }
     linear_stress(g, mu, lambda, 1.0, sig);
+    if (nodal) s.fem_theta[static_cast<std::size_t>(t)] = g[0] + g[4] + g[8] - 3.0;
     mul33(r, sig, p);  // P = R sigma
     scatter_forces(p, b, f.volume_m3(t), ix, 1.0, out);
   }
+  if (nodal)
+    nodal_pressure_forces(m, s.fem_r.data(), s.fem_theta.data(), s.fem_node_theta.data(), 1.0, out);
 }
 
 // out = K p at the current frames (rotate = true) or at rest (false); p and out 3 x N.
 TELEOP_FEM_CLONES
 void apply_stiffness(const DeformableModel& m, const double* frames, const double* pv,
-                     double* out) {
+                     double* theta, double* node_theta, double* out) {
   const DeformableModel::Fem& f = m.fem;
-  const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
+  const bool nodal = m.params.nodal_pressure;
+  const double mu = m.lame_mu_pa, lambda = nodal ? 0.0 : m.lame_lambda_pa;
   for (int t = 0; t < f.tet_count; ++t) {
     const int* ix = f.tets.col(t).data();
     const double* b = f.dm_inv.data() + 9 * t;
@@ -285,10 +328,13 @@ void apply_stiffness(const DeformableModel& m, const double* frames, const doubl
       mul33(r, sig, p);
       scatter_forces(p, b, f.volume_m3(t), ix, -1.0, out);
     } else {
+      for (int k = 0; k < 9; ++k) g[k] = df[k];
       linear_stress(df, mu, lambda, 0.0, sig);
       scatter_forces(sig, b, f.volume_m3(t), ix, -1.0, out);
     }
+    if (nodal) theta[t] = g[0] + g[4] + g[8];
   }
+  if (nodal) nodal_pressure_forces(m, frames, theta, node_theta, -1.0, out);
 }
 
 // One node's contact along unit normal n with an obstacle moving at normal speed vo: depth d0
@@ -418,7 +464,8 @@ void apply_system(const DeformableModel& m, DeformableState& s, const Eigen::Mat
   const double a = 1.0 + h * m.params.mass_damping_per_s;
   const double kk = h * m.params.stiffness_damping_s + h * h;
   y.leftCols(n).setZero();
-  apply_stiffness(m, s.fem_r.data(), p.data(), y.data());
+  apply_stiffness(m, s.fem_r.data(), p.data(), s.fem_theta.data(), s.fem_node_theta.data(),
+                  y.data());
   for (int i = 0; i < n; ++i) y.col(i) = a * f.mass_kg(i) * p.col(i) + kk * y.col(i);
   for (int c = 0; c < s.fem_contacts; ++c) {
     const int code = s.contact_node[static_cast<std::size_t>(c)];
@@ -441,7 +488,8 @@ void implicit_step(const DeformableModel& m, DeformableState& s, double h, doubl
   Eigen::Matrix3Xd& b = s.work_b;
   Eigen::Matrix3Xd& ap = s.work_ap;
   ap.leftCols(n).setZero();
-  apply_stiffness(m, s.fem_r.data(), s.v.data(), ap.data());  // K v
+  apply_stiffness(m, s.fem_r.data(), s.v.data(), s.fem_theta.data(), s.fem_node_theta.data(),
+                  ap.data());  // K v
   b.leftCols(n) = h * (s.work_f.leftCols(n) - h * ap.leftCols(n));
   for (int c = 0; c < s.fem_contacts; ++c) {
     const int code = s.contact_node[static_cast<std::size_t>(c)];
@@ -565,9 +613,11 @@ void build_fem(DeformableModel& m, const teleop::mesh::TetMesh& tm) {
   // lumped masses: a quarter of each tetrahedron's
   f.mass_kg = Eigen::VectorXd::Zero(f.node_count);
   for (int t = 0; t < f.tet_count; ++t) {
-    for (int k = 0; k < 4; ++k) f.mass_kg(f.tets(k, t)) += 0.25 * m.density_kg_per_m3 * f.volume_m3(t);
+    for (int k = 0; k < 4; ++k)
+      f.mass_kg(f.tets(k, t)) += 0.25 * m.density_kg_per_m3 * f.volume_m3(t);
   }
   f.inv_mass = f.mass_kg.cwiseInverse();
+  f.inv_node_volume = (f.mass_kg / m.density_kg_per_m3).cwiseInverse();
   m.rest_centre_m = f.rest * f.mass_kg / m.total_mass_kg;
   m.has_centre = false;
   m.centre_mass_kg = 0.0;
@@ -601,8 +651,8 @@ void build_fem(DeformableModel& m, const teleop::mesh::TetMesh& tm) {
     grad[0] = -(grad[1] + grad[2] + grad[3]);
     for (int k = 0; k < 4; ++k) {
       const Vec3& g = grad[k];
-      f.precond.col(f.tets(k, t)) +=
-          f.volume_m3(t) * (mu * g.squaredNorm() * Vec3::Ones() + (lambda + mu) * g.cwiseProduct(g));
+      f.precond.col(f.tets(k, t)) += f.volume_m3(t) * (mu * g.squaredNorm() * Vec3::Ones() +
+                                                       (lambda + mu) * g.cwiseProduct(g));
     }
   }
 }
@@ -626,6 +676,8 @@ void init_fem_state(const DeformableModel& m, DeformableState& s) {
   s.contact_coef = Eigen::Matrix4Xd::Zero(4, cap);
   s.fem_q.assign(4 * static_cast<std::size_t>(f.tet_count), 0.0);
   s.fem_r.assign(9 * static_cast<std::size_t>(f.tet_count), 0.0);
+  s.fem_theta.assign(static_cast<std::size_t>(f.tet_count), 0.0);
+  s.fem_node_theta.assign(static_cast<std::size_t>(f.node_count), 0.0);
   for (int t = 0; t < f.tet_count; ++t) {
     s.fem_q[4 * static_cast<std::size_t>(t)] = 1.0;
     for (int k = 0; k < 3; ++k) s.fem_r[9 * static_cast<std::size_t>(t) + 4 * k] = 1.0;
@@ -702,7 +754,9 @@ void fem_step(const DeformableModel& m, DeformableState& s, double h, double tip
 void fem_apply_rest_stiffness(const DeformableModel& m, const Eigen::VectorXd& p,
                               Eigen::VectorXd& y) {
   y.setZero(p.size());
-  apply_stiffness(m, nullptr, p.data(), y.data());
+  std::vector<double> theta(static_cast<std::size_t>(m.fem.tet_count)),
+      node_theta(static_cast<std::size_t>(m.fem.node_count));
+  apply_stiffness(m, nullptr, p.data(), theta.data(), node_theta.data(), y.data());
 }
 
 double fem_gershgorin_lambda(const DeformableModel& m) {
@@ -727,8 +781,10 @@ double fem_gershgorin_lambda(const DeformableModel& m) {
 
 double fem_elastic_energy(const DeformableModel& m, const DeformableState& s) {
   const DeformableModel::Fem& f = m.fem;
+  const bool nodal = m.params.nodal_pressure;
   const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
   double e = 0.0;
+  Eigen::VectorXd node_theta = Eigen::VectorXd::Zero(f.node_count);
   for (int t = 0; t < f.tet_count; ++t) {
     const int* ix = f.tets.col(t).data();
     const double* b = f.dm_inv.data() + 9 * t;
@@ -738,12 +794,24 @@ double fem_elastic_energy(const DeformableModel& m, const DeformableState& s) {
     mul33_tn(s.fem_r.data() + 9 * t, fg, g);
     double eps[9];
     for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) eps[3 * j + i] = 0.5 * (g[3 * j + i] + g[3 * i + j]) - (i == j ? 1.0 : 0.0);
+      for (int j = 0; j < 3; ++j)
+        eps[3 * j + i] = 0.5 * (g[3 * j + i] + g[3 * i + j]) - (i == j ? 1.0 : 0.0);
     }
     double ee = 0.0;
     for (double x : eps) ee += x * x;
     const double tr = eps[0] + eps[4] + eps[8];
-    e += f.volume_m3(t) * (mu * ee + 0.5 * lambda * tr * tr);
+    e += f.volume_m3(t) * mu * ee;
+    if (nodal) {
+      for (int k = 0; k < 4; ++k) node_theta(ix[k]) += 0.25 * f.volume_m3(t) * tr;
+    } else {
+      e += f.volume_m3(t) * 0.5 * lambda * tr * tr;
+    }
+  }
+  if (nodal) {
+    // sum_a lambda/2 V_a theta_a^2, theta_a = (sum of V_e/4 theta_e) / V_a
+    for (int i = 0; i < f.node_count; ++i) {
+      e += 0.5 * lambda * node_theta(i) * node_theta(i) * f.inv_node_volume(i);
+    }
   }
   return e;
 }

@@ -93,6 +93,8 @@ void load_volume_fields(const teleop::config::Node& node, DeformableParams& p) {
   p.tet_max_edge_m = node.number_or("tet_max_edge_m", 0.0, 0.0, 100.0);
   p.contact_pressure_stiffness_pa_per_m =
       node.number_or("contact_pressure_stiffness_pa_per_m", 0.0, 0.0, 1e15);
+  p.nodal_pressure = node.boolean_or("nodal_pressure", false);
+  if (!fem && p.nodal_pressure) node.fail("nodal_pressure", "is for model fem only");
 }
 
 }  // namespace
@@ -113,6 +115,7 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
                             "tet_mesh_file",
                             "tet_max_edge_m",
                             "contact_pressure_stiffness_pa_per_m",
+                            "nodal_pressure",
                             "mass_kg",
                             "density_kg_per_m3",
                             "centre_mass_fraction",

@@ -60,6 +60,7 @@ struct Case {
   df::IntegratorKind integrator;
   int level;
   va::Material material;
+  bool nodal_pressure = false;
 };
 
 int run_validate(const teleop::CommandArgs& args) {
@@ -78,35 +79,43 @@ int run_validate(const teleop::CommandArgs& args) {
     for (const va::Material& mat : {va::foam(), va::silicone()}) {
       for (int level : {1, 2, 3}) cases.push_back({df::ModelKind::kFem, sym, level, mat});
       cases.push_back({df::ModelKind::kFem, imp, 2, mat});
+      for (int level : {1, 2, 3}) cases.push_back({df::ModelKind::kFem, sym, level, mat, true});
     }
-    for (int level : {3, 4, 5}) cases.push_back({df::ModelKind::kMassSpring, sym, level, va::foam()});
+    for (int level : {3, 4, 5})
+      cases.push_back({df::ModelKind::kMassSpring, sym, level, va::foam()});
     for (auto model : {df::ModelKind::kNavierLinear, df::ModelKind::kNavierCorotational}) {
       for (int level : {3, 4}) cases.push_back({model, sym, level, va::foam()});
     }
   }
   const auto ccx = read_ccx_reference();
-  teleop::CsvWriter csv((args.out_dir / "validation.csv").string(),
-                        {"model", "integrator", "mesh", "nodes", "tets", "material", "quantity",
-                         "travel_mm", "reference", "value", "error_pct", "reference_source",
-                         "step_us"});
+  teleop::CsvWriter csv(
+      (args.out_dir / "validation.csv").string(),
+      {"model", "variant", "integrator", "mesh", "nodes", "tets", "material", "quantity",
+       "travel_mm", "reference", "value", "error_pct", "reference_source", "step_us"});
   auto row = [&](const Case& c, const va::PressResult& r, const std::string& quantity,
                  double travel_m, double reference, double value, const std::string& source,
                  double step_us) {
     const double err = std::isfinite(reference) && reference != 0.0 && std::isfinite(value)
                            ? 100.0 * (value / reference - 1.0)
                            : std::numeric_limits<double>::quiet_NaN();
-    csv.row_text({std::string(df::to_string(c.model)), std::string(df::to_string(c.integrator)),
-             "L" + std::to_string(c.level), std::to_string(r.nodes), std::to_string(r.tets),
-             c.material.name, quantity, travel_key(travel_m), teleop::format_number(reference),
-             teleop::format_number(value), teleop::format_number(err), source,
-             teleop::format_number(step_us)});
+    const std::string variant = c.model != df::ModelKind::kFem ? "-"
+                                : c.nodal_pressure             ? "nodal_pressure"
+                                                               : "element";
+    csv.row_text({std::string(df::to_string(c.model)), variant,
+                  std::string(df::to_string(c.integrator)), "L" + std::to_string(c.level),
+                  std::to_string(r.nodes), std::to_string(r.tets), c.material.name, quantity,
+                  travel_key(travel_m), teleop::format_number(reference),
+                  teleop::format_number(value), teleop::format_number(err), source,
+                  teleop::format_number(step_us)});
   };
   int failures = 0;
   for (const Case& c : cases) {
-    const df::DeformableParams p = va::ball_params(c.model, c.integrator, c.level, c.material);
+    df::DeformableParams p = va::ball_params(c.model, c.integrator, c.level, c.material);
+    p.nodal_pressure = c.nodal_pressure;
     const double weight = p.mass_kg * 9.81;
-    std::fprintf(stderr, "validate: %s %s L%d %s\n", df::to_string(c.model),
-                 df::to_string(c.integrator), c.level, c.material.name.c_str());
+    std::fprintf(stderr, "validate: %s%s %s L%d %s\n", df::to_string(c.model),
+                 c.nodal_pressure ? " (nodal pressure)" : "", df::to_string(c.integrator), c.level,
+                 c.material.name.c_str());
     // Lamb
     va::PressResult shape;  // nodes and tets for the Lamb rows
     for (auto mode : {va::LambMode::kS2, va::LambMode::kT2, va::LambMode::kS0}) {
@@ -164,12 +173,11 @@ int run_validate(const teleop::CommandArgs& args) {
   }
   csv.flush();
   if (!args.no_chart) {
-    teleop::run_chart_script("validation.py",
-                             {(args.out_dir / "validation.csv").string(),
-                              (args.out_dir / "validation.png").string()});
+    teleop::run_chart_script("validation.py", {(args.out_dir / "validation.csv").string(),
+                                               (args.out_dir / "validation.png").string()});
   }
-  std::cout << "validate: " << cases.size() << " bodies, " << failures
-            << " runs with faults -> " << (args.out_dir / "validation.csv").string() << "\n";
+  std::cout << "validate: " << cases.size() << " bodies, " << failures << " runs with faults -> "
+            << (args.out_dir / "validation.csv").string() << "\n";
   return failures == 0 ? 0 : 1;
 }
 

@@ -108,8 +108,8 @@ double lamb_eta(LambMode mode, double nu) {
     }
     case LambMode::kS0: {
       const double ratio2 = 2.0 * (1.0 - nu) / (1.0 - 2.0 * nu);  // (c_L / c_T)^2
-      const double xp = bisect(
-          [&](double x) { return x / std::tan(x) - 1.0 + 0.25 * x * x * ratio2; }, 1.6, 3.1);
+      const double xp =
+          bisect([&](double x) { return x / std::tan(x) - 1.0 + 0.25 * x * x * ratio2; }, 1.6, 3.1);
       return xp * std::sqrt(ratio2);
     }
     case LambMode::kS2: {
@@ -150,8 +150,7 @@ df::DeformableParams ball_params(df::ModelKind model, df::IntegratorKind integra
     return p;
   }
   if (model != df::ModelKind::kMassSpring) p.radial_stiffness_n_per_m3 = 0.0;
-  if (model == df::ModelKind::kMassSpring &&
-      integrator == df::IntegratorKind::kSymplecticEuler) {
+  if (model == df::ModelKind::kMassSpring && integrator == df::IntegratorKind::kSymplecticEuler) {
     p.kernel = df::default_kernel(model, integrator);
   }
   const teleop::mesh::TriMesh m =
@@ -259,7 +258,8 @@ PressResult press_ball(const df::DeformableParams& params_in, Support support, b
     relax_relative(m, s, relax_factor);
     ++steps;
     const double travel = z_touch - tip.z();
-    const double force = data.bodies[0].last.in_contact ? data.bodies[0].last.force_on_tip_n.z() : 0.0;
+    const double force =
+        data.bodies[0].last.in_contact ? data.bodies[0].last.force_on_tip_n.z() : 0.0;
     while (next < travels_m.size() && travel >= travels_m[next]) {
       const double w = (travels_m[next] - prev_travel) / (travel - prev_travel);
       out.force_n[next] = prev_force + w * (force - prev_force);
@@ -270,7 +270,8 @@ PressResult press_ball(const df::DeformableParams& params_in, Support support, b
     if (travel > last + 0.01) break;
   }
   const auto t1 = std::chrono::steady_clock::now();
-  out.step_us = steps > 0 ? std::chrono::duration<double, std::micro>(t1 - t0).count() / steps : 0.0;
+  out.step_us =
+      steps > 0 ? std::chrono::duration<double, std::micro>(t1 - t0).count() / steps : 0.0;
   out.faults = s.fault_count;
   return out;
 }
@@ -313,7 +314,8 @@ double free_vibration_hz(df::DeformableParams p, LambMode mode, double duration_
     df::step(m, s, dt, nullptr);
     const Eigen::Vector3d c = df::centroid(m, s);
     double acc = 0.0;
-    for (int i = 0; i < n; ++i) acc += mass(i) * ((s.x.col(i) - c) - (x0.col(i) - c0)).dot(phi.col(i));
+    for (int i = 0; i < n; ++i)
+      acc += mass(i) * ((s.x.col(i) - c) - (x0.col(i) - c0)).dot(phi.col(i));
     q[static_cast<std::size_t>(k)] = acc;
   }
   const auto t1 = std::chrono::steady_clock::now();
@@ -326,8 +328,8 @@ double free_vibration_hz(df::DeformableParams p, LambMode mode, double duration_
     std::complex<double> acc(0.0, 0.0);
     for (int k = 0; k < steps; ++k) {
       const double w = 0.5 - 0.5 * std::cos(2.0 * M_PI * k / (steps - 1));
-      acc += w * (q[static_cast<std::size_t>(k)] - mean) *
-             std::polar(1.0, -2.0 * M_PI * f * k * dt);
+      acc +=
+          w * (q[static_cast<std::size_t>(k)] - mean) * std::polar(1.0, -2.0 * M_PI * f * k * dt);
     }
     return std::norm(acc);
   };

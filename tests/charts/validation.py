@@ -2,8 +2,9 @@
 """Chart of `teleop_experiment validate`: each deformable model against physics.
 usage: validation.py validation.csv validation.png
 Left: the tip's force against its travel for the ball on the floor under its weight, each body
-beside the Hertz curve (foam ball). Right: the error against physics of every body, quantity
-by quantity (|error| in %, log scale), so one look shows which model is a material."""
+beside the Hertz curve (foam ball). Middle: the error against physics of every body, quantity
+by quantity (|error| in %, log scale), so one look shows which model is a material. Right: what
+each body costs per 1 ms world step against its worst error against physics."""
 import csv
 import math
 import sys
@@ -19,12 +20,13 @@ COLOURS = plt.get_cmap("tab20").colors
 
 
 def label(r):
-    return f"{r['model']} {r['mesh']}" + ("" if r["integrator"] == "symplectic_euler" else " (implicit)")
+    nodal = " nodal p." if r.get("variant") == "nodal_pressure" else ""
+    return f"{r['model']}{nodal} {r['mesh']}" + ("" if r["integrator"] == "symplectic_euler" else " (implicit)")
 
 
 def main():
     rows = list(csv.DictReader(open(sys.argv[1])))
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 5.5))
+    fig, (ax1, ax2, ax3) = plt.subplots(1, 3, figsize=(19, 5.8))
     # left: force against travel, foam, with the weight
     press = [r for r in rows if r["quantity"] == "tip_force_floor_weight_n" and r["material"] == "foam"]
     bodies = []
@@ -74,7 +76,25 @@ def main():
     ax2.set_ylabel("largest |error| against physics [%] (travel 2-20 mm)")
     ax2.set_title("Error against Hertz, Lamb and CalculiX")
     ax2.grid(alpha=0.3, which="both")
-    ax2.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    # right: cost against the worst error (Lamb, and the press under the weight at 2-20 mm)
+    for j, b in enumerate(all_bodies):
+        sub = [r for r in rows if label(r) + " " + r["material"] == b]
+        errs = [abs(float(r["error_pct"])) for r in sub
+                if r["quantity"] in ("lamb_S2_hz", "lamb_T2_hz", "lamb_S0_hz", "tip_force_floor_weight_n")
+                and r["reference_source"] != "calculix" and r["error_pct"] not in ("", "nan")
+                and (r["travel_mm"] == "" or float(r["travel_mm"]) >= 2.0)]
+        cost = [float(r["step_us"]) for r in sub if r["quantity"] == "sag_top_m"]
+        if errs and cost:
+            ax3.plot(cost[0], max(errs), MARKERS.get(b.split()[0], "o"), ms=7,
+                     color=COLOURS[j % len(COLOURS)], label=b)
+    ax3.axhline(10.0, color="k", ls="--", lw=1)
+    ax3.set_xscale("log")
+    ax3.set_yscale("log")
+    ax3.set_xlabel("world step with the body, 1 ms of simulated time [us]")
+    ax3.set_ylabel("worst |error| against Lamb and Hertz [%]")
+    ax3.set_title("Speed against physical accuracy")
+    ax3.grid(alpha=0.3, which="both")
+    ax3.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.tight_layout()
     fig.savefig(sys.argv[2], dpi=110)
 

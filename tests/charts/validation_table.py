@@ -25,17 +25,17 @@ def main():
     rows = list(csv.DictReader(open(sys.argv[1])))
     bodies = []
     for r in rows:
-        key = (r["model"], r["integrator"], r["mesh"], r["material"])
+        key = (r["model"], r["variant"], r["integrator"], r["mesh"], r["material"])
         if key not in bodies:
             bodies.append(key)
     print("| body | nodes / tets | " + " | ".join(c[2] for c in COLUMNS) + " | sag (top) | step [us] |")
     print("|---" * (len(COLUMNS) + 4) + "|")
     for b in bodies:
-        sub = [r for r in rows if (r["model"], r["integrator"], r["mesh"], r["material"]) == b]
-        integ = "" if b[1] == "symplectic_euler" else " implicit"
+        sub = [r for r in rows if (r["model"], r["variant"], r["integrator"], r["mesh"], r["material"]) == b]
+        integ = ("" if b[2] == "symplectic_euler" else " implicit") + (" nodal p." if b[1] == "nodal_pressure" else "")
         sag = next((float(r["value"]) for r in sub if r["quantity"] == "sag_top_m"), math.nan)
         us = next((float(r["step_us"]) for r in sub if r["quantity"] == "sag_top_m"), math.nan)
-        print(f"| {b[0]}{integ} {b[2]} {b[3]} | {sub[0]['nodes']} / {sub[0]['tets']} | " +
+        print(f"| {b[0]}{integ} {b[3]} {b[4]} | {sub[0]['nodes']} / {sub[0]['tets']} | " +
               " | ".join(cell(sub, q, t) for q, t, _ in COLUMNS) +
               f" | {sag * 1e3:.1f} mm | {us:.0f} |")
 

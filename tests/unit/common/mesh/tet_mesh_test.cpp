@@ -71,8 +71,8 @@ TEST(TetMesh, MshReaderNamesFileLineAndProblem) {
   const std::string good =
       "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n"
       "$EndNodes\n$Elements\n2\n1 15 2 0 1 1\n2 4 2 0 1 1 2 3 4\n$EndElements\n";
-  const msh::TetMesh m = msh::load_tet_mesh(write_file("teleop_ok.msh", good), 2.0,
-                                          Eigen::Vector3d(0, 0, 1));
+  const msh::TetMesh m =
+      msh::load_tet_mesh(write_file("teleop_ok.msh", good), 2.0, Eigen::Vector3d(0, 0, 1));
   EXPECT_EQ(m.tet_count(), 1);
   EXPECT_NEAR(msh::total_volume(m), 8.0 / 6.0, 1e-12);
   EXPECT_NEAR(m.vertices.row(2).minCoeff(), 1.0, 1e-12);

@@ -57,41 +57,46 @@ TEST(Fem, ModelHasTheMeshTheMassAndTheMaterial) {
 }
 
 TEST(Fem, RigidMotionMakesNoForceAndForcesAreTheEnergyGradient) {
-  const df::DeformableModel m = df::make_model(fem_params(1, df::IntegratorKind::kSymplecticEuler));
-  df::DeformableState s = df::make_state(m);
-  // rotated by 0.9 rad and moved: no elastic force (co-rotation), no energy
-  const Eigen::Matrix3d r = rotation(0.9);
-  for (int i = 0; i < m.fem.node_count; ++i) {
-    s.x.col(i) = r * m.fem.rest.col(i) + Eigen::Vector3d(0.3, -0.2, 0.1);
-  }
-  Eigen::Matrix3Xd f;
-  df::internal_forces(m, s, f);
-  EXPECT_LT(f.cwiseAbs().maxCoeff(), 1e-9);
-  EXPECT_LT(df::elastic_energy(m, s), 1e-12);
-  // a deformed state: the force is minus the gradient of the energy (central differences)
-  for (int i = 0; i < m.fem.node_count; ++i) {
-    const Eigen::Vector3d p = m.fem.rest.col(i);
-    s.x.col(i) = rotation(0.4) * (p + 0.05 * Eigen::Vector3d(std::sin(9 * p.z()), p.x() * p.y(),
-                                                             std::cos(7 * p.x()) * 0.3));
-  }
-  df::internal_forces(m, s, f);
-  const double h = 1e-7;
-  double worst = 0.0, scale = f.cwiseAbs().maxCoeff();
-  Eigen::Matrix3Xd scratch;
-  for (int i : {0, 5, m.node_count + 3}) {
-    for (int c = 0; c < 3; ++c) {
-      df::DeformableState t = s;
-      t.x(c, i) += h;
-      df::internal_forces(m, t, scratch);
-      const double ep = df::elastic_energy(m, t);
-      t.x(c, i) -= 2 * h;
-      df::internal_forces(m, t, scratch);
-      const double em = df::elastic_energy(m, t);
-      worst = std::max(worst, std::fabs(-(ep - em) / (2 * h) - f(c, i)));
+  for (bool nodal : {false, true}) {
+    SCOPED_TRACE(nodal ? "nodal pressure" : "element strain");
+    df::DeformableParams params = fem_params(1, df::IntegratorKind::kSymplecticEuler);
+    params.nodal_pressure = nodal;
+    const df::DeformableModel m = df::make_model(params);
+    df::DeformableState s = df::make_state(m);
+    // rotated by 0.9 rad and moved: no elastic force (co-rotation), no energy
+    const Eigen::Matrix3d r = rotation(0.9);
+    for (int i = 0; i < m.fem.node_count; ++i) {
+      s.x.col(i) = r * m.fem.rest.col(i) + Eigen::Vector3d(0.3, -0.2, 0.1);
     }
+    Eigen::Matrix3Xd f;
+    df::internal_forces(m, s, f);
+    EXPECT_LT(f.cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_LT(df::elastic_energy(m, s), 1e-12);
+    // a deformed state: the force is minus the gradient of the energy (central differences)
+    for (int i = 0; i < m.fem.node_count; ++i) {
+      const Eigen::Vector3d p = m.fem.rest.col(i);
+      s.x.col(i) = rotation(0.4) * (p + 0.05 * Eigen::Vector3d(std::sin(9 * p.z()), p.x() * p.y(),
+                                                               std::cos(7 * p.x()) * 0.3));
+    }
+    df::internal_forces(m, s, f);
+    const double h = 1e-7;
+    double worst = 0.0, scale = f.cwiseAbs().maxCoeff();
+    Eigen::Matrix3Xd scratch;
+    for (int i : {0, 5, m.node_count + 3}) {
+      for (int c = 0; c < 3; ++c) {
+        df::DeformableState t = s;
+        t.x(c, i) += h;
+        df::internal_forces(m, t, scratch);
+        const double ep = df::elastic_energy(m, t);
+        t.x(c, i) -= 2 * h;
+        df::internal_forces(m, t, scratch);
+        const double em = df::elastic_energy(m, t);
+        worst = std::max(worst, std::fabs(-(ep - em) / (2 * h) - f(c, i)));
+      }
+    }
+    EXPECT_GT(scale, 1e-3);
+    EXPECT_LT(worst, 1e-4 * scale);
   }
-  EXPECT_GT(scale, 1e-3);
-  EXPECT_LT(worst, 1e-4 * scale);
 }
 
 TEST(Fem, FallsFreelyAtGAndKeepsItsShape) {
@@ -127,8 +132,8 @@ TEST(Fem, RestsOnTheFloorCarryingItsWeightAndStaysStable) {
       }
     }
     EXPECT_NEAR(impulse / 1.0, 2.0 * 9.81, 0.05 * 2.0 * 9.81);
-    EXPECT_LT(lowest, 0.0);        // pressed into the floor a little
-    EXPECT_GT(lowest, -0.5e-3);    // by a stiff contact
+    EXPECT_LT(lowest, 0.0);      // pressed into the floor a little
+    EXPECT_GT(lowest, -0.5e-3);  // by a stiff contact
     EXPECT_EQ(s.fault_count, 0u);
   }
   // with stiffness damping (implicit Euler: stable at any damping) it comes to rest
@@ -175,28 +180,31 @@ TEST(Fem, TheTipSphereIsKeptOutAndFeelsTheReaction) {
 TEST(Fem, StableStepEstimateIsBelowItsBoundAndStepsAllocateNothing) {
   for (auto integ : {df::IntegratorKind::kSymplecticEuler, df::IntegratorKind::kExplicitEuler,
                      df::IntegratorKind::kImplicitEuler}) {
-    SCOPED_TRACE(df::to_string(integ));
-    df::DeformableParams p = fem_params(1, integ);
-    teleop::sim::Plane floor;
-    const df::DeformableModel m = df::make_model(p, {floor});
-    EXPECT_GT(m.omega_max_rad_per_s, 0.0);
-    EXPECT_LE(m.omega_max_rad_per_s, m.omega_bound_rad_per_s * (1 + 1e-9));
-    if (integ == df::IntegratorKind::kImplicitEuler) {
-      EXPECT_TRUE(std::isinf(m.stable_step_s));
-    } else {
-      EXPECT_GT(m.stable_step_s, 0.0);
+    for (bool nodal : {false, true}) {
+      SCOPED_TRACE(std::string(df::to_string(integ)) + (nodal ? " nodal pressure" : ""));
+      df::DeformableParams p = fem_params(1, integ);
+      p.nodal_pressure = nodal;
+      teleop::sim::Plane floor;
+      const df::DeformableModel m = df::make_model(p, {floor});
+      EXPECT_GT(m.omega_max_rad_per_s, 0.0);
+      EXPECT_LE(m.omega_max_rad_per_s, m.omega_bound_rad_per_s * (1 + 1e-9));
+      if (integ == df::IntegratorKind::kImplicitEuler) {
+        EXPECT_TRUE(std::isinf(m.stable_step_s));
+      } else {
+        EXPECT_GT(m.stable_step_s, 0.0);
+      }
+      df::DeformableState s = df::make_state(m);
+      teleop::sim::EventQueue events;
+      s.tip_radius_m = 0.05;
+      s.tip_from_m = s.tip_to_m = Eigen::Vector3d(0, 0, 0.545);
+      s.f_ext.col(3) = Eigen::Vector3d(0.1, 0, 0);
+      s.pinned[static_cast<std::size_t>(m.node_count + 1)] = 1;
+      s.pin_target.col(m.node_count + 1) = s.x.col(m.node_count + 1);
+      df::step(m, s, 1e-3, &events);  // warm-up: the sub-step event
+      teleop::test::NoAllocScope scope;
+      for (int k = 0; k < 20; ++k) df::step(m, s, 1e-3, &events);
+      EXPECT_EQ(scope.allocations(), 0u);
+      EXPECT_EQ(s.fault_count, 0u);
     }
-    df::DeformableState s = df::make_state(m);
-    teleop::sim::EventQueue events;
-    s.tip_radius_m = 0.05;
-    s.tip_from_m = s.tip_to_m = Eigen::Vector3d(0, 0, 0.545);
-    s.f_ext.col(3) = Eigen::Vector3d(0.1, 0, 0);
-    s.pinned[static_cast<std::size_t>(m.node_count + 1)] = 1;
-    s.pin_target.col(m.node_count + 1) = s.x.col(m.node_count + 1);
-    df::step(m, s, 1e-3, &events);  // warm-up: the sub-step event
-    teleop::test::NoAllocScope scope;
-    for (int k = 0; k < 20; ++k) df::step(m, s, 1e-3, &events);
-    EXPECT_EQ(scope.allocations(), 0u);
-    EXPECT_EQ(s.fault_count, 0u);
   }
 }

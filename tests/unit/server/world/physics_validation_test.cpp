@@ -33,8 +33,8 @@ TEST(PhysicsReferences, LambRootsMatchThePublishedValues) {
   const va::Material foam = va::foam();
   EXPECT_NEAR(foam.density_kg_per_m3 * 4.0 / 3.0 * M_PI * std::pow(0.25, 3), 2.0, 1e-12);
   const double ct = std::sqrt(6000.0 / (2.0 * foam.density_kg_per_m3 * 1.3));
-  EXPECT_NEAR(va::lamb_frequency_hz(va::LambMode::kT2, foam, 0.25),
-              2.5011 * ct / (2 * M_PI * 0.25), 1e-3);
+  EXPECT_NEAR(va::lamb_frequency_hz(va::LambMode::kT2, foam, 0.25), 2.5011 * ct / (2 * M_PI * 0.25),
+              1e-3);
 }
 
 TEST(PhysicsReferences, HertzTwoContactsInSeries) {
@@ -84,7 +84,7 @@ TEST(FemAgainstPhysics, TipOnTheBallOnTheFloorApproachesHertzAsTheMeshIsRefined)
     const va::PressResult r = va::press_ball(p, va::Support::kFloor, true, travels, 0.01, 1.0);
     EXPECT_EQ(r.faults, 0u);
     EXPECT_NEAR(r.floor_force_n, weight, 0.005 * weight);  // the floor carries the weight
-    EXPECT_GT(r.sag_top_m, 0.015);                          // and the ball sags (23-24 mm)
+    EXPECT_GT(r.sag_top_m, 0.015);                         // and the ball sags (23-24 mm)
     EXPECT_LT(r.sag_top_m, 0.035);
     for (std::size_t k = 0; k < travels.size(); ++k) {
       const double ref = va::hertz_floor_force_n(foam, 0.25, 0.05, travels[k], weight);
