@@ -289,20 +289,7 @@ double free_vibration_hz(df::DeformableParams p, LambMode mode, double duration_
   const Eigen::Matrix3Xd x0 = s.x;
   const Eigen::Vector3d c0 = df::centroid(m, s);
   Eigen::Matrix3Xd phi(3, n);
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d q = (x0.col(i) - c0) / kBallRadiusM;
-    switch (mode) {
-      case LambMode::kS2:
-        phi.col(i) = Eigen::Vector3d(q.x(), q.y(), -2.0 * q.z());
-        break;
-      case LambMode::kT2:
-        phi.col(i) = Eigen::Vector3d(q.y() * q.z(), -q.x() * q.z(), 0.0);
-        break;
-      case LambMode::kS0:
-        phi.col(i) = q;
-        break;
-    }
-  }
+  for (int i = 0; i < n; ++i) phi.col(i) = lamb_mode_field(mode, (x0.col(i) - c0) / kBallRadiusM);
   const double vmax = phi.colwise().norm().maxCoeff();
   s.v = phi * (0.02 / vmax);  // 2 cm/s at most: a small-strain vibration
   Eigen::VectorXd mass(n);
@@ -320,7 +307,24 @@ double free_vibration_hz(df::DeformableParams p, LambMode mode, double duration_
   }
   const auto t1 = std::chrono::steady_clock::now();
   if (step_us) *step_us = std::chrono::duration<double, std::micro>(t1 - t0).count() / steps;
-  // Hann-windowed spectrum on a fine grid around the expected frequency; its largest peak
+  return dominant_frequency_hz(q, dt, expected_hz);
+}
+
+Eigen::Vector3d lamb_mode_field(LambMode mode, const Eigen::Vector3d& q) {
+  switch (mode) {
+    case LambMode::kS2:
+      return Eigen::Vector3d(q.x(), q.y(), -2.0 * q.z());
+    case LambMode::kT2:
+      return Eigen::Vector3d(q.y() * q.z(), -q.x() * q.z(), 0.0);
+    case LambMode::kS0:
+      return q;
+  }
+  return Eigen::Vector3d::Zero();
+}
+
+double dominant_frequency_hz(const std::vector<double>& q, double dt, double expected_hz) {
+  const int steps = static_cast<int>(q.size());
+  if (steps < 8) return std::numeric_limits<double>::quiet_NaN();
   double mean = 0.0;
   for (double v : q) mean += v;
   mean /= static_cast<double>(steps);
@@ -328,8 +332,8 @@ double free_vibration_hz(df::DeformableParams p, LambMode mode, double duration_
     std::complex<double> acc(0.0, 0.0);
     for (int k = 0; k < steps; ++k) {
       const double w = 0.5 - 0.5 * std::cos(2.0 * M_PI * k / (steps - 1));
-      acc +=
-          w * (q[static_cast<std::size_t>(k)] - mean) * std::polar(1.0, -2.0 * M_PI * f * k * dt);
+      acc += w * (q[static_cast<std::size_t>(k)] - mean) *
+             std::polar(1.0, -2.0 * M_PI * f * k * dt);
     }
     return std::norm(acc);
   };

@@ -103,4 +103,12 @@ PressResult press_ball(const deformable::DeformableParams& params, Support suppo
 double free_vibration_hz(deformable::DeformableParams params, LambMode mode, double duration_s,
                          double expected_hz, double* step_us = nullptr);
 
+/// The velocity field that starts `mode` at point p (relative to the centre, in units of the
+/// radius): S2 (x, y, -2z), T2 (y z, -x z, 0), S0 (x, y, z).
+Eigen::Vector3d lamb_mode_field(LambMode mode, const Eigen::Vector3d& p);
+
+/// The frequency [Hz] of the largest peak of the Hann-windowed spectrum of samples q (period
+/// dt_s) between 0.3 and 2.5 times expected_hz, refined by a parabola through its neighbours.
+double dominant_frequency_hz(const std::vector<double>& q, double dt_s, double expected_hz);
+
 }  // namespace teleop::sim::validation

@@ -1,0 +1,226 @@
+// teleop_bench peers-fem --out DIR [--quick] [--no-chart] [--rounds N]
+// Our volumetric FEM ball against Bullet's deformable FEM (btDeformableMultiBodyDynamicsWorld
+// with btDeformableLinearElasticityForce, Debian's libbullet-dev, single precision, implicit
+// Euler by Newton-CG) on the same tetrahedral meshes (the shipped balls of levels 1 and 2), the
+// same material (the foam ball: E = 6000 Pa, nu = 0.3, 2 kg, lambda and mu given to both) and
+// the same 1 ms world step, interleaved in one process run.
+//
+// Workload: zero gravity, no planes, no damping; the ball at rest gets the velocity field of
+// Lamb's T2 or S2 mode (2 cm/s at most, physics_validation.hpp) and vibrates freely for 1 s.
+// Measured per engine, level and mode: wall time of each world step (median, p99 over the
+// rounds) and the frequency of the mode's coordinate against Lamb's [%].
+// Writes DIR/peers_fem.csv; chart DIR/peers_fem.png (tests/charts/peers_fem.py).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/mesh/tet_mesh.hpp"
+#include "common/util/csv.hpp"
+#include "common/util/registry.hpp"
+#include "common/util/stats.hpp"
+#include "server/deformable/deformable.hpp"
+#include "server/world/physics_validation.hpp"
+
+#ifdef TELEOP_HAVE_BULLET
+// Bullet's deformable headers instantiate code GCC flags as maybe uninitialized (in Bullet)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <BulletSoftBody/btDeformableBodySolver.h>
+#include <BulletSoftBody/btDeformableLinearElasticityForce.h>
+#include <BulletSoftBody/btDeformableMultiBodyConstraintSolver.h>
+#include <BulletSoftBody/btDeformableMultiBodyDynamicsWorld.h>
+#include <BulletSoftBody/btSoftBodyHelpers.h>
+#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
+#include <btBulletDynamicsCommon.h>
+
+#include <memory>
+#endif
+
+namespace {
+
+namespace df = teleop::sim::deformable;
+namespace va = teleop::sim::validation;
+
+struct Run {
+  std::vector<double> q;        ///< the mode's coordinate per step
+  std::vector<double> step_us;  ///< wall time per world step
+};
+
+// Mass-weighted projection of the displacement (centroid motion removed) on the mode field.
+double mode_coordinate(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x0,
+                       const Eigen::Matrix3Xd& phi, const Eigen::VectorXd& mass) {
+  const Eigen::Vector3d c = x * mass / mass.sum(), c0 = x0 * mass / mass.sum();
+  double acc = 0.0;
+  for (Eigen::Index i = 0; i < x.cols(); ++i) {
+    acc += mass(i) * ((x.col(i) - c) - (x0.col(i) - c0)).dot(phi.col(i));
+  }
+  return acc;
+}
+
+Eigen::Matrix3Xd mode_field(va::LambMode mode, const Eigen::Matrix3Xd& x0) {
+  const Eigen::Vector3d c0 = x0.rowwise().mean();
+  Eigen::Matrix3Xd phi(3, x0.cols());
+  for (Eigen::Index i = 0; i < x0.cols(); ++i) {
+    phi.col(i) = va::lamb_mode_field(mode, (x0.col(i) - c0) / va::kBallRadiusM);
+  }
+  return phi * (0.02 / phi.colwise().norm().maxCoeff());
+}
+
+Run run_ours(int level, va::LambMode mode, double dt, int steps) {
+  df::DeformableParams p =
+      va::ball_params(df::ModelKind::kFem, df::IntegratorKind::kSymplecticEuler, level, va::foam());
+  p.gravity_mps2.setZero();
+  p.stiffness_damping_s = 0.0;
+  p.mass_damping_per_s = 0.0;
+  const df::DeformableModel m = df::make_model(p);
+  df::DeformableState s = df::make_state(m);
+  const Eigen::Matrix3Xd x0 = s.x;
+  const Eigen::Matrix3Xd phi = mode_field(mode, x0);
+  s.v = phi;
+  Run r;
+  for (int k = 0; k < steps; ++k) {
+    const auto t0 = std::chrono::steady_clock::now();
+    df::step(m, s, dt, nullptr);
+    const auto t1 = std::chrono::steady_clock::now();
+    r.step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+    r.q.push_back(mode_coordinate(s.x, x0, phi, m.fem.mass_kg));
+  }
+  return r;
+}
+
+#ifdef TELEOP_HAVE_BULLET
+Run run_bullet(int level, va::LambMode mode, double dt, int steps) {
+  const teleop::mesh::TetMesh tm =
+      teleop::mesh::ball_tet_mesh(level, va::kBallRadiusM, Eigen::Vector3d::Zero());
+  // TetGen's text format, which Bullet reads (0-based indices)
+  std::ostringstream node, ele;
+  node.precision(17);
+  node << tm.node_count() << " 3 0 0\n";
+  for (int i = 0; i < tm.node_count(); ++i) {
+    node << i << " " << tm.vertices(0, i) << " " << tm.vertices(1, i) << " " << tm.vertices(2, i)
+         << "\n";
+  }
+  ele << tm.tet_count() << " 4 0\n";
+  for (int t = 0; t < tm.tet_count(); ++t) {
+    ele << t << " " << tm.tets(0, t) << " " << tm.tets(1, t) << " " << tm.tets(2, t) << " "
+        << tm.tets(3, t) << "\n";
+  }
+  auto config = std::make_unique<btSoftBodyRigidBodyCollisionConfiguration>();
+  auto dispatcher = std::make_unique<btCollisionDispatcher>(config.get());
+  auto broadphase = std::make_unique<btDbvtBroadphase>();
+  auto body_solver = std::make_unique<btDeformableBodySolver>();
+  auto solver = std::make_unique<btDeformableMultiBodyConstraintSolver>();
+  solver->setDeformableSolver(body_solver.get());
+  auto world = std::make_unique<btDeformableMultiBodyDynamicsWorld>(
+      dispatcher.get(), broadphase.get(), solver.get(), config.get(), body_solver.get());
+  world->setGravity(btVector3(0, 0, 0));
+  world->getWorldInfo().m_gravity.setValue(0, 0, 0);
+  world->getWorldInfo().m_sparsesdf.Initialize();
+  const std::string ele_text = ele.str(), node_text = node.str();
+  btSoftBody* sb = btSoftBodyHelpers::CreateFromTetGenData(
+      world->getWorldInfo(), ele_text.c_str(), nullptr, node_text.c_str(), false, true, true);
+  world->addSoftBody(sb);
+  sb->setVolumeMass(2.0);  // a quarter of each tetrahedron's share on its nodes, like ours
+  sb->m_cfg.kDF = 0;
+  sb->m_sleepingThreshold = 0;
+  const va::Material foam = va::foam();
+  const double nu = foam.poisson_ratio, e = foam.youngs_modulus_pa;
+  auto force = std::make_unique<btDeformableLinearElasticityForce>(
+      static_cast<btScalar>(e / (2 * (1 + nu))), static_cast<btScalar>(e * nu / ((1 + nu) * (1 - 2 * nu))),
+      0, 0);
+  world->addForce(sb, force.get());
+  Eigen::Matrix3Xd x0(3, sb->m_nodes.size()), x(3, sb->m_nodes.size());
+  Eigen::VectorXd mass(sb->m_nodes.size());
+  for (int i = 0; i < sb->m_nodes.size(); ++i) {
+    const btVector3& p = sb->m_nodes[i].m_x;
+    x0.col(i) = Eigen::Vector3d(p.x(), p.y(), p.z());
+    const double im = static_cast<double>(sb->m_nodes[i].m_im);
+    mass(i) = im > 0.0 ? 1.0 / im : 0.0;
+  }
+  const Eigen::Matrix3Xd phi = mode_field(mode, x0);
+  for (int i = 0; i < sb->m_nodes.size(); ++i) {
+    sb->m_nodes[i].m_v = btVector3(static_cast<btScalar>(phi(0, i)), static_cast<btScalar>(phi(1, i)),
+                                   static_cast<btScalar>(phi(2, i)));
+  }
+  Run r;
+  for (int k = 0; k < steps; ++k) {
+    const auto t0 = std::chrono::steady_clock::now();
+    world->stepSimulation(static_cast<btScalar>(dt), 0);
+    const auto t1 = std::chrono::steady_clock::now();
+    r.step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+    for (int i = 0; i < sb->m_nodes.size(); ++i) {
+      const btVector3& p = sb->m_nodes[i].m_x;
+      x.col(i) = Eigen::Vector3d(p.x(), p.y(), p.z());
+    }
+    r.q.push_back(mode_coordinate(x, x0, phi, mass));
+  }
+  world->removeSoftBody(sb);
+  delete sb;
+  return r;
+}
+#endif
+
+int run_peers_fem(const teleop::CommandArgs& args) {
+#ifndef TELEOP_HAVE_BULLET
+  std::cout << "peers-fem: skipped (built without Bullet: apt-get install libbullet-dev)\n";
+  (void)args;
+  return 0;
+#else
+  std::filesystem::create_directories(args.out_dir);
+  const double dt = 1e-3;
+  const int steps = args.quick ? 200 : 1000;
+  const int rounds = std::max(1, std::stoi(args.option("--rounds", args.quick ? "1" : "3")));
+  const std::vector<int> levels = args.quick ? std::vector<int>{1} : std::vector<int>{1, 2};
+  teleop::CsvWriter csv((args.out_dir / "peers_fem.csv").string(),
+                        {"engine", "level", "nodes", "tets", "mode", "lamb_hz", "frequency_hz",
+                         "error_pct", "step_us_median", "step_us_p99", "rounds"});
+  const va::Material foam = va::foam();
+  for (int level : levels) {
+    const teleop::mesh::TetMesh tm = teleop::mesh::ball_tet_mesh(level, 0.25, Eigen::Vector3d::Zero());
+    const std::vector<va::LambMode> modes =
+        args.quick ? std::vector<va::LambMode>{va::LambMode::kT2}
+                   : std::vector<va::LambMode>{va::LambMode::kT2, va::LambMode::kS2};
+    for (auto mode : modes) {
+      const double lamb = va::lamb_frequency_hz(mode, foam, va::kBallRadiusM);
+      for (const char* engine : {"ours", "bullet"}) {
+        std::vector<double> times;
+        double f = 0.0;
+        for (int round = 0; round < rounds; ++round) {
+          const Run r = std::string(engine) == "ours" ? run_ours(level, mode, dt, steps)
+                                                      : run_bullet(level, mode, dt, steps);
+          times.insert(times.end(), r.step_us.begin(), r.step_us.end());
+          if (round == 0) f = va::dominant_frequency_hz(r.q, dt, lamb);
+        }
+        std::sort(times.begin(), times.end());
+        const double median = times[times.size() / 2];
+        const double p99 = times[std::min(times.size() - 1, times.size() * 99 / 100)];
+        std::fprintf(stderr, "peers-fem: %s L%d %s: %.3f Hz (Lamb %.3f, %+.1f %%), step p50 %.0f us p99 %.0f us\n",
+                     engine, level, va::to_string(mode), f, lamb, 100 * (f / lamb - 1), median, p99);
+        csv.row_text({engine, std::to_string(level), std::to_string(tm.node_count()),
+                      std::to_string(tm.tet_count()), va::to_string(mode),
+                      teleop::format_number(lamb), teleop::format_number(f),
+                      teleop::format_number(100 * (f / lamb - 1)), teleop::format_number(median),
+                      teleop::format_number(p99), std::to_string(rounds)});
+      }
+    }
+  }
+  csv.flush();
+  if (!args.no_chart) {
+    teleop::run_chart_script("peers_fem.py", {(args.out_dir / "peers_fem.csv").string(),
+                                              (args.out_dir / "peers_fem.png").string()});
+  }
+  std::cout << "peers-fem: " << (args.out_dir / "peers_fem.csv").string() << "\n";
+  return 0;
+#endif
+}
+
+}  // namespace
+
+TELEOP_REGISTER_COMMAND(bench, "peers-fem",
+                        "our volumetric FEM ball against Bullet's deformable FEM on the same "
+                        "tetrahedral meshes: step cost and Lamb frequency error",
+                        run_peers_fem);
