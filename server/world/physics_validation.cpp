@@ -346,6 +346,10 @@ double dominant_frequency_hz(const std::vector<double>& q, double dt, double exp
       best_f = f;
     }
   }
+  // a peak on the edge of the range is no vibration in it (damped out, or drifting)
+  if (best_f < lo + 1.5 * df_hz || best_f > hi - 1.5 * df_hz) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
   const double pm = power(best_f - df_hz), pp = power(best_f + df_hz);
   const double den = pm - 2.0 * best_p + pp;
   const double shift = den != 0.0 ? 0.5 * (pm - pp) / den : 0.0;

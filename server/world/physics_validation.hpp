@@ -108,7 +108,8 @@ double free_vibration_hz(deformable::DeformableParams params, LambMode mode, dou
 Eigen::Vector3d lamb_mode_field(LambMode mode, const Eigen::Vector3d& p);
 
 /// The frequency [Hz] of the largest peak of the Hann-windowed spectrum of samples q (period
-/// dt_s) between 0.3 and 2.5 times expected_hz, refined by a parabola through its neighbours.
+/// dt_s) between 0.3 and 2.5 times expected_hz, refined by a parabola through its neighbours;
+/// NaN when the largest value is on the edge of that range (no vibration in it).
 double dominant_frequency_hz(const std::vector<double>& q, double dt_s, double expected_hz);
 
 }  // namespace teleop::sim::validation

@@ -1,14 +1,15 @@
 // teleop_bench peers-fem --out DIR [--quick] [--no-chart] [--rounds N]
 // Our volumetric FEM ball against Bullet's deformable FEM (btDeformableMultiBodyDynamicsWorld
 // with btDeformableLinearElasticityForce, Debian's libbullet-dev, single precision, implicit
-// Euler by Newton-CG) on the same tetrahedral meshes (the shipped balls of levels 1 and 2), the
+// Euler by Newton-CG, and its explicit scheme) on the same tetrahedral meshes (the shipped balls of levels 1 and 2), the
 // same material (the foam ball: E = 6000 Pa, nu = 0.3, 2 kg, lambda and mu given to both) and
 // the same 1 ms world step, interleaved in one process run.
 //
 // Workload: zero gravity, no planes, no damping; the ball at rest gets the velocity field of
-// Lamb's T2 or S2 mode (2 cm/s at most, physics_validation.hpp) and vibrates freely for 1 s.
+// Lamb's T2 or S2 mode (2 cm/s at most, physics_validation.hpp) and vibrates freely for 0.6 s (0.2 s with --quick).
 // Measured per engine, level and mode: wall time of each world step (median, p99 over the
-// rounds) and the frequency of the mode's coordinate against Lamb's [%].
+// rounds) and the frequency of the mode's coordinate against Lamb's [%] (NaN: no vibration in
+// 0.3-2.5 times Lamb's frequency, or the body blew up).
 // Writes DIR/peers_fem.csv; chart DIR/peers_fem.png (tests/charts/peers_fem.py).
 #include <algorithm>
 #include <chrono>
@@ -93,7 +94,7 @@ Run run_ours(int level, va::LambMode mode, double dt, int steps) {
 }
 
 #ifdef TELEOP_HAVE_BULLET
-Run run_bullet(int level, va::LambMode mode, double dt, int steps) {
+Run run_bullet(int level, va::LambMode mode, double dt, int steps, bool implicit) {
   const teleop::mesh::TetMesh tm =
       teleop::mesh::ball_tet_mesh(level, va::kBallRadiusM, Eigen::Vector3d::Zero());
   // TetGen's text format, which Bullet reads (0-based indices)
@@ -120,6 +121,7 @@ Run run_bullet(int level, va::LambMode mode, double dt, int steps) {
   world->setGravity(btVector3(0, 0, 0));
   world->getWorldInfo().m_gravity.setValue(0, 0, 0);
   world->getWorldInfo().m_sparsesdf.Initialize();
+  world->setImplicit(implicit);
   const std::string ele_text = ele.str(), node_text = node.str();
   btSoftBody* sb = btSoftBodyHelpers::CreateFromTetGenData(
       world->getWorldInfo(), ele_text.c_str(), nullptr, node_text.c_str(), false, true, true);
@@ -172,8 +174,8 @@ int run_peers_fem(const teleop::CommandArgs& args) {
 #else
   std::filesystem::create_directories(args.out_dir);
   const double dt = 1e-3;
-  const int steps = args.quick ? 200 : 1000;
-  const int rounds = std::max(1, std::stoi(args.option("--rounds", args.quick ? "1" : "3")));
+  const int steps = args.quick ? 200 : 600;
+  const int rounds = std::max(1, std::stoi(args.option("--rounds", args.quick ? "1" : "2")));
   const std::vector<int> levels = args.quick ? std::vector<int>{1} : std::vector<int>{1, 2};
   teleop::CsvWriter csv((args.out_dir / "peers_fem.csv").string(),
                         {"engine", "level", "nodes", "tets", "mode", "lamb_hz", "frequency_hz",
@@ -186,12 +188,15 @@ int run_peers_fem(const teleop::CommandArgs& args) {
                    : std::vector<va::LambMode>{va::LambMode::kT2, va::LambMode::kS2};
     for (auto mode : modes) {
       const double lamb = va::lamb_frequency_hz(mode, foam, va::kBallRadiusM);
-      for (const char* engine : {"ours", "bullet"}) {
+      const std::vector<std::string> engines =
+          args.quick ? std::vector<std::string>{"ours", "bullet-implicit"}
+                     : std::vector<std::string>{"ours", "bullet-implicit", "bullet-explicit"};
+      for (const std::string& engine : engines) {
         std::vector<double> times;
         double f = 0.0;
         for (int round = 0; round < rounds; ++round) {
-          const Run r = std::string(engine) == "ours" ? run_ours(level, mode, dt, steps)
-                                                      : run_bullet(level, mode, dt, steps);
+          const Run r = engine == "ours" ? run_ours(level, mode, dt, steps)
+                                         : run_bullet(level, mode, dt, steps, engine == "bullet-implicit");
           times.insert(times.end(), r.step_us.begin(), r.step_us.end());
           if (round == 0) f = va::dominant_frequency_hz(r.q, dt, lamb);
         }
@@ -199,7 +204,7 @@ int run_peers_fem(const teleop::CommandArgs& args) {
         const double median = times[times.size() / 2];
         const double p99 = times[std::min(times.size() - 1, times.size() * 99 / 100)];
         std::fprintf(stderr, "peers-fem: %s L%d %s: %.3f Hz (Lamb %.3f, %+.1f %%), step p50 %.0f us p99 %.0f us\n",
-                     engine, level, va::to_string(mode), f, lamb, 100 * (f / lamb - 1), median, p99);
+                     engine.c_str(), level, va::to_string(mode), f, lamb, 100 * (f / lamb - 1), median, p99);
         csv.row_text({engine, std::to_string(level), std::to_string(tm.node_count()),
                       std::to_string(tm.tet_count()), va::to_string(mode),
                       teleop::format_number(lamb), teleop::format_number(f),
