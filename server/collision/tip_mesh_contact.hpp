@@ -200,8 +200,8 @@ class TipMeshContact {
   std::vector<std::uint32_t> stamp_;  ///< scratch: node visited marks
   std::uint32_t stamp_counter_ = 0;
   Eigen::VectorXd node_area_m2_;  ///< nodes' rest areas (empty: every node the reference)
-  std::vector<int> node_list_;   ///< scratch: nodes inside the tip sphere
-  Eigen::Matrix3Xd node_force_;  ///< scratch: their penalty forces [N]
+  std::vector<int> node_list_;    ///< scratch: nodes inside the tip sphere
+  Eigen::Matrix3Xd node_force_;   ///< scratch: their penalty forces [N]
   int node_contacts_ = 0;
   int patch_size_ = 0;
   std::array<int, kMaxPatch> patch_node_{};

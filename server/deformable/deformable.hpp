@@ -265,18 +265,18 @@ struct DeformableModel {
   // interior) are the columns of the state's x, v, f_ext, force, pinned and pin_target;
   // mass_kg / inv_mass / area_m2 / contact_k / contact_c cover the surface nodes.
   struct Fem {
-    int node_count = 0;                  ///< all nodes
+    int node_count = 0;  ///< all nodes
     int tet_count = 0;
-    Eigen::Matrix3Xd rest;               ///< rest positions of all nodes [m]
-    Eigen::Matrix4Xi tets;               ///< positive orientation
-    std::vector<double> dm_inv;          ///< per tet 9: Dm^-1 column-major, Dm = [X1-X0 X2-X0 X3-X0]
+    Eigen::Matrix3Xd rest;       ///< rest positions of all nodes [m]
+    Eigen::Matrix4Xi tets;       ///< positive orientation
+    std::vector<double> dm_inv;  ///< per tet 9: Dm^-1 column-major, Dm = [X1-X0 X2-X0 X3-X0]
     /// The same four tets at a time (tets 4g .. 4g + 3, one per lane): dm_inv4[36 g + 4 k + l] =
     /// dm_inv[9 (4 g + l) + k]; volume4[4 g + l] (the last tet_count % 4 tets are not in it)
     std::vector<double> dm_inv4, volume4;
-    Eigen::VectorXd volume_m3;           ///< per tet
-    Eigen::VectorXd mass_kg, inv_mass;   ///< lumped, all nodes (a quarter of each tet's mass)
-    Eigen::VectorXd inv_node_volume;     ///< 1 / (a quarter of each adjacent tet's volume) [1/m^3]
-    Eigen::Matrix3Xd precond;            ///< diagonal of the rest stiffness (CG preconditioner)
+    Eigen::VectorXd volume_m3;          ///< per tet
+    Eigen::VectorXd mass_kg, inv_mass;  ///< lumped, all nodes (a quarter of each tet's mass)
+    Eigen::VectorXd inv_node_volume;    ///< 1 / (a quarter of each adjacent tet's volume) [1/m^3]
+    Eigen::Matrix3Xd precond;           ///< diagonal of the rest stiffness (CG preconditioner)
     double pressure_stiffness_pa_per_m = 0.0;  ///< plane and tip contact [Pa/m]
   } fem;
 

@@ -61,8 +61,8 @@ const char* to_string(KernelKind kind) {
 }
 
 ModelKind parse_model_kind(const std::string& name) {
-  for (auto k : {ModelKind::kMassSpring, ModelKind::kNavierLinear,
-                 ModelKind::kNavierCorotational, ModelKind::kFem}) {
+  for (auto k : {ModelKind::kMassSpring, ModelKind::kNavierLinear, ModelKind::kNavierCorotational,
+                 ModelKind::kFem}) {
     if (name == to_string(k)) return k;
   }
   throw config::ConfigError("deformable model '" + name +
@@ -152,7 +152,7 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
               "simd is implemented for model mass_spring with integrator symplectic_euler only");
   }
   p.level = fem ? static_cast<int>(node.integer_or("level", 2, 1, teleop::mesh::kMaxBallTetLevel))
-              : static_cast<int>(node.integer_or("level", p.level, 0, 6));
+                : static_cast<int>(node.integer_or("level", p.level, 0, 6));
 #ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
   // fuzz builds only (tests/fuzz): a level-6 body takes 0.2 s to build; level 2 takes 1 ms
   p.level = std::min(p.level, 2);

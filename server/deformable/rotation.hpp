@@ -88,7 +88,7 @@ TELEOP_ROTATION_INLINE void rotation_step(const T* a, const T* r, T& ox, T& oy, 
 // after a Newton step whose square is (its remaining error). Plain scalar arithmetic; the matrix of
 // the last check is the result when it converged.
 TELEOP_ROTATION_INLINE void extract_rotation(const double* a, Eigen::Quaterniond& q_io,
-                                           int max_iterations, double tolerance_rad, double* r) {
+                                             int max_iterations, double tolerance_rad, double* r) {
   double qw = q_io.w(), qx = q_io.x(), qy = q_io.y(), qz = q_io.z();
   bool converged = false;
   for (int it = 0; it < max_iterations; ++it) {

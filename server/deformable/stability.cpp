@@ -128,8 +128,8 @@ StabilityEstimate estimate_stability(const DeformableModel& m) {
   out.omega_bound_rad_per_s = gershgorin_omega_bound(m);
   Eigen::VectorXd inv_sqrt_m(dofs);
   for (int i = 0; i < n; ++i) {
-    inv_sqrt_m.segment<3>(3 * i).setConstant(
-        1.0 / std::sqrt(fem ? m.fem.mass_kg(i) : m.mass_kg(i)));
+    inv_sqrt_m.segment<3>(3 * i).setConstant(1.0 /
+                                             std::sqrt(fem ? m.fem.mass_kg(i) : m.mass_kg(i)));
   }
   if (m.has_centre) inv_sqrt_m.tail<3>().setConstant(1.0 / std::sqrt(m.centre_mass_kg));
 

@@ -197,9 +197,9 @@ struct ServerNode::Impl {
         sim::SimEvent body{};
         std::snprintf(
             body.message, sizeof(body.message),
-            "deformable %d: %s %s, kernel %s%s, %d nodes%s, %d sub-step(s) per step",
-            b.object_id, sim::deformable::to_string(p.model),
-            sim::deformable::to_string(p.integrator), sim::deformable::to_string(p.kernel),
+            "deformable %d: %s %s, kernel %s%s, %d nodes%s, %d sub-step(s) per step", b.object_id,
+            sim::deformable::to_string(p.model), sim::deformable::to_string(p.integrator),
+            sim::deformable::to_string(p.kernel),
             simd ? (sim::deformable::simd_kernel_vectorised() ? " (AVX2)" : " (portable)") : "",
             b.body.state_node_count(),
             p.model == sim::deformable::ModelKind::kFem

@@ -332,8 +332,8 @@ double dominant_frequency_hz(const std::vector<double>& q, double dt, double exp
     std::complex<double> acc(0.0, 0.0);
     for (int k = 0; k < steps; ++k) {
       const double w = 0.5 - 0.5 * std::cos(2.0 * M_PI * k / (steps - 1));
-      acc += w * (q[static_cast<std::size_t>(k)] - mean) *
-             std::polar(1.0, -2.0 * M_PI * f * k * dt);
+      acc +=
+          w * (q[static_cast<std::size_t>(k)] - mean) * std::polar(1.0, -2.0 * M_PI * f * k * dt);
     }
     return std::norm(acc);
   };

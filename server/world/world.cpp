@@ -88,11 +88,11 @@ void add_body_on_tip(const DeformableBodyData& b, const Eigen::Vector3d& tip_now
   }
 }
 
-void push_touch_event(const DeformableBodyData& b, int object_id, double t_s,
-                      EventQueue& events) {
-  events.push(b.last.in_contact ? EventKind::kContactBegin : EventKind::kContactEnd,
-              Severity::kInfo, t_s, object_id,
-              b.last.in_contact ? "tip touches the deformable body" : "tip leaves the deformable body");
+void push_touch_event(const DeformableBodyData& b, int object_id, double t_s, EventQueue& events) {
+  events.push(
+      b.last.in_contact ? EventKind::kContactBegin : EventKind::kContactEnd, Severity::kInfo, t_s,
+      object_id,
+      b.last.in_contact ? "tip touches the deformable body" : "tip leaves the deformable body");
 }
 
 /// Model fem: the contact result of the body's own step (its nodes kept out of the tip sphere):

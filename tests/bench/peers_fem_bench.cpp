@@ -1,16 +1,16 @@
 // teleop_bench peers-fem --out DIR [--quick] [--no-chart] [--rounds N]
 // Our volumetric FEM ball against Bullet's deformable FEM (btDeformableMultiBodyDynamicsWorld
 // with btDeformableLinearElasticityForce, Debian's libbullet-dev, single precision, implicit
-// Euler by Newton-CG, and its explicit scheme) on the same tetrahedral meshes (the shipped balls of levels 1 and 2), the
-// same material (the foam ball: E = 6000 Pa, nu = 0.3, 2 kg, lambda and mu given to both) and
-// the same 1 ms world step, interleaved in one process run.
+// Euler by Newton-CG, and its explicit scheme) on the same tetrahedral meshes (the shipped balls of
+// levels 1 and 2), the same material (the foam ball: E = 6000 Pa, nu = 0.3, 2 kg, lambda and mu
+// given to both) and the same 1 ms world step, interleaved in one process run.
 //
 // Workload: zero gravity, no planes, no damping; the ball at rest gets the velocity field of
-// Lamb's T2 or S2 mode (2 cm/s at most, physics_validation.hpp) and vibrates freely for 0.6 s (0.2 s with --quick).
-// Measured per engine, level and mode: wall time of each world step (median, p99 over the
-// rounds) and the frequency of the mode's coordinate against Lamb's [%] (NaN: no vibration in
-// 0.3-2.5 times Lamb's frequency, or the body blew up).
-// Writes DIR/peers_fem.csv; chart DIR/peers_fem.png (tests/charts/peers_fem.py).
+// Lamb's T2 or S2 mode (2 cm/s at most, physics_validation.hpp) and vibrates freely for 0.6 s (0.2
+// s with --quick). Measured per engine, level and mode: wall time of each world step (median, p99
+// over the rounds) and the frequency of the mode's coordinate against Lamb's [%] (NaN: no vibration
+// in 0.3-2.5 times Lamb's frequency, or the body blew up). Writes DIR/peers_fem.csv; chart
+// DIR/peers_fem.png (tests/charts/peers_fem.py).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -132,8 +132,8 @@ Run run_bullet(int level, va::LambMode mode, double dt, int steps, bool implicit
   const va::Material foam = va::foam();
   const double nu = foam.poisson_ratio, e = foam.youngs_modulus_pa;
   auto force = std::make_unique<btDeformableLinearElasticityForce>(
-      static_cast<btScalar>(e / (2 * (1 + nu))), static_cast<btScalar>(e * nu / ((1 + nu) * (1 - 2 * nu))),
-      0, 0);
+      static_cast<btScalar>(e / (2 * (1 + nu))),
+      static_cast<btScalar>(e * nu / ((1 + nu) * (1 - 2 * nu))), 0, 0);
   world->addForce(sb, force.get());
   Eigen::Matrix3Xd x0(3, sb->m_nodes.size()), x(3, sb->m_nodes.size());
   Eigen::VectorXd mass(sb->m_nodes.size());
@@ -145,8 +145,9 @@ Run run_bullet(int level, va::LambMode mode, double dt, int steps, bool implicit
   }
   const Eigen::Matrix3Xd phi = mode_field(mode, x0);
   for (int i = 0; i < sb->m_nodes.size(); ++i) {
-    sb->m_nodes[i].m_v = btVector3(static_cast<btScalar>(phi(0, i)), static_cast<btScalar>(phi(1, i)),
-                                   static_cast<btScalar>(phi(2, i)));
+    sb->m_nodes[i].m_v =
+        btVector3(static_cast<btScalar>(phi(0, i)), static_cast<btScalar>(phi(1, i)),
+                  static_cast<btScalar>(phi(2, i)));
   }
   Run r;
   for (int k = 0; k < steps; ++k) {
@@ -182,7 +183,8 @@ int run_peers_fem(const teleop::CommandArgs& args) {
                          "error_pct", "step_us_median", "step_us_p99", "rounds"});
   const va::Material foam = va::foam();
   for (int level : levels) {
-    const teleop::mesh::TetMesh tm = teleop::mesh::ball_tet_mesh(level, 0.25, Eigen::Vector3d::Zero());
+    const teleop::mesh::TetMesh tm =
+        teleop::mesh::ball_tet_mesh(level, 0.25, Eigen::Vector3d::Zero());
     const std::vector<va::LambMode> modes =
         args.quick ? std::vector<va::LambMode>{va::LambMode::kT2}
                    : std::vector<va::LambMode>{va::LambMode::kT2, va::LambMode::kS2};
@@ -195,16 +197,19 @@ int run_peers_fem(const teleop::CommandArgs& args) {
         std::vector<double> times;
         double f = 0.0;
         for (int round = 0; round < rounds; ++round) {
-          const Run r = engine == "ours" ? run_ours(level, mode, dt, steps)
-                                         : run_bullet(level, mode, dt, steps, engine == "bullet-implicit");
+          const Run r = engine == "ours"
+                            ? run_ours(level, mode, dt, steps)
+                            : run_bullet(level, mode, dt, steps, engine == "bullet-implicit");
           times.insert(times.end(), r.step_us.begin(), r.step_us.end());
           if (round == 0) f = va::dominant_frequency_hz(r.q, dt, lamb);
         }
         std::sort(times.begin(), times.end());
         const double median = times[times.size() / 2];
         const double p99 = times[std::min(times.size() - 1, times.size() * 99 / 100)];
-        std::fprintf(stderr, "peers-fem: %s L%d %s: %.3f Hz (Lamb %.3f, %+.1f %%), step p50 %.0f us p99 %.0f us\n",
-                     engine.c_str(), level, va::to_string(mode), f, lamb, 100 * (f / lamb - 1), median, p99);
+        std::fprintf(
+            stderr,
+            "peers-fem: %s L%d %s: %.3f Hz (Lamb %.3f, %+.1f %%), step p50 %.0f us p99 %.0f us\n",
+            engine.c_str(), level, va::to_string(mode), f, lamb, 100 * (f / lamb - 1), median, p99);
         csv.row_text({engine, std::to_string(level), std::to_string(tm.node_count()),
                       std::to_string(tm.tet_count()), va::to_string(mode),
                       teleop::format_number(lamb), teleop::format_number(f),

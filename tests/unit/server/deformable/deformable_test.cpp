@@ -70,8 +70,7 @@ TEST(Params, ErrorsNameFileFieldAndRange) {
   expect_error("deformable: {model: finite_elements}", "deformable.model");
   expect_error("deformable: {model: fem, level: 5}", "deformable.level");  // shipped balls 1-4
   expect_error("deformable: {model: mass_spring, tet_mesh_file: b.msh}", "tet_mesh_file");
-  expect_error("deformable: {model: fem, mesh_file: a.obj, tet_mesh_file: b.msh}",
-               "tet_mesh_file");
+  expect_error("deformable: {model: fem, mesh_file: a.obj, tet_mesh_file: b.msh}", "tet_mesh_file");
   expect_error("deformable: {radus_m: 1}", "radus_m");
   expect_error("deformable: {mass_kg: 1, density_kg_per_m3: 10}", "density_kg_per_m3");
   expect_error("deformable: {centre_m: [1, 2]}", "centre_m");
