@@ -136,32 +136,12 @@ TELEOP_FEM_INLINE void nodal_pressure_forces(const DeformableModel& m, const dou
   }
 }
 
-// The elastic and damping forces of tetrahedra 4g .. 4g + 3, one per lane, added to out: the
-// arithmetic of the scalar loop below in four lanes. Each frame takes one Newton step from its
-// warm start (the steady state needs no more); a lane whose step is not converged after it (the
-// increment's square above the tolerance, or no Newton step) is finished by the scalar
-// iteration.
-TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& s, int g,
-                                     double beta, int iterations, double tolerance, double* out) {
-  const DeformableModel::Fem& f = m.fem;
-  const bool nodal = m.params.nodal_pressure;
-  const double mu = m.lame_mu_pa, lambda = nodal ? 0.0 : m.lame_lambda_pa;
-  const double* x = s.x.data();
-  const double* v = s.v.data();
-  const int t0 = 4 * g;
-  const int* ix[4] = {f.tets.col(t0).data(), f.tets.col(t0 + 1).data(), f.tets.col(t0 + 2).data(),
-                      f.tets.col(t0 + 3).data()};
-  V4 ds[9], b[9], fg[9];
-  for (int l = 0; l < 4; ++l) {
-    const double* p0 = x + 3 * ix[l][0];
-    for (int c = 0; c < 3; ++c) {
-      const double* pc = x + 3 * ix[l][c + 1];
-      for (int r = 0; r < 3; ++r) ds[3 * c + r][l] = pc[r] - p0[r];
-    }
-  }
-  const double* b4 = f.dm_inv4.data() + 36 * g;
-  for (int k = 0; k < 9; ++k) b[k] = load4(b4 + 4 * k);
-  mul33(ds, b, fg);
+// The frames of tetrahedra t0 .. t0 + 3 (deformation gradients fg, one per lane) into r and
+// s.fem_q / s.fem_r: one Newton step from the warm start in four lanes; a lane whose step is not
+// converged after it (the increment's square above the tolerance, or no Newton step) is finished
+// by the scalar iteration.
+TELEOP_FEM_INLINE void group_frames(DeformableState& s, int t0, const V4* fg, int iterations,
+                                    double tolerance, V4* r) {
   // frames: one Newton step from the warm start in four lanes
   double* qd = s.fem_q.data() + 4 * t0;
   V4 qw, qx, qy, qz;
@@ -171,7 +151,6 @@ TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& 
     qy[l] = qd[4 * l + 2];
     qz[l] = qd[4 * l + 3];
   }
-  V4 r[9];
   quaternion_matrix(qw, qx, qy, qz, r);
   V4 ox, oy, oz;
   V4i newton;
@@ -218,6 +197,33 @@ TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& 
     qd[4 * l + 3] = qz[l];
     for (int k = 0; k < 9; ++k) rd[9 * l + k] = r[k][l];
   }
+}
+
+// The elastic and damping forces of tetrahedra 4g .. 4g + 3, one per lane, added to out: the
+// arithmetic of the scalar loop below in four lanes (the frames: group_frames).
+TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& s, int g,
+                                     double beta, int iterations, double tolerance, double* out) {
+  const DeformableModel::Fem& f = m.fem;
+  const bool nodal = m.params.nodal_pressure;
+  const double mu = m.lame_mu_pa, lambda = nodal ? 0.0 : m.lame_lambda_pa;
+  const double* x = s.x.data();
+  const double* v = s.v.data();
+  const int t0 = 4 * g;
+  const int* ix[4] = {f.tets.col(t0).data(), f.tets.col(t0 + 1).data(), f.tets.col(t0 + 2).data(),
+                      f.tets.col(t0 + 3).data()};
+  V4 ds[9], b[9], fg[9];
+  for (int l = 0; l < 4; ++l) {
+    const double* p0 = x + 3 * ix[l][0];
+    for (int c = 0; c < 3; ++c) {
+      const double* pc = x + 3 * ix[l][c + 1];
+      for (int r = 0; r < 3; ++r) ds[3 * c + r][l] = pc[r] - p0[r];
+    }
+  }
+  const double* b4 = f.dm_inv4.data() + 36 * g;
+  for (int k = 0; k < 9; ++k) b[k] = load4(b4 + 4 * k);
+  mul33(ds, b, fg);
+  V4 r[9];
+  group_frames(s, t0, fg, iterations, tolerance, r);
   V4 gm[9], sig[9], p[9];
   mul33_tn(r, fg, gm);  // R^T F
   if (beta > 0.0) {

@@ -40,7 +40,13 @@ std::map<std::string, double> read_ccx_reference() {
     std::string cell;
     while (std::getline(ss, cell, ',')) f.push_back(cell);
     if (f.size() < 8 || f[7] != "fine") continue;
-    const std::string key = f[0] + "," + f[1] + "," + f[2] + "," + f[3];
+    std::string travel;  // as travel_key() writes it, whatever the file's number format
+    if (!f[3].empty()) {
+      char b[32];
+      std::snprintf(b, sizeof b, "%g", std::strtod(f[3].c_str(), nullptr));
+      travel = b;
+    }
+    const std::string key = f[0] + "," + f[1] + "," + f[2] + "," + travel;
     const double v = std::strtod(f[4].c_str(), nullptr);
     (f[6] == "nlgeom" ? out : small)[key] = v;
   }
@@ -163,7 +169,9 @@ int run_validate(const teleop::CommandArgs& args) {
         row(c, held, "tip_force_held_n", travels[k],
             va::hertz_tip_force_n(c.material, va::kBallRadiusM, va::kTipRadiusM, travels[k]),
             held.force_n[k], "hertz", held.step_us);
-        const double cref = ccx_ref(mat + ",tip_centre_held,tip_force," + travel_key(travels[k]));
+        // the CalculiX ball clamped over the same 25 mm central sphere
+        const double cref =
+            ccx_ref(mat + ",tip_centre_held,tip_force_clamp25mm," + travel_key(travels[k]));
         if (std::isfinite(cref)) {
           row(c, held, "tip_force_held_n", travels[k], cref, held.force_n[k], "calculix",
               held.step_us);

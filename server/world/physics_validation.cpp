@@ -210,8 +210,14 @@ PressResult press_ball(const df::DeformableParams& params_in, Support support, b
   const Eigen::Vector3d c_rest = df::centroid(m, s);
   if (support == Support::kHeldCentre) {
     if (params.model != df::ModelKind::kFem) return out;  // surface models have no inside
+    // the nodes within kHeldRadiusM of the centre (at least the nearest one) are held
+    double nearest = 1e30;
     for (int i = m.node_count; i < m.fem.node_count; ++i) {
-      if ((m.fem.rest.col(i) - m.rest_centre_m).norm() < 0.05) {
+      nearest = std::min(nearest, (m.fem.rest.col(i) - m.rest_centre_m).norm());
+    }
+    const double held_r = std::max(kHeldRadiusM, nearest);
+    for (int i = m.node_count; i < m.fem.node_count; ++i) {
+      if ((m.fem.rest.col(i) - m.rest_centre_m).norm() <= held_r) {
         s.pinned[static_cast<std::size_t>(i)] = 1;
         s.pin_target.col(i) = s.x.col(i);
       }

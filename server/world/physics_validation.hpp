@@ -31,6 +31,8 @@ struct Material {
 
 constexpr double kBallRadiusM = 0.25;  ///< the paper's ball [m]
 constexpr double kTipRadiusM = 0.05;   ///< the slave's tip [m]
+/// Support::kHeldCentre holds the nodes within this of the centre (at least the nearest) [m]
+constexpr double kHeldRadiusM = 0.025;
 
 /// The project's ball: E = 6000 Pa, nu = 0.3, 2 kg at radius 0.25 m.
 Material foam();
@@ -84,7 +86,7 @@ struct PressResult {
 /// How the ball is held while the tip presses it.
 enum class Support {
   kFloor,       ///< resting on the rigid floor
-  kHeldCentre,  ///< no floor, no gravity: nodes within 0.05 m of the centre held (fem only)
+  kHeldCentre,  ///< no floor, no gravity: nodes within kHeldRadiusM of the centre held (fem only)
 };
 
 /// Presses the ball with the tip (kinematic, straight down at its top, speed_mps) through the
