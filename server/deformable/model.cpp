@@ -404,6 +404,10 @@ teleop::mesh::TetMesh make_tet_mesh_for(const DeformableParams& p) {
     return teleop::mesh::load_tet_mesh(p.tet_mesh_file, p.mesh_scale, p.centre_m);
   }
   if (!p.mesh_file.empty()) {
+#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+    // fuzz builds only (tests/fuzz): no child processes or temporary files from a fuzzed scene
+    throw teleop::mesh::MeshError("fuzz build: filling a surface with gmsh is not run");
+#endif
     const teleop::mesh::TriMesh surface = make_mesh_for(p);
     const double edge = p.tet_max_edge_m > 0.0
                             ? p.tet_max_edge_m
