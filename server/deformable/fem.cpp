@@ -64,6 +64,17 @@ TELEOP_FEM_INLINE void edge_matrix(const double* q, const int* ix, double* d) {
   }
 }
 
+// The edge matrices of four tetrahedra (node indices ix[l], one per lane) of field q (3 x N).
+TELEOP_FEM_INLINE void edge_matrix4(const double* q, const int* const* ix, V4* d) {
+  for (int l = 0; l < 4; ++l) {
+    const double* q0 = q + 3 * ix[l][0];
+    for (int c = 0; c < 3; ++c) {
+      const double* qc = q + 3 * ix[l][c + 1];
+      for (int r = 0; r < 3; ++r) d[3 * c + r][l] = qc[r] - q0[r];
+    }
+  }
+}
+
 // Linear-elastic stress of the rotated gradient G (= R^T F - I, or its rate): sigma = 2 mu
 // sym(G) + lambda tr(G) I, written symmetric into sig (column-major). scale_trace: G's trace
 // offset (1 for R^T F, whose identity is subtracted here; 0 for a rate or a perturbation).
@@ -212,13 +223,7 @@ TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& 
   const int* ix[4] = {f.tets.col(t0).data(), f.tets.col(t0 + 1).data(), f.tets.col(t0 + 2).data(),
                       f.tets.col(t0 + 3).data()};
   V4 ds[9], b[9], fg[9];
-  for (int l = 0; l < 4; ++l) {
-    const double* p0 = x + 3 * ix[l][0];
-    for (int c = 0; c < 3; ++c) {
-      const double* pc = x + 3 * ix[l][c + 1];
-      for (int r = 0; r < 3; ++r) ds[3 * c + r][l] = pc[r] - p0[r];
-    }
-  }
+  edge_matrix4(x, ix, ds);
   const double* b4 = f.dm_inv4.data() + 36 * g;
   for (int k = 0; k < 9; ++k) b[k] = load4(b4 + 4 * k);
   mul33(ds, b, fg);
@@ -228,13 +233,7 @@ TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& 
   mul33_tn(r, fg, gm);  // R^T F
   if (beta > 0.0) {
     V4 dv[9], fd[9], gd[9];
-    for (int l = 0; l < 4; ++l) {
-      const double* p0 = v + 3 * ix[l][0];
-      for (int c = 0; c < 3; ++c) {
-        const double* pc = v + 3 * ix[l][c + 1];
-        for (int rr = 0; rr < 3; ++rr) dv[3 * c + rr][l] = pc[rr] - p0[rr];
-      }
-    }
+    edge_matrix4(v, ix, dv);
     mul33(dv, b, fd);
     mul33_tn(r, fd, gd);
     for (int k = 0; k < 9; ++k) gm[k] += beta * gd[k];
