@@ -141,8 +141,8 @@ struct DeformableParams {
   bool friction = true;                ///< Coulomb friction with the planes' coefficients
   /// Model fem: the volumetric strain averaged over each node's tetrahedra (average nodal
   /// pressure, the remedy for the locking of linear tetrahedra as nu -> 0.5) instead of each
-  /// tetrahedron's own.
-  bool nodal_pressure = false;
+  /// tetrahedron's own (false: the element law). Other models ignore it.
+  bool nodal_pressure = true;
   /// Model fem: contact of the surface with planes and with the tip as a pressure per depth,
   /// node i's spring k_i = this * (area of node i), integrated implicitly per node (stable at
   /// any value; the force converges with the mesh). 0: 1000 E / (1 - nu^2) / (body size),

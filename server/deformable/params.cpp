@@ -93,8 +93,8 @@ void load_volume_fields(const teleop::config::Node& node, DeformableParams& p) {
   p.tet_max_edge_m = node.number_or("tet_max_edge_m", 0.0, 0.0, 100.0);
   p.contact_pressure_stiffness_pa_per_m =
       node.number_or("contact_pressure_stiffness_pa_per_m", 0.0, 0.0, 1e15);
-  p.nodal_pressure = node.boolean_or("nodal_pressure", false);
-  if (!fem && p.nodal_pressure) node.fail("nodal_pressure", "is for model fem only");
+  if (!fem && node.has("nodal_pressure")) node.fail("nodal_pressure", "is for model fem only");
+  p.nodal_pressure = node.boolean_or("nodal_pressure", true);
 }
 
 }  // namespace

@@ -66,7 +66,7 @@ struct Case {
   df::IntegratorKind integrator;
   int level;
   va::Material material;
-  bool nodal_pressure = false;
+  bool nodal_pressure = true;  // the fem default; false: the element law
 };
 
 int run_validate(const teleop::CommandArgs& args) {
@@ -85,7 +85,7 @@ int run_validate(const teleop::CommandArgs& args) {
     for (const va::Material& mat : {va::foam(), va::silicone()}) {
       for (int level : {1, 2, 3}) cases.push_back({df::ModelKind::kFem, sym, level, mat});
       cases.push_back({df::ModelKind::kFem, imp, 2, mat});
-      for (int level : {1, 2}) cases.push_back({df::ModelKind::kFem, sym, level, mat, true});
+      for (int level : {1, 2, 3}) cases.push_back({df::ModelKind::kFem, sym, level, mat, false});
     }
     for (int level : {3, 4, 5})
       cases.push_back({df::ModelKind::kMassSpring, sym, level, va::foam()});
@@ -106,7 +106,7 @@ int run_validate(const teleop::CommandArgs& args) {
                            : std::numeric_limits<double>::quiet_NaN();
     const std::string variant = c.model != df::ModelKind::kFem ? "-"
                                 : c.nodal_pressure             ? "nodal_pressure"
-                                                               : "element";
+                                                               : "element_strain";
     csv.row_text({std::string(df::to_string(c.model)), variant,
                   std::string(df::to_string(c.integrator)), "L" + std::to_string(c.level),
                   std::to_string(r.nodes), std::to_string(r.tets), c.material.name, quantity,
@@ -120,7 +120,9 @@ int run_validate(const teleop::CommandArgs& args) {
     p.nodal_pressure = c.nodal_pressure;
     const double weight = p.mass_kg * 9.81;
     std::fprintf(stderr, "validate: %s%s %s L%d %s\n", df::to_string(c.model),
-                 c.nodal_pressure ? " (nodal pressure)" : "", df::to_string(c.integrator), c.level,
+                 c.model != df::ModelKind::kFem ? ""
+                 : c.nodal_pressure             ? " (nodal pressure)"
+                                                : " (element strain)", df::to_string(c.integrator), c.level,
                  c.material.name.c_str());
     // Lamb
     va::PressResult shape;  // nodes and tets for the Lamb rows

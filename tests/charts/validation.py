@@ -20,7 +20,7 @@ COLOURS = plt.get_cmap("tab20").colors
 
 
 def label(r):
-    nodal = " nodal p." if r.get("variant") == "nodal_pressure" else ""
+    nodal = " element strain" if r.get("variant") == "element_strain" else ""
     return f"{r['model']}{nodal} {r['mesh']}" + ("" if r["integrator"] == "symplectic_euler" else " (implicit)")
 
 

@@ -32,7 +32,7 @@ def main():
     print("|---" * (len(COLUMNS) + 4) + "|")
     for b in bodies:
         sub = [r for r in rows if (r["model"], r["variant"], r["integrator"], r["mesh"], r["material"]) == b]
-        integ = ("" if b[2] == "symplectic_euler" else " implicit") + (" nodal p." if b[1] == "nodal_pressure" else "")
+        integ = ("" if b[2] == "symplectic_euler" else " implicit") + (" element strain" if b[1] == "element_strain" else "")
         sag = next((float(r["value"]) for r in sub if r["quantity"] == "sag_top_m"), math.nan)
         us = next((float(r["step_us"]) for r in sub if r["quantity"] == "sag_top_m"), math.nan)
         print(f"| {b[0]}{integ} {b[3]} {b[4]} | {sub[0]['nodes']} / {sub[0]['tets']} | " +
