@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Elastic-ball reference with gmsh + CalculiX: meshes, decks, runs, post-processing.
 
-Usage: reference.py [--only MATERIAL/MESH/CASE/THEORY globs] [--reuse]
+Usage: reference.py [--only MATERIAL/MESH/CASE/THEORY glob] [--skip GLOB] [--reuse]
 Writes ball_reference.csv next to this file; scratch files go to ./work/.
 See README.md for what each case models.
 """
@@ -489,6 +489,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument('--only', default='*', help='glob on material/mesh/case/theory')
     ap.add_argument('--reuse', action='store_true', help='do not rerun finished, unchanged decks')
+    ap.add_argument('--skip', default='', help='glob on material/mesh/case/theory not to run')
     ap.add_argument('--csv', default=os.path.join(HERE, 'ball_reference.csv'))
     args = ap.parse_args()
     os.makedirs(WORK, exist_ok=True)
@@ -497,7 +498,8 @@ def main():
     t_start = time.time()
 
     def want(*parts):
-        return fnmatch.fnmatch('/'.join(parts), args.only)
+        key = '/'.join(parts)
+        return fnmatch.fnmatch(key, args.only) and not (args.skip and fnmatch.fnmatch(key, args.skip))
 
     for meshname in MESHES:
         msh = make_mesh(meshname)
