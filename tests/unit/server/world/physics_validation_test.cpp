@@ -70,7 +70,7 @@ TEST(FemAgainstPhysics, LambFrequenciesWithinTenPercentAndConverging) {
       const df::DeformableParams p =
           va::ball_params(df::ModelKind::kFem, df::IntegratorKind::kSymplecticEuler, level, foam);
       err[level] = error_pct(va::free_vibration_hz(p, mode, 1.0, ref), ref);
-      EXPECT_LT(std::fabs(err[level]), 10.0) << "level " << level;  // measured 0.3-2.6 %
+      EXPECT_LT(std::fabs(err[level]), 10.0) << "level " << level;  // measured 0.4-5.3 %
     }
     // T2 and S0 are below Lamb at level 1 and closer at level 2 (S2 is within 0.3 % at both)
     if (mode != va::LambMode::kS2) {
