@@ -258,8 +258,11 @@ struct MasterNode::Impl {
     if (scene) {
       for (const auto& o : scene->objects()) {
         if (o.kind() == OBJECT_DEFORMABLE_MESH && o.size_m()[0] > 0.0) {
+          // its highest node where the server says (a body that sagged at load), else the top
+          // of its bounding sphere
+          const double top = o.size_m()[1] > 0.0 ? o.size_m()[1] : o.size_m()[0];
           return Eigen::Vector3d(o.position_m()[0], o.position_m()[1],
-                                 o.position_m()[2] + o.size_m()[0] + r);
+                                 o.position_m()[2] + top + r);
         }
       }
       for (const auto& o : scene->objects()) {

@@ -709,9 +709,12 @@ void fem_step(const DeformableModel& m, DeformableState& s, double h, double tip
   // internal forces (elastic + stiffness damping), then gravity, drag and the caller's loads
   F.leftCols(n).setZero();
   element_forces(m, s, p.stiffness_damping_s, kRotationIterations, kRotationTolerance, F.data());
+  // alpha damps the velocities relative to the body's support: its own mean velocity while it
+  // touches no plane (a falling body keeps g), the planes' frame while it rests on one (its
+  // bounce on them is damped too); the plane contacts are those of the last sub-step
   const double alpha = p.mass_damping_per_s;
   Vec3 vmean = Vec3::Zero();
-  if (alpha > 0.0) {
+  if (alpha > 0.0 && s.contact_count == 0) {
     for (int i = 0; i < n; ++i) vmean += f.mass_kg(i) * s.v.col(i);
     vmean /= m.total_mass_kg;
   }

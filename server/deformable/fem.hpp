@@ -9,8 +9,9 @@
 // with eps' the same strain of the velocities (stiffness-proportional Rayleigh damping beta =
 // params.stiffness_damping_s) and lambda, mu from E and nu. Mass lumped (a quarter of each
 // tetrahedron's mass on each of its nodes), gravity on every node, mass-proportional damping
-// alpha = params.mass_damping_per_s relative to the body's mean velocity (damps deformation,
-// not free fall).
+// alpha = params.mass_damping_per_s relative to the body's support (its mean velocity while it
+// touches no plane: damps deformation, not free fall; the planes' frame while it rests on one:
+// damps its bounce on them as well).
 //
 // Contact of the surface nodes with the rigid planes and the tip sphere: a pressure per depth
 // (k_i = kp A_i, A_i the node's area), integrated implicitly per node within each sub-step, so

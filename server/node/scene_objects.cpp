@@ -50,10 +50,12 @@ SceneDescription describe_scene(const sim::WorldModel& model, const sim::WorldDa
     o.id(model.bodies[i].object_id);
     o.name("deformable" + std::to_string(i));
     o.kind(OBJECT_DEFORMABLE_MESH);
-    // bounding sphere at rest: centroid and largest node distance
+    // bounding sphere at load: centroid and largest node distance; the height of its highest
+    // node above that centroid (where a tip coming from above touches it)
     const Eigen::Vector3d centre = x.rowwise().mean();
     copy3(o.position_m(), centre);
     o.size_m()[0] = (x.colwise() - centre).colwise().norm().maxCoeff();
+    o.size_m()[1] = x.row(2).maxCoeff() - centre.z();
     // the automatic step: what the body's highest mode allows, and what it takes per step
     const sim::deformable::DeformableModel& m = model.bodies[i].body;
     o.highest_frequency_radps(m.omega_max_rad_per_s);

@@ -270,6 +270,24 @@ bool place_tool(const WorldModel& model, WorldData& d, const Eigen::Vector3d& po
   return true;
 }
 
+namespace {
+
+/// DeformableBodyModel::settle_s: steps of dt with the velocities relaxed, until the body is
+/// still (every node slower than 0.1 mm/s) or settle_s has passed; then its clock starts at 0.
+void settle(const deformable::DeformableModel& m, deformable::DeformableState& s, double dt_s,
+            double settle_s) {
+  const int steps = static_cast<int>(std::ceil(settle_s / dt_s));
+  for (int k = 0; k < steps; ++k) {
+    if (deformable::step(m, s, dt_s, nullptr) == deformable::StepStatus::kFaultReset) break;
+    s.v *= 0.97;
+    s.centre_v *= 0.97;
+    if (k > 10 && s.v.colwise().squaredNorm().maxCoeff() < 1e-8) break;
+  }
+  s.sim_time_s = 0.0;
+}
+
+}  // namespace
+
 WorldData make_world_data(const WorldModel& model) {
   WorldData d;
   if (model.has_robot()) {
@@ -283,6 +301,7 @@ WorldData make_world_data(const WorldModel& model) {
   for (const DeformableBodyModel& bm : model.bodies) {
     DeformableBodyData& b = d.bodies.emplace_back();
     b.state = deformable::make_state(bm.body);
+    if (bm.settle_s > 0.0) settle(bm.body, b.state, 1.0 / model.physics_rate_hz, bm.settle_s);
     b.contact.set_params(bm.contact);
     b.contact.set_node_areas(bm.body.area_m2);
     b.contact.reset(b.state.x, bm.body.mesh.triangles);

@@ -382,8 +382,9 @@ void parse_robot(const config::Node& root, WorldModel& s) {
 /// automatically or from the explicit fields. `mesh_given` is the mesh_file as written.
 DeformableBodyModel parse_deformable_body(const config::Node& n, const WorldModel& s, int& next_id,
                                           std::string& mesh_given) {
-  n.reject_unknown_keys({"id", "body", "contact"});
+  n.reject_unknown_keys({"id", "body", "contact", "settle_s"});
   DeformableBodyModel b;
+  b.settle_s = n.number_or("settle_s", 0.0, 0.0, 10.0);
   b.object_id = static_cast<int>(n.integer_or("id", next_id, 10, 99));
   if (b.object_id > 99) {
     n.fail("id", "value '" + std::to_string(b.object_id) +

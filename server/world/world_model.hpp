@@ -33,6 +33,10 @@ struct DeformableBodyModel {
   int object_id = 10;  ///< SceneObject id (10-99)
   deformable::DeformableModel body;
   collision::TipContactParams contact;
+  /// At load (make_world_data): the body rests this long under gravity on its planes with its
+  /// velocities relaxed (x 0.97 per physics step), so it starts at rest in its sagged shape
+  /// instead of being dropped into it; 0: it starts as built [s].
+  double settle_s = 0.0;
   /// Automatic model (`auto` in the scene): the choice, predicted cost and error in one line
   /// (published as an info event) and the full report printed at load; empty otherwise.
   std::string auto_summary, auto_report;

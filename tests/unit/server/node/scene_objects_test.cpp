@@ -84,3 +84,32 @@ TEST(SceneObjects, DeformablesPublishTheirStableStepAndSubSteps) {
 
 }  // namespace
 }  // namespace teleop::server
+
+namespace teleop::server {
+namespace {
+
+TEST(SceneObjects, AFemBallSettledAtLoadIsDescribedByItsSaggedTop) {
+  // ball_fem.yaml: settle_s 3, the foam ball of radius 0.25 m resting on the floor
+  const sim::WorldModel model =
+      sim::load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/ball_fem.yaml");
+  ASSERT_EQ(model.bodies.size(), 1u);
+  EXPECT_GT(model.bodies[0].settle_s, 0.0);
+  const sim::WorldData data = sim::make_world_data(model);
+  const Eigen::Matrix3Xd& x = data.bodies[0].state.x;
+  const double top = x.row(2).maxCoeff();
+  EXPECT_LT(top, 0.5 - 0.015);  // it starts sagged (24 mm under its weight) ...
+  EXPECT_GT(top, 0.5 - 0.035);
+  EXPECT_LT(data.bodies[0].state.v.colwise().norm().maxCoeff(), 0.01);  // ... and at rest
+  const SceneDescription scene = describe_scene(model, data, 1000.0);
+  bool found = false;
+  for (const SceneObject& o : scene.objects()) {
+    if (o.kind() != OBJECT_DEFORMABLE_MESH) continue;
+    found = true;
+    EXPECT_NEAR(o.position_m()[2] + o.size_m()[1], top, 1e-12);  // where a tip from above lands
+    EXPECT_GE(o.size_m()[0], o.size_m()[1]);                      // inside its bounding sphere
+  }
+  EXPECT_TRUE(found);
+}
+
+}  // namespace
+}  // namespace teleop::server
