@@ -192,6 +192,7 @@ PressResult press_ball(const df::DeformableParams& params_in, Support support, b
   const double dt = 1e-3, r = kTipRadiusM;
   df::DeformableParams params = params_in;
   if (!gravity || support == Support::kHeldCentre) params.gravity_mps2.setZero();
+  params.mass_damping_per_s = 0.0;
   std::vector<Plane> planes;
   if (support == Support::kFloor) planes.push_back(Plane{});
   ToolModel tool;

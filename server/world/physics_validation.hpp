@@ -93,7 +93,9 @@ enum class Support {
 /// travels [m] (ascending), after settling it (dynamic relaxation: velocities scaled by 0.97
 /// per 1 ms step for settle_s). gravity: the ball's weight acts (kFloor only). During the press
 /// a relaxation of the velocities relative to the mean one (relax_factor per step) keeps it
-/// quasi-static without resisting the body's translation.
+/// quasi-static without resisting the body's translation, and the body's own drag
+/// (mass_damping_per_s) is off: the force measured is the elastic one, not a drag on the ball
+/// moving into the floor.
 PressResult press_ball(const deformable::DeformableParams& params, Support support, bool gravity,
                        const std::vector<double>& travels_m, double speed_mps, double settle_s,
                        double relax_factor = 0.98);
