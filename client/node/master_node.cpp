@@ -11,6 +11,7 @@
 #include <iostream>
 #include <limits>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
 #include "client/cycle/master_cycle.hpp"
@@ -29,6 +30,7 @@
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/csv.hpp"
+#include "common/util/files.hpp"
 #include "common/util/json.hpp"
 #include "common/util/rate_loop.hpp"
 #include "common/util/signals.hpp"
@@ -94,9 +96,28 @@ struct SessionReport {
   std::string owner_message;               // the server's word on who owns the slave
 };
 
-/// The verdict of a session; "refused" when it never had the slave (nothing was judged).
+/// True when the server rejected more than half of the commands it received (outside the
+/// workspace, non-finite, stale, ...): the slave mostly held still, so the session says nothing
+/// about the loop's stability.
+inline bool mostly_rejected(const SessionReport& rep) {
+  return rep.received > 0 && rep.server_rejected > rep.received / 2;
+}
+
+/// The verdict of a session; "refused" when it never had the slave (nothing was judged);
+/// "rejected" when the server rejected most of its commands and the loop was otherwise stable.
 inline const char* session_verdict(const SessionMetrics& m, const SessionReport& rep) {
-  return rep.refused && rep.issued == 0 ? "refused" : verdict_name(m.verdict());
+  if (rep.refused && rep.issued == 0) return "refused";
+  if (mostly_rejected(rep) && m.verdict() == Verdict::kStable) return "rejected";
+  return verdict_name(m.verdict());
+}
+
+/// Why: the metrics' reason, or how many commands the server rejected.
+inline std::string session_verdict_reason(const SessionMetrics& m, const SessionReport& rep) {
+  if (std::string(session_verdict(m, rep)) == "rejected") {
+    return "the server rejected " + std::to_string(rep.server_rejected) + " of the " +
+           std::to_string(rep.received) + " commands it received";
+  }
+  return m.verdict_reason();
 }
 
 /// One driver at a time on teleop/device_state: the first writer is the device until it has been
@@ -489,8 +510,16 @@ struct MasterNode::Impl {
       std::lock_guard<std::mutex> lock(owner_event_mutex);
       rep.owner_message = owner_event;
     }
+    // a file that could not be written is an error naming it, after everything else is out
+    std::string write_error;
+    try {
+      if (log) log->close();
+    } catch (const std::exception& e) {
+      write_error = e.what();
+    }
     if (!options.summary_json.empty()) write_summary_json(cycle, rep);
     if (!options.quiet) print_summary(cycle, rep);
+    if (!write_error.empty()) throw std::runtime_error(write_error);
     if (rep.refused) {
       std::cerr << "teleop_master: refused: another master owns the slave ("
                 << (rep.owner_message.empty() ? "the server's state names its session"
@@ -691,7 +720,7 @@ struct MasterNode::Impl {
     const Summary& r = rep.rtt_ms;
     const Summary& ld = rep.loop_delay_ms;
     const Summary& j = rep.jitter_us;
-    std::ofstream out(options.summary_json);
+    std::ostringstream out;
     out << "{\n"
         << "  \"duration_s\": " << json_number(rep.elapsed_s) << ",\n"
         << "  \"session_s\": " << json_number(rep.session_s) << ",\n"
@@ -727,6 +756,8 @@ struct MasterNode::Impl {
         << "  \"link_losses\": " << rep.link_losses << ",\n"
         << "  \"wait_server_s\": " << json_number(rep.wait_s) << ",\n"
         << "  \"verdict\": \"" << session_verdict(metrics, rep) << "\",\n"
+        << "  \"verdict_reason\": \"" << json_escape(session_verdict_reason(metrics, rep))
+        << "\",\n"
         << "  \"metrics\": " << metrics.summary_json() << ",\n"
         << "  \"transparency\": " << metrics.transparency_json() << ",\n"
         << "  \"delay\": {\"forward\": " << channel_json(rep.forward)
@@ -749,6 +780,7 @@ struct MasterNode::Impl {
         << ", \"waited_s\": " << json_number(rep.waited_for_owner_s) << ", \"server_says\": \""
         << json_escape(rep.owner_message) << "\"}\n"
         << "}\n";
+    write_text_file(options.summary_json, out.str());
   }
 
   /// {"accepting":..,"received":..,"applied":..,"rejected":..,"ignored":..,"dropped":..,
@@ -808,8 +840,10 @@ struct MasterNode::Impl {
                     v.slave_stiffness_n_per_m, v.forward_delay_s * 1e3, v.backward_delay_s * 1e3);
       tuning_line = buf;
     }
-    std::fprintf(
-        stdout,
+    const std::string reason = session_verdict_reason(metrics, rep);
+    char text[8192];
+    std::snprintf(
+        text, sizeof(text),
         "session summary (%s, %s, script %s)\n"
         "  duration        %.2f s (%.2f s of session after homing) at %.0f Hz\n"
         "  commands        %llu issued, %llu received by the server, %llu lost (%.2f%%; "
@@ -861,7 +895,8 @@ struct MasterNode::Impl {
         static_cast<unsigned long long>(rep.server_overruns),
         static_cast<unsigned long long>(rep.server_rejected),
         static_cast<unsigned long long>(rep.server_restarts), session_verdict(metrics, rep),
-        *metrics.verdict_reason() ? " - " : "", metrics.verdict_reason());
+        reason.empty() ? "" : " - ", reason.c_str());
+    std::fputs(nan_as_na(text).c_str(), stdout);
   }
 };
 
