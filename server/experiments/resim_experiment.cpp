@@ -45,10 +45,12 @@ void check_gaps(const std::vector<teleop::StreamedCommand>& stream, const std::s
   for (std::size_t i = 1; i < stream.size(); ++i) {
     const double gap_s = static_cast<double>(stream[i].receive_ns - stream[i - 1].receive_ns) * 1e-9;
     if (gap_s > max_gap_s) {
-      throw teleop::config::ConfigError(
-          file + ": line " + std::to_string(i + 2) + ", column 'receive_ns': " +
-          format_number(gap_s) + " s after the previous command; gaps longer than --max-gap " +
-          format_number(max_gap_s) + " s are refused (allowed --max-gap: 0.001 to 3600 s)");
+      char what[200];
+      std::snprintf(what, sizeof what,
+                    ": line %zu, column 'receive_ns': %.3f s after the previous command; gaps "
+                    "longer than --max-gap %g s are refused (allowed --max-gap: 0.001 to 3600 s)",
+                    i + 2, gap_s, max_gap_s);
+      throw teleop::config::ConfigError(file + what);
     }
   }
 }

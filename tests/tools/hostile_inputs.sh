@@ -159,7 +159,7 @@ echo "--- a full disk under teleop_record (a file size limit, SIGXFSZ ignored)"
 "$master" --domain "$domain" --duration 8 --quiet >"$tmp/master_rec.log" 2>&1 &
 pids+=($!)
 cases=$((cases + 1))
-rec_out="$( (trap '' XFSZ; ulimit -f 200; timeout -k 5 30 "$record" --domain "$domain" \
+rec_out="$( (trap '' XFSZ; ulimit -f 3000; timeout -k 5 30 "$record" --domain "$domain" \
   --out "$tmp/full.db" --duration 10) 2>&1)"
 rec_status=$?
 if [ "$rec_status" -eq 1 ] && grep -qF "written before the failure" <<<"$rec_out"; then
