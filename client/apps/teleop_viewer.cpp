@@ -822,10 +822,8 @@ int main(int argc, char** argv) {
                  "snapshot: give up (exit 3) when the data is not complete by then [s], 0.1-3600")
       ->capture_default_str();
   app.add_option("--width", o.width, "window or snapshot width [px], 320-7680")
-      ->check(teleop::config::integer_in(320.0, 7680.0))
       ->capture_default_str();
   app.add_option("--height", o.height, "window or snapshot height [px], 240-4320")
-      ->check(teleop::config::integer_in(240.0, 4320.0))
       ->capture_default_str();
   app.add_option("--fps", o.fps,
                  "frame rate cap [Hz], 0-1000; 0 = the display rate (vsync), or 15 on a "
