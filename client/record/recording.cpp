@@ -154,7 +154,8 @@ void RecordingWriter::append(const std::vector<RecordedSample>& samples) {
 }
 
 RecordingReader::RecordingReader(const std::string& path) : path_(path) {
-  config::require_regular_file(path, "recording");
+  std::error_code exists_ec;
+  if (std::filesystem::exists(path, exists_ec)) config::require_regular_file(path, "recording");
   if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);

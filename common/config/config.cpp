@@ -565,7 +565,8 @@ void require_regular_file(const std::string& file, const std::string& what) {
     throw ConfigError(file + ": " + what + " file does not exist");
   }
   if (std::filesystem::is_regular_file(st)) return;
-  if (std::filesystem::equivalent(file, "/dev/null", ec) && !ec) return;
+  // /dev/null reads as an empty file (std::filesystem::equivalent refuses two devices)
+  if (std::filesystem::canonical(file, ec) == "/dev/null" && !ec) return;
   const char* kind = std::filesystem::is_directory(st)       ? "a directory"
                      : std::filesystem::is_fifo(st)          ? "a FIFO"
                      : std::filesystem::is_socket(st)        ? "a socket"

@@ -88,19 +88,25 @@ struct App {
   }
 };
 
+/// A fresh App parsed with `args`.
+int run(const std::vector<std::string>& args) {
+  App a;
+  return parse(a.app, args);
+}
+
 TEST(HardenFlags, RefusesEmptyRepeatedUnknownAndOutOfRange) {
-  EXPECT_EQ(parse(App().app, {"--duration", "1", "--out", "x", "--exclude", "a", "--exclude",
+  EXPECT_EQ(run({"--duration", "1", "--out", "x", "--exclude", "a", "--exclude",
                               "b", "--quiet", "--quiet"}),
             -1);
-  EXPECT_EQ(parse(App().app, {"--duration", ""}), 2);
-  EXPECT_EQ(parse(App().app, {"--duration=-0"}), 2);
-  EXPECT_EQ(parse(App().app, {"--duration", "11"}), 2);
-  EXPECT_EQ(parse(App().app, {"--out", ""}), 2);
-  EXPECT_EQ(parse(App().app, {"--out="}), 2);
-  EXPECT_EQ(parse(App().app, {"--out", "a", "--out", "b"}), 2);
-  EXPECT_EQ(parse(App().app, {"--exclude", ""}), 2);
-  EXPECT_EQ(parse(App().app, {"--bogus"}), 2);
-  EXPECT_EQ(parse(App().app, {"stray"}), 2);
+  EXPECT_EQ(run({"--duration", ""}), 2);
+  EXPECT_EQ(run({"--duration=-0"}), 2);
+  EXPECT_EQ(run({"--duration", "11"}), 2);
+  EXPECT_EQ(run({"--out", ""}), 2);
+  EXPECT_EQ(run({"--out="}), 2);
+  EXPECT_EQ(run({"--out", "a", "--out", "b"}), 2);
+  EXPECT_EQ(run({"--exclude", ""}), 2);
+  EXPECT_EQ(run({"--bogus"}), 2);
+  EXPECT_EQ(run({"stray"}), 2);
 }
 
 TEST(RequireRegularFile, RefusesFifosDevicesAndDirectories) {
