@@ -286,7 +286,8 @@ Node Node::load_file(const std::string& file) {
   if (std::filesystem::is_directory(file, ec)) {
     throw ConfigError(file + ": is a directory, not a YAML file");
   }
-  require_regular_file(file, "YAML file");
+  // a FIFO or device could block or never end (a missing file: "cannot open" below)
+  if (std::filesystem::exists(file, ec)) require_regular_file(file, "YAML file");
   std::ifstream in(file, std::ios::binary);
   if (!in) throw ConfigError(file + ": cannot open the file for reading");
   std::string text;
