@@ -75,6 +75,8 @@ struct SessionReport {
   std::uint64_t states_received = 0;
   std::uint64_t overruns = 0;
   std::uint64_t link_losses = 0;
+  std::uint64_t stalls = 0;                // cycles that began kStallS or more after the last
+  double longest_stall_s = 0.0;            // the longest such gap
   Summary rtt_ms;
   Summary loop_delay_ms;
   Summary jitter_us;
@@ -571,6 +573,27 @@ struct MasterNode::Impl {
     }
   }
 
+  /// A cycle that begins this long after the previous one is a stall of this master's own loop
+  /// (the process was stopped, starved or swapped out): the device held its last force meanwhile
+  /// [s]. Far above any overrun of a loaded machine (tens of ms).
+  static constexpr double kStallS = 0.2;
+
+  /// A stall of the loop, detected from the clock: counted for the summary, published as an
+  /// event, and the force fades out at the device's rate bound and back in over the link fade
+  /// (SafetyLayer::fade_in) instead of carrying on from where it froze.
+  void check_stall(MasterCycle& cycle, double now_s, double prev_s, SessionReport& rep) {
+    if (prev_s < 0.0 || now_s - prev_s < kStallS) return;
+    const double gap_s = now_s - prev_s;
+    ++rep.stalls;
+    rep.longest_stall_s = std::max(rep.longest_stall_s, gap_s);
+    cycle.safety().fade_in();
+    char msg[96];
+    std::snprintf(msg, sizeof msg, "haptic loop stalled for %.3f s: force faded out and back in",
+                  gap_s);
+    event(static_cast<std::uint8_t>(sim::EventKind::kWatchdog), 1, msg, gap_s);
+    if (!options.quiet) std::cerr << "teleop_master: " << msg << "\n";
+  }
+
   /// The end of a session: the force fades to zero at the device's rate bound while the slave
   /// holds, then this master releases the slave (three release commands, best effort).
   /// Returns the cycles it took.
@@ -620,6 +643,7 @@ struct MasterNode::Impl {
     MasterState ms;
     std::uint64_t cycles = 0;
     bool was_link_lost = false;
+    double prev_cycle_s = -1.0;
     const auto state_every = std::max<std::uint64_t>(
         1, static_cast<std::uint64_t>(std::llround(options.rate_hz / options.state_rate_hz)));
     const double session_length =
@@ -669,6 +693,8 @@ struct MasterNode::Impl {
               "ignoring teleop/device_state from a second driver while the first one is live", 0.0);
       }
       tuning->poll(cycle, now_s, now, report_tuning);
+      check_stall(cycle, now_s, prev_cycle_s, rep);
+      prev_cycle_s = now_s;
       cycle.step(now_s);
       entry_time_s[cycle.command_seq() % kEntryRing] = now_s;
       if (cycle.sample_arrived()) {
@@ -754,6 +780,8 @@ struct MasterNode::Impl {
         << "  \"closing_cycles\": " << rep.closing_cycles << ",\n"
         << "  \"releases_sent\": " << rep.releases_sent << ",\n"
         << "  \"link_losses\": " << rep.link_losses << ",\n"
+        << "  \"stalls\": {\"count\": " << rep.stalls
+        << ", \"longest_s\": " << json_number(rep.longest_stall_s) << "},\n"
         << "  \"wait_server_s\": " << json_number(rep.wait_s) << ",\n"
         << "  \"verdict\": \"" << session_verdict(metrics, rep) << "\",\n"
         << "  \"verdict_reason\": \"" << json_escape(session_verdict_reason(metrics, rep))
@@ -859,7 +887,7 @@ struct MasterNode::Impl {
         "  transparency    free space %.3f N mean, %.3f N p99, %.3f N max; in contact felt %.2f x "
         "the environment's force (RMS %.3f N), stiffness felt %.0f N/m against %.0f N/m (%.2f)\n"
         "  passivity       energy at the master port %.4f J (min %.4f J)\n"
-        "  safety          %s%s, link losses %llu, re-homed %llu times (link back %llu, slave "
+        "  safety          %s%s, link losses %llu, loop stalls %llu (longest %.3f s), re-homed %llu times (link back %llu, slave "
         "restart %llu, takeover %llu); force change at most %.3f N per cycle (bound %.0f N/s, "
         "held to it in %llu cycles)\n"
         "  ownership       %s\n"
@@ -884,6 +912,7 @@ struct MasterNode::Impl {
         metrics.environment_stiffness_n_per_m(), metrics.stiffness_ratio(), metrics.energy_j(),
         metrics.energy_min_j(), safety.cut() ? "CUT: " : "ok",
         safety.cut() ? safety.cut_reason() : "", static_cast<unsigned long long>(rep.link_losses),
+        static_cast<unsigned long long>(rep.stalls), rep.longest_stall_s,
         static_cast<unsigned long long>(cycle.rehomes()),
         static_cast<unsigned long long>(cycle.rehomes(RehomeReason::kLinkBack)),
         static_cast<unsigned long long>(cycle.rehomes(RehomeReason::kSlaveRestart)),

@@ -2,7 +2,8 @@
 # Hostile inputs (issue 29, items 1, 2 and 4): every program's file inputs fed a FIFO, /dev/zero,
 # huge gaps and sizes, its outputs /dev/full or a missing folder, its flags empty, negative-zero,
 # partial or repeated values, each under `timeout` and a memory limit. Every case must end (no
-# hang), exit with the expected status and print a message naming the flag or the file.
+# hang), exit with the expected status and print a message naming the flag or the file. Last, a
+# master stopped for 1 s (SIGSTOP) must report the stall of its loop (item 6).
 #
 #   hostile_inputs.sh BUILD_DIR DOMAIN
 #
@@ -183,6 +184,24 @@ else
   failures=$((failures + 1))
   echo "FAILED  verdict of a mostly rejected session"
   grep -E "verdict|nan" "$tmp/rejected.log" "$tmp/rejected.json" | head -5 | sed 's/^/        /'
+fi
+
+echo "--- a stall of the master's own loop (SIGSTOP for 1 s) is reported"
+cases=$((cases + 1))
+"$master" --domain "$domain" --duration 5 --summary-json "$tmp/stall.json" >"$tmp/stall.log" 2>&1 &
+stall_pid=$!
+sleep 3
+kill -STOP "$stall_pid"
+sleep 1
+kill -CONT "$stall_pid"
+wait "$stall_pid"
+if grep -qE '"stalls": \{"count": [1-9]' "$tmp/stall.json" 2>/dev/null &&
+  grep -qF "haptic loop stalled for" "$tmp/stall.log"; then
+  echo "ok      stall counted: $(grep -o '"stalls": {[^}]*}' "$tmp/stall.json")"
+else
+  failures=$((failures + 1))
+  echo "FAILED  a 1 s SIGSTOP of the master is not reported"
+  grep -E "stall|safety" "$tmp/stall.log" "$tmp/stall.json" | head -5 | sed 's/^/        /'
 fi
 
 echo "$cases cases, $failures failed"
