@@ -22,20 +22,20 @@
 #include "client/device/device_factory.hpp"
 #include "client/node/master_node.hpp"
 #include "common/config/config.hpp"
+#include "common/config/flags.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/dds/participant.hpp"
 
 namespace {
 
+/// Every scene's command workspace lies within this box (the scene loader's range of
+/// command.workspace_min_m / workspace_max_m) [m]: a contact point outside can never be reached.
+constexpr double kContactPointLimitM = 100.0;
+
 Eigen::Vector3d parse_point(const std::string& flag, const std::string& text) {
-  Eigen::Vector3d p;
-  char c1 = 0, c2 = 0;
-  std::istringstream in(text);
-  if (!(in >> p.x() >> c1 >> p.y() >> c2 >> p.z()) || c1 != ',' || c2 != ',' || !p.allFinite()) {
-    throw teleop::config::ConfigError("command line: " + flag + " '" + text +
-                                      "' is not a point 'x,y,z' in metres");
-  }
-  return p;
+  const std::vector<double> lo(3, -kContactPointLimitM), hi(3, kContactPointLimitM);
+  const std::vector<double> v = teleop::config::parse_numbers(flag, text, 3, lo, hi);
+  return Eigen::Vector3d(v[0], v[1], v[2]);
 }
 
 /// Command-line values that are applied on top of the YAML config (unset: keep it).
@@ -57,11 +57,18 @@ struct Flags {
 
 /// Declares every flag of teleop_master.
 void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
+  using teleop::config::integer_in;
+  using teleop::config::number_in;
   app.add_option("--duration", o.duration_s,
-                 "session length after homing [s], 0-1e6 (0 = the script's length + 1 s)");
-  app.add_option("--samples", o.samples, "stop after N haptic cycles (0 = no limit)");
-  app.add_option("--rate", o.rate_hz, "haptic loop rate [Hz], 10-20000")->capture_default_str();
-  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
+                 "session length after homing [s], 0-1e6 (0 = the script's length + 1 s)")
+      ->check(number_in(0.0, 1e6));
+  app.add_option("--samples", o.samples, "stop after N haptic cycles, 0-1e12 (0 = no limit)")
+      ->check(integer_in(0.0, 1e12));
+  app.add_option("--rate", o.rate_hz, "haptic loop rate [Hz], 10-20000")
+      ->check(number_in(10.0, 20000.0))
+      ->capture_default_str();
+  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
+      ->check(integer_in(0.0, 232.0));
   app.add_option("--profile", f.profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
   teleop::dds::add_network_flags(app, f.net_flags, "master");
@@ -71,7 +78,8 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
       ->check(CLI::IsMember(teleop::master::controller_names()))
       ->capture_default_str();
   app.add_option("--wave-impedance", f.wave_b,
-                 "wave-variables: wave impedance b [N s/m], 0-1e4 (0 = K_ps * 0.025 s)");
+                 "wave-variables: wave impedance b [N s/m], 0-1e4 (0 = K_ps * 0.025 s)")
+      ->check(number_in(0.0, 1e4));
   app.add_flag("--wave-unmatched", f.wave_unmatched,
                "wave-variables: no matching damper at the slave (waves reflect)");
   app.add_option("--tdpa-base", f.tdpa_base, "tdpa: base law")
@@ -95,19 +103,29 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   app.add_option("--script", o.script, "operator script of the simulated device")
       ->check(CLI::IsMember({"hold", "line", "circle", "step", "press-slip"}))
       ->capture_default_str();
-  app.add_option("--press-depth", o.press_depth_m, "press-slip depth below the surface [m]")
+  app.add_option("--press-depth", o.press_depth_m, "press-slip depth below the surface [m], 0-0.2")
+      ->check(number_in(0.0, 0.2))
       ->capture_default_str();
-  app.add_option("--tremor", o.tremor_m, "operator tremor amplitude [m]");
+  app.add_option("--tremor", o.tremor_m, "operator tremor amplitude [m], 0-0.01")
+      ->check(number_in(0.0, 0.01));
   app.add_option("--contact-point", f.contact_point,
                  "slave point 'x,y,z' [m] of the master origin (default: top of the first "
-                 "deformable body, else the floor under the tip)");
-  app.add_option("--kps", f.kps, "slave position gain K_ps [N/m]");
-  app.add_option("--kpm", f.kpm, "master position gain K_pm [N/m] (0 = transparent choice)");
-  app.add_option("--bm", f.bm, "master damping B_m [N s/m]");
-  app.add_option("--force-gain", f.kf, "force-position reflection gain K_f [-]");
-  app.add_option("--position-scale", f.alpha, "slave metres per master metre [-]");
-  app.add_option("--force-scale", f.beta, "master newtons per slave newton [-]");
-  app.add_option("--max-force", f.max_force, "device force saturation [N] (0 = the spec's)");
+                 "deformable body, else the floor under the tip); each within +-100")
+      ->check(teleop::config::non_empty());
+  app.add_option("--kps", f.kps, "slave position gain K_ps [N/m], 0-1e6")
+      ->check(number_in(0.0, 1e6));
+  app.add_option("--kpm", f.kpm, "master position gain K_pm [N/m], 0-1e6 (0 = transparent choice)")
+      ->check(number_in(0.0, 1e6));
+  app.add_option("--bm", f.bm, "master damping B_m [N s/m], 0-1e4")
+      ->check(number_in(0.0, 1e4));
+  app.add_option("--force-gain", f.kf, "force-position reflection gain K_f [-], 0-100")
+      ->check(number_in(0.0, 100.0));
+  app.add_option("--position-scale", f.alpha, "slave metres per master metre [-], 0.001-1000")
+      ->check(number_in(1e-3, 1e3));
+  app.add_option("--force-scale", f.beta, "master newtons per slave newton [-], 0.001-1000")
+      ->check(number_in(1e-3, 1e3));
+  app.add_option("--max-force", f.max_force, "device force saturation [N], 0-1e4 (0 = the spec's)")
+      ->check(number_in(0.0, 1e4));
   app.add_option("--delay", f.delay, "one-way injected f.delay, each direction (e.g. 50ms)");
   app.add_option("--jitter", f.jitter, "jitter scale (e.g. 5ms)");
   app.add_option("--jitter-dist", f.jitter_dist, "uniform | normal");
@@ -120,10 +138,13 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   app.add_option("--loss-window", f.loss_window,
                  "AT,DURATION,P: samples sent in [AT, AT+DURATION) after the first are lost with "
                  "probability P, both directions (e.g. 3s,1s,50%)");
-  app.add_option("--seed", f.seed, "random f.seed of the channels (backward uses f.seed + 1)");
-  app.add_option("--homing", o.homing_s, "time to bring the slave to the script start [s]")
+  app.add_option("--seed", f.seed, "random seed of the channels (backward uses seed + 1), 0-2^53")
+      ->check(integer_in(0.0, 9007199254740992.0));
+  app.add_option("--homing", o.homing_s, "time to bring the slave to the script start [s], 0-60")
+      ->check(number_in(0.0, 60.0))
       ->capture_default_str();
-  app.add_option("--wait-server", o.wait_server_s, "wait for the server this long [s]")
+  app.add_option("--wait-server", o.wait_server_s, "wait for the server this long [s], 0-3600")
+      ->check(number_in(0.0, 3600.0))
       ->capture_default_str();
   app.add_flag("--accept-tuning", o.accept_tuning,
                "apply live tuning requests (teleop/tuning: gains and injected delays, checked "
@@ -131,19 +152,24 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
                "panel). Off: the master only publishes its tuning status");
   app.add_option("--wait-owner", o.wait_owner_s,
                  "when another master owns the slave, wait this long for it to release it "
-                 "(or to fall silent) instead of exiting with status 4 [s], 0-86400 (default 0)");
+                 "(or to fall silent) instead of exiting with status 4 [s], 0-86400 (default 0)")
+      ->check(number_in(0.0, 86400.0));
   app.add_option("--command-rate", o.command_rate_hz,
                  "commands to the slave per second [Hz], at most --rate (default: one per "
-                 "haptic cycle; model-mediated: 1000 with the haptic loop at 4000)");
+                 "haptic cycle; model-mediated: 1000 with the haptic loop at 4000), 1 to --rate")
+      ->check(number_in(0.0, 20000.0));
   teleop::dds::add_reconnect_flag(app, o.reconnect_s);
   app.add_option("--realtime", o.realtime.priority,
-                 "run the haptic loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)");
-  app.add_option("--cpu", o.realtime.cpu, "pin the haptic loop to this CPU (-1 = no pinning)");
+                 "run the haptic loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)")
+      ->check(integer_in(0.0, 99.0));
+  app.add_option("--cpu", o.realtime.cpu, "pin the haptic loop to this CPU (-1 = no pinning)")
+      ->check(integer_in(-1.0, 4096.0));
   app.add_option("--name", o.name,
                  "who this master is in the server's ownership events, up to 48 characters "
                  "(default IDENTITY@HOST:PID)");
   app.add_option("--link-timeout", f.link_timeout,
-                 "no SlaveState for this long fades the force to zero [s], 0.001-10");
+                 "no SlaveState for this long fades the force to zero [s], 0.001-10")
+      ->check(number_in(0.001, 10.0));
   app.add_option("--log", o.log_csv, "per-cycle CSV log");
   app.add_option("--summary-json", o.summary_json, "JSON summary at exit");
   app.add_flag("--quiet", o.quiet, "print only warnings and errors");
@@ -260,13 +286,9 @@ int main(int argc, char** argv) {
   teleop::master::MasterOptions o;
   Flags f;
   add_flags(app, o, f);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "teleop_master: " << e.what() << "\n\n" << app.help();
-    return 2;
+  if (const int status = teleop::config::parse_command_line(app, "teleop_master", argc, argv);
+      status >= 0) {
+    return status;
   }
   try {
     apply_flags(app, f, o);

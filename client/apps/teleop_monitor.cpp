@@ -37,6 +37,7 @@
 
 #include "client/monitor/monitor_state.hpp"
 #include "common/config/config.hpp"
+#include "common/config/flags.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/dds/observer_topics.hpp"
@@ -114,12 +115,15 @@ struct Flags {
 };
 
 void add_flags(CLI::App& app, Flags& f) {
-  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
+  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
+      ->check(teleop::config::integer_in(0.0, 232.0));
   app.add_option("--profile", f.profile, "Fast DDS profile (default: loopback)");
   tdds::add_network_flags(app, f.net);
   app.add_option("--period", f.period,
-                 "refresh / print period [s], 0.05-60 (default: 0.25 on the screen, 1 otherwise)");
-  app.add_option("--duration", f.duration_s, "stop after this long [s], 0-1e7; 0 = until q/SIGINT");
+                 "refresh / print period [s], 0.05-60 (default: 0.25 on the screen, 1 otherwise)")
+      ->check(teleop::config::number_in(0.05, 60.0));
+  app.add_option("--duration", f.duration_s, "stop after this long [s], 0-1e7; 0 = until q/SIGINT")
+      ->check(teleop::config::number_in(0.0, 1e7));
   app.add_option("--stale", f.stale_s,
                  "a stream topic silent this long is STALE [s], 0.05-3600 (server_stats: at "
                  "least 3 s)")
@@ -133,6 +137,7 @@ void add_flags(CLI::App& app, Flags& f) {
   app.add_option("--nice", f.nice,
                  "scheduling niceness of the monitor, 0-19: it yields the CPU to the server and "
                  "master on the same machine")
+      ->check(teleop::config::integer_in(0.0, 19.0))
       ->capture_default_str();
   teleop::dds::add_reconnect_flag(app, f.reconnect_s);
   json_opt->excludes(lines_opt)->excludes(tui_opt);
@@ -427,13 +432,9 @@ int main(int argc, char** argv) {
   CLI::App app{"teleop_monitor: terminal observer of a teleoperation session"};
   Flags flags;
   add_flags(app, flags);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "teleop_monitor: " << e.what() << "\n\n" << app.help();
-    return 2;
+  if (const int status = teleop::config::parse_command_line(app, "teleop_monitor", argc, argv);
+      status >= 0) {
+    return status == 2 ? 2 : status;
   }
   try {
     return run_monitor(flags);

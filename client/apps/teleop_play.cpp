@@ -26,6 +26,7 @@
 #include "client/record/recording.hpp"
 #include "client/record/topic_table.hpp"
 #include "common/config/config.hpp"
+#include "common/config/flags.hpp"
 #include "common/util/signals.hpp"
 
 int main(int argc, char** argv) {
@@ -35,29 +36,35 @@ int main(int argc, char** argv) {
   teleop::record::PlayerOptions po;
   app.add_option("file", po.file, "recording made by teleop_record")->required();
   app.add_option("--speed", po.speed, "playback speed, 0.01-100 (1 = as recorded)")
+      ->check(teleop::config::number_in(0.01, 100.0))
       ->capture_default_str();
-  app.add_option("--seek", po.seek_s, "start this far into the recording [s], 0-length");
-  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
+  app.add_option("--seek", po.seek_s, "start this far into the recording [s], 0-length")
+      ->check(teleop::config::number_in(0.0, 1e9));
+  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
+      ->check(teleop::config::integer_in(0.0, 232.0));
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
   app.add_option("--exclude", po.exclude, "topic not to publish (repeatable)");
   app.add_option("--wait", po.wait_s, "pause before the first sample, for discovery [s], 0-60")
+      ->check(teleop::config::number_in(0.0, 60.0))
       ->capture_default_str();
   app.add_option("--linger", po.linger_s,
                  "keep publishing latched topics after the end [s], 0-3600")
+      ->check(teleop::config::number_in(0.0, 3600.0))
+      ->capture_default_str();
+  app.add_option("--max-gap", po.max_gap_s,
+                 "a pause longer than this between recorded samples is cut to it, with a "
+                 "message [s], 0.001-3600")
+      ->check(teleop::config::number_in(0.001, 3600.0))
       ->capture_default_str();
   app.add_flag("--quiet", po.quiet, "print only warnings and errors");
   std::string export_commands;
   app.add_option("--export-commands", export_commands,
                  "write the recorded master commands to this command stream (CSV) for "
                  "`teleop_experiment resim`, publish nothing");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "teleop_play: " << e.what() << "\n\n" << app.help();
-    return 2;
+  if (const int status = teleop::config::parse_command_line(app, "teleop_play", argc, argv);
+      status >= 0) {
+    return status == 2 ? 2 : status;
   }
   try {
     using namespace teleop;
@@ -73,6 +80,7 @@ int main(int argc, char** argv) {
                                   "' is not a known topic (allowed: " + names + ")");
       }
     }
+    config::require_regular_file(po.file, "recording");
     if (!export_commands.empty()) {
       const std::size_t n = record::export_command_stream(po.file, export_commands);
       if (!po.quiet)

@@ -11,11 +11,13 @@
 // --queue-mb; samples dropped because the queue was full, and samples lost before they reached
 // the recorder (gaps in a writer's sequence numbers), are counted and printed at the end.
 //
-// Exit status: 0 done, 2 bad command line, 1 runtime failure (file, DDS).
+// A file that cannot be written (a full disk) stops the recording: the file keeps every sample
+// committed before, and the recorder says how many and exits 1.
+//
+// Exit status: 0 done, 2 bad command line, 1 runtime failure (file, DDS, a full disk).
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <optional>
 #include <thread>
@@ -23,7 +25,9 @@
 #include "client/record/recorder.hpp"
 #include "client/record/topic_table.hpp"
 #include "common/config/config.hpp"
+#include "common/config/flags.hpp"
 #include "common/util/clock.hpp"
+#include "common/util/files.hpp"
 #include "common/util/signals.hpp"
 
 int main(int argc, char** argv) {
@@ -36,25 +40,25 @@ int main(int argc, char** argv) {
   std::string summary_json;
   bool quiet = false;
   app.add_option("--out", ro.out, "recording file (SQLite; created or replaced)")->required();
-  app.add_option("--duration", duration_s, "stop after this long [s], 0-1e6; 0 = until SIGINT");
-  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
+  app.add_option("--duration", duration_s, "stop after this long [s], 0-1e6; 0 = until SIGINT")
+      ->check(teleop::config::number_in(0.0, 1e6));
+  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
+      ->check(teleop::config::integer_in(0.0, 232.0));
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
   app.add_option("--queue-mb", queue_mb, "bound of the in-memory queue [MiB], 1-4096")
+      ->check(teleop::config::number_in(1.0, 4096.0))
       ->capture_default_str();
   app.add_option("--exclude", ro.exclude, "topic not to record (repeatable)");
   app.add_option("--batch-ms", ro.batch_ms,
                  "take samples in batches this far apart [ms], 0-50 (0 = wake per sample)")
+      ->check(teleop::config::number_in(0.0, 50.0))
       ->capture_default_str();
   app.add_option("--summary-json", summary_json, "write the counts as JSON here at exit");
   app.add_flag("--quiet", quiet, "print only warnings and errors");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "teleop_record: " << e.what() << "\n\n" << app.help();
-    return 2;
+  if (const int status = teleop::config::parse_command_line(app, "teleop_record", argc, argv);
+      status >= 0) {
+    return status == 2 ? 2 : status;
   }
   try {
     using namespace teleop;
@@ -82,11 +86,24 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
     const auto t0 = now_ns();
-    while (!stop_requested()) {
+    while (!stop_requested() && !recorder.failed()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       if (duration_s > 0.0 && seconds_between(t0, now_ns()) >= duration_s) break;
     }
     recorder.stop();
+    if (recorder.failed()) {
+      // a full disk: the file keeps every sample committed before the failure
+      std::fprintf(stderr,
+                   "teleop_record: error: %s\nteleop_record: %s holds the %llu samples (%.1f MB "
+                   "of payload) written before the failure; %llu later samples were not "
+                   "written\n",
+                   recorder.error().c_str(), ro.out.c_str(),
+                   static_cast<unsigned long long>(recorder.written()),
+                   static_cast<double>(recorder.raw_bytes()) / 1e6,
+                   static_cast<unsigned long long>(recorder.lost_after_failure()));
+      if (!summary_json.empty()) write_text_file(summary_json, recorder.summary_json() + "\n");
+      return 1;
+    }
     if (!quiet) {
       std::printf("teleop_record: %llu samples, %.1f MB of payload stored in %.1f MB\n",
                   static_cast<unsigned long long>(recorder.samples()),
@@ -100,10 +117,7 @@ int main(int argc, char** argv) {
             static_cast<unsigned long long>(c.gaps), static_cast<unsigned long long>(c.dropped));
       }
     }
-    if (!summary_json.empty()) {
-      std::ofstream f(summary_json);
-      f << recorder.summary_json() << "\n";
-    }
+    if (!summary_json.empty()) write_text_file(summary_json, recorder.summary_json() + "\n");
     return 0;
   } catch (const teleop::config::ConfigError& e) {
     std::cerr << "teleop_record: " << e.what() << "\n";

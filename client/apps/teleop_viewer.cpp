@@ -62,10 +62,12 @@
 #include "client/viewer/ui/panel.hpp"
 #include "client/viewer/viewer_data.hpp"
 #include "common/config/config.hpp"
+#include "common/config/flags.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/dds/observer_topics.hpp"
 #include "common/util/clock.hpp"
+#include "common/util/files.hpp"
 #include "common/util/json.hpp"
 #include "common/util/signals.hpp"
 #include "common/util/stats.hpp"
@@ -682,13 +684,7 @@ class ViewerApp {
     std::printf("teleop_viewer: drive %s\n", json.c_str());
     std::fflush(stdout);
     if (!options_.drive_json.empty()) {
-      std::FILE* f = std::fopen(options_.drive_json.c_str(), "w");
-      if (f) {
-        std::fprintf(f, "%s\n", json.c_str());
-        std::fclose(f);
-      } else {
-        std::cerr << "teleop_viewer: cannot write " << options_.drive_json << "\n";
-      }
+      teleop::write_text_file(options_.drive_json, json + "\n");  // throws naming the file
     }
   }
 
@@ -811,7 +807,8 @@ class ViewerApp {
 int main(int argc, char** argv) {
   CLI::App app{"teleop_viewer: 3-D observer of a teleoperation session (scene, plots, events)"};
   Options o;
-  app.add_option("--domain", o.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
+  app.add_option("--domain", o.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
+      ->check(teleop::config::integer_in(0.0, 232.0));
   app.add_option("--profile", o.profile, "Fast DDS profile (default: loopback)");
   teleop::dds::NetworkFlags net_flags;
   teleop::dds::add_network_flags(app, net_flags);
@@ -833,10 +830,12 @@ int main(int argc, char** argv) {
                  "software renderer (llvmpipe)")
       ->capture_default_str();
   app.add_option("--history", o.history_s, "plot window [s], 1-600")->capture_default_str();
-  app.add_option("--duration", o.duration_s, "close after this long [s]; 0 = until closed");
+  app.add_option("--duration", o.duration_s, "close after this long [s], 0-1e7; 0 = until closed")
+      ->check(teleop::config::number_in(0.0, 1e7));
   app.add_option("--msaa", o.msaa,
                  "samples per pixel for anti-aliasing, 0-16 (default: 4; 0 in a window drawn by "
-                 "a software renderer such as llvmpipe)");
+                 "a software renderer such as llvmpipe)")
+      ->check(teleop::config::integer_in(0.0, 16.0));
   app.add_option("--force-scale", o.force_scale_m_per_n,
                  "contact force arrow length per newton [m/N], 0.0001-10")
       ->capture_default_str();
@@ -846,6 +845,7 @@ int main(int argc, char** argv) {
   app.add_option("--nice", o.nice,
                  "scheduling niceness of the viewer, 0-19: it yields the CPU to the server and "
                  "master on the same machine")
+      ->check(teleop::config::integer_in(0.0, 19.0))
       ->capture_default_str();
   app.add_flag("--full-rate", o.full_rate,
                "read the 1 kHz state topics instead of the 60 Hz *_view copies; loads the loops");
@@ -865,13 +865,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("--displacement", o.displacement,
                "start with meshes coloured by displacement from the first frame (key C)");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "teleop_viewer: " << e.what() << "\n\n" << app.help();
-    return kExitUsage;
+  if (const int status = teleop::config::parse_command_line(app, "teleop_viewer", argc, argv);
+      status >= 0) {
+    return status == 2 ? kExitUsage : status;
   }
   try {
     validate(o);

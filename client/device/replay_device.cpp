@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <utility>
@@ -162,6 +163,11 @@ std::vector<ReplaySample> parse_replay_csv(const std::string& text, const std::s
 }
 
 std::vector<ReplaySample> load_replay_csv(const std::string& path) {
+  config::require_regular_file(path, "replay file");  // a FIFO or device could block or never end
+  if (std::filesystem::file_size(path) > config::Node::kMaxFileBytes) {
+    throw config::ConfigError(path + ": larger than " +
+                              std::to_string(config::Node::kMaxFileBytes >> 20) + " MB");
+  }
   std::ifstream f(path);
   if (!f) throw config::ConfigError(path + ": cannot open replay file");
   std::stringstream ss;

@@ -11,6 +11,7 @@
 #include <iostream>
 #include <limits>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
 #include "client/cycle/master_cycle.hpp"
@@ -29,6 +30,7 @@
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/csv.hpp"
+#include "common/util/files.hpp"
 #include "common/util/json.hpp"
 #include "common/util/rate_loop.hpp"
 #include "common/util/signals.hpp"
@@ -73,6 +75,8 @@ struct SessionReport {
   std::uint64_t states_received = 0;
   std::uint64_t overruns = 0;
   std::uint64_t link_losses = 0;
+  std::uint64_t stalls = 0;                // cycles that began kStallS or more after the last
+  double longest_stall_s = 0.0;            // the longest such gap
   Summary rtt_ms;
   Summary loop_delay_ms;
   Summary jitter_us;
@@ -94,9 +98,28 @@ struct SessionReport {
   std::string owner_message;               // the server's word on who owns the slave
 };
 
-/// The verdict of a session; "refused" when it never had the slave (nothing was judged).
+/// True when the server rejected more than half of the commands it received (outside the
+/// workspace, non-finite, stale, ...): the slave mostly held still, so the session says nothing
+/// about the loop's stability.
+inline bool mostly_rejected(const SessionReport& rep) {
+  return rep.received > 0 && rep.server_rejected > rep.received / 2;
+}
+
+/// The verdict of a session; "refused" when it never had the slave (nothing was judged);
+/// "rejected" when the server rejected most of its commands and the loop was otherwise stable.
 inline const char* session_verdict(const SessionMetrics& m, const SessionReport& rep) {
-  return rep.refused && rep.issued == 0 ? "refused" : verdict_name(m.verdict());
+  if (rep.refused && rep.issued == 0) return "refused";
+  if (mostly_rejected(rep) && m.verdict() == Verdict::kStable) return "rejected";
+  return verdict_name(m.verdict());
+}
+
+/// Why: the metrics' reason, or how many commands the server rejected.
+inline std::string session_verdict_reason(const SessionMetrics& m, const SessionReport& rep) {
+  if (std::string(session_verdict(m, rep)) == "rejected") {
+    return "the server rejected " + std::to_string(rep.server_rejected) + " of the " +
+           std::to_string(rep.received) + " commands it received";
+  }
+  return m.verdict_reason();
 }
 
 /// One driver at a time on teleop/device_state: the first writer is the device until it has been
@@ -492,8 +515,16 @@ struct MasterNode::Impl {
       std::lock_guard<std::mutex> lock(owner_event_mutex);
       rep.owner_message = owner_event;
     }
+    // a file that could not be written is an error naming it, after everything else is out
+    std::string write_error;
+    try {
+      if (log) log->close();
+    } catch (const std::exception& e) {
+      write_error = e.what();
+    }
     if (!options.summary_json.empty()) write_summary_json(cycle, rep);
     if (!options.quiet) print_summary(cycle, rep);
+    if (!write_error.empty()) throw std::runtime_error(write_error);
     if (rep.refused) {
       std::cerr << "teleop_master: refused: another master owns the slave ("
                 << (rep.owner_message.empty() ? "the server's state names its session"
@@ -545,6 +576,27 @@ struct MasterNode::Impl {
     }
   }
 
+  /// A cycle that begins this long after the previous one is a stall of this master's own loop
+  /// (the process was stopped, starved or swapped out): the device held its last force meanwhile
+  /// [s]. Far above any overrun of a loaded machine (tens of ms).
+  static constexpr double kStallS = 0.2;
+
+  /// A stall of the loop, detected from the clock: counted for the summary, published as an
+  /// event, and the force fades out at the device's rate bound and back in over the link fade
+  /// (SafetyLayer::fade_in) instead of carrying on from where it froze.
+  void check_stall(MasterCycle& cycle, double now_s, double prev_s, SessionReport& rep) {
+    if (prev_s < 0.0 || now_s - prev_s < kStallS) return;
+    const double gap_s = now_s - prev_s;
+    ++rep.stalls;
+    rep.longest_stall_s = std::max(rep.longest_stall_s, gap_s);
+    cycle.safety().fade_in();
+    char msg[96];
+    std::snprintf(msg, sizeof msg, "haptic loop stalled for %.3f s: force faded out and back in",
+                  gap_s);
+    event(static_cast<std::uint8_t>(sim::EventKind::kWatchdog), 1, msg, gap_s);
+    if (!options.quiet) std::cerr << "teleop_master: " << msg << "\n";
+  }
+
   /// The end of a session: the force fades to zero at the device's rate bound while the slave
   /// holds, then this master releases the slave (three release commands, best effort).
   /// Returns the cycles it took.
@@ -594,6 +646,7 @@ struct MasterNode::Impl {
     MasterState ms;
     std::uint64_t cycles = 0;
     bool was_link_lost = false;
+    double prev_cycle_s = -1.0;
     const auto state_every = std::max<std::uint64_t>(
         1, static_cast<std::uint64_t>(std::llround(options.rate_hz / options.state_rate_hz)));
     const double session_length =
@@ -643,6 +696,8 @@ struct MasterNode::Impl {
               "ignoring teleop/device_state from a second driver while the first one is live", 0.0);
       }
       tuning->poll(cycle, now_s, now, report_tuning);
+      check_stall(cycle, now_s, prev_cycle_s, rep);
+      prev_cycle_s = now_s;
       cycle.step(now_s);
       entry_time_s[cycle.command_seq() % kEntryRing] = now_s;
       if (cycle.sample_arrived()) {
@@ -694,7 +749,7 @@ struct MasterNode::Impl {
     const Summary& r = rep.rtt_ms;
     const Summary& ld = rep.loop_delay_ms;
     const Summary& j = rep.jitter_us;
-    std::ofstream out(options.summary_json);
+    std::ostringstream out;
     out << "{\n"
         << "  \"duration_s\": " << json_number(rep.elapsed_s) << ",\n"
         << "  \"session_s\": " << json_number(rep.session_s) << ",\n"
@@ -728,8 +783,12 @@ struct MasterNode::Impl {
         << "  \"closing_cycles\": " << rep.closing_cycles << ",\n"
         << "  \"releases_sent\": " << rep.releases_sent << ",\n"
         << "  \"link_losses\": " << rep.link_losses << ",\n"
+        << "  \"stalls\": {\"count\": " << rep.stalls
+        << ", \"longest_s\": " << json_number(rep.longest_stall_s) << "},\n"
         << "  \"wait_server_s\": " << json_number(rep.wait_s) << ",\n"
         << "  \"verdict\": \"" << session_verdict(metrics, rep) << "\",\n"
+        << "  \"verdict_reason\": \"" << json_escape(session_verdict_reason(metrics, rep))
+        << "\",\n"
         << "  \"metrics\": " << metrics.summary_json() << ",\n"
         << "  \"transparency\": " << metrics.transparency_json() << ",\n"
         << "  \"delay\": {\"forward\": " << channel_json(rep.forward)
@@ -752,6 +811,7 @@ struct MasterNode::Impl {
         << ", \"waited_s\": " << json_number(rep.waited_for_owner_s) << ", \"server_says\": \""
         << json_escape(rep.owner_message) << "\"}\n"
         << "}\n";
+    write_text_file(options.summary_json, out.str());
   }
 
   /// {"accepting":..,"received":..,"applied":..,"rejected":..,"ignored":..,"dropped":..,
@@ -811,8 +871,10 @@ struct MasterNode::Impl {
                     v.slave_stiffness_n_per_m, v.forward_delay_s * 1e3, v.backward_delay_s * 1e3);
       tuning_line = buf;
     }
-    std::fprintf(
-        stdout,
+    const std::string reason = session_verdict_reason(metrics, rep);
+    char text[8192];
+    std::snprintf(
+        text, sizeof(text),
         "session summary (%s, %s, script %s)\n"
         "  duration        %.2f s (%.2f s of session after homing) at %.0f Hz\n"
         "  commands        %llu issued, %llu received by the server, %llu lost (%.2f%%; "
@@ -828,7 +890,7 @@ struct MasterNode::Impl {
         "  transparency    free space %.3f N mean, %.3f N p99, %.3f N max; in contact felt %.2f x "
         "the environment's force (RMS %.3f N), stiffness felt %.0f N/m against %.0f N/m (%.2f)\n"
         "  passivity       energy at the master port %.4f J (min %.4f J)\n"
-        "  safety          %s%s, link losses %llu, re-homed %llu times (link back %llu, slave "
+        "  safety          %s%s, link losses %llu, loop stalls %llu (longest %.3f s), re-homed %llu times (link back %llu, slave "
         "restart %llu, takeover %llu); force change at most %.3f N per cycle (bound %.0f N/s, "
         "held to it in %llu cycles)\n"
         "  ownership       %s\n"
@@ -853,6 +915,7 @@ struct MasterNode::Impl {
         metrics.environment_stiffness_n_per_m(), metrics.stiffness_ratio(), metrics.energy_j(),
         metrics.energy_min_j(), safety.cut() ? "CUT: " : "ok",
         safety.cut() ? safety.cut_reason() : "", static_cast<unsigned long long>(rep.link_losses),
+        static_cast<unsigned long long>(rep.stalls), rep.longest_stall_s,
         static_cast<unsigned long long>(cycle.rehomes()),
         static_cast<unsigned long long>(cycle.rehomes(RehomeReason::kLinkBack)),
         static_cast<unsigned long long>(cycle.rehomes(RehomeReason::kSlaveRestart)),
@@ -864,7 +927,8 @@ struct MasterNode::Impl {
         static_cast<unsigned long long>(rep.server_overruns),
         static_cast<unsigned long long>(rep.server_rejected),
         static_cast<unsigned long long>(rep.server_restarts), session_verdict(metrics, rep),
-        *metrics.verdict_reason() ? " - " : "", metrics.verdict_reason());
+        reason.empty() ? "" : " - ", reason.c_str());
+    std::fputs(nan_as_na(text).c_str(), stdout);
   }
 };
 

@@ -114,8 +114,23 @@ PlayerResult play(dds::Participant& participant, const PlayerOptions& o) {
   // 2. everything from the seek point, paced by the recorded receive times
   if (!all_ids.empty()) rec.scan(seek_ns, 0, all_ids);
   const auto t0 = std::chrono::steady_clock::now();
+  const auto max_gap_ns = static_cast<std::int64_t>(o.max_gap_s * 1e9);
+  std::int64_t prev_ns = seek_ns, skipped_ns = 0;
   while (!all_ids.empty() && !stop_requested() && rec.next(s)) {
-    const double offset_s = static_cast<double>(s.receive_ns - seek_ns) * 1e-9 / o.speed;
+    // a long pause in the recording (a clock jump, a stopped session) is cut to --max-gap
+    if (s.receive_ns - prev_ns > max_gap_ns) {
+      const std::int64_t cut = s.receive_ns - prev_ns - max_gap_ns;
+      skipped_ns += cut;
+      ++result.gaps_skipped;
+      std::fprintf(stderr,
+                   "teleop_play: %s: skipped %.3f s of a %.3f s pause at %.3f s (--max-gap %g)\n",
+                   o.file.c_str(), static_cast<double>(cut) * 1e-9,
+                   static_cast<double>(s.receive_ns - prev_ns) * 1e-9,
+                   static_cast<double>(prev_ns - rec.first_ns()) * 1e-9, o.max_gap_s);
+    }
+    prev_ns = s.receive_ns;
+    const double offset_s =
+        static_cast<double>(s.receive_ns - seek_ns - skipped_ns) * 1e-9 / o.speed;
     sleep_until(t0 + std::chrono::duration_cast<std::chrono::nanoseconds>(
                          std::chrono::duration<double>(offset_s)));
     if (stop_requested()) break;

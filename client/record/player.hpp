@@ -19,6 +19,7 @@ struct PlayerOptions {
   double seek_s = 0.0;               ///< start this far into the recording [s]
   double wait_s = 0.5;               ///< pause after creating the writers, for discovery [s]
   double linger_s = 1.0;             ///< keep the writers after the last sample [s]
+  double max_gap_s = 10.0;           ///< a longer pause between samples is cut to this [s]
   std::vector<std::string> exclude;  ///< topic names not to publish
   bool quiet = false;
 };
@@ -27,6 +28,7 @@ struct PlayerResult {
   std::uint64_t written = 0;         ///< samples written
   std::uint64_t failures = 0;        ///< write() refused by the middleware
   std::uint64_t skipped_topics = 0;  ///< topics of unknown type, not published
+  std::uint64_t gaps_skipped = 0;    ///< pauses longer than max_gap_s, cut short
   double recording_s = 0.0;          ///< length of the recording [s]
 };
 

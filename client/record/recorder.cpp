@@ -170,7 +170,18 @@ void Recorder::write_loop() {
       queue_.clear();
       queued_bytes_ = 0;
       l.unlock();
-      file_->append(batch);
+      if (!failed_.load()) {
+        try {
+          file_->append(batch);
+          written_.fetch_add(batch.size());
+        } catch (const std::exception& e) {
+          // a full disk or a failing file: keep what was committed, stop writing, say so
+          std::lock_guard<std::mutex> el(error_mutex_);
+          error_ = options_.out + ": " + e.what();
+          failed_.store(true);
+        }
+      }
+      if (failed_.load()) lost_after_failure_.fetch_add(batch.size());
       raw_bytes_.store(file_->raw_bytes());
       stored_bytes_.store(file_->stored_bytes());
       if (done) {
@@ -192,9 +203,20 @@ void Recorder::stop() {
     if (t->reader) participant_.subscriber()->delete_datareader(t->reader);
     t->reader = nullptr;
   }
-  file_->set_meta("stopped_unix_ns", std::to_string(wall_ns()));
-  file_->set_meta("summary", summary_json());
+  try {
+    file_->set_meta("stopped_unix_ns", std::to_string(wall_ns()));
+    file_->set_meta("summary", summary_json());
+  } catch (const std::exception& e) {
+    std::lock_guard<std::mutex> el(error_mutex_);
+    if (error_.empty()) error_ = options_.out + ": " + e.what();
+    failed_.store(true);
+  }
   file_->close();
+}
+
+std::string Recorder::error() const {
+  std::lock_guard<std::mutex> l(error_mutex_);
+  return error_;
 }
 
 std::vector<TopicCounts> Recorder::counts() const {

@@ -63,6 +63,15 @@ class Recorder {
   std::uint64_t raw_bytes() const;
   /// A JSON object with the counts (for --summary-json).
   std::string summary_json() const;
+  /// True once writing the file failed (a full disk): the samples committed before stay in the
+  /// file, later ones are counted in lost_after_failure() and not written.
+  bool failed() const { return failed_.load(); }
+  /// What failed, naming the file; empty while nothing failed.
+  std::string error() const;
+  /// Samples committed to the file.
+  std::uint64_t written() const { return written_.load(); }
+  /// Samples taken from the queue after the failure (not in the file).
+  std::uint64_t lost_after_failure() const { return lost_after_failure_.load(); }
 
  private:
   struct Topic;
@@ -81,6 +90,10 @@ class Recorder {
   std::atomic<bool> reading_done_{false};
   std::atomic<std::uint64_t> samples_{0};
   std::atomic<std::uint64_t> raw_bytes_{0}, stored_bytes_{0};
+  std::atomic<std::uint64_t> written_{0}, lost_after_failure_{0};
+  std::atomic<bool> failed_{false};
+  mutable std::mutex error_mutex_;
+  std::string error_;
   std::int64_t started_ns_ = 0;
   std::thread reader_thread_, writer_thread_;
   bool stopped_ = false;

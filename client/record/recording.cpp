@@ -5,6 +5,9 @@
 
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+
+#include "common/config/config.hpp"
 
 namespace teleop::record {
 
@@ -26,6 +29,13 @@ void check(sqlite3* db, int rc, const std::string& what) {
 }  // namespace
 
 RecordingWriter::RecordingWriter(const std::string& path) {
+  std::error_code ec;
+  const auto st = std::filesystem::symlink_status(path, ec);
+  if (path.empty()) throw config::ConfigError("the recording's file name is empty");
+  if (!ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st)) {
+    throw config::ConfigError(path + ": exists and is not a regular file; a recording replaces "
+                              "only a regular file");
+  }
   std::remove(path.c_str());
   if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
       SQLITE_OK) {
@@ -106,6 +116,7 @@ void RecordingWriter::set_meta(const std::string& key, const std::string& value)
 
 void RecordingWriter::append(const std::vector<RecordedSample>& samples) {
   if (samples.empty()) return;
+  std::uint64_t raw = 0, stored = 0;
   exec("BEGIN");
   for (const auto& s : samples) {
     const std::uint8_t* data = s.payload.data();
@@ -134,13 +145,17 @@ void RecordingWriter::append(const std::vector<RecordedSample>& samples) {
       sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
       fail(db_, "insert sample");
     }
-    raw_bytes_ += s.payload.size();
-    stored_bytes_ += size;
+    raw += s.payload.size();
+    stored += size;
   }
   exec("COMMIT");
+  raw_bytes_ += raw;  // only what was committed
+  stored_bytes_ += stored;
 }
 
-RecordingReader::RecordingReader(const std::string& path) {
+RecordingReader::RecordingReader(const std::string& path) : path_(path) {
+  std::error_code exists_ec;
+  if (std::filesystem::exists(path, exists_ec)) config::require_regular_file(path, "recording");
   if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
@@ -177,6 +192,14 @@ RecordingReader::RecordingReader(const std::string& path) {
     last_ns_ = sqlite3_column_int64(st, 1);
   }
   sqlite3_finalize(st);
+  if (first_ns_ < 0 || last_ns_ < first_ns_ || last_ns_ - first_ns_ > kMaxRecordingSpanNs) {
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw config::ConfigError(path + ": field 'samples.receive_ns': from " +
+                              std::to_string(first_ns_) + " to " + std::to_string(last_ns_) +
+                              " ns; receive times must be >= 0 and span at most " +
+                              std::to_string(kMaxRecordingSpanNs / 1000000000) + " s");
+  }
 }
 
 RecordingReader::~RecordingReader() {
@@ -247,9 +270,23 @@ bool RecordingReader::next(RecordedSample& out) {
   }
   out.writer_seq = sqlite3_column_int64(scan_, 4);
   const int codec = sqlite3_column_int(scan_, 5);
-  const auto raw_size = static_cast<std::size_t>(sqlite3_column_int64(scan_, 6));
+  const std::int64_t raw_size_field = sqlite3_column_int64(scan_, 6);
   const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(scan_, 7));
   const auto n = static_cast<std::size_t>(sqlite3_column_bytes(scan_, 7));
+  if (raw_size_field < 0 || raw_size_field > kMaxSampleBytes ||
+      (codec == kCodecRaw && static_cast<std::size_t>(raw_size_field) != n)) {
+    throw config::ConfigError(path_ + ": field 'samples.raw_size': " +
+                              std::to_string(raw_size_field) + " for a sample of " +
+                              std::to_string(n) + " stored bytes at receive_ns " +
+                              std::to_string(out.receive_ns) + "; allowed range [0, " +
+                              std::to_string(kMaxSampleBytes) +
+                              "], and equal to the stored size when uncompressed");
+  }
+  if (out.receive_ns < 0) {
+    throw config::ConfigError(path_ + ": field 'samples.receive_ns': " +
+                              std::to_string(out.receive_ns) + " is negative");
+  }
+  const auto raw_size = static_cast<std::size_t>(raw_size_field);
   if (codec == kCodecZstd) {
     out.payload.resize(raw_size);
     const std::size_t got = ZSTD_decompress(out.payload.data(), raw_size, blob, n);

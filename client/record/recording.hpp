@@ -76,10 +76,20 @@ class RecordingWriter {
   std::uint64_t stored_bytes_ = 0;
 };
 
-/// Reads a recording.
+/// Largest payload a recorded sample may declare (raw_size) [bytes]; a level-6 mesh frame is
+/// under 1 MB.
+constexpr std::int64_t kMaxSampleBytes = std::int64_t{64} << 20;
+/// Longest span of receive times a recording may have [ns] (30 days).
+constexpr std::int64_t kMaxRecordingSpanNs = std::int64_t{30} * 86400 * 1000000000;
+
+/// Reads a recording. What is read from the file is checked before use: a FIFO or device is
+/// refused at open, negative receive times or a span above kMaxRecordingSpanNs at open, a
+/// sample's raw_size outside [0, kMaxSampleBytes] (or a raw sample whose size is not its
+/// raw_size) when it is read; each is a config::ConfigError naming the file and the value.
 class RecordingReader {
  public:
-  /// Opens `path` read-only. @throws RecordingError if it is not a recording.
+  /// Opens `path` read-only. @throws RecordingError if it is not a recording,
+  /// config::ConfigError if it is not a regular file or its times are out of range.
   explicit RecordingReader(const std::string& path);
   ~RecordingReader();
   RecordingReader(const RecordingReader&) = delete;
@@ -96,10 +106,13 @@ class RecordingReader {
   /// Starts a scan of the samples with receive time >= from_ns (and < to_ns if to_ns > 0), in
   /// receive order, optionally of the given topic ids only (empty: all).
   void scan(std::int64_t from_ns, std::int64_t to_ns = 0, const std::vector<int>& topic_ids = {});
-  /// Next sample of the scan; false at the end.
+  /// Next sample of the scan; false at the end. @throws config::ConfigError for a sample whose
+  /// sizes are out of range, RecordingError for one that does not decompress.
   bool next(RecordedSample& out);
+  const std::string& path() const { return path_; }
 
  private:
+  std::string path_;
   sqlite3* db_ = nullptr;
   sqlite3_stmt* scan_ = nullptr;
   std::vector<TopicRecord> topics_;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -130,6 +131,11 @@ std::vector<ScriptAction> parse_input_script_text(const std::string& text,
 }
 
 std::vector<ScriptAction> parse_input_script(const std::string& path) {
+  config::require_regular_file(path, "input script");  // a FIFO or device could block or never end
+  if (std::filesystem::file_size(path) > config::Node::kMaxFileBytes) {
+    throw config::ConfigError(path + ": larger than " +
+                              std::to_string(config::Node::kMaxFileBytes >> 20) + " MB");
+  }
   std::ifstream f(path);
   if (!f) throw config::ConfigError(path + ": cannot open the input script");
   std::stringstream buf;

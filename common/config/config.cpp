@@ -1,6 +1,7 @@
 #include "common/config/config.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -285,6 +286,8 @@ Node Node::load_file(const std::string& file) {
   if (std::filesystem::is_directory(file, ec)) {
     throw ConfigError(file + ": is a directory, not a YAML file");
   }
+  // a FIFO or device could block or never end (a missing file: "cannot open" below)
+  if (std::filesystem::exists(file, ec)) require_regular_file(file, "YAML file");
   std::ifstream in(file, std::ios::binary);
   if (!in) throw ConfigError(file + ": cannot open the file for reading");
   std::string text;
@@ -469,13 +472,110 @@ void Node::reject_unknown_keys(const std::set<std::string>& known) const {
 }
 
 double check_flag(const std::string& flag, double value, double lo, double hi) {
-  if (!std::isfinite(value) || value < lo || value > hi) {
+  if (!std::isfinite(value) || value < lo || value > hi || (lo >= 0.0 && std::signbit(value))) {
     std::ostringstream os;
     os << "command line: " << flag << " " << value << " is out of the allowed range "
        << range_text(lo, hi);
     throw ConfigError(os.str());
   }
   return value;
+}
+
+std::string number_problem(const std::string& text, double lo, double hi, bool integer) {
+  const std::string quoted = "'" + text + "'";
+  const std::string range = " (allowed range " + range_text(lo, hi) + ")";
+  if (text.empty()) return "'' is empty, not a number" + range;
+  if (std::isspace(static_cast<unsigned char>(text.front())) ||
+      std::isspace(static_cast<unsigned char>(text.back()))) {
+    return quoted + " has blanks around the number" + range;
+  }
+  double v = 0.0;
+  std::size_t pos = 0;
+  try {
+    v = std::stod(text, &pos);
+  } catch (const std::out_of_range&) {
+    return quoted + " is too large" + range;
+  } catch (const std::exception&) {
+    return quoted + " is not a number" + range;
+  }
+  if (pos != text.size()) return quoted + " is not a number (it ends in '" + text.substr(pos) +
+                                 "')" + range;
+  if (!std::isfinite(v)) return quoted + " is not a finite number" + range;
+  if (integer && (v != std::floor(v) || text.find_first_of(".eExX") != std::string::npos)) {
+    return quoted + " is not a whole number" + range;
+  }
+  if (v < lo || v > hi) return quoted + " is out of the allowed range " + range_text(lo, hi);
+  if (lo >= 0.0 && text.front() == '-') {
+    return quoted + " is negative; the allowed range is " + range_text(lo, hi);
+  }
+  return "";
+}
+
+double parse_number(const std::string& flag, const std::string& text, double lo, double hi) {
+  const std::string problem = number_problem(text, lo, hi, false);
+  if (!problem.empty()) throw ConfigError("command line: " + flag + " " + problem);
+  return std::stod(text);
+}
+
+long long parse_integer(const std::string& flag, const std::string& text, long long lo,
+                        long long hi) {
+  const std::string problem =
+      number_problem(text, static_cast<double>(lo), static_cast<double>(hi), true);
+  if (!problem.empty()) throw ConfigError("command line: " + flag + " " + problem);
+  return std::stoll(text);
+}
+
+std::vector<double> parse_numbers(const std::string& flag, const std::string& text,
+                                  std::size_t count, const std::vector<double>& lo,
+                                  const std::vector<double>& hi) {
+  std::vector<std::string> parts(1);
+  for (char c : text) {
+    if (c == ',') {
+      parts.emplace_back();
+    } else {
+      parts.back() += c;
+    }
+  }
+  std::string ranges;
+  for (std::size_t i = 0; i < count; ++i) {
+    ranges += (i ? ", " : "") + range_text(lo.at(i), hi.at(i));
+  }
+  if (parts.size() != count) {
+    throw ConfigError("command line: " + flag + " '" + text + "' has " +
+                      std::to_string(parts.size()) + " component(s); exactly " +
+                      std::to_string(count) + " numbers separated by commas are needed, in " +
+                      ranges);
+  }
+  std::vector<double> out(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::string problem = number_problem(parts[i], lo[i], hi[i], false);
+    if (!problem.empty()) {
+      throw ConfigError("command line: " + flag + " '" + text + "': component " +
+                        std::to_string(i + 1) + " " + problem);
+    }
+    out[i] = std::stod(parts[i]);
+  }
+  return out;
+}
+
+void require_regular_file(const std::string& file, const std::string& what) {
+  if (file.empty()) throw ConfigError("'': the " + what + " file name is empty");
+  std::error_code ec;
+  const auto st = std::filesystem::status(file, ec);
+  if (ec || !std::filesystem::exists(st)) {
+    throw ConfigError(file + ": " + what + " file does not exist");
+  }
+  if (std::filesystem::is_regular_file(st)) return;
+  // /dev/null reads as an empty file (std::filesystem::equivalent refuses two devices)
+  if (std::filesystem::canonical(file, ec) == "/dev/null" && !ec) return;
+  const char* kind = std::filesystem::is_directory(st)       ? "a directory"
+                     : std::filesystem::is_fifo(st)          ? "a FIFO"
+                     : std::filesystem::is_socket(st)        ? "a socket"
+                     : std::filesystem::is_character_file(st) ? "a character device"
+                     : std::filesystem::is_block_file(st)    ? "a block device"
+                                                             : "not a plain file";
+  throw ConfigError(file + ": " + what + " is " + kind +
+                    ", not a regular file (reading it may block or never end)");
 }
 
 double parse_duration_s(const std::string& flag, const std::string& text) {
@@ -502,7 +602,7 @@ double parse_duration_s(const std::string& flag, const std::string& text) {
                       "' (allowed: s, ms, us, ns)");
   }
   const double s = v * scale;
-  if (!std::isfinite(s) || s < 0.0) {
+  if (!std::isfinite(s) || s < 0.0 || (!text.empty() && text.front() == '-')) {
     throw ConfigError("command line: " + flag + " '" + text + "' must be a finite duration >= 0");
   }
   return s;

@@ -100,7 +100,31 @@ class Node {
 std::string range_text(double lo, double hi);
 
 /// Checks a command-line numeric flag; throws ConfigError naming the flag, value and range.
+/// A negative zero is refused where the range starts at 0 or above (`--duration -0`).
 double check_flag(const std::string& flag, double value, double lo, double hi);
+
+/// Parses the whole of `text` as a finite number within [lo, hi] (no empty text, no trailing
+/// characters such as "3x", no leading blanks, no "-0" where lo >= 0, no NaN or infinity).
+/// @throws ConfigError "command line: <flag> '<text>' ..." naming the allowed range.
+double parse_number(const std::string& flag, const std::string& text, double lo, double hi);
+/// The same for a whole number within [lo, hi] ("1.5", "1e3" are refused).
+long long parse_integer(const std::string& flag, const std::string& text, long long lo,
+                        long long hi);
+/// Exactly `count` numbers separated by commas ("x,y,z"), each parsed as parse_number() with the
+/// per-component range [lo[i], hi[i]] (`lo`, `hi` of size `count`).
+/// @throws ConfigError naming the flag, the text, the expected count and the range.
+std::vector<double> parse_numbers(const std::string& flag, const std::string& text,
+                                  std::size_t count, const std::vector<double>& lo,
+                                  const std::vector<double>& hi);
+/// Problem with `text` as a number in [lo, hi] (integer: whole numbers only), or "" when it is
+/// fine. The message starts with the quoted text: "'-1' is out of the allowed range [0, 10]".
+std::string number_problem(const std::string& text, double lo, double hi, bool integer);
+
+/// Checks that `file` can be read as a file without blocking: a regular file, or /dev/null (an
+/// empty input). A FIFO, socket, device or directory is refused (reading one may block forever
+/// or never end). `what` names the role in the message ("scene", "recording").
+/// @throws ConfigError "<file>: <what> is a FIFO, not a regular file".
+void require_regular_file(const std::string& file, const std::string& what);
 
 /// Parses durations such as "50ms", "0.2s", "150us", "3" (seconds); throws ConfigError.
 double parse_duration_s(const std::string& flag, const std::string& text);

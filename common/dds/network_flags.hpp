@@ -17,6 +17,7 @@
 // TELEOP_SECURITY_DIR, TELEOP_IDENTITY.
 #include <CLI/CLI.hpp>
 
+#include "common/config/flags.hpp"
 #include "common/dds/participant.hpp"
 
 namespace teleop::dds {
@@ -61,6 +62,7 @@ inline void add_reconnect_flag(CLI::App& app, double& reconnect_s) {
   app.add_option("--reconnect", reconnect_s,
                  "TCP client profiles: with no answer from a server for this long, make a new "
                  "participant (a new connection) [s], 0.5-3600, 0 = never")
+      ->check(teleop::config::number_in(0.0, 3600.0))
       ->capture_default_str();
 }
 

@@ -2,11 +2,13 @@
 
 #include <cerrno>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 
 #include "common/config/config.hpp"
+#include "common/util/files.hpp"
 
 namespace teleop {
 namespace {
@@ -57,19 +59,46 @@ void write_command_stream(const std::string& path, const std::vector<StreamedCom
     f << r.receive_ns << "," << r.source_ns << "," << r.writer << ","
       << to_hex(r.payload.data(), r.payload.size()) << "\n";
   }
-  if (!f.flush()) throw std::runtime_error(path + ": write error");
+  check_written(f, path);
 }
 
+namespace {
+/// std::getline with a bound: false at the end of the input; throws past kMaxStreamLineBytes.
+bool read_line(std::istream& in, std::string& line, const std::string& file, std::size_t line_no) {
+  line.clear();
+  std::streambuf* buf = in.rdbuf();
+  for (;;) {
+    const int c = buf->sbumpc();
+    if (c == std::char_traits<char>::eof()) return !line.empty();
+    if (c == '\n') return true;
+    if (line.size() >= kMaxStreamLineBytes) {
+      fail(file, line_no, "<line>",
+           "longer than " + std::to_string(kMaxStreamLineBytes) +
+               " bytes; not a command stream row");
+    }
+    line += static_cast<char>(c);
+  }
+}
+}  // namespace
+
 std::vector<StreamedCommand> read_command_stream(const std::string& path) {
+  config::require_regular_file(path, "command stream");
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec && size > kMaxStreamFileBytes) {
+    throw config::ConfigError(path + ": command stream of " + std::to_string(size) +
+                              " bytes; at most " + std::to_string(kMaxStreamFileBytes) +
+                              " are read");
+  }
   std::ifstream f(path, std::ios::binary);
   if (!f) throw config::ConfigError(path + ": cannot open the command stream for reading");
   std::string line;
   std::size_t line_no = 1;
-  if (!std::getline(f, line) || line != kHeader) {
+  if (!read_line(f, line, path, 1) || line != kHeader) {
     fail(path, 1, "<header>", std::string("expected the header '") + kHeader + "'");
   }
   std::vector<StreamedCommand> out;
-  while (std::getline(f, line)) {
+  while (read_line(f, line, path, line_no + 1)) {
     ++line_no;
     if (line.empty()) continue;
     std::stringstream ss(line);

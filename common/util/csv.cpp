@@ -1,7 +1,10 @@
 #include "common/util/csv.hpp"
 
 #include <charconv>
+#include <iostream>
 #include <stdexcept>
+
+#include "common/util/files.hpp"
 
 namespace teleop {
 
@@ -15,6 +18,23 @@ CsvWriter::CsvWriter(const std::string& path, const std::vector<std::string>& co
     : path_(path), out_(path), columns_(columns.size()) {
   if (!out_) throw std::runtime_error("cannot open '" + path + "' for writing");
   row_text(columns);
+}
+
+CsvWriter::~CsvWriter() {
+  if (!out_.is_open()) return;
+  out_.flush();
+  if (!out_) {
+    const std::string message = path_ + ": write error (the file is incomplete)";
+    std::cerr << "error: " << message << "\n";
+    note_failed_write(message);
+  }
+}
+
+void CsvWriter::close() {
+  if (!out_.is_open()) return;
+  check_written(out_, path_);
+  out_.close();
+  if (!out_) throw std::runtime_error(path_ + ": write error on close");
 }
 
 void CsvWriter::row(std::initializer_list<double> values) { row(std::vector<double>(values)); }

@@ -11,6 +11,11 @@ class CsvWriter {
  public:
   /// Opens `path` for writing and writes the header. @throws std::runtime_error on failure.
   CsvWriter(const std::string& path, const std::vector<std::string>& columns);
+  /// A writer not close()d checks its writes here; a failure cannot throw from a destructor, so
+  /// it is printed and noted in failed_writes() (common/util/files.hpp).
+  ~CsvWriter();
+  CsvWriter(const CsvWriter&) = delete;
+  CsvWriter& operator=(const CsvWriter&) = delete;
   /// Writes one row of numbers; the count must match the header.
   void row(std::initializer_list<double> values);
   void row(const std::vector<double>& values);
@@ -20,6 +25,9 @@ class CsvWriter {
   /// Writes one row of pre-formatted fields.
   void row_text(const std::vector<std::string>& fields);
   void flush() { out_.flush(); }
+  /// Flushes and closes the file. @throws std::runtime_error naming the file when any write
+  /// failed (a full disk, /dev/full).
+  void close();
   const std::string& path() const { return path_; }
 
  private:

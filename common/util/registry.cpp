@@ -4,9 +4,12 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <iostream>
+#include <optional>
 
 #include "common/config/config.hpp"
+#include "common/util/files.hpp"
 
 #ifndef TELEOP_SOURCE_DIR
 #define TELEOP_SOURCE_DIR "."
@@ -29,8 +32,9 @@ CommandRegistry& CommandRegistry::get(const std::string& group) {
   return groups[group];
 }
 
-bool CommandRegistry::add(const std::string& name, const std::string& description, CommandFn fn) {
-  entries_[name] = CommandEntry{name, description, std::move(fn)};
+bool CommandRegistry::add(const std::string& name, const std::string& description, CommandFn fn,
+                          std::vector<OptionSpec> options) {
+  entries_[name] = CommandEntry{name, description, std::move(fn), std::move(options)};
   return true;
 }
 
@@ -72,15 +76,87 @@ int run_chart_script(const std::string& script, const std::vector<std::string>& 
 }
 
 namespace {
+std::string option_usage(const OptionSpec& o) {
+  std::string v = o.name;
+  if (o.kind == OptionSpec::Kind::kText) {
+    v += " TEXT";
+  } else {
+    v += (o.kind == OptionSpec::Kind::kInteger ? " INTEGER in " : " NUMBER in ") +
+         config::range_text(o.lo, o.hi);
+  }
+  return v;
+}
+
 void usage(const std::string& group, const std::string& exe, std::ostream& os) {
   os << "usage: " << exe << " <name> --out DIR [--quick] [--no-chart] [command options]\n\n"
      << "names:\n";
   for (const auto* e : CommandRegistry::get(group).list()) {
     os << "  " << e->name << std::string(e->name.size() < 24 ? 24 - e->name.size() : 1, ' ')
        << e->description << "\n";
+    for (const OptionSpec& o : e->options) {
+      os << "      " << option_usage(o) << (o.help.empty() ? "" : ": " + o.help) << "\n";
+    }
   }
 }
+
+std::string known_options(const CommandEntry& entry) {
+  std::string list = "--out, --quick, --no-chart";
+  for (const OptionSpec& o : entry.options) list += ", " + o.name;
+  return list;
+}
 }  // namespace
+
+CommandArgs parse_command_args(const CommandEntry& entry, const std::vector<std::string>& words) {
+  CommandArgs args;
+  std::vector<std::string> seen;
+  bool have_out = false;
+  for (std::size_t i = 0; i < words.size(); ++i) {
+    std::string key = words[i];
+    std::optional<std::string> value;
+    if (const auto eq = key.find('='); key.rfind("--", 0) == 0 && eq != std::string::npos) {
+      value = key.substr(eq + 1);
+      key = key.substr(0, eq);
+    }
+    if (key == "--quick" || key == "--no-chart") {
+      if (value) throw config::ConfigError("command line: " + key + " takes no value");
+      (key == "--quick" ? args.quick : args.no_chart) = true;
+      continue;
+    }
+    const OptionSpec* spec = nullptr;
+    for (const OptionSpec& o : entry.options) {
+      if (o.name == key) spec = &o;
+    }
+    if (key != "--out" && !spec) {
+      throw config::ConfigError("command line: '" + words[i] + "' is not an option of " +
+                                entry.name + " (its options: " + known_options(entry) + ")");
+    }
+    if (!value) {
+      if (i + 1 >= words.size()) throw config::ConfigError("command line: " + key + " needs a value");
+      value = words[++i];
+    }
+    if (std::find(seen.begin(), seen.end(), key) != seen.end()) {
+      throw config::ConfigError("command line: " + key + " is given more than once");
+    }
+    seen.push_back(key);
+    if (value->empty()) {
+      throw config::ConfigError("command line: " + key + " '' is empty; a value is needed");
+    }
+    if (key == "--out") {
+      args.out_dir = *value;
+      have_out = true;
+      continue;
+    }
+    if (spec->kind != OptionSpec::Kind::kText) {
+      const std::string problem = config::number_problem(
+          *value, spec->lo, spec->hi, spec->kind == OptionSpec::Kind::kInteger);
+      if (!problem.empty()) throw config::ConfigError("command line: " + key + " " + problem);
+    }
+    args.options.push_back(key);
+    args.options.push_back(*value);
+  }
+  if (!have_out) throw config::ConfigError("command line: --out DIR is required");
+  return args;
+}
 
 int run_registry_main(const std::string& group, const std::string& exe, int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
@@ -94,26 +170,13 @@ int run_registry_main(const std::string& group, const std::string& exe, int argc
     usage(group, exe, std::cerr);
     return 2;
   }
-  CommandArgs args;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--out" && i + 1 < argc) {
-      args.out_dir = argv[++i];
-    } else if (a == "--quick") {
-      args.quick = true;
-    } else if (a == "--no-chart") {
-      args.no_chart = true;
-    } else {
-      args.options.push_back(a);
-    }
-  }
-  if (args.out_dir.empty()) {
-    std::cerr << exe << " " << name << ": --out DIR is required\n";
-    return 2;
-  }
   try {
+    const CommandArgs args = parse_command_args(*entry, std::vector<std::string>(argv + 2, argv + argc));
     std::filesystem::create_directories(args.out_dir);
-    return entry->run(args);
+    const int status = entry->run(args);
+    const std::vector<std::string> failed = failed_writes();
+    for (const std::string& f : failed) std::cerr << exe << " " << name << ": error: " << f << "\n";
+    return failed.empty() ? status : 1;
   } catch (const config::ConfigError& e) {
     std::cerr << exe << " " << name << ": " << e.what() << "\n";
     return 2;

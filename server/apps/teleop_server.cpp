@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "common/config/config.hpp"
+#include "common/config/flags.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/dds/participant.hpp"
 #include "server/node/server_node.hpp"
@@ -32,33 +33,37 @@ int main(int argc, char** argv) {
   bool quiet = false;
   teleop::RealtimeOptions realtime;
   app.add_option("--scene", scene_file, "scene YAML file")->capture_default_str();
-  app.add_option("--rate", rate_hz, "physics rate [Hz], 10-20000 (default: the scene's)");
+  app.add_option("--rate", rate_hz, "physics rate [Hz], 10-20000 (default: the scene's)")
+      ->check(teleop::config::number_in(10.0, 20000.0));
   app.add_option("--command-timeout", command_timeout_s,
                  "hold the slave when no valid command arrives for this long [s], 0.001-10 "
-                 "(default: the scene's, 0.05)");
+                 "(default: the scene's, 0.05)")
+      ->check(teleop::config::number_in(0.001, 10.0));
   app.add_option("--owner-timeout", owner_timeout_s,
                  "a master owning the slave loses it when none of its commands arrived for "
                  "this long, and another may take it over [s], from the command timeout to 60 "
-                 "(default: 0.5, or the command timeout if longer)");
-  app.add_option("--duration", duration_s, "stop after this many seconds; 0 = run until SIGINT");
-  app.add_option("--stats-period", stats_period_s, "ServerStats period [s], 0.1-10");
-  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)");
+                 "(default: 0.5, or the command timeout if longer)")
+      ->check(teleop::config::number_in(0.001, 60.0));
+  app.add_option("--duration", duration_s, "stop after this many seconds, 0-1e7; 0 = run until SIGINT")
+      ->check(teleop::config::number_in(0.0, 1e7));
+  app.add_option("--stats-period", stats_period_s, "ServerStats period [s], 0.1-10")
+      ->check(teleop::config::number_in(0.1, 10.0));
+  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
+      ->check(teleop::config::integer_in(0.0, 232.0));
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
   teleop::dds::NetworkFlags net_flags;
   teleop::dds::add_network_flags(app, net_flags, "server");
   app.add_option("--summary-json", summary_json, "write a JSON summary here at exit");
   app.add_option("--realtime", realtime.priority,
-                 "run the physics loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)");
-  app.add_option("--cpu", realtime.cpu, "pin the physics loop to this CPU (-1 = no pinning)");
+                 "run the physics loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)")
+      ->check(teleop::config::integer_in(0.0, 99.0));
+  app.add_option("--cpu", realtime.cpu, "pin the physics loop to this CPU (-1 = no pinning)")
+      ->check(teleop::config::integer_in(-1.0, 4096.0));
   app.add_flag("--quiet", quiet, "print only warnings and errors");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "teleop_server: " << e.what() << "\n\n" << app.help();
-    return 2;
+  if (const int status = teleop::config::parse_command_line(app, "teleop_server", argc, argv);
+      status >= 0) {
+    return status == 2 ? 2 : status;
   }
   try {
     const teleop::sim::WorldModel scene = teleop::sim::load_world_model(scene_file);

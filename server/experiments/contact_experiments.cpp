@@ -172,4 +172,8 @@ TELEOP_REGISTER_COMMAND(experiments, "contact-force-curve",
                         "tip pressed 30 mm into the deformable sphere and withdrawn at several "
                         "speeds: force vs deformation (paper Figs. 16-17) with linear and Hertz "
                         "fits",
-                        run_contact_force_curve);
+                        run_contact_force_curve,
+                        teleop::number_option("--stiffness", 0.0, 1e6, "tip contact [N/m], > 0"),
+                        teleop::number_option("--damping", 0.0, 1e4, "tip contact [N s/m]"),
+                        teleop::number_option("--mu", 0.0, 10.0, "static friction [-]"),
+                        teleop::text_option("--integrator", "integrator of the sphere"));

@@ -38,6 +38,23 @@ double number_flag(const teleop::CommandArgs& args, const std::string& flag, con
   return teleop::config::check_flag(flag, v, lo, hi);
 }
 
+/// A re-simulation steps the world through every gap between commands at the physics rate: a
+/// gap longer than --max-gap (a clock jump, an edited file) is refused, not simulated for hours.
+void check_gaps(const std::vector<teleop::StreamedCommand>& stream, const std::string& file,
+                double max_gap_s) {
+  for (std::size_t i = 1; i < stream.size(); ++i) {
+    const double gap_s = static_cast<double>(stream[i].receive_ns - stream[i - 1].receive_ns) * 1e-9;
+    if (gap_s > max_gap_s) {
+      char what[200];
+      std::snprintf(what, sizeof what,
+                    ": line %zu, column 'receive_ns': %.3f s after the previous command; gaps "
+                    "longer than --max-gap %g s are refused (allowed --max-gap: 0.001 to 3600 s)",
+                    i + 2, gap_s, max_gap_s);
+      throw teleop::config::ConfigError(file + what);
+    }
+  }
+}
+
 std::string hash_text(std::uint64_t h) {
   char buf[20];
   std::snprintf(buf, sizeof buf, "%016" PRIx64, h);
@@ -57,7 +74,9 @@ int run_resim(const teleop::CommandArgs& args) {
   opt.rate_hz = number_flag(args, "--rate", "1000", 10.0, 20000.0);
   opt.tail_s = number_flag(args, "--tail", "0.5", 0.0, 60.0);
   const teleop::sim::WorldModel model = teleop::sim::load_world_model(scene);
+  const double max_gap_s = number_flag(args, "--max-gap", "60", 0.001, 3600.0);
   const auto stream = teleop::read_command_stream(commands);
+  check_gaps(stream, commands, max_gap_s);
 
   teleop::CsvWriter states(
       (args.out_dir / "resim_states.csv").string(),
@@ -80,8 +99,8 @@ int run_resim(const teleop::CommandArgs& args) {
                          std::to_string(static_cast<int>(e.severity)), format_number(e.value),
                          std::string("\"") + e.message + "\""});
       });
-  states.flush();
-  events.flush();
+  states.close();
+  events.close();
   teleop::CsvWriter summary((args.out_dir / "resim_summary.csv").string(), {"key", "value"});
   auto put = [&](const char* k, std::uint64_t v) { summary.row_text({k, std::to_string(v)}); };
   put("steps", r.steps);
@@ -97,7 +116,7 @@ int run_resim(const teleop::CommandArgs& args) {
   put("events", r.events);
   put("watchdog_trips", r.watchdog_trips);
   summary.row_text({"hash", hash_text(r.hash)});
-  summary.flush();
+  summary.close();
   std::printf("resim: %s on %s: %" PRIu64 " steps, %" PRIu64 " commands (%" PRIu64
               " accepted, %" PRIu64 " rejected, %" PRIu64 " undecodable, %" PRIu64
               " refused: not the owner) from %" PRIu64 " owner(s), %" PRIu64 " events, %" PRIu64
@@ -114,4 +133,9 @@ int run_resim(const teleop::CommandArgs& args) {
 TELEOP_REGISTER_COMMAND(experiments, "resim",
                         "re-run a session off-line from its command stream (teleop_play "
                         "--export-commands), deterministic: states, events and a hash",
-                        run_resim);
+                        run_resim, teleop::text_option("--commands", "command stream CSV"),
+                        teleop::text_option("--scene", "scene YAML"),
+                        teleop::number_option("--rate", 10, 20000, "physics rate [Hz]"),
+                        teleop::number_option("--tail", 0, 60, "simulate after the last [s]"),
+                        teleop::number_option("--max-gap", 0.001, 3600,
+                                              "longest gap between commands [s]"));

@@ -5,12 +5,14 @@
 #include <fstream>
 #include <iostream>
 #include <mutex>
+#include <sstream>
 #include <vector>
 
 #include "common/dds/endpoint.hpp"
 #include "common/dds/rate_limited_publisher.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
+#include "common/util/files.hpp"
 #include "common/util/json.hpp"
 #include "common/util/rate_loop.hpp"
 #include "common/util/signals.hpp"
@@ -352,8 +354,12 @@ struct ServerNode::Impl {
 
   void finish(const RateLoop& loop, double elapsed_s) {
     const Summary s = summarize(step_us_all.snapshot());
+    if (!options.quiet) print_summary(loop, elapsed_s, s);
+    // a summary that cannot be written is an error naming the file (exit status 1)
     if (!options.summary_json.empty()) write_summary(loop, elapsed_s, s);
-    if (options.quiet) return;
+  }
+
+  void print_summary(const RateLoop& loop, double elapsed_s, const Summary& s) {
     const Summary c = summarize(collision_us.snapshot()), d = summarize(deformable_us.snapshot()),
                   sl = summarize(slave_us.snapshot()), pu = summarize(publish_us.snapshot());
     std::fprintf(stderr,
@@ -381,7 +387,7 @@ struct ServerNode::Impl {
 
   void write_summary(const RateLoop& loop, double elapsed_s, const Summary& s) {
     const Summary late = summarize(loop.lateness_us().snapshot());
-    std::ofstream f(options.summary_json);
+    std::ostringstream f;
     f << "{\n"
       << "  \"scene\": \"" << model.name << "\",\n"
       << "  \"elapsed_s\": " << json_number(elapsed_s) << ",\n"
@@ -407,6 +413,7 @@ struct ServerNode::Impl {
       << "  \"watchdog_trips\": " << cycle.watchdog_trips() << ",\n"
       << "  \"faults\": " << faults << "\n"
       << "}\n";
+    write_text_file(options.summary_json, f.str());
   }
 };
 

@@ -246,6 +246,6 @@ int bench_growth(const teleop::CommandArgs& a) {
 TELEOP_REGISTER_COMMAND(bench, "growth",
                         "step time against nodes (levels 2-6) and collision query against "
                         "triangles, with log-log fitted exponents",
-                        bench_growth);
+                        bench_growth, teleop::integer_option("--rounds", 1, 100, "rounds"));
 
 }  // namespace

@@ -418,10 +418,22 @@ int observers_bench(const CommandArgs& args) {
 TELEOP_REGISTER_COMMAND(bench, "observers",
                         "server + master with 0-32 observer processes: round trip, overruns, "
                         "link losses, watchdog trips",
-                        observers_bench);
+                        observers_bench, text_option("--counts", "observer counts N,N,..."),
+                        text_option("--full-rate-counts", "counts with --full-rate observers"),
+                        text_option("--nice0-counts", "counts with observers at nice 0"),
+                        text_option("--realtime", "priorities P,P,... (live)"),
+                        integer_option("--rounds", 1, 100, "rounds"),
+                        number_option("--duration", 1, 600, "session length [s]"),
+                        integer_option("--domain", 0, 232, "DDS domain id"),
+                        text_option("--bin-dir", "build folder of the executables"),
+                        integer_option("--live", 0, 1, "1: the live session benchmark"));
 TELEOP_REGISTER_COMMAND(bench, "observer-probe",
                         "(internal) a headless observer reading what teleop_viewer reads",
-                        observer_probe);
+                        observer_probe, text_option("--kind", "view | monitor"),
+                        integer_option("--full-rate", 0, 1, "1: the 1 kHz topics"),
+                        integer_option("--domain", 0, 232, "DDS domain id"),
+                        number_option("--duration", 0, 1e6, "stop after [s], 0 = never"),
+                        number_option("--nice", 0, 19, "nice value"));
 
 }  // namespace
 }  // namespace teleop::bench

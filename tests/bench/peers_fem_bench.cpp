@@ -233,4 +233,4 @@ int run_peers_fem(const teleop::CommandArgs& args) {
 TELEOP_REGISTER_COMMAND(bench, "peers-fem",
                         "our volumetric FEM ball against Bullet's deformable FEM on the same "
                         "tetrahedral meshes: step cost and Lamb frequency error",
-                        run_peers_fem);
+                        run_peers_fem, teleop::integer_option("--rounds", 1, 100, "rounds"));

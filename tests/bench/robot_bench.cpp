@@ -139,6 +139,7 @@ int run_robot_bench(const teleop::CommandArgs& args) {
 
 TELEOP_REGISTER_COMMAND(bench, "robot",
                         "slave robot step time: ODE dWorldStep / dWorldQuickStep, kinematics",
-                        run_robot_bench);
+                        run_robot_bench,
+                        teleop::integer_option("--steps", 100, 1e7, "steps per measurement"));
 
 }  // namespace

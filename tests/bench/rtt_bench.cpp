@@ -133,11 +133,14 @@ int rtt(const CommandArgs& args) {
     const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
     if (n <= 0) throw std::runtime_error("cannot find /proc/self/exe");
     self[n] = '\0';
-    teleop::test::Process echo(
-        self,
-        {"rtt-echo", "--out", args.out_dir.string(), "--domain", std::to_string(domain),
-         "--profile", profile, "--security-dir", security_dir},
-        "rtt_echo");
+    std::vector<std::string> echo_args = {"rtt-echo", "--out",     args.out_dir.string(),
+                                          "--domain", std::to_string(domain), "--profile",
+                                          profile};
+    if (!security_dir.empty()) {
+      echo_args.push_back("--security-dir");
+      echo_args.push_back(security_dir);
+    }
+    teleop::test::Process echo(self, echo_args, "rtt_echo");
     dds::Participant p(bench_options(profile, domain, "rtt-ping", security_dir));
     dds::Writer<MeshFramePubSubType> ping(p, kPing, dds::TopicQos::kStream);
     std::mutex m;
@@ -183,8 +186,15 @@ int rtt(const CommandArgs& args) {
   return 0;
 }
 
-TELEOP_REGISTER_COMMAND(bench, "rtt", "DDS round trip, 200 B and 60 KB, paced and max rate", rtt);
-TELEOP_REGISTER_COMMAND(bench, "rtt-echo", "(internal) echo side of the rtt benchmark", rtt_echo);
+TELEOP_REGISTER_COMMAND(bench, "rtt", "DDS round trip, 200 B and 60 KB, paced and max rate", rtt,
+                        integer_option("--samples", 1, 1e7, "samples per case"),
+                        integer_option("--domain", 0, 232, "DDS domain id"),
+                        text_option("--profiles", "profiles P,P,..."),
+                        text_option("--security-dir", "DDS Security files"));
+TELEOP_REGISTER_COMMAND(bench, "rtt-echo", "(internal) echo side of the rtt benchmark", rtt_echo,
+                        integer_option("--domain", 0, 232, "DDS domain id"),
+                        text_option("--profile", "participant profile"),
+                        text_option("--security-dir", "DDS Security files"));
 
 }  // namespace
 }  // namespace teleop::bench

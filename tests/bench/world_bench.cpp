@@ -86,7 +86,8 @@ int world(const CommandArgs& args) {
 }
 
 TELEOP_REGISTER_COMMAND(bench, "world", "physics step of the assembled default scene, by phase",
-                        world);
+                        world, text_option("--scene", "scene YAML"),
+                        number_option("--dt", 1e-5, 0.1, "time step [s]"));
 
 }  // namespace
 }  // namespace teleop::bench

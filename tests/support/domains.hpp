@@ -32,6 +32,7 @@ inline constexpr int kPlayback = 74;           // record_play_test: teleop_play 
 inline constexpr int kMonitorTui = 75;         // monitor_tui_test: teleop_monitor under tmux
 inline constexpr int kMonitorJson = 76;        // monitor_tui_test: teleop_monitor --json
 inline constexpr int kMonitorScene = 77;       // monitor_tui_test: the scene line of a server
+inline constexpr int kHostileInputs = 78;  // tests/tools/hostile_inputs.sh (ctest hostile_inputs)
 inline constexpr int kSecureOutsiders = 105;   // security_test: no credentials / foreign CA
 inline constexpr int kSecureObserver = 106;    // security_test: observer reads, cannot command
 inline constexpr int kSecureSession = 107;     // security_test: server + master, secure

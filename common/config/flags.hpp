@@ -1,0 +1,79 @@
+#pragma once
+// The command-line rules every executable shares (header-only: the apps link CLI11).
+//
+//   - a number flag is checked on its text, before conversion: the whole text must be a finite
+//     number within the flag's range (number_in / integer_in): "" (which CLI11 would turn into
+//     the default), "3x", "nan", "-0" or "-1" where the range starts at 0 are refused;
+//   - harden_flags(app), called once every option is declared: every option that takes a value
+//     refuses an empty value (`--out ''`, `--domain=`), and every single-valued option refuses
+//     to be given twice (`--out a --out b`); CLI11 itself refuses unknown arguments;
+//   - parse_command_line(app, exe, argc, argv) parses, prints a refusal as
+//     "<exe>: <flag>: '<value>' ..." with the usage, and gives the exit status: 2 for a mistake,
+//     0 for --help, -1 to go on.
+// Checks that need another flag's value (a range that depends on --rate) stay after the parse,
+// with config::check_flag / parse_number, which refuse the same texts.
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+#include <string>
+
+#include "common/config/config.hpp"
+
+namespace teleop::config {
+
+/// A CLI11 check: the value is a finite number within [lo, hi] (see number_problem()).
+inline CLI::Validator number_in(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& v) { return number_problem(v, lo, hi, false); },
+      "NUMBER in " + range_text(lo, hi));
+}
+
+/// A CLI11 check: the value is a whole number within [lo, hi].
+inline CLI::Validator integer_in(double lo, double hi) {
+  return CLI::Validator([lo, hi](std::string& v) { return number_problem(v, lo, hi, true); },
+                        "INTEGER in " + range_text(lo, hi));
+}
+
+/// A CLI11 check: the value is not empty.
+inline CLI::Validator non_empty() {
+  return CLI::Validator(
+      [](std::string& v) { return v.empty() ? std::string("'' is empty; a value is needed") : ""; },
+      "");
+}
+
+/// Applies the shared rules to every option of `app` already declared (see the file comment).
+/// Options bound to a list (`--exclude`, `--peer`) stay repeatable.
+inline void harden_flags(CLI::App& app) {
+  for (CLI::Option* opt : app.get_options()) {
+    if (opt->get_items_expected_max() == 0) continue;  // a switch (--quiet) or --help
+    opt->check(non_empty());
+    if (opt->get_items_expected_max() == 1 &&
+        opt->get_multi_option_policy() != CLI::MultiOptionPolicy::TakeAll) {
+      opt->multi_option_policy(CLI::MultiOptionPolicy::Throw);
+    }
+  }
+}
+
+/// Parses the command line with the shared rules. Returns -1 to go on, else the exit status:
+/// 0 after --help, 2 after a mistake (printed to stderr with the usage).
+inline int parse_command_line(CLI::App& app, const std::string& exe, int argc, char** argv) {
+  harden_flags(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // CLI11 says "--out: At Most 1 required but received 2" for a repeated flag
+    std::string what = e.what();
+    const std::string repeated = ": At Most 1 required but received ";
+    if (const auto at = what.find(repeated); at != std::string::npos) {
+      what = what.substr(0, at) + " is given " + what.substr(at + repeated.size()) +
+             " times; it takes one value";
+    }
+    std::cerr << exe << ": " << what << "\n\n" << app.help();
+    return 2;
+  }
+  return -1;
+}
+
+}  // namespace teleop::config

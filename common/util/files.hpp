@@ -1,0 +1,24 @@
+#pragma once
+// Output files that never fail silently: every write error names the file and the reason.
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace teleop {
+
+/// Writes `text` to `path` (created or replaced).
+/// @throws std::runtime_error "<path>: cannot write: <reason>" when the file cannot be opened,
+/// written (a full disk, /dev/full) or closed.
+void write_text_file(const std::string& path, const std::string& text);
+
+/// Flushes `out` and throws std::runtime_error "<path>: write error: <reason>" unless every
+/// write to it succeeded.
+void check_written(std::ostream& out, const std::string& path);
+
+/// Files whose buffered writes failed where nothing could throw (a CsvWriter destroyed without
+/// close()); the tools' shared main reports them and exits non-zero.
+std::vector<std::string> failed_writes();
+/// Adds `message` (naming the file) to failed_writes().
+void note_failed_write(const std::string& message);
+
+}  // namespace teleop

@@ -1,0 +1,208 @@
+#!/usr/bin/env bash
+# Hostile inputs (issue 29, items 1, 2 and 4): every program's file inputs fed a FIFO, /dev/zero,
+# huge gaps and sizes, its outputs /dev/full or a missing folder, its flags empty, negative-zero,
+# partial or repeated values, each under `timeout` and a memory limit. Every case must end (no
+# hang), exit with the expected status and print a message naming the flag or the file. Last, a
+# master stopped for 1 s (SIGSTOP) must report the stall of its loop (item 6).
+#
+#   hostile_inputs.sh BUILD_DIR DOMAIN
+#
+# DOMAIN: the test's DDS domain (tests/support/domains.hpp, kHostileInputs); only the few
+# cases that need a running server use it, on the loopback profile.
+set -u
+build="$1"
+domain="$2"
+server="$build/server/teleop_server"
+master="$build/client/teleop_master"
+record="$build/client/teleop_record"
+play="$build/client/teleop_play"
+monitor="$build/client/teleop_monitor"
+experiment="$build/server/teleop_experiment"
+export TELEOP_PROFILE=loopback
+unset TELEOP_DOMAIN
+tmp="$(mktemp -d)"
+pids=()
+cleanup() {
+  for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done
+  rm -rf "$tmp"
+}
+trap cleanup EXIT
+failures=0
+cases=0
+
+# check WANT_STATUS PATTERN TIMEOUT_S -- command...: runs the command under a timeout and a 3 GB
+# address-space limit; WANT_STATUS "nz" means any non-zero status other than a timeout.
+check() {
+  local want="$1" pattern="$2" limit="$3"
+  shift 4
+  cases=$((cases + 1))
+  local out status
+  out="$( (ulimit -v 3000000; timeout -k 5 "$limit" "$@") 2>&1 < /dev/null)"
+  status=$?
+  local ok=1
+  if [ "$want" = "nz" ]; then
+    { [ "$status" -ne 0 ] && [ "$status" -ne 124 ] && [ "$status" -ne 137 ]; } || ok=0
+  else
+    [ "$status" -eq "$want" ] || ok=0
+  fi
+  if [ "$ok" = 1 ] && ! grep -qF -- "$pattern" <<<"$out"; then ok=0; fi
+  if [ "$ok" = 1 ]; then
+    echo "ok      [$status] $*"
+  else
+    failures=$((failures + 1))
+    echo "FAILED  [$status, wanted $want and '$pattern'] $*"
+    echo "$out" | tail -5 | sed 's/^/        /'
+  fi
+}
+
+mkfifo "$tmp/fifo"
+out="$tmp/out"
+mkdir -p "$out"
+
+# --- recordings and command streams made by hand (python3's sqlite3) --------------------------
+/usr/bin/python3 - "$tmp" <<'EOF'
+import sqlite3, sys
+tmp = sys.argv[1]
+def make(name, rows):
+    db = sqlite3.connect(f"{tmp}/{name}.db")
+    db.executescript("""
+      CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);
+      CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT UNIQUE NOT NULL,
+                          type_name TEXT NOT NULL, qos TEXT NOT NULL);
+      CREATE TABLE samples(topic_id INTEGER NOT NULL, receive_ns INTEGER NOT NULL,
+                           source_ns INTEGER NOT NULL, writer_guid BLOB, writer_seq INTEGER,
+                           codec INTEGER NOT NULL, raw_size INTEGER NOT NULL, data BLOB NOT NULL);
+      INSERT INTO meta VALUES('format', 'teleop-recording-1');
+      INSERT INTO topics VALUES(1, 'teleop/master_command', 'teleop::MasterCommand', 'stream');
+    """)
+    for t, raw_size, data in rows:
+        db.execute("INSERT INTO samples VALUES(1, ?, ?, ?, 1, 0, ?, ?)",
+                   (t, t, b"\x01" * 16, raw_size, data))
+    db.commit()
+    db.close()
+payload = b"\x00\x01\x00\x00" + b"\x00" * 60
+t0 = 1_700_000_000_000_000_000
+make("good", [(t0 + i * 1_000_000, len(payload), payload) for i in range(20000)])
+make("gap", [(t0, len(payload), payload), (t0 + 10**18, len(payload), payload)])
+make("negative", [(-5, len(payload), payload), (t0, len(payload), payload)])
+make("raw_huge", [(t0, 2**40, payload)])
+make("raw_negative", [(t0, -1, payload)])
+header = "receive_ns,source_ns,writer,payload\n"
+row = lambda t: f"{t},{t},{'01' * 16},{payload.hex()}\n"
+open(f"{tmp}/gap.csv", "w").write(header + row(t0) + row(t0 + 1000 * 10**9))
+open(f"{tmp}/long_line.csv", "w").write(header + "1," * 200000 + "\n")
+EOF
+
+echo "--- flags: empty, negative zero, negative, partial, wrong vectors, unknown, repeated"
+check 2 "--duration" 20 -- "$server" --duration ""
+check 2 "--duration: '-0'" 20 -- "$server" --duration -0
+check 2 "--domain" 20 -- "$server" --domain ""
+check 2 "--rate: '3x'" 20 -- "$server" --rate 3x
+check 2 "--bogus" 20 -- "$server" --bogus
+check 2 "--duration is given 2 times" 20 -- "$server" --duration 1 --duration 2
+check 2 "--samples: '-1'" 20 -- "$master" --samples -1
+check 2 "--duration: '-0'" 20 -- "$master" --duration -0
+check 2 "--contact-point '1,2,3,4' has 4 component(s)" 20 -- "$master" --contact-point 1,2,3,4
+check 2 "--contact-point '1,2' has 2 component(s)" 20 -- "$master" --contact-point 1,2
+check 2 "component 1 '1000' is out of the allowed range [-100, 100]" 20 -- \
+  "$master" --contact-point 1000,0,0
+check 2 "--kps: 'nan'" 20 -- "$master" --kps nan
+check 2 "--delay" 20 -- "$master" --delay -0
+check 2 "--log" 20 -- "$master" --log ""
+check 2 "--out" 20 -- "$record" --out ""
+check 2 "--out is given 2 times" 20 -- "$record" --out "$out/a.db" --out "$out/b.db"
+check 2 "--queue-mb: ''" 20 -- "$record" --out "$out/a.db" --queue-mb ""
+check 2 "--speed: ''" 20 -- "$play" "$tmp/good.db" --speed ""
+check 2 "--bogus" 20 -- "$play" "$tmp/good.db" --bogus
+check 2 "--period: 'nan'" 20 -- "$monitor" --period nan
+check 2 "--bogus" 20 -- "$monitor" --bogus
+check 2 "--out is given more than once" 20 -- "$experiment" sphere-zero-g --out "$out/e" --out "$out/f"
+check 2 "'--bogus' is not an option of sphere-zero-g" 20 -- \
+  "$experiment" sphere-zero-g --out "$out/e" --bogus 1
+check 2 "--level '-0'" 20 -- "$experiment" sphere-zero-g --out "$out/e" --level -0
+check 2 "--dt '' is empty" 20 -- "$experiment" sphere-zero-g --out "$out/e" --dt ""
+check 2 "--rate '20000x'" 20 -- "$experiment" resim --out "$out/e" --rate 20000x
+check 2 "'stray' is not an option of sphere-zero-g" 20 -- "$experiment" sphere-zero-g --out "$out/e" stray
+
+echo "--- file inputs: FIFOs, devices, huge sizes and gaps"
+check 2 "FIFO" 20 -- "$server" --scene "$tmp/fifo"
+check 2 "character device" 20 -- "$server" --scene /dev/zero
+check 2 "FIFO" 20 -- "$play" "$tmp/fifo"
+check 2 "character device" 20 -- "$play" /dev/zero
+check 2 "receive times must be >= 0" 30 -- "$play" "$tmp/gap.db" --wait 0 --linger 0
+check 2 "receive times must be >= 0" 30 -- "$play" "$tmp/negative.db" --wait 0 --linger 0
+check 2 "raw_size': 1099511627776" 30 -- "$play" "$tmp/raw_huge.db" --export-commands "$out/x.csv"
+check 2 "raw_size': -1" 30 -- "$play" "$tmp/raw_negative.db" --export-commands "$out/x.csv"
+check 2 "FIFO" 20 -- "$experiment" resim --out "$out/r" --commands "$tmp/fifo"
+check 2 "character device" 20 -- "$experiment" resim --out "$out/r" --commands /dev/zero
+check 2 "gaps longer than --max-gap 60 s are refused" 60 -- \
+  "$experiment" resim --out "$out/r" --commands "$tmp/gap.csv"
+check 2 "longer than 65536 bytes" 30 -- "$experiment" resim --out "$out/r" --commands "$tmp/long_line.csv"
+check 2 "FIFO" 20 -- "$experiment" resim --out "$out/r" --commands "$tmp/gap.csv" --scene "$tmp/fifo"
+
+echo "--- outputs: /dev/full and a missing folder"
+check nz "/dev/full" 60 -- "$play" "$tmp/good.db" --export-commands /dev/full
+check nz "$tmp/missing/x.csv" 60 -- "$play" "$tmp/good.db" --export-commands "$tmp/missing/x.csv"
+check 2 "not a regular file" 20 -- "$record" --out /dev/full --duration 1
+check nz "/dev/full" 60 -- "$server" --domain "$domain" --duration 1 --summary-json /dev/full --quiet
+check nz "$tmp/missing/s.json" 60 -- \
+  "$server" --domain "$domain" --duration 1 --summary-json "$tmp/missing/s.json" --quiet
+
+# the cases below need a running server (loopback, this test's domain)
+"$server" --domain "$domain" --duration 90 --quiet >"$tmp/server.log" 2>&1 &
+pids+=($!)
+sleep 1
+check nz "/dev/full" 60 -- "$master" --domain "$domain" --duration 1 --log /dev/full --quiet
+check nz "$tmp/missing/m.json" 60 -- \
+  "$master" --domain "$domain" --duration 1 --summary-json "$tmp/missing/m.json" --quiet
+
+echo "--- a full disk under teleop_record (a file size limit, SIGXFSZ ignored)"
+"$master" --domain "$domain" --duration 8 --quiet >"$tmp/master_rec.log" 2>&1 &
+pids+=($!)
+cases=$((cases + 1))
+rec_out="$( (trap '' XFSZ; ulimit -f 3000; timeout -k 5 30 "$record" --domain "$domain" \
+  --out "$tmp/full.db" --duration 10) 2>&1)"
+rec_status=$?
+if [ "$rec_status" -eq 1 ] && grep -qF "written before the failure" <<<"$rec_out"; then
+  echo "ok      [1] teleop_record on a full disk"
+else
+  failures=$((failures + 1))
+  echo "FAILED  [$rec_status, wanted 1 and 'written before the failure'] teleop_record on a full disk"
+  echo "$rec_out" | tail -5 | sed 's/^/        /'
+fi
+wait "${pids[-1]}" 2>/dev/null
+
+echo "--- a session whose commands the server mostly rejects is not 'stable'"
+cases=$((cases + 1))
+timeout -k 5 60 "$master" --domain "$domain" --duration 1 --contact-point 99,99,99 \
+  --summary-json "$tmp/rejected.json" >"$tmp/rejected.log" 2>&1
+if grep -qF '"verdict": "rejected"' "$tmp/rejected.json" 2>/dev/null &&
+  grep -qF "verdict         rejected - the server rejected" "$tmp/rejected.log" &&
+  ! grep -qE '(^| )-?nan( |$)' "$tmp/rejected.log"; then
+  echo "ok      verdict rejected, no 'nan' in the text summary"
+else
+  failures=$((failures + 1))
+  echo "FAILED  verdict of a mostly rejected session"
+  grep -E "verdict|nan" "$tmp/rejected.log" "$tmp/rejected.json" | head -5 | sed 's/^/        /'
+fi
+
+echo "--- a stall of the master's own loop (SIGSTOP for 1 s) is reported"
+cases=$((cases + 1))
+"$master" --domain "$domain" --duration 5 --summary-json "$tmp/stall.json" >"$tmp/stall.log" 2>&1 &
+stall_pid=$!
+sleep 3
+kill -STOP "$stall_pid"
+sleep 1
+kill -CONT "$stall_pid"
+wait "$stall_pid"
+if grep -qE '"stalls": \{"count": [1-9]' "$tmp/stall.json" 2>/dev/null &&
+  grep -qF "haptic loop stalled for" "$tmp/stall.log"; then
+  echo "ok      stall counted: $(grep -o '"stalls": {[^}]*}' "$tmp/stall.json")"
+else
+  failures=$((failures + 1))
+  echo "FAILED  a 1 s SIGSTOP of the master is not reported"
+  grep -E "stall|safety" "$tmp/stall.log" "$tmp/stall.json" | head -5 | sed 's/^/        /'
+fi
+
+echo "$cases cases, $failures failed"
+[ "$failures" -eq 0 ]

@@ -1,0 +1,136 @@
+// The shared command-line rules (common/config/flags.hpp, config.hpp: parse_number & co).
+#include "common/config/flags.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace {
+
+using teleop::config::ConfigError;
+using teleop::config::number_problem;
+
+TEST(NumberProblem, AcceptsWholeFiniteNumbersInRange) {
+  EXPECT_EQ(number_problem("0", 0.0, 1.0, false), "");
+  EXPECT_EQ(number_problem("0.5", 0.0, 1.0, false), "");
+  EXPECT_EQ(number_problem("1e-3", 0.0, 1.0, false), "");
+  EXPECT_EQ(number_problem("-1", -1.0, 1.0, false), "");
+  EXPECT_EQ(number_problem("-0", -1.0, 1.0, false), "");  // a range below 0: -0 is 0
+  EXPECT_EQ(number_problem("232", 0.0, 232.0, true), "");
+}
+
+TEST(NumberProblem, RefusesEmptyPartialNegativeZeroAndNonFinite) {
+  for (const char* bad : {"", " 1", "1 ", "3x", "0x10", "nan", "inf", "-inf", "1e999", "-0",
+                          "-0.0", "-1", "2", "--1", "1,2"}) {
+    const std::string p = number_problem(bad, 0.0, 1.0, false);
+    EXPECT_FALSE(p.empty()) << "'" << bad << "' accepted";
+    EXPECT_NE(p.find(std::string("'") + bad + "'"), std::string::npos) << p;  // names the value
+    EXPECT_NE(p.find("[0, 1]"), std::string::npos) << p;                      // and the range
+  }
+}
+
+TEST(NumberProblem, IntegersRefuseFractions) {
+  EXPECT_FALSE(number_problem("1.5", 0.0, 10.0, true).empty());
+  EXPECT_FALSE(number_problem("1e3", 0.0, 1e4, true).empty());
+  EXPECT_FALSE(number_problem("1.0", 0.0, 10.0, true).empty());
+  EXPECT_EQ(teleop::config::parse_integer("--n", "7", 0, 10), 7);
+}
+
+TEST(CheckFlag, RefusesNegativeZeroWhereTheRangeStartsAtZero) {
+  EXPECT_THROW(teleop::config::check_flag("--duration", -0.0, 0.0, 10.0), ConfigError);
+  EXPECT_EQ(teleop::config::check_flag("--cpu", -0.0, -1.0, 10.0), 0.0);
+  EXPECT_THROW(teleop::config::check_flag("--x", std::nan(""), 0.0, 10.0), ConfigError);
+}
+
+TEST(ParseNumbers, NeedsExactlyTheCountInRange) {
+  const std::vector<double> lo(3, -100.0), hi(3, 100.0);
+  const auto v = teleop::config::parse_numbers("--contact-point", "1,-2,3.5", 3, lo, hi);
+  ASSERT_EQ(v.size(), 3u);
+  EXPECT_DOUBLE_EQ(v[1], -2.0);
+  for (const char* bad : {"1,2,3,4", "1,2", "", "1,,3", "1,2,3,", "1,2,x", "1000,0,0", "1;2;3"}) {
+    try {
+      teleop::config::parse_numbers("--contact-point", bad, 3, lo, hi);
+      ADD_FAILURE() << "'" << bad << "' accepted";
+    } catch (const ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("--contact-point"), std::string::npos) << what;
+      EXPECT_NE(what.find("[-100, 100]"), std::string::npos) << what;
+    }
+  }
+}
+
+/// Runs a CLI11 app with the shared rules on `args`; returns the exit status (-1: go on).
+int parse(CLI::App& app, std::vector<std::string> args) {
+  args.insert(args.begin(), "prog");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  return teleop::config::parse_command_line(app, "prog", static_cast<int>(argv.size()),
+                                            argv.data());
+}
+
+struct App {
+  CLI::App app{"test"};
+  double duration = 0.0;
+  std::optional<std::string> out;
+  std::vector<std::string> exclude;
+  bool quiet = false;
+  App() {
+    app.add_option("--duration", duration)->check(teleop::config::number_in(0.0, 10.0));
+    app.add_option("--out", out);
+    app.add_option("--exclude", exclude);
+    app.add_flag("--quiet", quiet);
+  }
+};
+
+/// A fresh App parsed with `args`.
+int run(const std::vector<std::string>& args) {
+  App a;
+  return parse(a.app, args);
+}
+
+TEST(HardenFlags, RefusesEmptyRepeatedUnknownAndOutOfRange) {
+  EXPECT_EQ(run({"--duration", "1", "--out", "x", "--exclude", "a", "--exclude",
+                              "b", "--quiet", "--quiet"}),
+            -1);
+  EXPECT_EQ(run({"--duration", ""}), 2);
+  EXPECT_EQ(run({"--duration=-0"}), 2);
+  EXPECT_EQ(run({"--duration", "11"}), 2);
+  EXPECT_EQ(run({"--out", ""}), 2);
+  EXPECT_EQ(run({"--out="}), 2);
+  EXPECT_EQ(run({"--out", "a", "--out", "b"}), 2);
+  EXPECT_EQ(run({"--exclude", ""}), 2);
+  EXPECT_EQ(run({"--bogus"}), 2);
+  EXPECT_EQ(run({"stray"}), 2);
+}
+
+TEST(RequireRegularFile, RefusesFifosDevicesAndDirectories) {
+  char dir[] = "/tmp/flags_test_XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::string fifo = std::string(dir) + "/fifo", file = std::string(dir) + "/f.yaml";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  std::FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fclose(f);
+  EXPECT_NO_THROW(teleop::config::require_regular_file(file, "scene"));
+  EXPECT_NO_THROW(teleop::config::require_regular_file("/dev/null", "scene"));
+  for (const std::string& bad : {fifo, std::string("/dev/zero"), std::string(dir),
+                                 std::string(dir) + "/missing", std::string()}) {
+    try {
+      teleop::config::require_regular_file(bad, "scene");
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
+  std::remove(fifo.c_str());
+  std::remove(file.c_str());
+  rmdir(dir);
+}
+
+}  // namespace
