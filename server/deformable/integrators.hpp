@@ -80,6 +80,22 @@ TELEOP_ALWAYS_INLINE void symplectic_node(const DeformableModel& m, int i, doubl
   sums.add(mi, px, py, pz, vx, vy, vz);
 }
 
+/// Symplectic Euler of the centre node (velocity cv [m/s] at the step's start) under gravity,
+/// the drag relative to the body's mean velocity vm [m/s] and the radial springs' reaction fc
+/// [N] (both fused mass-spring kernels).
+TELEOP_ALWAYS_INLINE void symplectic_centre(const DeformableModel& m, DeformableState& s, double h,
+                                            const double cv[3], const double vm[3],
+                                            const double fc[3]) {
+  const DeformableParams& p = m.params;
+  const double alpha = p.mass_damping_per_s;
+  const double gx = p.gravity_mps2.x(), gy = p.gravity_mps2.y(), gz = p.gravity_mps2.z();
+  const double hm = h / m.centre_mass_kg, mc = m.centre_mass_kg;
+  s.centre_v.x() += hm * (mc * (gx - alpha * (cv[0] - vm[0])) + fc[0]);
+  s.centre_v.y() += hm * (mc * (gy - alpha * (cv[1] - vm[1])) + fc[1]);
+  s.centre_v.z() += hm * (mc * (gz - alpha * (cv[2] - vm[2])) + fc[2]);
+  s.centre_x += h * s.centre_v;
+}
+
 /// The end of a step of the first n nodes (masses `mass` [kg]): held nodes onto their targets,
 /// then the post-step sums into `sums`.
 TELEOP_ALWAYS_INLINE void hold_and_sum(const Eigen::VectorXd& mass, int n, DeformableState& s,

@@ -192,13 +192,7 @@ void step_mass_spring_symplectic(const DeformableModel& m, DeformableState& s, d
   }
   s.contact_count = nc;
   s.plane_force_n = plane_force;
-  if (centre) {
-    const double hm = h / m.centre_mass_kg, mc = m.centre_mass_kg;
-    s.centre_v.x() += hm * (mc * (gx - alpha * (cv[0] - vmx)) + fc[0]);
-    s.centre_v.y() += hm * (mc * (gy - alpha * (cv[1] - vmy)) + fc[1]);
-    s.centre_v.z() += hm * (mc * (gz - alpha * (cv[2] - vmz)) + fc[2]);
-    s.centre_x += h * s.centre_v;
-  }
+  if (centre) symplectic_centre(m, s, h, cv, vm, fc);
   node_sums.store(sums);
 }
 

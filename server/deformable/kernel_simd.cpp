@@ -632,14 +632,9 @@ void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double 
 
   // the centre node: it moves on the radial springs' reaction only (no node reads it after the
   // force pass, so it may move before the nodes do)
+  const double vmean[3] = {vmx, vmy, vmz};
   const auto move_centre = [&](const Internal& internal) {
-    if (!m.has_centre) return;
-    const double gx = p.gravity_mps2.x(), gy = p.gravity_mps2.y(), gz = p.gravity_mps2.z();
-    const double hm = h / m.centre_mass_kg, mc = m.centre_mass_kg;
-    s.centre_v.x() += hm * (mc * (gx - alpha * (cv[0] - vmx)) + internal.centre[0]);
-    s.centre_v.y() += hm * (mc * (gy - alpha * (cv[1] - vmy)) + internal.centre[1]);
-    s.centre_v.z() += hm * (mc * (gz - alpha * (cv[2] - vmz)) + internal.centre[2]);
-    s.centre_x += h * s.centre_v;
+    if (m.has_centre) symplectic_centre(m, s, h, cv, vmean, internal.centre);
   };
 
 #ifdef TELEOP_HAVE_AVX2_PATH
