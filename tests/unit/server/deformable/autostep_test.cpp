@@ -486,6 +486,18 @@ TEST(AutoStep, ParamsAreValidated) {
 // ---------------------------------------------------------------------------------------------
 // kernel simd
 
+// The loads of the kernels' obstacle course at step k: a point load on node 5 for steps
+// 200-499, node 17 held 1 cm above where it is from step 600, released at step 800.
+void course_loads(DeformableState& s, int k) {
+  s.f_ext.setZero();
+  if (k >= 200 && k < 500) s.f_ext.col(5) = Eigen::Vector3d(0.0, 2.0, -1.0);
+  if (k == 600) {
+    s.pinned[17] = 1;
+    s.pin_target.col(17) = s.x.col(17) + Eigen::Vector3d(0.0, 0.0, 0.01);
+  }
+  if (k == 800) s.pinned[17] = 0;
+}
+
 // The simd kernel does what the general passes do, up to single-precision forces, through
 // gravity, drag, a point load, a held node, the floor and a wall with friction.
 TEST(SimdKernel, MatchesTheGeneralPasses) {
@@ -498,15 +510,7 @@ TEST(SimdKernel, MatchesTheGeneralPasses) {
   DeformableState general = simd;
   double worst_x = 0.0, worst_f = 0.0, worst_centre = 0.0;
   for (int k = 0; k < 1000; ++k) {
-    for (DeformableState* s : {&simd, &general}) {
-      s->f_ext.setZero();
-      if (k >= 200 && k < 500) s->f_ext.col(5) = Eigen::Vector3d(0.0, 2.0, -1.0);
-      if (k == 600) {
-        s->pinned[17] = 1;
-        s->pin_target.col(17) = s->x.col(17) + Eigen::Vector3d(0.0, 0.0, 0.01);
-      }
-      if (k == 800) s->pinned[17] = 0;
-    }
+    for (DeformableState* s : {&simd, &general}) course_loads(*s, k);
     const StepStatus a = step(m, simd, 1e-3, nullptr);
     const StepStatus b = detail::step_general(m, general, 1e-3, nullptr);
     ASSERT_EQ(a, b) << "step " << k;
@@ -548,15 +552,7 @@ TEST(SimdKernel, MatchesTheScalarKernel) {
     double worst_x = 0.0, worst_v = 0.0, worst_f = 0.0, worst_plane = 0.0;
     int contact_steps = 0;
     for (int k = 0; k < 1000; ++k) {
-      for (DeformableState* s : {&scalar, &simd}) {
-        s->f_ext.setZero();
-        if (k >= 200 && k < 500) s->f_ext.col(5) = Eigen::Vector3d(0.0, 2.0, -1.0);
-        if (k == 600) {
-          s->pinned[17] = 1;
-          s->pin_target.col(17) = s->x.col(17) + Eigen::Vector3d(0.0, 0.0, 0.01);
-        }
-        if (k == 800) s->pinned[17] = 0;
-      }
+      for (DeformableState* s : {&scalar, &simd}) course_loads(*s, k);
       const StepStatus a = step(scalar_model, scalar, 1e-3, nullptr);
       const StepStatus b = step(simd_model, simd, 1e-3, nullptr);
       ASSERT_EQ(a, b) << "level " << level << " step " << k;
