@@ -5,14 +5,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "server/deformable/conjugate_gradient.hpp"
+#include "server/deformable/hot.hpp"
+#include "server/deformable/integrators.hpp"
 #include "server/deformable/rotation.hpp"
-
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
-    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
-#define TELEOP_FEM_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define TELEOP_FEM_CLONES
-#endif
 
 namespace teleop::sim::deformable::detail {
 
@@ -28,13 +24,9 @@ using Vec3 = Eigen::Vector3d;
 constexpr int kRotationIterations = 8;
 constexpr double kRotationTolerance = 1e-7;
 
-// Always inlined: each instruction-set clone of the hot loops keeps its own copy (with AVX2
-// for the four-lane arithmetic).
-#define TELEOP_FEM_INLINE inline __attribute__((always_inline))
-
 // c = a b for column-major 3x3 matrices (of one element, or of four: T = V4, one per lane).
 template <class T>
-TELEOP_FEM_INLINE void mul33(const T* a, const T* b, T* c) {
+TELEOP_ALWAYS_INLINE void mul33(const T* a, const T* b, T* c) {
   for (int j = 0; j < 3; ++j) {
     for (int i = 0; i < 3; ++i) {
       c[3 * j + i] = a[i] * b[3 * j] + a[3 + i] * b[3 * j + 1] + a[6 + i] * b[3 * j + 2];
@@ -44,7 +36,7 @@ TELEOP_FEM_INLINE void mul33(const T* a, const T* b, T* c) {
 
 // c = a^T b (column-major).
 template <class T>
-TELEOP_FEM_INLINE void mul33_tn(const T* a, const T* b, T* c) {
+TELEOP_ALWAYS_INLINE void mul33_tn(const T* a, const T* b, T* c) {
   for (int j = 0; j < 3; ++j) {
     for (int i = 0; i < 3; ++i) {
       c[3 * j + i] =
@@ -54,7 +46,7 @@ TELEOP_FEM_INLINE void mul33_tn(const T* a, const T* b, T* c) {
 }
 
 // The edge matrix [q1 - q0, q2 - q0, q3 - q0] (column-major) of the nodes `ix` of field q (3 x N).
-TELEOP_FEM_INLINE void edge_matrix(const double* q, const int* ix, double* d) {
+TELEOP_ALWAYS_INLINE void edge_matrix(const double* q, const int* ix, double* d) {
   const double* q0 = q + 3 * ix[0];
   for (int c = 0; c < 3; ++c) {
     const double* qc = q + 3 * ix[c + 1];
@@ -65,7 +57,7 @@ TELEOP_FEM_INLINE void edge_matrix(const double* q, const int* ix, double* d) {
 }
 
 // The edge matrices of four tetrahedra (node indices ix[l], one per lane) of field q (3 x N).
-TELEOP_FEM_INLINE void edge_matrix4(const double* q, const int* const* ix, V4* d) {
+TELEOP_ALWAYS_INLINE void edge_matrix4(const double* q, const int* const* ix, V4* d) {
   for (int l = 0; l < 4; ++l) {
     const double* q0 = q + 3 * ix[l][0];
     for (int c = 0; c < 3; ++c) {
@@ -79,8 +71,8 @@ TELEOP_FEM_INLINE void edge_matrix4(const double* q, const int* const* ix, V4* d
 // sym(G) + lambda tr(G) I, written symmetric into sig (column-major). scale_trace: G's trace
 // offset (1 for R^T F, whose identity is subtracted here; 0 for a rate or a perturbation).
 template <class T>
-TELEOP_FEM_INLINE void linear_stress(const T* g, double mu, double lambda, double identity,
-                                     T* sig) {
+TELEOP_ALWAYS_INLINE void linear_stress(const T* g, double mu, double lambda, double identity,
+                                        T* sig) {
   const T e00 = g[0] - identity, e11 = g[4] - identity, e22 = g[8] - identity;
   const T tr = e00 + e11 + e22;
   sig[0] = 2.0 * mu * e00 + lambda * tr;
@@ -94,8 +86,8 @@ TELEOP_FEM_INLINE void linear_stress(const T* g, double mu, double lambda, doubl
 // Adds the nodal forces of first Piola stress P (column-major) of a tetrahedron of volume vol
 // and rest inverse B: f_j = -vol P B(j-1, :)^T for j = 1..3, f_0 = -(f_1 + f_2 + f_3); `sign`
 // -1 gives K p instead (the force's negative).
-TELEOP_FEM_INLINE void scatter_forces(const double* p, const double* b, double vol, const int* ix,
-                                      double sign, double* out) {
+TELEOP_ALWAYS_INLINE void scatter_forces(const double* p, const double* b, double vol,
+                                         const int* ix, double sign, double* out) {
   double s0 = 0.0, s1 = 0.0, s2 = 0.0;
   for (int j = 0; j < 3; ++j) {
     // column j of P B^T: sum_k P(:, k) B(j, k)
@@ -124,9 +116,9 @@ TELEOP_FEM_INLINE void scatter_forces(const double* p, const double* b, double v
 // e's nodes is -V_e p_e R_e grad N_j with p_e = lambda (the mean of theta_a over e's four nodes)
 // (exact: tr(R^T F) has no derivative through the polar factor R). `theta` holds theta_e per
 // tetrahedron, `node_theta` is scratch (a value per node); `sign` -1 gives K p.
-TELEOP_FEM_INLINE void nodal_pressure_forces(const DeformableModel& m, const double* frames,
-                                             const double* theta, double* node_theta, double sign,
-                                             double* out) {
+TELEOP_ALWAYS_INLINE void nodal_pressure_forces(const DeformableModel& m, const double* frames,
+                                                const double* theta, double* node_theta,
+                                                double sign, double* out) {
   const DeformableModel::Fem& f = m.fem;
   for (int i = 0; i < f.node_count; ++i) node_theta[i] = 0.0;
   for (int t = 0; t < f.tet_count; ++t) {
@@ -151,8 +143,8 @@ TELEOP_FEM_INLINE void nodal_pressure_forces(const DeformableModel& m, const dou
 // s.fem_q / s.fem_r: one Newton step from the warm start in four lanes; a lane whose step is not
 // converged after it (the increment's square above the tolerance, or no Newton step) is finished
 // by the scalar iteration.
-TELEOP_FEM_INLINE void group_frames(DeformableState& s, int t0, const V4* fg, int iterations,
-                                    double tolerance, V4* r) {
+TELEOP_ALWAYS_INLINE void group_frames(DeformableState& s, int t0, const V4* fg, int iterations,
+                                       double tolerance, V4* r) {
   // frames: one Newton step from the warm start in four lanes
   double* qd = s.fem_q.data() + 4 * t0;
   V4 qw, qx, qy, qz;
@@ -212,8 +204,9 @@ TELEOP_FEM_INLINE void group_frames(DeformableState& s, int t0, const V4* fg, in
 
 // The elastic and damping forces of tetrahedra 4g .. 4g + 3, one per lane, added to out: the
 // arithmetic of the scalar loop below in four lanes (the frames: group_frames).
-TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& s, int g,
-                                     double beta, int iterations, double tolerance, double* out) {
+TELEOP_ALWAYS_INLINE void element_group(const DeformableModel& m, DeformableState& s, int g,
+                                        double beta, int iterations, double tolerance,
+                                        double* out) {
   const DeformableModel::Fem& f = m.fem;
   const bool nodal = m.params.nodal_pressure;
   const double mu = m.lame_mu_pa, lambda = nodal ? 0.0 : m.lame_lambda_pa;
@@ -272,7 +265,7 @@ TELEOP_FEM_INLINE void element_group(const DeformableModel& m, DeformableState& 
 
 // Elastic and damping forces of every tetrahedron, added to out (3 x N): frames refreshed in
 // s.fem_q / s.fem_r. Four at a time (element_group), the last tet_count % 4 one by one.
-TELEOP_FEM_CLONES
+TELEOP_HOT_CLONES
 void element_forces(const DeformableModel& m, DeformableState& s, double beta, int iterations,
                     double tolerance, double* out) {
   const DeformableModel::Fem& f = m.fem;
@@ -314,7 +307,7 @@ void element_forces(const DeformableModel& m, DeformableState& s, double beta, i
 }
 
 // out = K p at the current frames (rotate = true) or at rest (false); p and out 3 x N.
-TELEOP_FEM_CLONES
+TELEOP_HOT_CLONES
 void apply_stiffness(const DeformableModel& m, const double* frames, const double* pv,
                      double* theta, double* node_theta, double* out) {
   const DeformableModel::Fem& f = m.fem;
@@ -485,7 +478,8 @@ void apply_system(const DeformableModel& m, DeformableState& s, const Eigen::Mat
 }
 
 // Implicit Euler: (1 + h alpha) M + (h beta + h^2) K + contacts) dv = h (f - h K v + contact
-// forces), K at the current frames, by Jacobi-preconditioned conjugate gradients; then x += h v.
+// forces), K at the current frames, by conjugate_gradient (conjugate_gradient.hpp, the same
+// routine as the surface models'); then x += h v.
 void implicit_step(const DeformableModel& m, DeformableState& s, double h, double tip_alpha) {
   const DeformableModel::Fem& f = m.fem;
   const int n = f.node_count;
@@ -525,34 +519,11 @@ void implicit_step(const DeformableModel& m, DeformableState& s, double h, doubl
       dg.col(i).setOnes();
     }
   }
-  auto dgi = dg.leftCols(n).cwiseInverse();
-  Eigen::Matrix3Xd& dv = s.work_dv;
-  Eigen::Matrix3Xd& r = s.work_r;
-  Eigen::Matrix3Xd& z = s.work_z;
-  Eigen::Matrix3Xd& pp = s.work_p;
-  dv.leftCols(n).setZero();
-  r.leftCols(n) = b.leftCols(n);
-  z.leftCols(n) = r.leftCols(n).cwiseProduct(dgi);
-  pp.leftCols(n) = z.leftCols(n);
-  double rz = (r.leftCols(n).array() * z.leftCols(n).array()).sum();
-  const double rz0 = rz;
-  const double tol2 = m.params.cg_tolerance * m.params.cg_tolerance;
-  int it = 0;
-  while (it < m.params.cg_max_iterations && rz > tol2 * rz0 && rz0 > 0.0) {
-    apply_system(m, s, pp, ap, h);
-    const double pap = (pp.leftCols(n).array() * ap.leftCols(n).array()).sum();
-    if (!(pap > 0.0)) break;
-    const double alpha = rz / pap;
-    dv.leftCols(n) += alpha * pp.leftCols(n);
-    r.leftCols(n) -= alpha * ap.leftCols(n);
-    z.leftCols(n) = r.leftCols(n).cwiseProduct(dgi);
-    const double rz_new = (r.leftCols(n).array() * z.leftCols(n).array()).sum();
-    pp.leftCols(n) = z.leftCols(n) + (rz_new / rz) * pp.leftCols(n);
-    rz = rz_new;
-    ++it;
-  }
-  s.cg_iterations = it;
-  s.cg_residual = rz0 > 0.0 ? std::sqrt(std::max(rz, 0.0) / rz0) : 0.0;
+  dg.leftCols(n) = dg.leftCols(n).cwiseInverse();  // stored inverted: the solve multiplies
+  conjugate_gradient(m, s, n, [&](const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& y) {
+    apply_system(m, s, p, y, h);
+  });
+  const Eigen::Matrix3Xd& dv = s.work_dv;
   for (int i = 0; i < n; ++i) {
     if (!s.pinned[static_cast<std::size_t>(i)]) s.v.col(i) += dv.col(i);
   }
@@ -699,7 +670,7 @@ void fem_internal_forces(const DeformableModel& m, DeformableState& s, int rotat
                  s.work_f.data());
 }
 
-TELEOP_FEM_CLONES
+TELEOP_HOT_CLONES
 void fem_step(const DeformableModel& m, DeformableState& s, double h, double tip_alpha,
               KernelSums& sums) {
   const DeformableModel::Fem& f = m.fem;
@@ -741,22 +712,7 @@ void fem_step(const DeformableModel& m, DeformableState& s, double h, double tip
     }
   }
   // held nodes onto their targets; the sums of the post-step checks
-  double fastest2 = 0.0, sum_x = 0.0, sum_v = 0.0;
-  Vec3 mx = Vec3::Zero();
-  for (int i = 0; i < n; ++i) {
-    if (s.pinned[static_cast<std::size_t>(i)]) s.x.col(i) = s.pin_target.col(i);
-    const double sp2 = s.v.col(i).squaredNorm();
-    fastest2 = sp2 > fastest2 ? sp2 : fastest2;
-    sum_x += s.x.col(i).sum();
-    sum_v += sp2;
-    mx += f.mass_kg(i) * s.x.col(i);
-  }
-  sums.fastest2 = fastest2;
-  sums.sum_x = sum_x;
-  sums.sum_v = sum_v;
-  sums.mx[0] = mx.x();
-  sums.mx[1] = mx.y();
-  sums.mx[2] = mx.z();
+  hold_and_sum(f.mass_kg, n, s, sums);
 }
 
 void fem_apply_rest_stiffness(const DeformableModel& m, const Eigen::VectorXd& p,

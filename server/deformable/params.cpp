@@ -32,8 +32,8 @@ const char* to_string(IntegratorKind kind) {
   return "?";
 }
 
-// Here rather than in step_simd.cpp so that the scene loader alone (the fuzz build) has it; the
-// kernel's AVX2 path (step_simd.cpp) exists under the same condition and asks this.
+// Here rather than in kernel_simd.cpp so that the scene loader alone (the fuzz build) has it; the
+// kernel's AVX2 path (kernel_simd.cpp) exists under the same condition and asks this.
 bool simd_kernel_vectorised() {
 #if defined(__GNUC__) && defined(__x86_64__)
   static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");

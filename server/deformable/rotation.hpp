@@ -7,11 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#if defined(__GNUC__)
-#define TELEOP_ROTATION_INLINE inline __attribute__((always_inline))
-#else
-#define TELEOP_ROTATION_INLINE inline
-#endif
+#include "server/deformable/hot.hpp"
 
 namespace teleop::sim::deformable::detail {
 
@@ -22,14 +18,14 @@ namespace teleop::sim::deformable::detail {
 typedef double V4 __attribute__((vector_size(32)));
 typedef double V4u __attribute__((vector_size(32), aligned(8), may_alias));
 
-TELEOP_ROTATION_INLINE V4 load4(const double* p) { return *reinterpret_cast<const V4u*>(p); }
-TELEOP_ROTATION_INLINE void store4(double* p, V4 v) { *reinterpret_cast<V4u*>(p) = v; }
+TELEOP_ALWAYS_INLINE V4 load4(const double* p) { return *reinterpret_cast<const V4u*>(p); }
+TELEOP_ALWAYS_INLINE void store4(double* p, V4 v) { *reinterpret_cast<V4u*>(p) = v; }
 typedef long long V4i __attribute__((vector_size(32)));
 
 // Rotation matrix of the unit quaternion (w, x, y, z), column-major into r[9]: of one node
 // (T = double) or of four (T = V4, one node per lane).
 template <class T>
-TELEOP_ROTATION_INLINE void quaternion_matrix(T w, T x, T y, T z, T* r) {
+TELEOP_ALWAYS_INLINE void quaternion_matrix(T w, T x, T y, T z, T* r) {
   const T tx = 2.0 * x, ty = 2.0 * y, tz = 2.0 * z;
   const T twx = tx * w, twy = ty * w, twz = tz * w;
   const T txx = tx * x, txy = ty * x, txz = tz * x;
@@ -45,8 +41,8 @@ TELEOP_ROTATION_INLINE void quaternion_matrix(T w, T x, T y, T z, T* r) {
   r[8] = 1.0 - (txx + tyy);
 }
 
-TELEOP_ROTATION_INLINE double abs_of(double x) { return std::fabs(x); }
-TELEOP_ROTATION_INLINE V4 abs_of(V4 x) {
+TELEOP_ALWAYS_INLINE double abs_of(double x) { return std::fabs(x); }
+TELEOP_ALWAYS_INLINE V4 abs_of(V4 x) {
   for (int l = 0; l < 4; ++l) x[l] = std::fabs(x[l]);
   return x;
 }
@@ -55,7 +51,7 @@ TELEOP_ROTATION_INLINE V4 abs_of(V4 x) {
 // column-major): Newton's where H is positive definite (`newton` set), else Mueller's. One node
 // (T = double, B = bool) or four (T = V4, B = V4i, one node per lane).
 template <class T, class B>
-TELEOP_ROTATION_INLINE void rotation_step(const T* a, const T* r, T& ox, T& oy, T& oz, B& newton) {
+TELEOP_ALWAYS_INLINE void rotation_step(const T* a, const T* r, T& ox, T& oy, T& oz, B& newton) {
   // C = A R^T: C_ij = sum_k A_ik R_jk
   T c[3][3];
   for (int i = 0; i < 3; ++i) {
@@ -87,8 +83,8 @@ TELEOP_ROTATION_INLINE void rotation_step(const T* a, const T* r, T& ox, T& oy, 
 // is Mueller's, d = g / |tr C| (an ascent step). It stops when a step is below the tolerance, or
 // after a Newton step whose square is (its remaining error). Plain scalar arithmetic; the matrix of
 // the last check is the result when it converged.
-TELEOP_ROTATION_INLINE void extract_rotation(const double* a, Eigen::Quaterniond& q_io,
-                                             int max_iterations, double tolerance_rad, double* r) {
+TELEOP_ALWAYS_INLINE void extract_rotation(const double* a, Eigen::Quaterniond& q_io,
+                                           int max_iterations, double tolerance_rad, double* r) {
   double qw = q_io.w(), qx = q_io.x(), qy = q_io.y(), qz = q_io.z();
   bool converged = false;
   for (int it = 0; it < max_iterations; ++it) {

@@ -1,7 +1,9 @@
-// Kernel simd of the mass-spring symplectic-Euler step (params.kernel == kSimd).
+// Kernel simd of the mass-spring symplectic-Euler step (params.kernel == kSimd): the law of
+// laws/mass_spring.hpp, the plane contact of plane_contact.hpp and the node update of the scalar
+// kernel (kernel_scalar.cpp) in another data layout.
 //
-// The scalar kernel (step.cpp) visits each edge once and scatters its reaction, which keeps it
-// scalar (~45 instructions per edge). Here every node gathers its own edges instead (each edge is
+// The scalar kernel visits each edge once and scatters its reaction, which keeps it scalar.
+// Here every node gathers its own edges instead (each edge is
 // evaluated twice, once from each end, with exactly opposite results: d_ji = -d_ij bit for bit),
 // so neighbouring nodes are independent and 8 of them are computed at once:
 //   1. pack: per node 8 floats (position relative to the centre node, 0, velocity relative to its
@@ -17,13 +19,16 @@
 // Without AVX2 and FMA (checked once at run time) a portable loop does the same operations (but
 // 1 / length by an exact square root and division, not the AVX2 path's estimate + Newton step).
 // Single precision in the forces: positions relative to the centre (|x| < ~1 m) carry 6e-8 m of
-// rounding, a spring force error of k * 6e-8 m (1e-5 N at k = 150 N/m); the accuracy table of
-// docs/deformable.md shows the effect on the trajectory.
+// rounding, a spring force error of k * 6e-8 m (1e-5 N at k = 150 N/m); the test
+// SimdKernel.MatchesTheScalarKernel bounds the difference to the scalar kernel.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 
+#include "server/deformable/integrators.hpp"
 #include "server/deformable/kernels.hpp"
+#include "server/deformable/laws/mass_spring.hpp"
+#include "server/deformable/plane_contact.hpp"
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -58,16 +63,6 @@ inline void pack_node(const double* x, const double* v, const double* c, const d
   out[5] = static_cast<float>(v[1] - cv[1]);
   out[6] = static_cast<float>(v[2] - cv[2]);
   out[7] = 0.0f;
-}
-
-// Force per unit length of d on a node from a spring to d = (dx, dy, dz) of relative velocity
-// (ex, ey, ez): (k (l - l0) + c dl/dt) / l. One formula for the scalar and vector paths.
-inline float spring_scale(float dx, float dy, float dz, float ex, float ey, float ez, float k,
-                          float l0, float beta) {
-  const float l2 = dx * dx + dy * dy + dz * dz + 1e-30f;
-  const float inv_l = 1.0f / std::sqrt(l2);
-  const float rate = (ex * dx + ey * dy + ez * dz) * inv_l;
-  return (k * (l2 * inv_l - l0) + beta * k * rate) * inv_l;
 }
 
 // Portable path (no AVX2): the same arithmetic one node at a time.
@@ -127,31 +122,6 @@ __attribute__((target("avx2,fma"))) inline void transpose8(__m256* r) {
   r[5] = _mm256_permute2f128_ps(s1, s5, 0x31);
   r[6] = _mm256_permute2f128_ps(s2, s6, 0x31);
   r[7] = _mm256_permute2f128_ps(s3, s7, 0x31);
-}
-
-// spring_scale for 8 springs at once, with 1 / l from the CPU's reciprocal square-root estimate
-// y0 (12 bits) and one Newton step, 1 / l = y0 u with u = 1.5 - 0.5 l2 y0^2: at most 2.0e-7
-// relative error (1.7 float ulps; measured over 1.6e7 lengths from 1e-6 to 10 m), against 1e-7
-// for the exact sqrt and division of the portable path, which took 5 % of the step more. The
-// same value as spring_scale, arranged for a short dependency chain after the estimate:
-//   (k (l - l0) + beta k rate) / l = (k y0 u) ((l2 + beta (e . d)) y0 u - l0),
-// with l2 + beta (e . d) and 0.5 l2 formed while the estimate is computed and k y0, w y0 beside
-// the Newton factor u (14 cycles of latency after the estimate instead of 24: the force pass is
-// bound by these chains, not by its instruction count). The estimate is the CPU's (its table may
-// differ between CPU makers, so may the last bits of a force); on one machine the result is
-// deterministic.
-__attribute__((target("avx2,fma"))) inline __m256 spring_scale8(__m256 dx, __m256 dy, __m256 dz,
-                                                                __m256 ex, __m256 ey, __m256 ez,
-                                                                __m256 k, __m256 l0, __m256 beta) {
-  const __m256 l2 = _mm256_add_ps(_mm256_fmadd_ps(dx, dx, _mm256_set1_ps(1e-30f)),
-                                  _mm256_fmadd_ps(dz, dz, _mm256_mul_ps(dy, dy)));
-  const __m256 y0 = _mm256_rsqrt_ps(l2);  // ~12 bits; one Newton step: ~23 bits
-  const __m256 dot = _mm256_fmadd_ps(ez, dz, _mm256_fmadd_ps(ey, dy, _mm256_mul_ps(ex, dx)));
-  const __m256 w = _mm256_fmadd_ps(beta, dot, l2);
-  const __m256 half_l2 = _mm256_mul_ps(_mm256_set1_ps(0.5f), l2);
-  const __m256 u = _mm256_fnmadd_ps(_mm256_mul_ps(half_l2, y0), y0, _mm256_set1_ps(1.5f));
-  const __m256 ky = _mm256_mul_ps(k, y0), wy = _mm256_mul_ps(w, y0);
-  return _mm256_mul_ps(_mm256_mul_ps(ky, u), _mm256_fmsub_ps(wy, u, l0));
 }
 
 // Four nodes' (X, Y, Z) to x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3 in o[0..2].
@@ -339,38 +309,6 @@ __attribute__((target("avx2,fma"))) void pack_all_avx2(const DeformableModel& m,
 bool use_avx2() { return simd_kernel_vectorised(); }
 #endif
 
-// Plane contact of one node after its velocity update, as in step.cpp: damping as an implicit
-// impulse v_n /= 1 + h c / m that never pulls, Coulomb friction limited by the normal impulse and
-// never reversing the slip. Adds the plane's force to `total`.
-inline void contact_impulse(const Eigen::Vector3d& nrm, double mass, double damping,
-                            double spring_impulse, double mu, double h, double& vx, double& vy,
-                            double& vz, Eigen::Vector3d& total) {
-  const double vn = nrm.x() * vx + nrm.y() * vy + nrm.z() * vz;
-  double dvn = vn / (1.0 + h * damping / mass) - vn;
-  dvn = std::max(dvn, -spring_impulse / mass);
-  vx += dvn * nrm.x();
-  vy += dvn * nrm.y();
-  vz += dvn * nrm.z();
-  const double jn = spring_impulse + mass * dvn;  // >= 0
-  double ix = jn * nrm.x(), iy = jn * nrm.y(), iz = jn * nrm.z();
-  if (mu > 0.0) {
-    const double vn2 = nrm.x() * vx + nrm.y() * vy + nrm.z() * vz;
-    const double tx = vx - vn2 * nrm.x(), ty = vy - vn2 * nrm.y(), tz = vz - vn2 * nrm.z();
-    const double st = std::sqrt(tx * tx + ty * ty + tz * tz);
-    if (st > 1e-12) {
-      const double jt = std::min(mu * jn, mass * st);
-      const double dv = jt / (mass * st);
-      vx -= dv * tx;
-      vy -= dv * ty;
-      vz -= dv * tz;
-      ix -= (jt / st) * tx;
-      iy -= (jt / st) * ty;
-      iz -= (jt / st) * tz;
-    }
-  }
-  total += Eigen::Vector3d(ix, iy, iz) / h;
-}
-
 // Step 3: per node, in double: the rest of the force, symplectic Euler, contact, held nodes.
 TELEOP_SIMD_CLONES
 void integrate_nodes(const DeformableModel& m, DeformableState& s, double h, double vmx, double vmy,
@@ -382,19 +320,16 @@ void integrate_nodes(const DeformableModel& m, DeformableState& s, double h, dou
   double* __restrict f = s.force.data();  // in: the internal forces; out: the total
   const double* __restrict mp = m.mass_kg.data();
   const double* __restrict imp = m.inv_mass.data();
-  const double* __restrict ck = m.contact_k.data();
-  const double* __restrict cc = m.contact_c.data();
   const double* __restrict fext = s.f_ext.data();
   const double* __restrict tgt = s.pin_target.data();
   const std::uint8_t* __restrict pin = s.pinned.data();
   const double gx = p.gravity_mps2.x(), gy = p.gravity_mps2.y(), gz = p.gravity_mps2.z();
   const double alpha = p.mass_damping_per_s;
   const bool any_pinned = s.pinned_count > 0;
-  const int planes = m.plane_count;
   double spring_of[8] = {};
   int nc = 0;
   Eigen::Vector3d plane_force = Eigen::Vector3d::Zero();
-  double fastest2 = 0.0, sum_x = 0.0, sum_v = 0.0, mxx = 0.0, mxy = 0.0, mxz = 0.0;
+  NodeSums node_sums;
   for (int i = 0; i < n; ++i) {
     const int a = 3 * i;
     const double mi = mp[i];
@@ -403,65 +338,16 @@ void integrate_nodes(const DeformableModel& m, DeformableState& s, double h, dou
     double ax = f[a] + mi * (gx - alpha * (vx - vmx)) + fext[a];
     double ay = f[a + 1] + mi * (gy - alpha * (vy - vmy)) + fext[a + 1];
     double az = f[a + 2] + mi * (gz - alpha * (vz - vmz)) + fext[a + 2];
-    unsigned touched = 0;
-    for (int k = 0; k < planes; ++k) {
-      const Plane& pl = m.planes[static_cast<std::size_t>(k)];
-      const double dist =
-          pl.normal.x() * xx + pl.normal.y() * xy + pl.normal.z() * xz - pl.offset_m;
-      if (dist >= 0.0) continue;
-      spring_of[k] = -ck[i] * dist;
-      ax += spring_of[k] * pl.normal.x();
-      ay += spring_of[k] * pl.normal.y();
-      az += spring_of[k] * pl.normal.z();
-      touched |= 1u << k;
-      ++nc;
-    }
+    const unsigned touched = node_plane_springs(m, i, xx, xy, xz, spring_of, ax, ay, az, nc);
     f[a] = ax;
     f[a + 1] = ay;
     f[a + 2] = az;
-    const bool held = any_pinned && pin[i] != 0;
-    double px, py, pz;
-    if (!held) {
-      const double hm = h * imp[i];
-      vx += hm * ax;
-      vy += hm * ay;
-      vz += hm * az;
-      for (int k = 0; touched != 0 && k < planes; ++k) {
-        if ((touched & (1u << k)) == 0) continue;
-        const Plane& pl = m.planes[static_cast<std::size_t>(k)];
-        contact_impulse(pl.normal, mi, cc[i], h * spring_of[k], p.friction ? pl.friction : 0.0, h,
-                        vx, vy, vz, plane_force);
-      }
-      px = xx + h * vx;
-      py = xy + h * vy;
-      pz = xz + h * vz;
-    } else {
-      px = tgt[a];
-      py = tgt[a + 1];
-      pz = tgt[a + 2];
-    }
-    v[a] = vx;
-    v[a + 1] = vy;
-    v[a + 2] = vz;
-    x[a] = px;
-    x[a + 1] = py;
-    x[a + 2] = pz;
-    const double sp2 = vx * vx + vy * vy + vz * vz;
-    fastest2 = sp2 > fastest2 ? sp2 : fastest2;
-    sum_x += px + py + pz;
-    sum_v += sp2;  // NaN and infinity propagate into the sums
-    mxx += mi * px;
-    mxy += mi * py;
-    mxz += mi * pz;
+    symplectic_node(m, i, h, mi, imp[i], any_pinned && pin[i] != 0, tgt + a, xx, xy, xz, vx, vy, vz,
+                    ax, ay, az, touched, spring_of, x, v, plane_force, node_sums);
   }
   s.contact_count = nc;
   s.plane_force_n = plane_force;
-  sums.fastest2 = fastest2;
-  sums.sum_x = sum_x;
-  sums.sum_v = sum_v;
-  sums.mx[0] = mxx;
-  sums.mx[1] = mxy;
-  sums.mx[2] = mxz;
+  node_sums.store(sums);
 }
 
 #ifdef TELEOP_HAVE_AVX2_PATH
@@ -746,14 +632,9 @@ void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double 
 
   // the centre node: it moves on the radial springs' reaction only (no node reads it after the
   // force pass, so it may move before the nodes do)
+  const double vmean[3] = {vmx, vmy, vmz};
   const auto move_centre = [&](const Internal& internal) {
-    if (!m.has_centre) return;
-    const double gx = p.gravity_mps2.x(), gy = p.gravity_mps2.y(), gz = p.gravity_mps2.z();
-    const double hm = h / m.centre_mass_kg, mc = m.centre_mass_kg;
-    s.centre_v.x() += hm * (mc * (gx - alpha * (cv[0] - vmx)) + internal.centre[0]);
-    s.centre_v.y() += hm * (mc * (gy - alpha * (cv[1] - vmy)) + internal.centre[1]);
-    s.centre_v.z() += hm * (mc * (gz - alpha * (cv[2] - vmz)) + internal.centre[2]);
-    s.centre_x += h * s.centre_v;
+    if (m.has_centre) symplectic_centre(m, s, h, cv, vmean, internal.centre);
   };
 
 #ifdef TELEOP_HAVE_AVX2_PATH
