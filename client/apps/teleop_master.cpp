@@ -116,8 +116,7 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
       ->check(number_in(0.0, 1e6));
   app.add_option("--kpm", f.kpm, "master position gain K_pm [N/m], 0-1e6 (0 = transparent choice)")
       ->check(number_in(0.0, 1e6));
-  app.add_option("--bm", f.bm, "master damping B_m [N s/m], 0-1e4")
-      ->check(number_in(0.0, 1e4));
+  app.add_option("--bm", f.bm, "master damping B_m [N s/m], 0-1e4")->check(number_in(0.0, 1e4));
   app.add_option("--force-gain", f.kf, "force-position reflection gain K_f [-], 0-100")
       ->check(number_in(0.0, 100.0));
   app.add_option("--position-scale", f.alpha, "slave metres per master metre [-], 0.001-1000")

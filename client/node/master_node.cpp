@@ -75,8 +75,8 @@ struct SessionReport {
   std::uint64_t states_received = 0;
   std::uint64_t overruns = 0;
   std::uint64_t link_losses = 0;
-  std::uint64_t stalls = 0;                // cycles that began kStallS or more after the last
-  double longest_stall_s = 0.0;            // the longest such gap
+  std::uint64_t stalls = 0;      // cycles that began kStallS or more after the last
+  double longest_stall_s = 0.0;  // the longest such gap
   Summary rtt_ms;
   Summary loop_delay_ms;
   Summary jitter_us;
@@ -284,8 +284,7 @@ struct MasterNode::Impl {
           // its highest node where the server says (a body that sagged at load), else the top
           // of its bounding sphere
           const double top = o.size_m()[1] > 0.0 ? o.size_m()[1] : o.size_m()[0];
-          return Eigen::Vector3d(o.position_m()[0], o.position_m()[1],
-                                 o.position_m()[2] + top + r);
+          return Eigen::Vector3d(o.position_m()[0], o.position_m()[1], o.position_m()[2] + top + r);
         }
       }
       for (const auto& o : scene->objects()) {
@@ -890,7 +889,8 @@ struct MasterNode::Impl {
         "  transparency    free space %.3f N mean, %.3f N p99, %.3f N max; in contact felt %.2f x "
         "the environment's force (RMS %.3f N), stiffness felt %.0f N/m against %.0f N/m (%.2f)\n"
         "  passivity       energy at the master port %.4f J (min %.4f J)\n"
-        "  safety          %s%s, link losses %llu, loop stalls %llu (longest %.3f s), re-homed %llu times (link back %llu, slave "
+        "  safety          %s%s, link losses %llu, loop stalls %llu (longest %.3f s), re-homed "
+        "%llu times (link back %llu, slave "
         "restart %llu, takeover %llu); force change at most %.3f N per cycle (bound %.0f N/s, "
         "held to it in %llu cycles)\n"
         "  ownership       %s\n"

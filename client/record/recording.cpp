@@ -33,7 +33,8 @@ RecordingWriter::RecordingWriter(const std::string& path) {
   const auto st = std::filesystem::symlink_status(path, ec);
   if (path.empty()) throw config::ConfigError("the recording's file name is empty");
   if (!ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st)) {
-    throw config::ConfigError(path + ": exists and is not a regular file; a recording replaces "
+    throw config::ConfigError(path +
+                              ": exists and is not a regular file; a recording replaces "
                               "only a regular file");
   }
   std::remove(path.c_str());
@@ -275,16 +276,15 @@ bool RecordingReader::next(RecordedSample& out) {
   const auto n = static_cast<std::size_t>(sqlite3_column_bytes(scan_, 7));
   if (raw_size_field < 0 || raw_size_field > kMaxSampleBytes ||
       (codec == kCodecRaw && static_cast<std::size_t>(raw_size_field) != n)) {
-    throw config::ConfigError(path_ + ": field 'samples.raw_size': " +
-                              std::to_string(raw_size_field) + " for a sample of " +
-                              std::to_string(n) + " stored bytes at receive_ns " +
-                              std::to_string(out.receive_ns) + "; allowed range [0, " +
-                              std::to_string(kMaxSampleBytes) +
-                              "], and equal to the stored size when uncompressed");
+    throw config::ConfigError(
+        path_ + ": field 'samples.raw_size': " + std::to_string(raw_size_field) +
+        " for a sample of " + std::to_string(n) + " stored bytes at receive_ns " +
+        std::to_string(out.receive_ns) + "; allowed range [0, " + std::to_string(kMaxSampleBytes) +
+        "], and equal to the stored size when uncompressed");
   }
   if (out.receive_ns < 0) {
-    throw config::ConfigError(path_ + ": field 'samples.receive_ns': " +
-                              std::to_string(out.receive_ns) + " is negative");
+    throw config::ConfigError(
+        path_ + ": field 'samples.receive_ns': " + std::to_string(out.receive_ns) + " is negative");
   }
   const auto raw_size = static_cast<std::size_t>(raw_size_field);
   if (codec == kCodecZstd) {

@@ -498,8 +498,8 @@ std::string number_problem(const std::string& text, double lo, double hi, bool i
   } catch (const std::exception&) {
     return quoted + " is not a number" + range;
   }
-  if (pos != text.size()) return quoted + " is not a number (it ends in '" + text.substr(pos) +
-                                 "')" + range;
+  if (pos != text.size())
+    return quoted + " is not a number (it ends in '" + text.substr(pos) + "')" + range;
   if (!std::isfinite(v)) return quoted + " is not a finite number" + range;
   if (integer && (v != std::floor(v) || text.find_first_of(".eExX") != std::string::npos)) {
     return quoted + " is not a whole number" + range;
@@ -568,12 +568,12 @@ void require_regular_file(const std::string& file, const std::string& what) {
   if (std::filesystem::is_regular_file(st)) return;
   // /dev/null reads as an empty file (std::filesystem::equivalent refuses two devices)
   if (std::filesystem::canonical(file, ec) == "/dev/null" && !ec) return;
-  const char* kind = std::filesystem::is_directory(st)       ? "a directory"
-                     : std::filesystem::is_fifo(st)          ? "a FIFO"
-                     : std::filesystem::is_socket(st)        ? "a socket"
+  const char* kind = std::filesystem::is_directory(st)        ? "a directory"
+                     : std::filesystem::is_fifo(st)           ? "a FIFO"
+                     : std::filesystem::is_socket(st)         ? "a socket"
                      : std::filesystem::is_character_file(st) ? "a character device"
-                     : std::filesystem::is_block_file(st)    ? "a block device"
-                                                             : "not a plain file";
+                     : std::filesystem::is_block_file(st)     ? "a block device"
+                                                              : "not a plain file";
   throw ConfigError(file + ": " + what + " is " + kind +
                     ", not a regular file (reading it may block or never end)");
 }

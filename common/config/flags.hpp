@@ -23,9 +23,8 @@ namespace teleop::config {
 
 /// A CLI11 check: the value is a finite number within [lo, hi] (see number_problem()).
 inline CLI::Validator number_in(double lo, double hi) {
-  return CLI::Validator(
-      [lo, hi](std::string& v) { return number_problem(v, lo, hi, false); },
-      "NUMBER in " + range_text(lo, hi));
+  return CLI::Validator([lo, hi](std::string& v) { return number_problem(v, lo, hi, false); },
+                        "NUMBER in " + range_text(lo, hi));
 }
 
 /// A CLI11 check: the value is a whole number within [lo, hi].

@@ -20,8 +20,8 @@ inline std::string nan_as_na(const std::string& text) {
   std::string out;
   out.reserve(text.size());
   auto word_char = [](char c) {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-           c == '_' || c == '.';
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '.';
   };
   std::size_t i = 0;
   while (i < text.size()) {

@@ -2,9 +2,9 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
-#include <algorithm>
 #include <iostream>
 #include <optional>
 
@@ -131,7 +131,8 @@ CommandArgs parse_command_args(const CommandEntry& entry, const std::vector<std:
                                 entry.name + " (its options: " + known_options(entry) + ")");
     }
     if (!value) {
-      if (i + 1 >= words.size()) throw config::ConfigError("command line: " + key + " needs a value");
+      if (i + 1 >= words.size())
+        throw config::ConfigError("command line: " + key + " needs a value");
       value = words[++i];
     }
     if (std::find(seen.begin(), seen.end(), key) != seen.end()) {
@@ -147,8 +148,8 @@ CommandArgs parse_command_args(const CommandEntry& entry, const std::vector<std:
       continue;
     }
     if (spec->kind != OptionSpec::Kind::kText) {
-      const std::string problem = config::number_problem(
-          *value, spec->lo, spec->hi, spec->kind == OptionSpec::Kind::kInteger);
+      const std::string problem = config::number_problem(*value, spec->lo, spec->hi,
+                                                         spec->kind == OptionSpec::Kind::kInteger);
       if (!problem.empty()) throw config::ConfigError("command line: " + key + " " + problem);
     }
     args.options.push_back(key);
@@ -171,7 +172,8 @@ int run_registry_main(const std::string& group, const std::string& exe, int argc
     return 2;
   }
   try {
-    const CommandArgs args = parse_command_args(*entry, std::vector<std::string>(argv + 2, argv + argc));
+    const CommandArgs args =
+        parse_command_args(*entry, std::vector<std::string>(argv + 2, argv + argc));
     std::filesystem::create_directories(args.out_dir);
     const int status = entry->run(args);
     const std::vector<std::string> failed = failed_writes();

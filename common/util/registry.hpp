@@ -17,11 +17,11 @@ namespace teleop {
 /// number (or integer) option a value that is not wholly a finite number within [lo, hi].
 struct OptionSpec {
   enum class Kind { kText, kNumber, kInteger };
-  std::string name;       ///< "--scene"
+  std::string name;  ///< "--scene"
   Kind kind = Kind::kText;
-  double lo = 0.0;        ///< range of a number or integer option
+  double lo = 0.0;  ///< range of a number or integer option
   double hi = 0.0;
-  std::string help;       ///< shown by `<exe> --help`
+  std::string help;  ///< shown by `<exe> --help`
 };
 inline OptionSpec text_option(std::string name, std::string help) {
   return {std::move(name), OptionSpec::Kind::kText, 0.0, 0.0, std::move(help)};
@@ -84,7 +84,6 @@ int run_registry_main(const std::string& group, const std::string& exe, int argc
 #define TELEOP_REGISTRY_CAT(a, b) TELEOP_REGISTRY_CAT2(a, b)
 /// TELEOP_REGISTER_COMMAND(group, name, description, fn[, option specs...]): a command with no
 /// option specs accepts only the common words (--out, --quick, --no-chart).
-#define TELEOP_REGISTER_COMMAND(group, name, description, fn, ...)                         \
+#define TELEOP_REGISTER_COMMAND(group, name, description, fn, ...)                       \
   static const bool TELEOP_REGISTRY_CAT(teleop_registered_, __LINE__) [[maybe_unused]] = \
-      ::teleop::CommandRegistry::get(#group).add(name, description, fn,                  \
-                                                 {__VA_ARGS__})
+      ::teleop::CommandRegistry::get(#group).add(name, description, fn, {__VA_ARGS__})

@@ -44,7 +44,8 @@ int main(int argc, char** argv) {
                  "this long, and another may take it over [s], from the command timeout to 60 "
                  "(default: 0.5, or the command timeout if longer)")
       ->check(teleop::config::number_in(0.001, 60.0));
-  app.add_option("--duration", duration_s, "stop after this many seconds, 0-1e7; 0 = run until SIGINT")
+  app.add_option("--duration", duration_s,
+                 "stop after this many seconds, 0-1e7; 0 = run until SIGINT")
       ->check(teleop::config::number_in(0.0, 1e7));
   app.add_option("--stats-period", stats_period_s, "ServerStats period [s], 0.1-10")
       ->check(teleop::config::number_in(0.1, 10.0));

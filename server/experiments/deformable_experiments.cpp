@@ -295,11 +295,13 @@ TELEOP_REGISTER_COMMAND(experiments, "sphere-zero-g",
                         teleop::number_option("--dt", 1e-6, 1e-2, "time step [s]"));
 TELEOP_REGISTER_COMMAND(experiments, "navier-free-vertex",
                         "Figs. 4-5: Navier sphere, a vertex pushed in and released (phase graph)",
-                        navier_free_vertex, teleop::integer_option("--level", 0, 6, "icosphere level"),
+                        navier_free_vertex,
+                        teleop::integer_option("--level", 0, 6, "icosphere level"),
                         teleop::number_option("--dt", 1e-6, 1e-2, "time step [s]"));
 TELEOP_REGISTER_COMMAND(experiments, "navier-held-vertex",
                         "Figs. 6-7: Navier sphere, a vertex held in; a neighbour's distance, force",
-                        navier_held_vertex, teleop::integer_option("--level", 0, 6, "icosphere level"),
+                        navier_held_vertex,
+                        teleop::integer_option("--level", 0, 6, "icosphere level"),
                         teleop::number_option("--dt", 1e-6, 1e-2, "time step [s]"));
 TELEOP_REGISTER_COMMAND(experiments, "sphere-gravity",
                         "experiment 2 without robot: dropped between walls, settles on the floor",

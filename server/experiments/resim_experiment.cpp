@@ -43,7 +43,8 @@ double number_flag(const teleop::CommandArgs& args, const std::string& flag, con
 void check_gaps(const std::vector<teleop::StreamedCommand>& stream, const std::string& file,
                 double max_gap_s) {
   for (std::size_t i = 1; i < stream.size(); ++i) {
-    const double gap_s = static_cast<double>(stream[i].receive_ns - stream[i - 1].receive_ns) * 1e-9;
+    const double gap_s =
+        static_cast<double>(stream[i].receive_ns - stream[i - 1].receive_ns) * 1e-9;
     if (gap_s > max_gap_s) {
       char what[200];
       std::snprintf(what, sizeof what,

@@ -259,8 +259,7 @@ int run_robot_reach(const teleop::CommandArgs& args) {
 
 TELEOP_REGISTER_COMMAND(experiments, "robot-reach",
                         "PUMA 560 slave tip follows a path, presses on the floor and a wall",
-                        run_robot_reach,
-                        teleop::text_option("--scene", "robot scene YAML"),
+                        run_robot_reach, teleop::text_option("--scene", "robot scene YAML"),
                         teleop::text_option("--stepper", "step | quick"));
 
 }  // namespace

@@ -330,12 +330,13 @@ int bench_peers(const teleop::CommandArgs& a) {
   return 0;
 }
 
-TELEOP_REGISTER_COMMAND(bench, "peers",
-                        "our sphere vs Bullet's soft body on the same icosphere: step time, "
-                        "overshoot and drift of a released node, volume error",
-                        bench_peers, teleop::integer_option("--rounds", 1, 100, "rounds"),
-                        teleop::integer_option("--bullet-piterations", 1, 1000, "Bullet iterations"),
-                        teleop::number_option("--bullet-kpr", 0, 1e6, "Bullet pressure coefficient"),
-                        teleop::integer_option("--bullet-randomize", 0, 1, "Bullet constraint order"));
+TELEOP_REGISTER_COMMAND(
+    bench, "peers",
+    "our sphere vs Bullet's soft body on the same icosphere: step time, "
+    "overshoot and drift of a released node, volume error",
+    bench_peers, teleop::integer_option("--rounds", 1, 100, "rounds"),
+    teleop::integer_option("--bullet-piterations", 1, 1000, "Bullet iterations"),
+    teleop::number_option("--bullet-kpr", 0, 1e6, "Bullet pressure coefficient"),
+    teleop::integer_option("--bullet-randomize", 0, 1, "Bullet constraint order"));
 
 }  // namespace

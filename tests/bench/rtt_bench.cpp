@@ -133,9 +133,9 @@ int rtt(const CommandArgs& args) {
     const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
     if (n <= 0) throw std::runtime_error("cannot find /proc/self/exe");
     self[n] = '\0';
-    std::vector<std::string> echo_args = {"rtt-echo", "--out",     args.out_dir.string(),
-                                          "--domain", std::to_string(domain), "--profile",
-                                          profile};
+    std::vector<std::string> echo_args = {
+        "rtt-echo",  "--out", args.out_dir.string(), "--domain", std::to_string(domain),
+        "--profile", profile};
     if (!security_dir.empty()) {
       echo_args.push_back("--security-dir");
       echo_args.push_back(security_dir);

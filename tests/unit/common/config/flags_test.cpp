@@ -26,8 +26,8 @@ TEST(NumberProblem, AcceptsWholeFiniteNumbersInRange) {
 }
 
 TEST(NumberProblem, RefusesEmptyPartialNegativeZeroAndNonFinite) {
-  for (const char* bad : {"", " 1", "1 ", "3x", "0x10", "nan", "inf", "-inf", "1e999", "-0",
-                          "-0.0", "-1", "2", "--1", "1,2"}) {
+  for (const char* bad : {"", " 1", "1 ", "3x", "0x10", "nan", "inf", "-inf", "1e999", "-0", "-0.0",
+                          "-1", "2", "--1", "1,2"}) {
     const std::string p = number_problem(bad, 0.0, 1.0, false);
     EXPECT_FALSE(p.empty()) << "'" << bad << "' accepted";
     EXPECT_NE(p.find(std::string("'") + bad + "'"), std::string::npos) << p;  // names the value
@@ -95,8 +95,8 @@ int run(const std::vector<std::string>& args) {
 }
 
 TEST(HardenFlags, RefusesEmptyRepeatedUnknownAndOutOfRange) {
-  EXPECT_EQ(run({"--duration", "1", "--out", "x", "--exclude", "a", "--exclude",
-                              "b", "--quiet", "--quiet"}),
+  EXPECT_EQ(run({"--duration", "1", "--out", "x", "--exclude", "a", "--exclude", "b", "--quiet",
+                 "--quiet"}),
             -1);
   EXPECT_EQ(run({"--duration", ""}), 2);
   EXPECT_EQ(run({"--duration=-0"}), 2);

@@ -33,17 +33,17 @@ TEST(Registry, ParsesDeclaredOptions) {
 
 TEST(Registry, RefusesUnknownRepeatedEmptyAndOutOfRange) {
   const std::vector<std::vector<std::string>> bad = {
-      {"--scene", "s"},                         // no --out
-      {"--out", "o", "--out", "p"},             // repeated
-      {"--out", ""},                            // empty
-      {"--out", "o", "--bogus", "1"},           // unknown
-      {"--out", "o", "stray"},                  // a stray word
+      {"--scene", "s"},                // no --out
+      {"--out", "o", "--out", "p"},    // repeated
+      {"--out", ""},                   // empty
+      {"--out", "o", "--bogus", "1"},  // unknown
+      {"--out", "o", "stray"},         // a stray word
       {"--out", "o", "--scene", "a", "--scene", "b"},
       {"--out", "o", "--dt", "-0"},
       {"--out", "o", "--dt", "1"},
       {"--out", "o", "--dt", "0.001x"},
       {"--out", "o", "--level", "2.5"},
-      {"--out", "o", "--level"},                // no value
+      {"--out", "o", "--level"},  // no value
       {"--out", "o", "--quick=1"},
   };
   for (const auto& words : bad) {

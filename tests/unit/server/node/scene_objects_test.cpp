@@ -106,7 +106,7 @@ TEST(SceneObjects, AFemBallSettledAtLoadIsDescribedByItsSaggedTop) {
     if (o.kind() != OBJECT_DEFORMABLE_MESH) continue;
     found = true;
     EXPECT_NEAR(o.position_m()[2] + o.size_m()[1], top, 1e-12);  // where a tip from above lands
-    EXPECT_GE(o.size_m()[0], o.size_m()[1]);                      // inside its bounding sphere
+    EXPECT_GE(o.size_m()[0], o.size_m()[1]);                     // inside its bounding sphere
   }
   EXPECT_TRUE(found);
 }
