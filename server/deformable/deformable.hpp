@@ -143,6 +143,13 @@ struct DeformableParams {
   /// pressure, the remedy for the locking of linear tetrahedra as nu -> 0.5) instead of each
   /// tetrahedron's own (false: the element law). Other models ignore it.
   bool nodal_pressure = true;
+  /// Model fem, mass scaling: raise the lumped (inertial) masses of the nodes whose stiffness
+  /// limits the stable step, the fewest grams that make stable_step_s at least this [s] (0: off).
+  /// Gravity, the centroid and the weight keep the physical masses; the inertia added is
+  /// fem.added_mass_kg (docs/deformable.md, "Mass scaling").
+  double mass_scaling_step_s = 0.0;
+  /// The most mass scaling may add, as a fraction of the body's mass; needing more is an error.
+  double mass_scaling_max_fraction = 0.02;
   /// Model fem: contact of the surface with planes and with the tip as a pressure per depth,
   /// node i's spring k_i = this * (area of node i), integrated implicitly per node (stable at
   /// any value; the force converges with the mesh). 0: 1000 E / (1 - nu^2) / (body size),
@@ -273,10 +280,14 @@ struct DeformableModel {
     /// The same four tets at a time (tets 4g .. 4g + 3, one per lane): dm_inv4[36 g + 4 k + l] =
     /// dm_inv[9 (4 g + l) + k]; volume4[4 g + l] (the last tet_count % 4 tets are not in it)
     std::vector<double> dm_inv4, volume4;
-    Eigen::VectorXd volume_m3;          ///< per tet
-    Eigen::VectorXd mass_kg, inv_mass;  ///< lumped, all nodes (a quarter of each tet's mass)
-    Eigen::VectorXd inv_node_volume;    ///< 1 / (a quarter of each adjacent tet's volume) [1/m^3]
-    Eigen::Matrix3Xd precond;           ///< diagonal of the rest stiffness (CG preconditioner)
+    Eigen::VectorXd volume_m3;  ///< per tet
+    /// Lumped inertial masses of all nodes: a quarter of each tet's mass, plus the mass
+    /// scaling's (params.mass_scaling_step_s)
+    Eigen::VectorXd mass_kg, inv_mass;
+    Eigen::VectorXd weight_kg;        ///< lumped physical masses (gravity, centroid) [kg]
+    double added_mass_kg = 0.0;       ///< inertia the mass scaling added: sum(mass_kg - weight_kg)
+    Eigen::VectorXd inv_node_volume;  ///< 1 / (a quarter of each adjacent tet's volume) [1/m^3]
+    Eigen::Matrix3Xd precond;         ///< diagonal of the rest stiffness (CG preconditioner)
     double pressure_stiffness_pa_per_m = 0.0;  ///< plane and tip contact [Pa/m]
   } fem;
 

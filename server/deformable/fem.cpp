@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/util/csv.hpp"
 #include "server/deformable/conjugate_gradient.hpp"
 #include "server/deformable/hot.hpp"
 #include "server/deformable/integrators.hpp"
@@ -593,6 +594,8 @@ void build_fem(DeformableModel& m, const teleop::mesh::TetMesh& tm) {
       f.mass_kg(f.tets(k, t)) += 0.25 * m.density_kg_per_m3 * f.volume_m3(t);
   }
   f.inv_mass = f.mass_kg.cwiseInverse();
+  f.weight_kg = f.mass_kg;
+  f.added_mass_kg = 0.0;
   f.inv_node_volume = (f.mass_kg / m.density_kg_per_m3).cwiseInverse();
   m.rest_centre_m = f.rest * f.mass_kg / m.total_mass_kg;
   m.has_centre = false;
@@ -687,11 +690,13 @@ void fem_step(const DeformableModel& m, DeformableState& s, double h, double tip
   Vec3 vmean = Vec3::Zero();
   if (alpha > 0.0 && s.contact_count == 0) {
     for (int i = 0; i < n; ++i) vmean += f.mass_kg(i) * s.v.col(i);
-    vmean /= m.total_mass_kg;
+    vmean /= m.total_mass_kg + f.added_mass_kg;
   }
+  // gravity on the physical masses, the drag on the inertial ones (they differ by the mass
+  // scaling's share)
   for (int i = 0; i < n; ++i) {
-    const double mi = f.mass_kg(i);
-    F.col(i) += mi * p.gravity_mps2 - (alpha * mi) * (s.v.col(i) - vmean) + s.f_ext.col(i);
+    F.col(i) += f.weight_kg(i) * p.gravity_mps2 - (alpha * f.mass_kg(i)) * (s.v.col(i) - vmean) +
+                s.f_ext.col(i);
   }
   s.force = F.leftCols(n);
   s.plane_force_n.setZero();
@@ -712,7 +717,7 @@ void fem_step(const DeformableModel& m, DeformableState& s, double h, double tip
     }
   }
   // held nodes onto their targets; the sums of the post-step checks
-  hold_and_sum(f.mass_kg, n, s, sums);
+  hold_and_sum(f.weight_kg, n, s, sums);
 }
 
 void fem_apply_rest_stiffness(const DeformableModel& m, const Eigen::VectorXd& p,
@@ -723,7 +728,7 @@ void fem_apply_rest_stiffness(const DeformableModel& m, const Eigen::VectorXd& p
   apply_stiffness(m, nullptr, p.data(), theta.data(), node_theta.data(), y.data());
 }
 
-double fem_gershgorin_lambda(const DeformableModel& m) {
+Eigen::VectorXd fem_gershgorin_rows(const DeformableModel& m) {
   const DeformableModel::Fem& f = m.fem;
   const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
   Eigen::VectorXd row = Eigen::VectorXd::Zero(f.node_count);
@@ -740,7 +745,62 @@ double fem_gershgorin_lambda(const DeformableModel& m) {
       }
     }
   }
-  return row.cwiseProduct(f.inv_mass).maxCoeff();
+  return row;
+}
+
+double fem_gershgorin_lambda(const DeformableModel& m) {
+  return fem_gershgorin_rows(m).cwiseProduct(m.fem.inv_mass).maxCoeff();
+}
+
+namespace {
+
+// The inertial masses max(weight_i, row_i / cap) and what depends on them; the stable step
+// re-estimated. Returns the mass added [kg].
+double set_scaled_masses(DeformableModel& m, const Eigen::VectorXd& row, double cap) {
+  DeformableModel::Fem& f = m.fem;
+  f.mass_kg = f.weight_kg.cwiseMax(row / cap);
+  f.inv_mass = f.mass_kg.cwiseInverse();
+  f.added_mass_kg = f.mass_kg.sum() - f.weight_kg.sum();
+  const int ns = m.node_count;
+  m.mass_kg = f.mass_kg.head(ns);
+  m.inv_mass = f.inv_mass.head(ns);
+  m.contact_c =
+      (2.0 * m.params.contact_damping_ratio) * (m.contact_k.cwiseProduct(m.mass_kg)).cwiseSqrt();
+  update_stable_step(m);
+  return f.added_mass_kg;
+}
+
+}  // namespace
+
+void fem_scale_masses(DeformableModel& m) {
+  const DeformableParams& p = m.params;
+  const double target = p.mass_scaling_step_s;
+  if (!(target > 0.0) || m.stable_step_s >= target) return;
+  const Eigen::VectorXd row = fem_gershgorin_rows(m);
+  const double allowed = p.mass_scaling_max_fraction * m.total_mass_kg;
+  // cap = the largest row / mass ratio left [1/s^2]: hi fails (no scaling), lo passes
+  double hi = row.cwiseQuotient(m.fem.weight_kg).maxCoeff(), lo = 0.5 * hi;
+  double added = set_scaled_masses(m, row, lo);
+  while (m.stable_step_s < target) {
+    if (added > allowed || lo < 1e-12 * hi) {
+      bad("mass_scaling_step_s " + teleop::format_number(target) + " s: the stable step is " +
+          teleop::format_number(m.stable_step_s) + " s with " + teleop::format_number(1e3 * added) +
+          " g added (" + teleop::format_number(100.0 * added / m.total_mass_kg) +
+          " % of the body's mass), and mass_scaling_max_fraction allows " +
+          teleop::format_number(100.0 * p.mass_scaling_max_fraction) +
+          " %: lower mass_scaling_step_s, raise mass_scaling_max_fraction or use a coarser mesh");
+    }
+    hi = lo;
+    lo *= 0.5;
+    added = set_scaled_masses(m, row, lo);
+  }
+  // the largest cap that passes, to 2 %
+  while (hi / lo > 1.02) {
+    const double mid = std::sqrt(lo * hi);
+    set_scaled_masses(m, row, mid);
+    (m.stable_step_s >= target ? lo : hi) = mid;
+  }
+  set_scaled_masses(m, row, lo);
 }
 
 double fem_elastic_energy(const DeformableModel& m, const DeformableState& s) {

@@ -42,6 +42,13 @@ void fem_apply_rest_stiffness(const DeformableModel& m, const Eigen::VectorXd& p
                               Eigen::VectorXd& y);
 /// Block Gershgorin upper bound of lambda_max(M^-1 K) at rest [1/s^2].
 double fem_gershgorin_lambda(const DeformableModel& m);
+/// Per node, the bound's row sum of |K| (element law) [N/m].
+Eigen::VectorXd fem_gershgorin_rows(const DeformableModel& m);
+/// Mass scaling (params.mass_scaling_step_s > 0 and above the stable step): raises the inertial
+/// masses of the nodes with the largest stiffness per mass, the fewest (to 2 %) that bring
+/// stable_step_s up to the target, and refreshes the stable step. @throws config::ConfigError
+/// when that needs more than params.mass_scaling_max_fraction of the body's mass.
+void fem_scale_masses(DeformableModel& m);
 
 /// Elastic energy with the current element frames [J].
 double fem_elastic_energy(const DeformableModel& m, const DeformableState& s);

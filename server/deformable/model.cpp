@@ -391,6 +391,7 @@ DeformableModel make_model(const teleop::mesh::TetMesh& tets, const DeformablePa
   m.radial_rest_m.resize(0);
   detail::build_fem(m, tets);
   update_stable_step(m);
+  detail::fem_scale_masses(m);
   return m;
 }
 
@@ -471,7 +472,7 @@ DeformableState make_state(const DeformableModel& m) {
 }
 
 Eigen::Vector3d centroid(const DeformableModel& m, const DeformableState& s) {
-  if (m.params.model == ModelKind::kFem) return s.x * m.fem.mass_kg / m.total_mass_kg;
+  if (m.params.model == ModelKind::kFem) return s.x * m.fem.weight_kg / m.total_mass_kg;
   Eigen::Vector3d c = s.x * m.mass_kg;
   c += m.centre_mass_kg * s.centre_x;
   return c / m.total_mass_kg;
@@ -529,10 +530,12 @@ double potential_energy(const DeformableModel& m, const DeformableState& s) {
   double e = elastic_energy(m, s);
   const Eigen::Vector3d& g = m.params.gravity_mps2;
   if (m.params.model == ModelKind::kFem) {
-    for (int i = m.node_count; i < m.fem.node_count; ++i) e -= m.fem.mass_kg(i) * g.dot(s.x.col(i));
+    for (int i = m.node_count; i < m.fem.node_count; ++i)
+      e -= m.fem.weight_kg(i) * g.dot(s.x.col(i));
   }
+  const bool fem = m.params.model == ModelKind::kFem;
   for (int i = 0; i < m.node_count; ++i) {
-    e -= m.mass_kg(i) * g.dot(s.x.col(i));
+    e -= (fem ? m.fem.weight_kg(i) : m.mass_kg(i)) * g.dot(s.x.col(i));
     for (int k = 0; k < m.plane_count; ++k) {
       const double d = m.planes[static_cast<std::size_t>(k)].signed_distance(s.x.col(i));
       if (d < 0.0) e += 0.5 * m.contact_k(i) * d * d;

@@ -95,6 +95,12 @@ void load_volume_fields(const teleop::config::Node& node, DeformableParams& p) {
       node.number_or("contact_pressure_stiffness_pa_per_m", 0.0, 0.0, 1e15);
   if (!fem && node.has("nodal_pressure")) node.fail("nodal_pressure", "is for model fem only");
   p.nodal_pressure = node.boolean_or("nodal_pressure", true);
+  for (const char* key : {"mass_scaling_step_s", "mass_scaling_max_fraction"}) {
+    if (!fem && node.has(key)) node.fail(key, "is for model fem only");
+  }
+  p.mass_scaling_step_s = node.number_or("mass_scaling_step_s", 0.0, 0.0, 1.0);
+  p.mass_scaling_max_fraction =
+      node.number_or("mass_scaling_max_fraction", p.mass_scaling_max_fraction, 0.0, 0.5);
 }
 
 }  // namespace
@@ -116,6 +122,8 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
                             "tet_max_edge_m",
                             "contact_pressure_stiffness_pa_per_m",
                             "nodal_pressure",
+                            "mass_scaling_step_s",
+                            "mass_scaling_max_fraction",
                             "mass_kg",
                             "density_kg_per_m3",
                             "centre_mass_fraction",

@@ -70,7 +70,14 @@ struct Case {
   int level;
   va::Material material;
   bool nodal_pressure = true;  // the fem default; false: the element law
+  double mass_scaling_step_s = 0.0;  // fem: mass scaling to this stable step (0: none)
 };
+
+std::string variant_name(const Case& c) {
+  if (c.model != df::ModelKind::kFem) return "-";
+  if (!c.nodal_pressure) return "element_strain";
+  return c.mass_scaling_step_s > 0.0 ? "nodal_pressure_mass_scaled_1ms" : "nodal_pressure";
+}
 
 using RowFn = std::function<void(const Case&, const va::PressResult&, const std::string&, double,
                                  double, double, const std::string&, double)>;
@@ -81,12 +88,11 @@ int validate_case(const Case& c, const std::vector<double>& travels, bool quick,
   int failures = 0;
   df::DeformableParams p = va::ball_params(c.model, c.integrator, c.level, c.material);
   p.nodal_pressure = c.nodal_pressure;
+  p.mass_scaling_step_s = c.mass_scaling_step_s;
   const double weight = p.mass_kg * 9.81;
-  std::fprintf(stderr, "validate: %s%s %s L%d %s\n", df::to_string(c.model),
-               c.model != df::ModelKind::kFem ? ""
-               : c.nodal_pressure             ? " (nodal pressure)"
-                                              : " (element strain)",
-               df::to_string(c.integrator), c.level, c.material.name.c_str());
+  std::fprintf(stderr, "validate: %s (%s) %s L%d %s\n", df::to_string(c.model),
+               variant_name(c).c_str(), df::to_string(c.integrator), c.level,
+               c.material.name.c_str());
   // Lamb
   va::PressResult shape;  // nodes and tets for the Lamb rows
   for (auto mode : {va::LambMode::kS2, va::LambMode::kT2, va::LambMode::kS0}) {
@@ -173,6 +179,8 @@ int run_validate(const teleop::CommandArgs& args) {
       for (int level : {1, 2, 3}) cases.push_back({df::ModelKind::kFem, sym, level, mat});
       cases.push_back({df::ModelKind::kFem, imp, 2, mat});
       for (int level : {1, 2, 3}) cases.push_back({df::ModelKind::kFem, sym, level, mat, false});
+      // mass-scaled to one step per 1 ms world step (the default scene's ball)
+      for (int level : {1, 2}) cases.push_back({df::ModelKind::kFem, sym, level, mat, true, 1e-3});
     }
     for (int level : {3, 4, 5})
       cases.push_back({df::ModelKind::kMassSpring, sym, level, va::foam()});
@@ -191,9 +199,7 @@ int run_validate(const teleop::CommandArgs& args) {
     const double err = std::isfinite(reference) && reference != 0.0 && std::isfinite(value)
                            ? 100.0 * (value / reference - 1.0)
                            : std::numeric_limits<double>::quiet_NaN();
-    const std::string variant = c.model != df::ModelKind::kFem ? "-"
-                                : c.nodal_pressure             ? "nodal_pressure"
-                                                               : "element_strain";
+    const std::string variant = variant_name(c);
     csv.row_text({std::string(df::to_string(c.model)), variant,
                   std::string(df::to_string(c.integrator)), "L" + std::to_string(c.level),
                   std::to_string(r.nodes), std::to_string(r.tets), c.material.name, quantity,

@@ -20,7 +20,8 @@ COLOURS = plt.get_cmap("tab20").colors
 
 
 def label(r):
-    nodal = " element strain" if r.get("variant") == "element_strain" else ""
+    nodal = {"element_strain": " element strain",
+             "nodal_pressure_mass_scaled_1ms": " mass-scaled 1 ms"}.get(r.get("variant"), "")
     return f"{r['model']}{nodal} {r['mesh']}" + ("" if r["integrator"] == "symplectic_euler" else " (implicit)")
 
 

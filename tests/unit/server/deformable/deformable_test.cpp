@@ -70,6 +70,10 @@ TEST(Params, ErrorsNameFileFieldAndRange) {
   expect_error("deformable: {model: finite_elements}", "deformable.model");
   expect_error("deformable: {model: fem, level: 5}", "deformable.level");  // shipped balls 1-4
   expect_error("deformable: {model: mass_spring, tet_mesh_file: b.msh}", "tet_mesh_file");
+  expect_error("deformable: {model: mass_spring, mass_scaling_step_s: 0.001}",
+               "mass_scaling_step_s");
+  expect_error("deformable: {model: fem, mass_scaling_max_fraction: 0.6}",
+               "deformable.mass_scaling_max_fraction");
   expect_error("deformable: {model: fem, mesh_file: a.obj, tet_mesh_file: b.msh}", "tet_mesh_file");
   expect_error("deformable: {radus_m: 1}", "radus_m");
   expect_error("deformable: {mass_kg: 1, density_kg_per_m3: 10}", "density_kg_per_m3");

@@ -232,3 +232,46 @@ TEST(FemAgainstPhysics, NodalPressureUnlocksANearlyIncompressibleBall) {
   const double ref = va::lamb_frequency_hz(va::LambMode::kS0, rubber, va::kBallRadiusM);
   EXPECT_LT(std::fabs(error_pct(va::free_vibration_hz(p, va::LambMode::kS0, 1.0, ref), ref)), 10.0);
 }
+
+TEST(FemAgainstPhysics, MassScaledToOneStepPerMillisecondStaysWithinTheReferences) {
+  // the default ball mass-scaled so that one symplectic step spans the 1 ms world step: the
+  // inertia added (at the small elements of the poles) leaves Lamb's modes and the quasi-static
+  // presses against the CalculiX ball where the unscaled ball has them
+  const auto ref = read_calculix();
+  const std::vector<double> travels = {2e-3, 5e-3, 10e-3};
+  for (const va::Material& mat : {va::foam(), va::silicone()}) {
+    SCOPED_TRACE(mat.name);
+    df::DeformableParams p =
+        va::ball_params(df::ModelKind::kFem, df::IntegratorKind::kSymplecticEuler, 2, mat);
+    const df::DeformableParams plain = p;
+    p.mass_scaling_step_s = 1e-3;
+    const df::DeformableModel m = df::make_model(p);
+    EXPECT_GE(m.stable_step_s, 1e-3);
+    EXPECT_EQ(m.substeps_for(1e-3), 1);
+    EXPECT_GT(m.fem.added_mass_kg, 0.0);
+    EXPECT_LT(m.fem.added_mass_kg, 0.02 * p.mass_kg);
+    std::printf("%s: added %.2f g (%.2f %%), stable step %.3f ms\n", mat.name.c_str(),
+                1e3 * m.fem.added_mass_kg, 100.0 * m.fem.added_mass_kg / p.mass_kg,
+                1e3 * m.stable_step_s);
+    for (auto mode : {va::LambMode::kS2, va::LambMode::kT2, va::LambMode::kS0}) {
+      const double lamb = va::lamb_frequency_hz(mode, mat, va::kBallRadiusM);
+      const double scaled = va::free_vibration_hz(p, mode, 1.0, lamb);
+      const double unscaled = va::free_vibration_hz(plain, mode, 1.0, lamb);
+      std::printf("  %s: scaled %+.2f %%, unscaled %+.2f %% against Lamb\n", va::to_string(mode),
+                  error_pct(scaled, lamb), error_pct(unscaled, lamb));
+      EXPECT_LT(std::fabs(error_pct(scaled, lamb)), 10.0) << va::to_string(mode);
+      EXPECT_LT(std::fabs(error_pct(scaled, unscaled)), 2.0) << va::to_string(mode);
+    }
+    const va::PressResult heavy = va::press_ball(p, va::Support::kFloor, true, travels, 0.01, 1.0);
+    EXPECT_EQ(heavy.faults, 0u);
+    EXPECT_NEAR(heavy.floor_force_n, p.mass_kg * 9.81, 0.005 * p.mass_kg * 9.81);  // the weight
+    for (std::size_t k = 0; k < travels.size(); ++k) {
+      const std::string mm = std::to_string(static_cast<int>(std::lround(travels[k] * 1e3)));
+      const double e = error_pct(
+          heavy.force_n[k],
+          ccx(ref, mat.name + ",tip_floor_gravity,tip_force," + mm + ",small_strain,fine"));
+      std::printf("  %s mm on the floor: %+.2f %% against CalculiX\n", mm.c_str(), e);
+      EXPECT_LT(std::fabs(e), 10.0) << mm << " mm";
+    }
+  }
+}
