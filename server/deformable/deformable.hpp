@@ -399,6 +399,9 @@ struct DeformableState {
   int fem_contacts = 0;
   // params.nodal_pressure: each tet's volumetric strain, and each node's average of them
   std::vector<double> fem_theta, fem_node_theta;
+  /// model fem with nodal pressure: per group of four tets, their deviatoric node forces and the
+  /// forces of a unit pressure (72 values; element_forces' second pass)
+  std::vector<double> fem_group;
   /// Model fem: a rigid sphere the surface nodes are kept out of within step() (the slave's
   /// tip): its centre moves linearly from tip_from_m to tip_to_m over the step. Set by the
   /// caller before step(); tip_radius_m <= 0: none.

@@ -58,12 +58,18 @@ TELEOP_ALWAYS_INLINE void edge_matrix(const double* q, const int* ix, double* d)
 }
 
 // The edge matrices of four tetrahedra (node indices ix[l], one per lane) of field q (3 x N).
+// Each vector is built from its four lanes' values at once (no lane-by-lane stores into vectors
+// that are then reloaded whole).
 TELEOP_ALWAYS_INLINE void edge_matrix4(const double* q, const int* const* ix, V4* d) {
-  for (int l = 0; l < 4; ++l) {
-    const double* q0 = q + 3 * ix[l][0];
+  const double* p[4][4];  // [node k of the tet][lane l]
+  for (int k = 0; k < 4; ++k) {
+    for (int l = 0; l < 4; ++l) p[k][l] = q + 3 * ix[l][k];
+  }
+  for (int r = 0; r < 3; ++r) {
+    const V4 base = {p[0][0][r], p[0][1][r], p[0][2][r], p[0][3][r]};
     for (int c = 0; c < 3; ++c) {
-      const double* qc = q + 3 * ix[l][c + 1];
-      for (int r = 0; r < 3; ++r) d[3 * c + r][l] = qc[r] - q0[r];
+      const V4 qc = {p[c + 1][0][r], p[c + 1][1][r], p[c + 1][2][r], p[c + 1][3][r]};
+      d[3 * c + r] = qc - base;
     }
   }
 }
@@ -148,13 +154,8 @@ TELEOP_ALWAYS_INLINE void group_frames(DeformableState& s, int t0, const V4* fg,
                                        double tolerance, V4* r) {
   // frames: one Newton step from the warm start in four lanes
   double* qd = s.fem_q.data() + 4 * t0;
-  V4 qw, qx, qy, qz;
-  for (int l = 0; l < 4; ++l) {
-    qw[l] = qd[4 * l];
-    qx[l] = qd[4 * l + 1];
-    qy[l] = qd[4 * l + 2];
-    qz[l] = qd[4 * l + 3];
-  }
+  V4 qw = {qd[0], qd[4], qd[8], qd[12]}, qx = {qd[1], qd[5], qd[9], qd[13]},
+     qy = {qd[2], qd[6], qd[10], qd[14]}, qz = {qd[3], qd[7], qd[11], qd[15]};
   quaternion_matrix(qw, qx, qy, qz, r);
   V4 ox, oy, oz;
   V4i newton;
@@ -168,9 +169,11 @@ TELEOP_ALWAYS_INLINE void group_frames(DeformableState& s, int t0, const V4* fg,
     V4 nx = qx + hx * qw + hy * qz - hz * qy;
     V4 ny = qy - hx * qz + hy * qw + hz * qx;
     V4 nz = qz + hx * qy - hy * qx + hz * qw;
-    V4 inv;
-    for (int l = 0; l < 4; ++l)
-      inv[l] = 1.0 / std::sqrt(nw[l] * nw[l] + nx[l] * nx[l] + ny[l] * ny[l] + nz[l] * nz[l]);
+    // 1 / |n| by two Newton steps from 1: exact to rounding for the lanes kept (|o| <= 3e-4
+    // rad: |n|^2 - 1 ~ 1e-8); the others are redone by the scalar iteration below
+    const V4 n2 = nw * nw + nx * nx + ny * ny + nz * nz;
+    V4 inv = 1.5 - 0.5 * n2;
+    inv = inv * (1.5 - 0.5 * n2 * inv * inv);
     const V4i moved = w2 > tol2;
     qw = moved ? nw * inv : qw;
     qx = moved ? nx * inv : qx;
@@ -180,11 +183,10 @@ TELEOP_ALWAYS_INLINE void group_frames(DeformableState& s, int t0, const V4* fg,
     for (int l = 0; l < 4; ++l) {
       if (newton[l] != 0 && w2[l] <= tolerance) continue;  // a Newton step: error ~ its square
       double a[9], rl[9];
-      for (int k = 0; k < 9; ++k) {
-        a[k] = fg[k][l];
-        rl[k] = r[k][l];
-      }
+      for (int k = 0; k < 9; ++k) a[k] = fg[k][l];
       Eigen::Quaterniond q(qw[l], qx[l], qy[l], qz[l]);
+      q.normalize();  // the lanes' 1 / |n| is exact only for the small increments kept
+      quaternion_matrix(q.w(), q.x(), q.y(), q.z(), rl);
       extract_rotation(a, q, iterations, tolerance, rl);
       qw[l] = q.w();
       qx[l] = q.x();
@@ -203,49 +205,9 @@ TELEOP_ALWAYS_INLINE void group_frames(DeformableState& s, int t0, const V4* fg,
   }
 }
 
-// The elastic and damping forces of tetrahedra 4g .. 4g + 3, one per lane, added to out: the
-// arithmetic of the scalar loop below in four lanes (the frames: group_frames).
-TELEOP_ALWAYS_INLINE void element_group(const DeformableModel& m, DeformableState& s, int g,
-                                        double beta, int iterations, double tolerance,
-                                        double* out) {
-  const DeformableModel::Fem& f = m.fem;
-  const bool nodal = m.params.nodal_pressure;
-  const double mu = m.lame_mu_pa, lambda = nodal ? 0.0 : m.lame_lambda_pa;
-  const double* x = s.x.data();
-  const double* v = s.v.data();
-  const int t0 = 4 * g;
-  const int* ix[4] = {f.tets.col(t0).data(), f.tets.col(t0 + 1).data(), f.tets.col(t0 + 2).data(),
-                      f.tets.col(t0 + 3).data()};
-  V4 ds[9], b[9], fg[9];
-  edge_matrix4(x, ix, ds);
-  const double* b4 = f.dm_inv4.data() + 36 * g;
-  for (int k = 0; k < 9; ++k) b[k] = load4(b4 + 4 * k);
-  mul33(ds, b, fg);
-  V4 r[9];
-  group_frames(s, t0, fg, iterations, tolerance, r);
-  V4 gm[9], sig[9], p[9];
-  mul33_tn(r, fg, gm);  // R^T F
-  if (beta > 0.0) {
-    V4 dv[9], fd[9], gd[9];
-    edge_matrix4(v, ix, dv);
-    mul33(dv, b, fd);
-    mul33_tn(r, fd, gd);
-    for (int k = 0; k < 9; ++k) gm[k] += beta * gd[k];
-  }
-  linear_stress(gm, mu, lambda, 1.0, sig);
-  if (nodal) {
-    const V4 theta = gm[0] + gm[4] + gm[8] - 3.0;  // tr(eps) (+ beta its rate)
-    for (int l = 0; l < 4; ++l) s.fem_theta[static_cast<std::size_t>(t0 + l)] = theta[l];
-  }
-  mul33(r, sig, p);  // P = R sigma
-  // node forces -vol P B(j, :)^T, node 0 the negative sum
-  const V4 vol = load4(f.volume4.data() + 4 * g);
-  V4 h[9];
-  for (int j = 0; j < 3; ++j) {
-    for (int i = 0; i < 3; ++i) {
-      h[3 * j + i] = -vol * (p[i] * b[j] + p[3 + i] * b[3 + j] + p[6 + i] * b[6 + j]);
-    }
-  }
+// Adds the node forces h (h[3 j + i]: component i on node j + 1 of the lane's tetrahedron; node 0
+// takes minus their sum) of four tetrahedra to out.
+TELEOP_ALWAYS_INLINE void scatter4(const V4* h, const int* const* ix, double* out) {
   for (int l = 0; l < 4; ++l) {
     double sx = 0.0, sy = 0.0, sz = 0.0;
     for (int j = 0; j < 3; ++j) {
@@ -264,8 +226,86 @@ TELEOP_ALWAYS_INLINE void element_group(const DeformableModel& m, DeformableStat
   }
 }
 
+// h = -vol P B^T (nodes 1..3 of each lane; column-major P, B).
+TELEOP_ALWAYS_INLINE void node_forces4(const V4* p, const V4* b, V4 vol, V4* h) {
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 3; ++i) {
+      h[3 * j + i] = -vol * (p[i] * b[j] + p[3 + i] * b[3 + j] + p[6 + i] * b[6 + j]);
+    }
+  }
+}
+
+// The elastic and damping forces of tetrahedra 4g .. 4g + 3, one per lane: the arithmetic of the
+// scalar loop below in four lanes (the frames: group_frames). Without nodal pressure they are
+// added to out; with it (`group` set) the deviatoric forces and -vol R B^T are kept in group[72]
+// for pressure_group, which adds both once the nodes' pressures are known (one scatter per tet).
+TELEOP_ALWAYS_INLINE void element_group(const DeformableModel& m, DeformableState& s, int g,
+                                        double beta, int iterations, double tolerance,
+                                        double* group, double* out) {
+  const DeformableModel::Fem& f = m.fem;
+  const double mu = m.lame_mu_pa, lambda = group != nullptr ? 0.0 : m.lame_lambda_pa;
+  const int t0 = 4 * g;
+  const int* ix[4] = {f.tets.col(t0).data(), f.tets.col(t0 + 1).data(), f.tets.col(t0 + 2).data(),
+                      f.tets.col(t0 + 3).data()};
+  V4 ds[9], b[9], fg[9];
+  edge_matrix4(s.x.data(), ix, ds);
+  const double* b4 = f.dm_inv4.data() + 36 * g;
+  for (int k = 0; k < 9; ++k) b[k] = load4(b4 + 4 * k);
+  mul33(ds, b, fg);
+  V4 r[9];
+  group_frames(s, t0, fg, iterations, tolerance, r);
+  V4 gm[9], sig[9], p[9];
+  if (beta > 0.0) {
+    // R^T (F + beta F') = R^T (Ds + beta Dv) B
+    V4 dv[9], fb[9];
+    edge_matrix4(s.v.data(), ix, dv);
+    for (int k = 0; k < 9; ++k) dv[k] = ds[k] + beta * dv[k];
+    mul33(dv, b, fb);
+    mul33_tn(r, fb, gm);
+  } else {
+    mul33_tn(r, fg, gm);  // R^T F
+  }
+  linear_stress(gm, mu, lambda, 1.0, sig);
+  mul33(r, sig, p);  // P = R sigma
+  const V4 vol = load4(f.volume4.data() + 4 * g);
+  V4 h[9];
+  node_forces4(p, b, vol, h);
+  if (group == nullptr) {
+    scatter4(h, ix, out);
+    return;
+  }
+  const V4 theta = gm[0] + gm[4] + gm[8] - 3.0;  // tr(eps) (+ beta its rate)
+  store4(s.fem_theta.data() + t0, theta);
+  V4 rb[9];
+  node_forces4(r, b, vol, rb);  // -vol R B^T: the force of a unit pressure
+  for (int k = 0; k < 9; ++k) {
+    store4(group + 4 * k, h[k]);
+    store4(group + 36 + 4 * k, rb[k]);
+  }
+}
+
+// The forces of tetrahedra 4g .. 4g + 3 with their nodal pressure p_e = lambda (mean of their
+// nodes' theta_a): group[72] from element_group, node_theta the nodes' mean volumetric strains.
+TELEOP_ALWAYS_INLINE void pressure_group(const DeformableModel& m, int g, const double* group,
+                                         const double* node_theta, double* out) {
+  const DeformableModel::Fem& f = m.fem;
+  const int t0 = 4 * g;
+  const int* ix[4] = {f.tets.col(t0).data(), f.tets.col(t0 + 1).data(), f.tets.col(t0 + 2).data(),
+                      f.tets.col(t0 + 3).data()};
+  V4 pe;
+  for (int l = 0; l < 4; ++l) {
+    pe[l] =
+        node_theta[ix[l][0]] + node_theta[ix[l][1]] + node_theta[ix[l][2]] + node_theta[ix[l][3]];
+  }
+  pe *= 0.25 * m.lame_lambda_pa;
+  V4 h[9];
+  for (int k = 0; k < 9; ++k) h[k] = load4(group + 4 * k) + pe * load4(group + 36 + 4 * k);
+  scatter4(h, ix, out);
+}
+
 // Elastic and damping forces of every tetrahedron, added to out (3 x N): frames refreshed in
-// s.fem_q / s.fem_r. Four at a time (element_group), the last tet_count % 4 one by one.
+// s.fem_q / s.fem_r. Four at a time (element_group), the last tet_count % 4 one by one; with
+// nodal pressure a second pass adds each tetrahedron's forces once its nodes' pressures are known.
 TELEOP_HOT_CLONES
 void element_forces(const DeformableModel& m, DeformableState& s, double beta, int iterations,
                     double tolerance, double* out) {
@@ -275,7 +315,10 @@ void element_forces(const DeformableModel& m, DeformableState& s, double beta, i
   const double* x = s.x.data();
   const double* v = s.v.data();
   const int groups = f.tet_count / 4;
-  for (int g = 0; g < groups; ++g) element_group(m, s, g, beta, iterations, tolerance, out);
+  double* kept = s.fem_group.data();
+  for (int g = 0; g < groups; ++g) {
+    element_group(m, s, g, beta, iterations, tolerance, nodal ? kept + 72 * g : nullptr, out);
+  }
   for (int t = 4 * groups; t < f.tet_count; ++t) {
     const int* ix = f.tets.col(t).data();
     const double* b = f.dm_inv.data() + 9 * t;
@@ -303,8 +346,25 @@ void element_forces(const DeformableModel& m, DeformableState& s, double beta, i
     mul33(r, sig, p);  // P = R sigma
     scatter_forces(p, b, f.volume_m3(t), ix, 1.0, out);
   }
-  if (nodal)
-    nodal_pressure_forces(m, s.fem_r.data(), s.fem_theta.data(), s.fem_node_theta.data(), 1.0, out);
+  if (!nodal) return;
+  // the nodes' mean volumetric strains, then each tetrahedron's forces with its pressure
+  double* node_theta = s.fem_node_theta.data();
+  for (int i = 0; i < f.node_count; ++i) node_theta[i] = 0.0;
+  for (int t = 0; t < f.tet_count; ++t) {
+    const double w = 0.25 * f.volume_m3(t) * s.fem_theta[static_cast<std::size_t>(t)];
+    for (int k = 0; k < 4; ++k) node_theta[f.tets(k, t)] += w;
+  }
+  for (int i = 0; i < f.node_count; ++i) node_theta[i] *= f.inv_node_volume(i);
+  for (int g = 0; g < groups; ++g) pressure_group(m, g, kept + 72 * g, node_theta, out);
+  for (int t = 4 * groups; t < f.tet_count; ++t) {
+    const int* ix = f.tets.col(t).data();
+    const double pe =
+        0.25 * m.lame_lambda_pa *
+        (node_theta[ix[0]] + node_theta[ix[1]] + node_theta[ix[2]] + node_theta[ix[3]]);
+    double p[9];
+    for (int k = 0; k < 9; ++k) p[k] = pe * s.fem_r[9 * static_cast<std::size_t>(t) + k];
+    scatter_forces(p, f.dm_inv.data() + 9 * t, f.volume_m3(t), ix, 1.0, out);
+  }
 }
 
 // out = K p at the current frames (rotate = true) or at rest (false); p and out 3 x N.
@@ -657,6 +717,7 @@ void init_fem_state(const DeformableModel& m, DeformableState& s) {
   s.fem_r.assign(9 * static_cast<std::size_t>(f.tet_count), 0.0);
   s.fem_theta.assign(static_cast<std::size_t>(f.tet_count), 0.0);
   s.fem_node_theta.assign(static_cast<std::size_t>(f.node_count), 0.0);
+  s.fem_group.assign(72 * static_cast<std::size_t>(f.tet_count / 4), 0.0);
   for (int t = 0; t < f.tet_count; ++t) {
     s.fem_q[4 * static_cast<std::size_t>(t)] = 1.0;
     for (int k = 0; k < 3; ++k) s.fem_r[9 * static_cast<std::size_t>(t) + 4 * k] = 1.0;
