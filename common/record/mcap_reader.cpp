@@ -172,6 +172,7 @@ struct Reader::Source {
                                 std::to_string(offset) + " runs past the end of the file (" +
                                 std::to_string(size) + " bytes)");
     }
+    if (n == 0) return;
     if (memory) {
       std::memcpy(out, memory + offset, static_cast<std::size_t>(n));
       return;
@@ -233,11 +234,15 @@ Reader::Reader(const std::uint8_t* data, std::size_t size, const std::string& na
   open();
 }
 
-Reader::~Reader() { ZSTD_freeDCtx(static_cast<ZSTD_DCtx*>(dctx_)); }
+Reader::~Reader() = default;
+
+void Reader::FreeDctx::operator()(void* dctx) const {
+  ZSTD_freeDCtx(static_cast<ZSTD_DCtx*>(dctx));
+}
 
 void Reader::open() {
   size_ = source_->size;
-  dctx_ = ZSTD_createDCtx();
+  dctx_.reset(ZSTD_createDCtx());
   if (!dctx_) throw RecordingError(name_ + ": out of memory (zstd)");
   std::uint8_t head[8 + 9] = {};
   if (size_ < sizeof head) {
@@ -449,10 +454,11 @@ void Reader::read_chunk(std::uint64_t offset, std::uint64_t length,
   }
   records.resize(static_cast<std::size_t>(h.uncompressed_size));
   if (h.compression.empty()) {
-    std::memcpy(records.data(), in, static_cast<std::size_t>(n));
+    if (n > 0) std::memcpy(records.data(), in, static_cast<std::size_t>(n));
   } else {
-    const std::size_t got = ZSTD_decompressDCtx(static_cast<ZSTD_DCtx*>(dctx_), records.data(),
-                                                records.size(), in, static_cast<std::size_t>(n));
+    const std::size_t got =
+        ZSTD_decompressDCtx(static_cast<ZSTD_DCtx*>(dctx_.get()), records.data(), records.size(),
+                            in, static_cast<std::size_t>(n));
     if (ZSTD_isError(got) || got != records.size()) {
       c.fail("records",
              ZSTD_isError(got) ? std::string("do not decompress (") + ZSTD_getErrorName(got) + ")"
@@ -642,9 +648,9 @@ void Reader::count_cut_chunk(std::uint64_t pos) {
     std::size_t produced = 0;
     if (compression.empty()) {
       produced = static_cast<std::size_t>(std::min(n, usize));
-      std::memcpy(out.data(), in, produced);
+      if (produced > 0) std::memcpy(out.data(), in, produced);
     } else if (compression == "zstd") {
-      auto* d = static_cast<ZSTD_DCtx*>(dctx_);
+      auto* d = static_cast<ZSTD_DCtx*>(dctx_.get());
       ZSTD_DCtx_reset(d, ZSTD_reset_session_only);
       ZSTD_inBuffer ib{in, static_cast<std::size_t>(n), 0};
       ZSTD_outBuffer ob{out.data(), out.size(), 0};

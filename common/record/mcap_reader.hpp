@@ -139,7 +139,10 @@ class Reader {
   std::uint64_t start_ns_ = 0, end_ns_ = 0;
   Health health_;
   std::string data_crc_status_;
-  void* dctx_ = nullptr;  // ZSTD_DCtx
+  struct FreeDctx {
+    void operator()(void* dctx) const;
+  };
+  std::unique_ptr<void, FreeDctx> dctx_;  // ZSTD_DCtx, freed even when a constructor throws
   // the scan
   std::vector<std::size_t> candidates_;
   std::size_t next_candidate_ = 0;
