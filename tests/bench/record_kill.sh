@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # What a teleop_record killed with -9 loses: one server + master session (loopback profile,
-# domain 104) recorded by two MCAP recorders; one is stopped normally, the other
-# killed with -9 3.4, 3.7, 4.1 ... s into the session (another moment of its chunk each run).
-# Both files are converted to SQLite
-# (teleop_play --convert) and compared with python3's sqlite3: the samples the finished
-# recording received before the kill that the recovered file lacks are what the kill lost.
-# Prints, per run, the recovered chunks, the lost samples and the span they cover. No
-# assertion: figures for docs/tools.md.
+# domain 104) recorded by two MCAP recorders; one is stopped normally, the other killed with -9
+# 3.4, 3.7, 4.1 ... s into the session (another moment of its chunk each run). Both files are
+# converted to SQLite (teleop_play --convert) and compared with python3's sqlite3: the samples
+# the finished recording received before the kill, from the first sample the killed recorder
+# heard of each writer on, that the recovered file lacks are what the kill lost. Prints, per
+# run, the recovered chunks, the lost samples and the span they cover. No assertion: figures for
+# docs/tools.md.
 #   tests/bench/record_kill.sh [BUILD_DIR] [RUNS] [SCENE] [CHUNK_S]
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -34,7 +34,7 @@ for i in $(seq 1 "$runs"); do
   sleep "$(awk -v i="$i" 'BEGIN {print 3 + 0.37 * i}')"
   kill -KILL $victim
   killed_ns=$(date +%s%N)
-  wait $victim 2>/dev/null || true
+  wait $victim 2>/dev/null || true  # bash reports the kill on stderr
   wait $master || true
   kill -TERM $server; wait $server || true
   sleep 0.3
@@ -52,13 +52,19 @@ def keyed(path):
     return {(names[t], w, s): r for t, w, s, r in
             db.execute("SELECT topic_id, writer_guid, writer_seq, receive_ns FROM samples")}
 a, b = keyed(full), keyed(killed)
-before = {k: r for k, r in a.items() if r <= killed_ns}
+# a writer's samples count from the first one the killed recorder heard (the two recorders
+# matched each writer at slightly different times)
+first = {}
+for t, w, s in b:
+    first[(t, w)] = min(s, first.get((t, w), s))
+before = {k: r for k, r in a.items() if r <= killed_ns and (k[0], k[1]) in first and
+          k[2] >= first[(k[0], k[1])]}
 lost = [r for k, r in before.items() if k not in b]
 extra = [k for k in b if k not in a]
 span = (max(lost) - min(lost)) / 1e9 if lost else 0.0
 last = max(b.values()) if b else 0
 print(f"run {run}: killed recording {len(b)} samples in {chunks} chunks; the finished one had "
-      f"{len(before)} by the kill: {len(lost)} lost ({100 * len(lost) / max(1, len(before)):.1f} %), "
+      f"{len(before)} of those writers by the kill: {len(lost)} lost ({100 * len(lost) / max(1, len(before)):.1f} %), "
       f"spanning {span:.3f} s; last recovered sample {(killed_ns - last) / 1e9:.3f} s before the "
       f"kill; {len(extra)} samples not in the finished file")
 PY
