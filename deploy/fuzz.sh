@@ -7,7 +7,7 @@
 # bug, and commit the input into tests/fuzz/corpus/<name>/regression_<what> so every test run
 # replays it. Prints executions, executions per second and crashes of each fuzzer.
 #
-#   deploy/fuzz.sh [SECONDS] [scene|mesh|command ...]     e.g. deploy/fuzz.sh 3600 scene
+#   deploy/fuzz.sh [SECONDS] [scene|mesh|command|mcap ...]     e.g. deploy/fuzz.sh 3600 scene
 #   JOBS=2 deploy/fuzz.sh 600        # libFuzzer -jobs/-workers per fuzzer (default 1)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -15,7 +15,7 @@ build="${FUZZ_BUILD_DIR:-$root/build-fuzz}"
 seconds="${1:-600}"
 shift || true
 names=("$@")
-[ ${#names[@]} -eq 0 ] && names=(scene mesh command)
+[ ${#names[@]} -eq 0 ] && names=(scene mesh command mcap)
 jobs="${JOBS:-1}"
 command -v clang++ >/dev/null || { echo "fuzz.sh: clang++ not found (apt-get install clang)" >&2; exit 2; }
 if [ ! -f "$build/CMakeCache.txt" ]; then

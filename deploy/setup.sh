@@ -23,6 +23,12 @@ packages=(
   clang-format
   clang libclang-rt-dev   # libFuzzer + sanitizers of the fuzz targets (tests/fuzz, deploy/fuzz.sh)
 )
+# Node.js and npm: tests/node reads MCAP recordings with the MCAP project's own reader
+# (@mcap/core; `npm ci` from tests/node/package-lock.json, run by deploy/build.sh). A Node.js
+# already on the PATH (NodeSource's package bundles npm and conflicts with Debian's npm) is used.
+if ! command -v npm >/dev/null 2>&1; then
+  packages+=(nodejs npm)
+fi
 if [ "${TELEOP_SETUP_VIEWER:-1}" = "1" ]; then
   packages+=(libglfw3-dev libgl-dev libimgui-dev zlib1g-dev xvfb xauth)
 fi

@@ -4,6 +4,13 @@
 //   teleop_play FILE [--speed 1] [--seek S] [--domain D] [--profile P]
 //                    [--exclude TOPIC]... [--wait 0.5] [--linger 1] [--quiet]
 //   teleop_play FILE --export-commands STREAM.csv
+//   teleop_play FILE --info
+//   teleop_play FILE --convert OUT
+//
+// FILE is an MCAP or an SQLite recording (told apart by its first bytes). An MCAP file is read
+// through its summary, seeking by its chunk index; one whose recorder was killed (no summary)
+// is recovered: every complete chunk whose CRC checks is played, and --info says what was
+// dropped.
 //
 // Each topic is published with the QoS class it was recorded with (latched topics stay
 // transient local for late observers), each sample byte for byte as it was received, paced by
@@ -14,19 +21,23 @@
 //
 // --export-commands writes the recording's master commands as a command stream for the
 // server's off-line re-simulation (`teleop_experiment resim`, docs/tools.md) and publishes
-// nothing.
+// nothing. --info reads every sample (CRCs, sizes) and prints what the file holds and how it
+// was read. --convert writes the recording in the other format (by OUT's extension: SQLite for
+// .db, .sqlite, .sqlite3, else MCAP).
 //
 // Exit status: 0 done, 2 bad command line (or --seek past the end), 1 runtime failure.
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <optional>
 
-#include "client/record/command_export.hpp"
+#include "client/record/info.hpp"
 #include "client/record/player.hpp"
-#include "client/record/recording.hpp"
 #include "client/record/topic_table.hpp"
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
+#include "common/record/commands.hpp"
+#include "common/record/convert.hpp"
+#include "common/record/recording.hpp"
 #include "common/util/signals.hpp"
 
 int main(int argc, char** argv) {
@@ -62,6 +73,14 @@ int main(int argc, char** argv) {
   app.add_option("--export-commands", export_commands,
                  "write the recorded master commands to this command stream (CSV) for "
                  "`teleop_experiment resim`, publish nothing");
+  bool info = false;
+  app.add_flag("--info", info,
+               "read every sample, print what the file holds and how it was read, publish "
+               "nothing");
+  std::string convert;
+  app.add_option("--convert", convert,
+                 "write the recording to this file in the other format (SQLite for .db, "
+                 ".sqlite, .sqlite3, else MCAP), publish nothing");
   if (const int status = teleop::config::parse_command_line(app, "teleop_play", argc, argv);
       status >= 0) {
     return status == 2 ? 2 : status;
@@ -81,6 +100,18 @@ int main(int argc, char** argv) {
       }
     }
     config::require_regular_file(po.file, "recording");
+    if (info) {
+      std::cout << record::recording_info(po.file);
+      return 0;
+    }
+    if (!convert.empty()) {
+      const auto n = record::convert_recording(po.file, convert, record::format_for_path(convert));
+      if (!po.quiet) {
+        std::cout << "teleop_play: " << n << " samples -> " << convert << " ("
+                  << record::format_name(record::format_for_path(convert)) << ")\n";
+      }
+      return 0;
+    }
     if (!export_commands.empty()) {
       const std::size_t n = record::export_command_stream(po.file, export_commands);
       if (!po.quiet)

@@ -1,18 +1,25 @@
 // teleop_record: records every teleop/* topic of a session into one indexed file.
 //
-//   teleop_record --out session.db [--duration S] [--domain D] [--profile P]
-//                 [--queue-mb 64] [--batch-ms 10] [--exclude TOPIC]... [--summary-json FILE]
-//                 [--quiet]
+//   teleop_record --out session.mcap [--format mcap|sqlite] [--duration S] [--domain D]
+//                 [--profile P] [--queue-mb 64] [--batch-ms 10] [--chunk-mb 1] [--chunk-s 1]
+//                 [--exclude TOPIC]... [--summary-json FILE] [--quiet]
 //
 // Each sample is stored as the serialized CDR payload its writer sent, with the writer's
 // source timestamp, the recorder's receive timestamp, the writer's GUID and sequence number
-// (client/record/recording.hpp: SQLite, zstd for large payloads). It only subscribes, with the
-// QoS class of each topic's live writers, so it never slows the loop. Memory is bounded by
-// --queue-mb; samples dropped because the queue was full, and samples lost before they reached
-// the recorder (gaps in a writer's sequence numbers), are counted and printed at the end.
+// (common/record/recording.hpp). The format is MCAP unless --out ends in .db, .sqlite or
+// .sqlite3 (SQLite) or --format says otherwise: one schema per type (the IDL text), one
+// channel per topic, zstd chunks closed every --chunk-mb of samples or --chunk-s seconds,
+// whichever comes first, a chunk index and a summary; Foxglove and Lichtblick open it as it is.
+// It only subscribes, with the QoS class of each topic's live writers, so it never slows the
+// loop. Memory is bounded by --queue-mb; samples dropped because the queue was full, and
+// samples lost before they reached the recorder (gaps in a writer's sequence numbers), are
+// counted and printed at the end.
 //
-// A file that cannot be written (a full disk) stops the recording: the file keeps every sample
-// committed before, and the recorder says how many and exits 1.
+// Killed with -9, an MCAP recording keeps every chunk already written: what is lost is the open
+// chunk (at most --chunk-s seconds of samples) and the queue (--batch-ms plus up to 50 ms).
+// A file that cannot be written (a full disk) stops the recording: an MCAP file is closed as a
+// valid file holding its complete chunks, an SQLite file keeps every committed sample; the
+// recorder says how many and exits 1.
 //
 // Exit status: 0 done, 2 bad command line, 1 runtime failure (file, DDS, a full disk).
 #include <CLI/CLI.hpp>
@@ -26,9 +33,79 @@
 #include "client/record/topic_table.hpp"
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
+#include "common/record/recording.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/files.hpp"
 #include "common/util/signals.hpp"
+
+namespace {
+
+using namespace teleop;
+
+/// Checks the flags that need more than a range and fills `ro` from them.
+/// @throws config::ConfigError naming the flag, its value and what is allowed.
+void check_options(record::RecorderOptions& ro, const std::string& format, double queue_mb,
+                   double chunk_mb, double chunk_s) {
+  config::check_flag("--queue-mb", queue_mb, 1.0, 4096.0);
+  config::check_flag("--batch-ms", ro.batch_ms, 0.0, 50.0);
+  for (const auto& t : ro.exclude) {
+    if (!record::find_topic(t)) {
+      std::string names;
+      for (const auto& e : record::known_topics()) names += (names.empty() ? "" : ", ") + e.name;
+      throw config::ConfigError("command line: --exclude '" + t +
+                                "' is not a known topic (allowed: " + names + ")");
+    }
+  }
+  ro.queue_bytes = static_cast<std::size_t>(queue_mb * 1024.0 * 1024.0);
+  config::check_flag("--chunk-mb", chunk_mb, 0.0625, 64.0);
+  config::check_flag("--chunk-s", chunk_s, 0.05, 60.0);
+  ro.mcap.chunk_bytes = static_cast<std::uint64_t>(chunk_mb * 1024.0 * 1024.0);
+  ro.mcap.chunk_ns = static_cast<std::int64_t>(chunk_s * 1e9);
+  const record::RecordingFormat by_name = record::format_for_path(ro.out);
+  ro.format = format.empty() ? by_name : record::parse_format("--format", format);
+  const bool mcap_name = ro.out.size() > 5 && ro.out.substr(ro.out.size() - 5) == ".mcap";
+  if ((*ro.format == record::RecordingFormat::kMcap && by_name != *ro.format) ||
+      (*ro.format == record::RecordingFormat::kSqlite && mcap_name)) {
+    throw config::ConfigError(
+        "command line: --format " + format + " does not match the extension of --out '" + ro.out +
+        "' (.mcap: mcap; .db, .sqlite, .sqlite3: sqlite); rename the file or leave "
+        "--format out");
+  }
+}
+
+/// Prints what was recorded (or the failure), writes --summary-json; returns the exit status.
+int report(const record::Recorder& recorder, const std::string& out, bool quiet,
+           const std::string& summary_json) {
+  if (recorder.failed()) {
+    // a full disk: the file keeps every sample written before the failure (MCAP: a valid file
+    // of its complete chunks)
+    std::fprintf(stderr,
+                 "teleop_record: error: %s\nteleop_record: %s holds the %llu samples written "
+                 "before the failure; %llu later samples were not written\n",
+                 recorder.error().c_str(), out.c_str(),
+                 static_cast<unsigned long long>(recorder.written()),
+                 static_cast<unsigned long long>(recorder.lost_after_failure()));
+    if (!summary_json.empty()) write_text_file(summary_json, recorder.summary_json() + "\n");
+    return 1;
+  }
+  if (!quiet) {
+    std::printf("teleop_record: %llu samples, %.1f MB of payload stored in %.1f MB\n",
+                static_cast<unsigned long long>(recorder.samples()),
+                static_cast<double>(recorder.raw_bytes()) / 1e6,
+                static_cast<double>(recorder.stored_bytes()) / 1e6);
+    for (const auto& c : recorder.counts()) {
+      if (c.samples == 0 && c.dropped == 0) continue;
+      std::printf(
+          "  %-24s %8llu samples  %3llu writers  %llu lost  %llu dropped\n", c.name.c_str(),
+          static_cast<unsigned long long>(c.samples), static_cast<unsigned long long>(c.writers),
+          static_cast<unsigned long long>(c.gaps), static_cast<unsigned long long>(c.dropped));
+    }
+  }
+  if (!summary_json.empty()) write_text_file(summary_json, recorder.summary_json() + "\n");
+  return 0;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"teleop_record: record every topic of a teleoperation session"};
@@ -39,7 +116,22 @@ int main(int argc, char** argv) {
   double queue_mb = 64.0;
   std::string summary_json;
   bool quiet = false;
-  app.add_option("--out", ro.out, "recording file (SQLite; created or replaced)")->required();
+  std::string format;
+  double chunk_mb = 1.0, chunk_s = 1.0;
+  app.add_option("--out", ro.out,
+                 "recording file, created or replaced (MCAP; SQLite for .db, .sqlite, .sqlite3)")
+      ->required();
+  app.add_option("--format", format,
+                 "mcap or sqlite (default: from the --out extension, mcap for any other name)");
+  app.add_option("--chunk-mb", chunk_mb,
+                 "MCAP: close a chunk at this many MiB of samples, 0.0625-64")
+      ->check(teleop::config::number_in(0.0625, 64.0))
+      ->capture_default_str();
+  app.add_option("--chunk-s", chunk_s,
+                 "MCAP: close a chunk this long after its first sample [s], 0.05-60 (a recorder "
+                 "killed with -9 loses at most this much)")
+      ->check(teleop::config::number_in(0.05, 60.0))
+      ->capture_default_str();
   app.add_option("--duration", duration_s, "stop after this long [s], 0-1e6; 0 = until SIGINT")
       ->check(teleop::config::number_in(0.0, 1e6));
   app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
@@ -63,26 +155,16 @@ int main(int argc, char** argv) {
   try {
     using namespace teleop;
     config::check_flag("--duration", duration_s, 0.0, 1e6);
-    config::check_flag("--queue-mb", queue_mb, 1.0, 4096.0);
-    config::check_flag("--batch-ms", ro.batch_ms, 0.0, 50.0);
-    for (const auto& t : ro.exclude) {
-      if (!record::find_topic(t)) {
-        std::string names;
-        for (const auto& e : record::known_topics()) names += (names.empty() ? "" : ", ") + e.name;
-        throw config::ConfigError("command line: --exclude '" + t +
-                                  "' is not a known topic (allowed: " + names + ")");
-      }
-    }
-    ro.queue_bytes = static_cast<std::size_t>(queue_mb * 1024.0 * 1024.0);
+    check_options(ro, format, queue_mb, chunk_mb, chunk_s);
     const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_record");
     teleop::dds::profile_file(opts.profile);
     install_stop_signal_handlers();
     teleop::dds::Participant p(opts);
     record::Recorder recorder(p, ro);
     if (!quiet) {
-      std::printf("teleop_record: recording %zu topics on domain %d (profile %s) to %s\n",
+      std::printf("teleop_record: recording %zu topics on domain %d (profile %s) to %s (%s)\n",
                   record::known_topics().size() - ro.exclude.size(), opts.domain,
-                  opts.profile.c_str(), ro.out.c_str());
+                  opts.profile.c_str(), ro.out.c_str(), record::format_name(*ro.format));
       std::fflush(stdout);
     }
     const auto t0 = now_ns();
@@ -91,34 +173,7 @@ int main(int argc, char** argv) {
       if (duration_s > 0.0 && seconds_between(t0, now_ns()) >= duration_s) break;
     }
     recorder.stop();
-    if (recorder.failed()) {
-      // a full disk: the file keeps every sample committed before the failure
-      std::fprintf(stderr,
-                   "teleop_record: error: %s\nteleop_record: %s holds the %llu samples (%.1f MB "
-                   "of payload) written before the failure; %llu later samples were not "
-                   "written\n",
-                   recorder.error().c_str(), ro.out.c_str(),
-                   static_cast<unsigned long long>(recorder.written()),
-                   static_cast<double>(recorder.raw_bytes()) / 1e6,
-                   static_cast<unsigned long long>(recorder.lost_after_failure()));
-      if (!summary_json.empty()) write_text_file(summary_json, recorder.summary_json() + "\n");
-      return 1;
-    }
-    if (!quiet) {
-      std::printf("teleop_record: %llu samples, %.1f MB of payload stored in %.1f MB\n",
-                  static_cast<unsigned long long>(recorder.samples()),
-                  static_cast<double>(recorder.raw_bytes()) / 1e6,
-                  static_cast<double>(recorder.stored_bytes()) / 1e6);
-      for (const auto& c : recorder.counts()) {
-        if (c.samples == 0 && c.dropped == 0) continue;
-        std::printf(
-            "  %-24s %8llu samples  %3llu writers  %llu lost  %llu dropped\n", c.name.c_str(),
-            static_cast<unsigned long long>(c.samples), static_cast<unsigned long long>(c.writers),
-            static_cast<unsigned long long>(c.gaps), static_cast<unsigned long long>(c.dropped));
-      }
-    }
-    if (!summary_json.empty()) write_text_file(summary_json, recorder.summary_json() + "\n");
-    return 0;
+    return report(recorder, ro.out, quiet, summary_json);
   } catch (const teleop::config::ConfigError& e) {
     std::cerr << "teleop_record: " << e.what() << "\n";
     return 2;

@@ -10,9 +10,9 @@
 #include <thread>
 
 #include "client/record/raw_type.hpp"
-#include "client/record/recording.hpp"
 #include "client/record/topic_table.hpp"
 #include "common/config/config.hpp"
+#include "common/record/recording.hpp"
 #include "common/util/signals.hpp"
 
 namespace teleop::record {

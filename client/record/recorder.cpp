@@ -45,7 +45,8 @@ struct Recorder::Topic {
 
 Recorder::Recorder(dds::Participant& participant, const RecorderOptions& options)
     : participant_(participant), options_(options) {
-  file_ = std::make_unique<RecordingWriter>(options.out);
+  file_ = std::make_unique<RecordingWriter>(
+      options.out, options.format.value_or(format_for_path(options.out)), options.mcap);
   started_ns_ = wall_ns();
   file_->set_meta("domain", std::to_string(participant.options().domain));
   file_->set_meta("profile", participant.options().profile);
@@ -172,16 +173,14 @@ void Recorder::write_loop() {
       l.unlock();
       if (!failed_.load()) {
         try {
+          // an empty batch still lets an MCAP file write a chunk that has grown old
           file_->append(batch);
-          written_.fetch_add(batch.size());
         } catch (const std::exception& e) {
-          // a full disk or a failing file: keep what was committed, stop writing, say so
-          std::lock_guard<std::mutex> el(error_mutex_);
-          error_ = options_.out + ": " + e.what();
-          failed_.store(true);
+          // a full disk or a failing file: keep what was written, stop writing, say so
+          note_failure(e.what());
         }
       }
-      if (failed_.load()) lost_after_failure_.fetch_add(batch.size());
+      written_.store(file_->samples_in_file());
       raw_bytes_.store(file_->raw_bytes());
       stored_bytes_.store(file_->stored_bytes());
       if (done) {
@@ -206,12 +205,22 @@ void Recorder::stop() {
   try {
     file_->set_meta("stopped_unix_ns", std::to_string(wall_ns()));
     file_->set_meta("summary", summary_json());
+    file_->close();
   } catch (const std::exception& e) {
-    std::lock_guard<std::mutex> el(error_mutex_);
-    if (error_.empty()) error_ = options_.out + ": " + e.what();
-    failed_.store(true);
+    note_failure(e.what());
   }
-  file_->close();
+  written_.store(file_->samples_in_file());
+  raw_bytes_.store(file_->raw_bytes());
+  stored_bytes_.store(file_->stored_bytes());
+}
+
+void Recorder::note_failure(const std::string& what) {
+  std::lock_guard<std::mutex> el(error_mutex_);
+  if (error_.empty()) {
+    // the writers' messages name the file already
+    error_ = what.find(options_.out) == std::string::npos ? options_.out + ": " + what : what;
+  }
+  failed_.store(true);
 }
 
 std::string Recorder::error() const {
@@ -253,7 +262,8 @@ std::string Recorder::summary_json() const {
     dropped += c.dropped;
     gaps += c.gaps;
   }
-  o << "}, \"samples\": " << total << ", \"gaps\": " << gaps << ", \"dropped\": " << dropped
+  o << "}, \"format\": \"" << format_name(file_->format()) << "\", \"samples\": " << total
+    << ", \"gaps\": " << gaps << ", \"dropped\": " << dropped
     << ", \"payload_bytes\": " << raw_bytes() << ", \"stored_bytes\": " << stored_bytes() << "}";
   return o.str();
 }

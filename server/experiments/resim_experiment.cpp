@@ -1,12 +1,17 @@
+// teleop_experiment resim --recording REC [--from S] [--to S] [--scene FILE] [--rate 1000]
+//                         [--tail 0.5] --out DIR
 // teleop_experiment resim --commands STREAM.csv [--scene FILE] [--rate 1000] [--tail 0.5]
 //                         --out DIR
 //
-// Re-runs a session off-line from its command stream (`teleop_play REC --export-commands
-// STREAM.csv`) through the server's cycle on a simulated clock (server/node/resim.hpp): the same
-// stream and scene give the same states, forces and events on every run, and the printed hash
-// says so. Writes resim_states.csv (one row per physics step), resim_events.csv and
-// resim_summary.csv (counts and the hash). This is how a bad moment found in a recording is
-// reproduced, inspected and, after a fix, checked.
+// Re-runs a session off-line from its recorded master commands through the server's cycle on a
+// simulated clock (server/node/resim.hpp): the same commands and scene give the same states,
+// forces and events on every run, and the printed hash says so. The commands come from a
+// recording (MCAP or SQLite, common/record/commands.hpp; --from/--to pick a window in seconds
+// from its first sample, and an MCAP file is read only from the chunks that overlap it, through
+// its chunk index) or from a command stream (`teleop_play REC --export-commands STREAM.csv`).
+// Writes resim_states.csv (one row per physics step), resim_events.csv and resim_summary.csv
+// (counts and the hash). This is how a bad moment found in a recording is reproduced, inspected
+// and, after a fix, checked.
 #include <cinttypes>
 #include <cstdio>
 #include <cstdlib>
@@ -14,6 +19,7 @@
 #include <string>
 
 #include "common/config/config.hpp"
+#include "common/record/commands.hpp"
 #include "common/util/command_stream.hpp"
 #include "common/util/csv.hpp"
 #include "common/util/registry.hpp"
@@ -62,13 +68,38 @@ std::string hash_text(std::uint64_t h) {
   return buf;
 }
 
-int run_resim(const teleop::CommandArgs& args) {
+/// The commands of --recording (in the --from/--to window) or of --commands.
+std::vector<teleop::StreamedCommand> resim_commands(const teleop::CommandArgs& args,
+                                                    std::string& source) {
   const std::string commands = args.option("--commands", "");
-  if (commands.empty()) {
+  const std::string recording = args.option("--recording", "");
+  if (commands.empty() == recording.empty()) {
     throw teleop::config::ConfigError(
-        "command line: --commands STREAM.csv is required (make one from a recording with "
-        "teleop_play REC --export-commands STREAM.csv)");
+        "command line: give exactly one of --recording REC (a recording made by teleop_record) "
+        "and --commands STREAM.csv (teleop_play REC --export-commands STREAM.csv)");
   }
+  const double from_s = number_flag(args, "--from", "0", 0.0, 1e6);
+  const double to_s = number_flag(args, "--to", "0", 0.0, 1e6);
+  if (!commands.empty()) {
+    if (from_s > 0.0 || to_s > 0.0) {
+      throw teleop::config::ConfigError(
+          "command line: --from and --to apply to --recording only (a command stream is "
+          "re-simulated whole)");
+    }
+    source = commands;
+    return teleop::read_command_stream(commands);
+  }
+  if (to_s > 0.0 && to_s <= from_s) {
+    throw teleop::config::ConfigError("command line: --to " + format_number(to_s) +
+                                      " must be after --from " + format_number(from_s) +
+                                      " (or 0: to the end)");
+  }
+  teleop::config::require_regular_file(recording, "recording");
+  source = recording;
+  return teleop::record::recorded_commands(recording, from_s, to_s);
+}
+
+int run_resim(const teleop::CommandArgs& args) {
   const std::string scene =
       args.option("--scene", std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
   teleop::server::ResimOptions opt;
@@ -76,7 +107,8 @@ int run_resim(const teleop::CommandArgs& args) {
   opt.tail_s = number_flag(args, "--tail", "0.5", 0.0, 60.0);
   const teleop::sim::WorldModel model = teleop::sim::load_world_model(scene);
   const double max_gap_s = number_flag(args, "--max-gap", "60", 0.001, 3600.0);
-  const auto stream = teleop::read_command_stream(commands);
+  std::string commands;
+  const auto stream = resim_commands(args, commands);
   check_gaps(stream, commands, max_gap_s);
 
   teleop::CsvWriter states(
@@ -131,12 +163,15 @@ int run_resim(const teleop::CommandArgs& args) {
 
 }  // namespace
 
-TELEOP_REGISTER_COMMAND(experiments, "resim",
-                        "re-run a session off-line from its command stream (teleop_play "
-                        "--export-commands), deterministic: states, events and a hash",
-                        run_resim, teleop::text_option("--commands", "command stream CSV"),
-                        teleop::text_option("--scene", "scene YAML"),
-                        teleop::number_option("--rate", 10, 20000, "physics rate [Hz]"),
-                        teleop::number_option("--tail", 0, 60, "simulate after the last [s]"),
-                        teleop::number_option("--max-gap", 0.001, 3600,
-                                              "longest gap between commands [s]"));
+TELEOP_REGISTER_COMMAND(
+    experiments, "resim",
+    "re-run a session off-line from its recorded commands (a recording, or "
+    "teleop_play --export-commands), deterministic: states, events, a hash",
+    run_resim, teleop::text_option("--recording", "recording (MCAP or SQLite)"),
+    teleop::number_option("--from", 0, 1e6, "start this far into the recording [s]"),
+    teleop::number_option("--to", 0, 1e6, "end this far into the recording [s], 0 = end"),
+    teleop::text_option("--commands", "command stream CSV"),
+    teleop::text_option("--scene", "scene YAML"),
+    teleop::number_option("--rate", 10, 20000, "physics rate [Hz]"),
+    teleop::number_option("--tail", 0, 60, "simulate after the last [s]"),
+    teleop::number_option("--max-gap", 0.001, 3600, "longest gap between commands [s]"));

@@ -6,9 +6,13 @@
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
+#include <set>
 #include <thread>
+#include <tuple>
 
 #include "common/dds/endpoint.hpp"
+#include "common/record/recording.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
 #include "tests/support/domains.hpp"
 #include "tests/support/integration.hpp"
@@ -195,6 +199,191 @@ TEST(RecordPlay, RecordedSessionReSimulatesBitIdenticallyAndItsLogReplays) {
   const std::string r = Process::slurp(replay_json);
   EXPECT_GT(json_value(r, "received"), 0.0) << r << replay.err();
   std::remove(rec_file.c_str());
+}
+
+/// Now on the system clock [ns] (the clock of DDS receive times).
+std::int64_t wall_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+/// Every sample of a recording: (topic name, writer GUID, writer sequence number) -> payload.
+using SampleKey = std::tuple<std::string, std::string, std::int64_t>;
+std::map<SampleKey, std::vector<std::uint8_t>> samples_of(const std::string& path) {
+  record::RecordingReader r(path);
+  std::map<int, std::string> names;
+  for (const auto& t : r.topics()) names[t.id] = t.name;
+  std::map<SampleKey, std::vector<std::uint8_t>> out;
+  record::RecordedSample s;
+  r.scan(r.first_ns());
+  while (r.next(s)) {
+    const std::string guid(reinterpret_cast<const char*>(s.writer_guid), 16);
+    out[{names[s.topic_id], guid, s.writer_seq}] = s.payload;
+  }
+  return out;
+}
+
+/// The value of the top-level "samples" of a recorder's --summary-json (after its topics).
+double total_samples(const std::string& json) {
+  const auto at = json.find("\"format\"");
+  return at == std::string::npos ? -1.0 : json_value(json.substr(at), "samples");
+}
+
+// Issue 26 item 5: the default format is MCAP. One live session, two recorders: one finishes
+// normally (its file read through the summary, played back, converted, re-simulated from a
+// window found through the chunk index), the other is killed with -9 mid-session (its file
+// recovered: every complete chunk, each sample identical to the finished recording's).
+TEST(RecordPlay, McapSessionPlaysReSimulatesAndSurvivesAKill) {
+  const std::string d = std::to_string(domains::kRecordMcap);
+  const std::string full = tmp("session.mcap"), killed = tmp("killed.mcap");
+  const std::string rec_json = tmp("mcap_rec.json"), scene = scene_file("tool_only.yaml");
+  std::int64_t killed_at_ns = 0;
+  {
+    Process recorder(kRecordBinary, {"--domain", d, "--out", full, "--summary-json", rec_json},
+                     "mcap_recorder");
+    Process victim(kRecordBinary, {"--domain", d, "--out", killed, "--chunk-s", "0.5"},
+                   "mcap_victim");
+    ASSERT_TRUE(wait_for_output(recorder, "(mcap)", 20.0)) << recorder.err();
+    ASSERT_TRUE(wait_for_output(victim, "(mcap)", 20.0)) << victim.err();
+    Process server(kServerBinary, {"--domain", d, "--duration", "60", "--scene", scene},
+                   "mcap_server");
+    Process master(kMasterBinary, {"--domain", d, "--duration", "4", "--homing", "0.5", "--quiet"},
+                   "mcap_master");
+    std::this_thread::sleep_for(std::chrono::milliseconds(3000));
+    victim.signal(SIGKILL);
+    killed_at_ns = wall_ns();
+    EXPECT_EQ(victim.wait_for(10.0), -2);
+    ASSERT_EQ(master.wait_for(60.0), 0) << master.err();
+    server.signal(SIGTERM);
+    ASSERT_EQ(server.wait_for(20.0), 0) << server.err();
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    recorder.signal(SIGINT);
+    ASSERT_EQ(recorder.wait_for(20.0), 0) << recorder.err();
+  }
+  const std::string rec = Process::slurp(rec_json);
+  EXPECT_NE(rec.find("\"format\": \"mcap\""), std::string::npos) << rec;
+  EXPECT_EQ(json_value(rec, "gaps"), 0.0) << rec;
+  EXPECT_EQ(json_value(rec, "dropped"), 0.0) << rec;
+
+  // the finished file: read through its summary, every CRC checked
+  Process info(kPlayBinary, {full, "--info"}, "mcap_info");
+  ASSERT_EQ(info.wait_for(60.0), 0) << info.err();
+  std::printf("[ info     ] %s", info.out().c_str());
+  EXPECT_NE(info.out().find("read through its summary"), std::string::npos) << info.out();
+  EXPECT_NE(info.out().find("whole file: ok"), std::string::npos) << info.out();
+  const auto whole = samples_of(full);
+  EXPECT_EQ(static_cast<double>(whole.size()), total_samples(rec)) << rec;
+
+  // the killed recorder's file: recovered, each of its samples as the finished file has it,
+  // and what it lost is the end of the session: the open chunk (--chunk-s 0.5) and the queue
+  {
+    record::RecordingReader r(killed);
+    const record::RecordingHealth h = r.health();
+    EXPECT_TRUE(h.recovered) << h.how;
+    EXPECT_GT(h.chunks, 0u) << h.note;
+    const auto got = samples_of(killed);
+    // the first sequence number the finished recorder heard from each writer: a recorder that
+    // matched a writer sooner holds its earlier samples too
+    std::map<std::pair<std::string, std::string>, std::int64_t> first_seq;
+    for (const auto& [key, payload] : whole) {
+      const auto w = std::make_pair(std::get<0>(key), std::get<1>(key));
+      if (!first_seq.count(w)) first_seq[w] = std::get<2>(key);
+    }
+    std::size_t same = 0, earlier = 0;
+    for (const auto& [key, payload] : got) {
+      const auto it = whole.find(key);
+      const auto w = first_seq.find(std::make_pair(std::get<0>(key), std::get<1>(key)));
+      if (it != whole.end()) {
+        same += it->second == payload ? 1 : 0;
+      } else if (w == first_seq.end() || std::get<2>(key) < w->second) {
+        ++earlier;
+      }
+    }
+    EXPECT_EQ(same + earlier, got.size()) << same << " the same, " << earlier << " earlier";
+    const double lost_s = static_cast<double>(killed_at_ns - r.last_ns()) * 1e-9;
+    std::printf(
+        "[ kill -9  ] recovered %zu samples in %llu chunks; the last was received %.3f s "
+        "before the kill; dropped %llu bytes (%llu chunk, %llu messages seen in it)\n",
+        got.size(), static_cast<unsigned long long>(h.chunks), lost_s,
+        static_cast<unsigned long long>(h.dropped_bytes),
+        static_cast<unsigned long long>(h.dropped_chunks),
+        static_cast<unsigned long long>(h.dropped_messages));
+    // a bound for a loaded 2-core machine: --chunk-s 0.5 plus the queue, several times over
+    EXPECT_LT(lost_s, 5.0);
+    EXPECT_GT(got.size(), 1000u);
+  }
+  Process killed_info(kPlayBinary, {killed, "--info"}, "mcap_killed_info");
+  EXPECT_EQ(killed_info.wait_for(60.0), 0) << killed_info.err();
+  EXPECT_NE(killed_info.out().find("recovered"), std::string::npos) << killed_info.out();
+
+  // played back to a subscriber on another domain (as the SQLite test does)
+  {
+    const int pd = domains::kPlaybackMcap;
+    dds::Participant p(dds::ParticipantOptions{"loopback", pd, "mcap-playback-subscriber"});
+    std::atomic<std::uint64_t> states{0}, scenes{0};
+    dds::Reader<SlaveStatePubSubType> r_state(
+        p, dds::topics::kSlaveState, dds::TopicQos::kStream,
+        [&](const SlaveState&, const eprosima::fastdds::dds::SampleInfo&) { ++states; });
+    dds::Reader<SceneDescriptionPubSubType> r_scene(
+        p, dds::topics::kScene, dds::TopicQos::kLatched,
+        [&](const SceneDescription&, const eprosima::fastdds::dds::SampleInfo&) { ++scenes; });
+    Process player(kPlayBinary,
+                   {full, "--domain", std::to_string(pd), "--speed", "4", "--wait", "1", "--linger",
+                    "0.5", "--seek", "1"},
+                   "mcap_player");
+    ASSERT_EQ(player.wait_for(60.0), 0) << player.err();
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    EXPECT_NE(player.out().find("0 refused"), std::string::npos) << player.out();
+    EXPECT_EQ(scenes.load(), 1u);  // the latched scene, recorded before the seek point
+    EXPECT_GT(states.load(), 500u);
+  }
+
+  // converted to SQLite and back: the same samples
+  const std::string db = tmp("converted.db"), back = tmp("back.mcap");
+  Process to_db(kPlayBinary, {full, "--convert", db}, "mcap_to_db");
+  ASSERT_EQ(to_db.wait_for(60.0), 0) << to_db.err();
+  Process to_mcap(kPlayBinary, {db, "--convert", back}, "mcap_back");
+  ASSERT_EQ(to_mcap.wait_for(60.0), 0) << to_mcap.err();
+  EXPECT_TRUE(samples_of(db) == whole);
+  EXPECT_TRUE(samples_of(back) == whole);
+
+  // re-simulated straight from the MCAP file, and from its exported command stream: the same
+  const std::string stream = tmp("mcap_stream.csv");
+  Process exporter(kPlayBinary, {full, "--export-commands", stream}, "mcap_export");
+  ASSERT_EQ(exporter.wait_for(60.0), 0) << exporter.err();
+  std::string hashes[2];
+  const std::vector<std::vector<std::string>> sources = {{"--recording", full},
+                                                         {"--commands", stream}};
+  for (int run = 0; run < 2; ++run) {
+    std::vector<std::string> args = {
+        "resim", "--scene", scene, "--out", tmp("mcap_resim" + std::to_string(run)), "--no-chart"};
+    args.insert(args.end(), sources[run].begin(), sources[run].end());
+    Process resim(kExperimentBinary, args, "mcap_resim" + std::to_string(run));
+    ASSERT_EQ(resim.wait_for(120.0), 0) << resim.err() << resim.out();
+    std::printf("[ resim    ] %s", resim.out().c_str());
+    hashes[run] = resim_hash(resim.out());
+  }
+  ASSERT_EQ(hashes[0].size(), 16u);
+  EXPECT_EQ(hashes[0], hashes[1]);
+  // a window of the recording, found through its chunk index
+  Process window(kExperimentBinary,
+                 {"resim", "--recording", full, "--from", "1", "--to", "2", "--scene", scene,
+                  "--out", tmp("mcap_resim_window"), "--no-chart"},
+                 "mcap_resim_window");
+  ASSERT_EQ(window.wait_for(120.0), 0) << window.err() << window.out();
+  const std::string summary = Process::slurp(tmp("mcap_resim_window") + "/resim_summary.csv");
+  EXPECT_NE(summary.find("commands,"), std::string::npos) << summary;
+  Process bad_window(kExperimentBinary,
+                     {"resim", "--recording", full, "--from", "1000", "--scene", scene, "--out",
+                      tmp("mcap_resim_bad"), "--no-chart"},
+                     "mcap_resim_bad");
+  EXPECT_EQ(bad_window.wait_for(60.0), 2);
+  EXPECT_NE(bad_window.err().find("--from"), std::string::npos) << bad_window.err();
+  // the killed recorder's shared-memory segments
+  if (std::system("fastdds shm clean >/dev/null 2>&1") != 0)
+    std::printf("fastdds shm clean failed\n");
+  for (const auto& f : {full, killed, db, back, stream}) std::remove(f.c_str());
 }
 
 }  // namespace

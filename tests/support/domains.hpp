@@ -33,11 +33,15 @@ inline constexpr int kMonitorTui = 75;         // monitor_tui_test: teleop_monit
 inline constexpr int kMonitorJson = 76;        // monitor_tui_test: teleop_monitor --json
 inline constexpr int kMonitorScene = 77;       // monitor_tui_test: the scene line of a server
 inline constexpr int kHostileInputs = 78;  // tests/tools/hostile_inputs.sh (ctest hostile_inputs)
+inline constexpr int kRecordMcap = 79;     // record_play_test: an MCAP session, a kill -9
+inline constexpr int kNodeMcapCheck = 85;  // tests/node/run_mcap_check.sh (ctest node.*)
+inline constexpr int kPlaybackMcap = 86;   // record_play_test: an MCAP file played back
 inline constexpr int kSecureOutsiders = 105;  // security_test: no credentials / foreign CA
 inline constexpr int kSecureObserver = 106;   // security_test: observer reads, cannot command
 inline constexpr int kSecureSession = 107;    // security_test: server + master, secure
 inline constexpr int kSecureBadFiles = 108;   // security_test: bad files (exits before DDS)
 inline constexpr int kSecureStranger = 109;   // security_test: identity of another CA
+// 104: tests/bench/record_kill.sh
 // 110, 111: tests/bench/security_rtt.sh (plain, secure); 112: teleop_bench rtt in docs
 inline constexpr int kMultiHostSecureLanUnicast = 113;  // multi_host_test, secure_lan_unicast
 inline constexpr int kMultiHostSecureWanTcp = 114;      // multi_host_test, secure_wan_tcp_*

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Hostile inputs (issue 29, items 1, 2 and 4): every program's file inputs fed a FIFO, /dev/zero,
-# huge gaps and sizes, its outputs /dev/full or a missing folder, its flags empty, negative-zero,
+# huge gaps and sizes, damaged MCAP recordings (issue 26), its outputs /dev/full or a missing
+# folder, its flags empty, negative-zero,
 # partial or repeated values, each under `timeout` and a memory limit. Every case must end (no
 # hang), exit with the expected status and print a message naming the flag or the file. Last, a
 # master stopped for 1 s (SIGSTOP) must report the stall of its loop (item 6).
@@ -140,6 +141,36 @@ check 2 "gaps longer than --max-gap 60 s are refused" 60 -- \
 check 2 "longer than 65536 bytes" 30 -- "$experiment" resim --out "$out/r" --commands "$tmp/long_line.csv"
 check 2 "FIFO" 20 -- "$experiment" resim --out "$out/r" --commands "$tmp/gap.csv" --scene "$tmp/fifo"
 
+echo "--- MCAP recordings: cut, a wrong chunk CRC, a header that runs past the end"
+"$play" "$tmp/good.db" --convert "$tmp/good.mcap" --quiet
+/usr/bin/python3 - "$tmp" <<'EOF2'
+import struct, sys
+tmp = sys.argv[1]
+data = bytearray(open(f"{tmp}/good.mcap", "rb").read())
+# the first Chunk record: flip a byte of its uncompressed_crc (content offset 24)
+pos = 8
+while data[pos] != 0x06:
+    pos += 9 + struct.unpack_from("<Q", data, pos + 1)[0]
+bad = bytearray(data)
+bad[pos + 9 + 24] ^= 0x5A
+open(f"{tmp}/bad_crc.mcap", "wb").write(bad)
+open(f"{tmp}/cut.mcap", "wb").write(data[: len(data) * 2 // 3])
+open(f"{tmp}/long_header.mcap", "wb").write(data[:8] + b"\x01" + struct.pack("<Q", 2**62))
+open(f"{tmp}/junk.mcap", "wb").write(data[:8] + b"\xee" * 200)
+EOF2
+check 0 "recovered" 30 -- "$play" "$tmp/cut.mcap" --info
+check 0 "whole file: ok" 30 -- "$play" "$tmp/good.mcap" --info
+check 2 "uncompressed_crc" 30 -- "$play" "$tmp/bad_crc.mcap" --export-commands "$out/x.csv"
+check 2 "field 'length'" 30 -- "$play" "$tmp/long_header.mcap" --wait 0 --linger 0
+check 2 "Header record at byte 8" 30 -- "$play" "$tmp/junk.mcap" --info
+check 2 "uncompressed_crc" 60 -- "$experiment" resim --out "$out/r" --recording "$tmp/bad_crc.mcap"
+check 2 "FIFO" 20 -- "$experiment" resim --out "$out/r" --recording "$tmp/fifo"
+check 2 "exactly one of --recording" 20 -- \
+  "$experiment" resim --out "$out/r" --recording "$tmp/good.mcap" --commands "$tmp/gap.csv"
+check 2 "--format 'bag' is not a recording format" 20 -- "$record" --out "$out/a.mcap" --format bag
+check 2 "does not match the extension" 20 -- "$record" --out "$out/a.mcap" --format sqlite
+check 2 "--chunk-s" 20 -- "$record" --out "$out/a.mcap" --chunk-s 0
+
 echo "--- outputs: /dev/full and a missing folder"
 check nz "/dev/full" 60 -- "$play" "$tmp/good.db" --export-commands /dev/full
 check nz "$tmp/missing/x.csv" 60 -- "$play" "$tmp/good.db" --export-commands "$tmp/missing/x.csv"
@@ -156,7 +187,7 @@ check nz "/dev/full" 60 -- "$master" --domain "$domain" --duration 1 --log /dev/
 check nz "$tmp/missing/m.json" 60 -- \
   "$master" --domain "$domain" --duration 1 --summary-json "$tmp/missing/m.json" --quiet
 
-echo "--- a full disk under teleop_record (a file size limit, SIGXFSZ ignored)"
+echo "--- a full disk under teleop_record, SQLite (a file size limit, SIGXFSZ ignored)"
 "$master" --domain "$domain" --duration 8 --quiet >"$tmp/master_rec.log" 2>&1 &
 pids+=($!)
 cases=$((cases + 1))
@@ -169,6 +200,26 @@ else
   failures=$((failures + 1))
   echo "FAILED  [$rec_status, wanted 1 and 'written before the failure'] teleop_record on a full disk"
   echo "$rec_out" | tail -5 | sed 's/^/        /'
+fi
+wait "${pids[-1]}" 2>/dev/null
+
+echo "--- a full disk under teleop_record, MCAP: an error, and a valid file"
+"$master" --domain "$domain" --duration 8 --quiet >"$tmp/master_rec2.log" 2>&1 &
+pids+=($!)
+cases=$((cases + 1))
+rec_out="$( (trap '' XFSZ; ulimit -f 3000; timeout -k 5 30 "$record" --domain "$domain" \
+  --out "$tmp/full.mcap" --duration 10) 2>&1)"
+rec_status=$?
+info_out="$(timeout 30 "$play" "$tmp/full.mcap" --info 2>&1)"
+info_status=$?
+if [ "$rec_status" -eq 1 ] && grep -qF "valid MCAP file" <<<"$rec_out" &&
+  [ "$info_status" -eq 0 ] && grep -qF "read through its summary" <<<"$info_out" &&
+  grep -qF "whole file: ok" <<<"$info_out"; then
+  echo "ok      [1] teleop_record on a full disk, MCAP: $(grep -o 'holding the [0-9]* messages' <<<"$rec_out")"
+else
+  failures=$((failures + 1))
+  echo "FAILED  [$rec_status, wanted 1, 'valid MCAP file' and a file read through its summary] teleop_record on a full disk, MCAP"
+  { echo "$rec_out"; echo "$info_out"; } | tail -8 | sed 's/^/        /'
 fi
 wait "${pids[-1]}" 2>/dev/null
 

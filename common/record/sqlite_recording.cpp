@@ -1,11 +1,10 @@
-#include "client/record/recording.hpp"
+#include "common/record/sqlite_recording.hpp"
 
 #include <sqlite3.h>
 #include <zstd.h>
 
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 
 #include "common/config/config.hpp"
 
@@ -28,16 +27,7 @@ void check(sqlite3* db, int rc, const std::string& what) {
 
 }  // namespace
 
-RecordingWriter::RecordingWriter(const std::string& path) {
-  std::error_code ec;
-  const auto st = std::filesystem::symlink_status(path, ec);
-  if (path.empty()) throw config::ConfigError("the recording's file name is empty");
-  if (!ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st)) {
-    throw config::ConfigError(path +
-                              ": exists and is not a regular file; a recording replaces "
-                              "only a regular file");
-  }
-  std::remove(path.c_str());
+SqliteWriter::SqliteWriter(const std::string& path) {
   if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
       SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
@@ -66,9 +56,9 @@ RecordingWriter::RecordingWriter(const std::string& path) {
         "prepare insert");
 }
 
-RecordingWriter::~RecordingWriter() { close(); }
+SqliteWriter::~SqliteWriter() { close(); }
 
-void RecordingWriter::close() {
+void SqliteWriter::close() {
   if (!db_) return;
   sqlite3_finalize(insert_);
   insert_ = nullptr;
@@ -77,7 +67,7 @@ void RecordingWriter::close() {
   db_ = nullptr;
 }
 
-void RecordingWriter::exec(const std::string& sql) {
+void SqliteWriter::exec(const std::string& sql) {
   char* err = nullptr;
   if (sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
     const std::string msg = err ? err : "?";
@@ -86,8 +76,8 @@ void RecordingWriter::exec(const std::string& sql) {
   }
 }
 
-int RecordingWriter::add_topic(const std::string& name, const std::string& type_name,
-                               const std::string& qos) {
+int SqliteWriter::add_topic(const std::string& name, const std::string& type_name,
+                            const std::string& qos, const std::string& /*schema*/) {
   sqlite3_stmt* st = nullptr;
   check(db_,
         sqlite3_prepare_v2(db_, "INSERT INTO topics(name, type_name, qos) VALUES(?,?,?)", -1, &st,
@@ -102,7 +92,7 @@ int RecordingWriter::add_topic(const std::string& name, const std::string& type_
   return static_cast<int>(sqlite3_last_insert_rowid(db_));
 }
 
-void RecordingWriter::set_meta(const std::string& key, const std::string& value) {
+void SqliteWriter::set_meta(const std::string& key, const std::string& value) {
   sqlite3_stmt* st = nullptr;
   check(db_,
         sqlite3_prepare_v2(db_, "INSERT OR REPLACE INTO meta(key, value) VALUES(?,?)", -1, &st,
@@ -115,7 +105,7 @@ void RecordingWriter::set_meta(const std::string& key, const std::string& value)
   check(db_, rc, "insert meta " + key);
 }
 
-void RecordingWriter::append(const std::vector<RecordedSample>& samples) {
+void SqliteWriter::append(const std::vector<RecordedSample>& samples) {
   if (samples.empty()) return;
   std::uint64_t raw = 0, stored = 0;
   exec("BEGIN");
@@ -151,12 +141,11 @@ void RecordingWriter::append(const std::vector<RecordedSample>& samples) {
   }
   exec("COMMIT");
   raw_bytes_ += raw;  // only what was committed
+  committed_ += samples.size();
   stored_bytes_ += stored;
 }
 
-RecordingReader::RecordingReader(const std::string& path) : path_(path) {
-  std::error_code exists_ec;
-  if (std::filesystem::exists(path, exists_ec)) config::require_regular_file(path, "recording");
+SqliteReader::SqliteReader(const std::string& path) : path_(path) {
   if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
@@ -203,12 +192,12 @@ RecordingReader::RecordingReader(const std::string& path) : path_(path) {
   }
 }
 
-RecordingReader::~RecordingReader() {
+SqliteReader::~SqliteReader() {
   sqlite3_finalize(scan_);
   sqlite3_close(db_);
 }
 
-std::map<std::string, std::string> RecordingReader::meta() const {
+std::map<std::string, std::string> SqliteReader::meta() const {
   std::map<std::string, std::string> out;
   sqlite3_stmt* st = nullptr;
   if (sqlite3_prepare_v2(db_, "SELECT key, value FROM meta", -1, &st, nullptr) != SQLITE_OK) {
@@ -222,7 +211,7 @@ std::map<std::string, std::string> RecordingReader::meta() const {
   return out;
 }
 
-std::map<int, std::int64_t> RecordingReader::counts() const {
+std::map<int, std::int64_t> SqliteReader::counts() const {
   std::map<int, std::int64_t> out;
   sqlite3_stmt* st = nullptr;
   check(db_,
@@ -236,8 +225,8 @@ std::map<int, std::int64_t> RecordingReader::counts() const {
   return out;
 }
 
-void RecordingReader::scan(std::int64_t from_ns, std::int64_t to_ns,
-                           const std::vector<int>& topic_ids) {
+void SqliteReader::scan(std::int64_t from_ns, std::int64_t to_ns,
+                        const std::vector<int>& topic_ids) {
   sqlite3_finalize(scan_);
   scan_ = nullptr;
   std::string sql =
@@ -257,7 +246,7 @@ void RecordingReader::scan(std::int64_t from_ns, std::int64_t to_ns,
   if (to_ns > 0) sqlite3_bind_int64(scan_, 2, to_ns);
 }
 
-bool RecordingReader::next(RecordedSample& out) {
+bool SqliteReader::next(RecordedSample& out) {
   if (!scan_) return false;
   const int rc = sqlite3_step(scan_);
   if (rc == SQLITE_DONE) return false;
@@ -299,6 +288,27 @@ bool RecordingReader::next(RecordedSample& out) {
     throw RecordingError("unknown codec " + std::to_string(codec) + " in the recording");
   }
   return true;
+}
+
+RecordingHealth SqliteReader::health() const {
+  RecordingHealth h;
+  h.how = "SQLite";
+  return h;
+}
+
+std::string SqliteReader::verify_file() {
+  sqlite3_stmt* st = nullptr;
+  std::string result = "not checked";
+  if (sqlite3_prepare_v2(db_, "PRAGMA quick_check", -1, &st, nullptr) == SQLITE_OK &&
+      sqlite3_step(st) == SQLITE_ROW) {
+    const auto* text = reinterpret_cast<const char*>(sqlite3_column_text(st, 0));
+    result = text ? text : "?";
+  }
+  sqlite3_finalize(st);
+  if (result != "ok") {
+    throw config::ConfigError(path_ + ": SQLite quick_check: " + result);
+  }
+  return result;
 }
 
 }  // namespace teleop::record
