@@ -180,8 +180,12 @@ TELEOP_ALWAYS_INLINE void group_frames(DeformableState& s, int t0, const V4* fg,
     qy = moved ? ny * inv : qy;
     qz = moved ? nz * inv : qz;
     quaternion_matrix(qw, qx, qy, qz, r);
-    for (int l = 0; l < 4; ++l) {
-      if (newton[l] != 0 && w2[l] <= tolerance) continue;  // a Newton step: error ~ its square
+    // a Newton step leaves an error of the order of its square: the lanes above are finished by
+    // the scalar iteration (a vector test first: usually none is)
+    const V4i redo = (newton == 0) | (w2 > tolerance);
+    const bool any = (redo[0] | redo[1] | redo[2] | redo[3]) != 0;
+    for (int l = 0; any && l < 4; ++l) {
+      if (redo[l] == 0) continue;
       double a[9], rl[9];
       for (int k = 0; k < 9; ++k) a[k] = fg[k][l];
       Eigen::Quaterniond q(qw[l], qx[l], qy[l], qz[l]);
