@@ -113,12 +113,17 @@ struct DeformableParams {
   double centre_mass_fraction = 0.3;
 
   // mass-spring model
+  /// The two springs below are derived from the material (youngs_modulus_pa, poisson_ratio) and
+  /// the radius by mass_spring_from_material (material.hpp) when make_model builds the body,
+  /// replacing edge_stiffness_n_per_m and radial_stiffness_n_per_m3. A scene file sets it when a
+  /// mass-spring body gives its material (docs/deformable.md, "Mass-spring from a material").
+  bool springs_from_material = false;
   double edge_stiffness_n_per_m = 150.0;  ///< each edge spring [N/m] (membrane, level invariant)
   /// Radial spring of node i: k_i = this * (area of node i) [N/m per m^2 of surface]; 0 = none.
   /// Default: 1.5e5 for mass_spring (46 N/m per node at level 4), 0 for the Navier models.
   double radial_stiffness_n_per_m3 = 1.5e5;
 
-  // Navier model, eq. (1)-(2)
+  // the material: models navier_*, fem, and mass_spring with springs_from_material
   double youngs_modulus_pa = 6000.0;  ///< E [Pa]
   double poisson_ratio = 0.3;         ///< nu [-], in [0, 0.49]
 

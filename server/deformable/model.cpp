@@ -7,6 +7,7 @@
 
 #include "server/deformable/deformable.hpp"
 #include "server/deformable/fem.hpp"
+#include "server/deformable/material.hpp"
 
 namespace teleop::sim::deformable {
 
@@ -362,6 +363,17 @@ DeformableModel make_model(const teleop::mesh::TriMesh& mesh, const DeformablePa
   check_inputs(mesh, params, planes);
   DeformableModel m;
   m.params = params;
+  if (params.model == ModelKind::kMassSpring && params.springs_from_material) {
+    // the sphere the body stands for: the icosphere's radius, or a mesh's volume-equivalent one
+    const double radius_m =
+        params.mesh_file.empty()
+            ? params.radius_m
+            : std::cbrt(3.0 * std::fabs(teleop::mesh::enclosed_volume(mesh)) / (4.0 * M_PI));
+    const MassSpringStiffness k = mass_spring_from_material(
+        params.youngs_modulus_pa, params.poisson_ratio, radius_m, params.centre_mass_fraction);
+    m.params.edge_stiffness_n_per_m = k.edge_n_per_m;
+    m.params.radial_stiffness_n_per_m3 = k.radial_n_per_m3;
+  }
   m.mesh = mesh;
   m.node_count = mesh.vertex_count();
   set_geometry_and_masses(m);

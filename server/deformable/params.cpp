@@ -103,6 +103,24 @@ void load_volume_fields(const teleop::config::Node& node, DeformableParams& p) {
       node.number_or("mass_scaling_max_fraction", p.mass_scaling_max_fraction, 0.0, 0.5);
 }
 
+// Model mass_spring: a body that gives its material (youngs_modulus_pa, poisson_ratio) gets its
+// springs derived from it (springs_from_material); one that gives springs keeps them; not both.
+void load_mass_spring_source(const teleop::config::Node& node, DeformableParams& p) {
+  if (p.model != ModelKind::kMassSpring) return;
+  const bool material = node.has("youngs_modulus_pa") || node.has("poisson_ratio");
+  if (!material) return;
+  for (const char* key : {"edge_stiffness_n_per_m", "radial_stiffness_n_per_m3"}) {
+    if (node.has(key)) {
+      node.fail(key,
+                "give a mass-spring body either its material (youngs_modulus_pa, poisson_ratio: "
+                "the springs are derived from it, docs/deformable.md \"Mass-spring from a "
+                "material\") or its springs (edge_stiffness_n_per_m, radial_stiffness_n_per_m3), "
+                "not both");
+    }
+  }
+  p.springs_from_material = true;
+}
+
 }  // namespace
 
 DeformableParams load_deformable_params(const teleop::config::Node& node) {
@@ -214,8 +232,9 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   p.max_speed_mps = node.number_or("max_speed_mps", p.max_speed_mps, 1e-3, 1e6);
   p.max_substeps = static_cast<int>(node.integer_or("max_substeps", p.max_substeps, 1, 10000));
   p.min_substeps = static_cast<int>(node.integer_or("min_substeps", p.min_substeps, 1, 10000));
-  if (p.model == ModelKind::kMassSpring && p.edge_stiffness_n_per_m <= 0.0 &&
-      p.radial_stiffness_n_per_m3 <= 0.0) {
+  load_mass_spring_source(node, p);
+  if (p.model == ModelKind::kMassSpring && !p.springs_from_material &&
+      p.edge_stiffness_n_per_m <= 0.0 && p.radial_stiffness_n_per_m3 <= 0.0) {
     node.fail("edge_stiffness_n_per_m",
               "a mass-spring body needs edge_stiffness_n_per_m > 0 or "
               "radial_stiffness_n_per_m3 > 0");

@@ -27,43 +27,6 @@ namespace {
 namespace df = teleop::sim::deformable;
 namespace va = teleop::sim::validation;
 
-// (material, case, quantity, travel_mm) -> value of the CalculiX reference: fine mesh, linear
-// elasticity (small strain), the material law of Hertz, Lamb and the fem model. The file's
-// geometrically nonlinear rows use St Venant-Kirchhoff, another material under large strain, and
-// are not a reference here.
-std::map<std::string, double> read_ccx_reference() {
-  std::map<std::string, double> out;
-  const std::string path =
-      std::string(TELEOP_SOURCE_DIR) + "/tests/reference/calculix/ball_reference.csv";
-  std::ifstream in(path);
-  std::string line;
-  std::getline(in, line);  // header
-  while (std::getline(in, line)) {
-    std::vector<std::string> f;
-    std::stringstream ss(line);
-    std::string cell;
-    while (std::getline(ss, cell, ',')) f.push_back(cell);
-    if (f.size() < 8 || f[7] != "fine") continue;
-    std::string travel;  // as travel_key() writes it, whatever the file's number format
-    if (!f[3].empty()) {
-      char b[32];
-      std::snprintf(b, sizeof b, "%g", std::strtod(f[3].c_str(), nullptr));
-      travel = b;
-    }
-    const std::string key = f[0] + "," + f[1] + "," + f[2] + "," + travel;
-    const double v = std::strtod(f[4].c_str(), nullptr);
-    if (f[6] == "small_strain") out[key] = v;
-  }
-  return out;
-}
-
-std::string travel_key(double travel_m) {
-  if (!(travel_m > 0.0)) return "";
-  char b[32];
-  std::snprintf(b, sizeof b, "%g", travel_m * 1e3);
-  return b;
-}
-
 struct Case {
   df::ModelKind model;
   df::IntegratorKind integrator;
@@ -105,8 +68,8 @@ int validate_case(const Case& c, const std::vector<double>& travels, bool quick,
     row(c, shape, std::string("lamb_") + va::to_string(mode) + "_hz", 0.0, ref, f, "lamb", us);
   }
   const std::string mat = c.material.name;
-  auto ccx_ref = [&](const std::string& key) {
-    const auto it = ccx.find(key);
+  auto ccx_ref = [&](const std::string& case_name, const std::string& quantity, double travel_m) {
+    const auto it = ccx.find(va::calculix_key(mat, case_name, quantity, travel_m));
     return it == ccx.end() ? std::numeric_limits<double>::quiet_NaN() : it->second;
   };
   // Hertz (and CalculiX): on the floor without and with the weight; held at the centre
@@ -117,7 +80,7 @@ int validate_case(const Case& c, const std::vector<double>& travels, bool quick,
     const double ref =
         va::hertz_floor_force_n(c.material, va::kBallRadiusM, va::kTipRadiusM, travels[k], 0.0);
     row(c, free, "tip_force_floor_n", travels[k], ref, free.force_n[k], "hertz", free.step_us);
-    const double cref = ccx_ref(mat + ",tip_floor_nogravity,tip_force," + travel_key(travels[k]));
+    const double cref = ccx_ref("tip_floor_nogravity", "tip_force", travels[k]);
     if (std::isfinite(cref)) {
       row(c, free, "tip_force_floor_n", travels[k], cref, free.force_n[k], "calculix",
           free.step_us);
@@ -131,15 +94,15 @@ int validate_case(const Case& c, const std::vector<double>& travels, bool quick,
         va::hertz_floor_force_n(c.material, va::kBallRadiusM, va::kTipRadiusM, travels[k], weight);
     row(c, heavy, "tip_force_floor_weight_n", travels[k], ref, heavy.force_n[k], "hertz",
         heavy.step_us);
-    const double cref = ccx_ref(mat + ",tip_floor_gravity,tip_force," + travel_key(travels[k]));
+    const double cref = ccx_ref("tip_floor_gravity", "tip_force", travels[k]);
     if (std::isfinite(cref)) {
       row(c, heavy, "tip_force_floor_weight_n", travels[k], cref, heavy.force_n[k], "calculix",
           heavy.step_us);
     }
   }
-  row(c, heavy, "sag_top_m", 0.0, ccx_ref(mat + ",sag_floor,top_descent,"), heavy.sag_top_m,
+  row(c, heavy, "sag_top_m", 0.0, ccx_ref("sag_floor", "top_descent", 0.0), heavy.sag_top_m,
       "calculix", heavy.step_us);
-  row(c, heavy, "sag_centre_m", 0.0, ccx_ref(mat + ",sag_floor,centre_descent,"),
+  row(c, heavy, "sag_centre_m", 0.0, ccx_ref("sag_floor", "centre_descent", 0.0),
       heavy.sag_centre_m, "calculix", heavy.step_us);
   row(c, heavy, "floor_force_n", 0.0, weight, heavy.floor_force_n, "weight", heavy.step_us);
   if (c.model == df::ModelKind::kFem) {
@@ -151,8 +114,7 @@ int validate_case(const Case& c, const std::vector<double>& travels, bool quick,
           va::hertz_tip_force_n(c.material, va::kBallRadiusM, va::kTipRadiusM, travels[k]),
           held.force_n[k], "hertz", held.step_us);
       // the CalculiX ball clamped over the same 25 mm central sphere
-      const double cref =
-          ccx_ref(mat + ",tip_centre_held,tip_force_clamp25mm," + travel_key(travels[k]));
+      const double cref = ccx_ref("tip_centre_held", "tip_force_clamp25mm", travels[k]);
       if (std::isfinite(cref)) {
         row(c, held, "tip_force_held_n", travels[k], cref, held.force_n[k], "calculix",
             held.step_us);
@@ -188,7 +150,7 @@ int run_validate(const teleop::CommandArgs& args) {
       for (int level : {3, 4}) cases.push_back({model, sym, level, va::foam()});
     }
   }
-  const auto ccx = read_ccx_reference();
+  const auto ccx = va::calculix_reference();
   teleop::CsvWriter csv(
       (args.out_dir / "validation.csv").string(),
       {"model", "variant", "integrator", "mesh", "nodes", "tets", "material", "quantity",
@@ -203,7 +165,7 @@ int run_validate(const teleop::CommandArgs& args) {
     csv.row_text({std::string(df::to_string(c.model)), variant,
                   std::string(df::to_string(c.integrator)), "L" + std::to_string(c.level),
                   std::to_string(r.nodes), std::to_string(r.tets), c.material.name, quantity,
-                  travel_key(travel_m), teleop::format_number(reference),
+                  va::travel_mm_text(travel_m), teleop::format_number(reference),
                   teleop::format_number(value), teleop::format_number(err), source,
                   teleop::format_number(step_us)});
   };

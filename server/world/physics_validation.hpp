@@ -13,7 +13,8 @@
 //   - Lamb (1882): f = eta c_T / (2 pi R), c_T = sqrt(E / (2 rho (1 + nu))). Torsional l = 2:
 //     (l - 1) j_l(eta) = eta j_(l+1)(eta), eta = 2.5011 for any nu. Breathing (spheroidal l = 0):
 //     eta_P cot(eta_P) = 1 - (eta_P / 2)^2 (c_L / c_T)^2 with eta = eta_P c_L / c_T. Spheroidal
-//     l = 2: the tabulated roots of the coupled equation (nu 0.25-0.45, linear in between).
+//     l = 2: the root of the coupled free-surface equation (server/deformable/material.hpp).
+#include <map>
 #include <string>
 #include <vector>
 
@@ -58,15 +59,18 @@ double hertz_tip_force_n(const Material& m, double ball_r_m, double tip_r_m, dou
 /// The free-vibration modes of a solid sphere measured here.
 enum class LambMode { kS2, kT2, kS0 };
 const char* to_string(LambMode mode);
-/// Lamb's dimensionless frequency eta of `mode` at Poisson ratio nu (S2: nu in [0.25, 0.45]).
-/// @throws std::domain_error for S2 outside that range.
+/// Lamb's dimensionless frequency eta of `mode` at Poisson ratio nu
+/// (server/deformable/material.hpp).
+/// @throws std::domain_error for S2 and S0 with nu outside [0, 0.49].
 double lamb_eta(LambMode mode, double nu);
 /// Lamb's frequency [Hz] of `mode` for a ball of `radius_m`.
 double lamb_frequency_hz(LambMode mode, const Material& m, double radius_m);
 
 /// The parameters of a ball of the material: model and integrator given, geometry at `level`,
 /// resting on the floor (its lowest point at z = 0 for the icosphere, the poles for fem), the
-/// material's E, nu and density (mass-spring: its own stiffness parameters; it has no material).
+/// material's E, nu and density, every other field as a scene file's body of that model gets it
+/// (mass-spring: springs derived from the material, springs_from_material, as a scene body that
+/// gives youngs_modulus_pa).
 deformable::DeformableParams ball_params(deformable::ModelKind model,
                                          deformable::IntegratorKind integrator, int level,
                                          const Material& material);
@@ -103,13 +107,29 @@ PressResult press_ball(const deformable::DeformableParams& params, Support suppo
 /// The frequency [Hz] of the body's free vibration (zero gravity, no planes, no damping)
 /// started by the velocity field of `mode` (S2: (x, y, -2z); T2: (y z, -x z, 0) / R; S0:
 /// (x, y, z), about the centre), from the largest peak of the Hann-windowed spectrum of the
-/// mode's coordinate over duration_s, refined by a parabola. Also returns the wall time.
+/// mode's coordinate over duration_s, refined by a parabola. Also returns the mean wall time of
+/// a step and the body's faults: a run that blew up (explicit Euler, unstable without damping at
+/// any step) stops at the fault and returns NaN.
 double free_vibration_hz(deformable::DeformableParams params, LambMode mode, double duration_s,
-                         double expected_hz, double* step_us = nullptr);
+                         double expected_hz, double* step_us = nullptr,
+                         std::uint64_t* faults = nullptr);
 
 /// The velocity field that starts `mode` at point p (relative to the centre, in units of the
 /// radius): S2 (x, y, -2z), T2 (y z, -x z, 0), S0 (x, y, z).
 Eigen::Vector3d lamb_mode_field(LambMode mode, const Eigen::Vector3d& p);
+
+/// The converged CalculiX ball (tests/reference/calculix/ball_reference.csv, see its README):
+/// the fine mesh's small-strain (linear elasticity) values, keyed by calculix_key. The file's
+/// geometrically nonlinear rows use another material law under large strain and are left out.
+/// Empty when the file cannot be read.
+std::map<std::string, double> calculix_reference();
+/// "material,case,quantity,travel" with the travel in mm as travel_mm_text writes it, e.g.
+/// calculix_key("foam", "tip_floor_gravity", "tip_force", 5e-3) for the tip's force [N] at a
+/// 5 mm press of the ball resting on the floor under its weight.
+std::string calculix_key(const std::string& material, const std::string& case_name,
+                         const std::string& quantity, double travel_m);
+/// A travel [m] as the CSVs write it in mm ("%g"; empty for travel_m <= 0).
+std::string travel_mm_text(double travel_m);
 
 /// The frequency [Hz] of the largest peak of the Hann-windowed spectrum of samples q (period
 /// dt_s) between 0.3 and 2.5 times expected_hz, refined by a parabola through its neighbours;

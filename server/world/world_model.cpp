@@ -409,7 +409,7 @@ DeformableBodyModel parse_deformable_body(const config::Node& n, const WorldMode
     b.auto_summary = ab.summary();
     b.auto_report = ab.report();
   } else {
-    for (const char* key : {"tolerance_mm", "budget_us", "model_table"}) {
+    for (const char* key : {"tolerance_pct", "tolerance_mm", "budget_us", "model_table"}) {
       if (body.has(key)) {
         body.fail(key,
                   "is used only when model, integrator, level or kernel is auto (automatic "

@@ -16,8 +16,8 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/mesh/tet_mesh.hpp"
@@ -26,50 +26,19 @@
 #include "common/util/stats.hpp"
 #include "server/deformable/deformable.hpp"
 #include "server/world/physics_validation.hpp"
-
-#ifdef TELEOP_HAVE_BULLET
-// Bullet's deformable headers instantiate code GCC flags as maybe uninitialized (in Bullet)
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include <BulletSoftBody/btDeformableBodySolver.h>
-#include <BulletSoftBody/btDeformableLinearElasticityForce.h>
-#include <BulletSoftBody/btDeformableMultiBodyConstraintSolver.h>
-#include <BulletSoftBody/btDeformableMultiBodyDynamicsWorld.h>
-#include <BulletSoftBody/btSoftBodyHelpers.h>
-#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
-#include <btBulletDynamicsCommon.h>
-
-#include <memory>
-#endif
+#include "tests/bench/bullet_tet_ball.hpp"
 
 namespace {
 
 namespace df = teleop::sim::deformable;
 namespace va = teleop::sim::validation;
+using teleop::bench::mode_coordinate;
+using teleop::bench::mode_field;
 
 struct Run {
   std::vector<double> q;        ///< the mode's coordinate per step
   std::vector<double> step_us;  ///< wall time per world step
 };
-
-// Mass-weighted projection of the displacement (centroid motion removed) on the mode field.
-double mode_coordinate(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& x0,
-                       const Eigen::Matrix3Xd& phi, const Eigen::VectorXd& mass) {
-  const Eigen::Vector3d c = x * mass / mass.sum(), c0 = x0 * mass / mass.sum();
-  double acc = 0.0;
-  for (Eigen::Index i = 0; i < x.cols(); ++i) {
-    acc += mass(i) * ((x.col(i) - c) - (x0.col(i) - c0)).dot(phi.col(i));
-  }
-  return acc;
-}
-
-Eigen::Matrix3Xd mode_field(va::LambMode mode, const Eigen::Matrix3Xd& x0) {
-  const Eigen::Vector3d c0 = x0.rowwise().mean();
-  Eigen::Matrix3Xd phi(3, x0.cols());
-  for (Eigen::Index i = 0; i < x0.cols(); ++i) {
-    phi.col(i) = va::lamb_mode_field(mode, (x0.col(i) - c0) / va::kBallRadiusM);
-  }
-  return phi * (0.02 / phi.colwise().norm().maxCoeff());
-}
 
 Run run_ours(int level, va::LambMode mode, double dt, int steps) {
   df::DeformableParams p =
@@ -97,73 +66,9 @@ Run run_ours(int level, va::LambMode mode, double dt, int steps) {
 Run run_bullet(int level, va::LambMode mode, double dt, int steps, bool implicit) {
   const teleop::mesh::TetMesh tm =
       teleop::mesh::ball_tet_mesh(level, va::kBallRadiusM, Eigen::Vector3d::Zero());
-  // TetGen's text format, which Bullet reads (0-based indices)
-  std::ostringstream node, ele;
-  node.precision(17);
-  node << tm.node_count() << " 3 0 0\n";
-  for (int i = 0; i < tm.node_count(); ++i) {
-    node << i << " " << tm.vertices(0, i) << " " << tm.vertices(1, i) << " " << tm.vertices(2, i)
-         << "\n";
-  }
-  ele << tm.tet_count() << " 4 0\n";
-  for (int t = 0; t < tm.tet_count(); ++t) {
-    ele << t << " " << tm.tets(0, t) << " " << tm.tets(1, t) << " " << tm.tets(2, t) << " "
-        << tm.tets(3, t) << "\n";
-  }
-  auto config = std::make_unique<btSoftBodyRigidBodyCollisionConfiguration>();
-  auto dispatcher = std::make_unique<btCollisionDispatcher>(config.get());
-  auto broadphase = std::make_unique<btDbvtBroadphase>();
-  auto body_solver = std::make_unique<btDeformableBodySolver>();
-  auto solver = std::make_unique<btDeformableMultiBodyConstraintSolver>();
-  solver->setDeformableSolver(body_solver.get());
-  auto world = std::make_unique<btDeformableMultiBodyDynamicsWorld>(
-      dispatcher.get(), broadphase.get(), solver.get(), config.get(), body_solver.get());
-  world->setGravity(btVector3(0, 0, 0));
-  world->getWorldInfo().m_gravity.setValue(0, 0, 0);
-  world->getWorldInfo().m_sparsesdf.Initialize();
-  world->setImplicit(implicit);
-  const std::string ele_text = ele.str(), node_text = node.str();
-  btSoftBody* sb = btSoftBodyHelpers::CreateFromTetGenData(
-      world->getWorldInfo(), ele_text.c_str(), nullptr, node_text.c_str(), false, true, true);
-  world->addSoftBody(sb);
-  sb->setVolumeMass(2.0);  // a quarter of each tetrahedron's share on its nodes, like ours
-  sb->m_cfg.kDF = 0;
-  sb->m_sleepingThreshold = 0;
-  const va::Material foam = va::foam();
-  const double nu = foam.poisson_ratio, e = foam.youngs_modulus_pa;
-  auto force = std::make_unique<btDeformableLinearElasticityForce>(
-      static_cast<btScalar>(e / (2 * (1 + nu))),
-      static_cast<btScalar>(e * nu / ((1 + nu) * (1 - 2 * nu))), 0, 0);
-  world->addForce(sb, force.get());
-  Eigen::Matrix3Xd x0(3, sb->m_nodes.size()), x(3, sb->m_nodes.size());
-  Eigen::VectorXd mass(sb->m_nodes.size());
-  for (int i = 0; i < sb->m_nodes.size(); ++i) {
-    const btVector3& p = sb->m_nodes[i].m_x;
-    x0.col(i) = Eigen::Vector3d(p.x(), p.y(), p.z());
-    const double im = static_cast<double>(sb->m_nodes[i].m_im);
-    mass(i) = im > 0.0 ? 1.0 / im : 0.0;
-  }
-  const Eigen::Matrix3Xd phi = mode_field(mode, x0);
-  for (int i = 0; i < sb->m_nodes.size(); ++i) {
-    sb->m_nodes[i].m_v =
-        btVector3(static_cast<btScalar>(phi(0, i)), static_cast<btScalar>(phi(1, i)),
-                  static_cast<btScalar>(phi(2, i)));
-  }
-  Run r;
-  for (int k = 0; k < steps; ++k) {
-    const auto t0 = std::chrono::steady_clock::now();
-    world->stepSimulation(static_cast<btScalar>(dt), 0);
-    const auto t1 = std::chrono::steady_clock::now();
-    r.step_us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
-    for (int i = 0; i < sb->m_nodes.size(); ++i) {
-      const btVector3& p = sb->m_nodes[i].m_x;
-      x.col(i) = Eigen::Vector3d(p.x(), p.y(), p.z());
-    }
-    r.q.push_back(mode_coordinate(x, x0, phi, mass));
-  }
-  world->removeSoftBody(sb);
-  delete sb;
-  return r;
+  teleop::bench::BulletModeRun b =
+      teleop::bench::run_bullet_mode(tm, va::foam(), 2.0, mode, dt, steps, implicit);
+  return Run{std::move(b.q), std::move(b.step_us)};
 }
 #endif
 

@@ -63,7 +63,9 @@ INSTANTIATE_TEST_SUITE_P(
              "model,t_s"},
         Case{"server/teleop_experiment", "sphere-gravity", "sphere_gravity.csv", "t_s,"},
         Case{"tests/bench/teleop_bench", "deformable", "deformable.csv",
-             "model,integrator,level,dt_s,step_us_median,step_us_p99,error"},
+             "model,integrator,kernel,level,nodes,elements,dt_s,substeps,step_us_median,"
+             "step_us_p99,cost_steps,lamb_s2_pct,lamb_t2_pct,lamb_s0_pct,press_5mm_pct,"
+             "error_pct"},
         Case{"tests/bench/teleop_bench", "growth", "growth.csv", "series,kind,level,n,"},
         Case{"tests/bench/teleop_bench", "peers", "peers.csv", "engine,level,nodes,dt_s,"}),
     [](const auto& param_info) {
