@@ -171,6 +171,8 @@ std::string ModelChoice::name() const {
   std::string s = std::string(to_string(entry.model)) + " " + to_string(entry.integrator) + " " +
                   to_string(entry.kernel) + " level " + std::to_string(entry.level) + ", " +
                   std::to_string(substeps) + " x " + ms_text(entry.dt_s);
+  if (entry.mass_scaling_step_s > 0.0)
+    s += ", mass-scaled to " + ms_text(entry.mass_scaling_step_s);
   return s;
 }
 
@@ -179,19 +181,19 @@ namespace {
 /// Where each column of the table is (-1: absent).
 struct TableColumns {
   int model = -1, integ = -1, level = -1, dt = -1, med = -1, p99 = -1, err = -1, kernel = -1,
-      substeps = -1, s2 = -1, t2 = -1, s0 = -1, press = -1;
+      substeps = -1, s2 = -1, t2 = -1, s0 = -1, press = -1, mass_scaling = -1;
 };
 
 TableColumns table_columns(const std::vector<std::string>& header, const std::string& where) {
   TableColumns c;
   const std::pair<const char*, int*> names[] = {
-      {"model", &c.model},        {"integrator", &c.integ},
-      {"level", &c.level},        {"dt_s", &c.dt},
-      {"step_us_median", &c.med}, {"step_us_p99", &c.p99},
-      {"error_pct", &c.err},      {"kernel", &c.kernel},
-      {"substeps", &c.substeps},  {"lamb_s2_pct", &c.s2},
-      {"lamb_t2_pct", &c.t2},     {"lamb_s0_pct", &c.s0},
-      {"press_5mm_pct", &c.press}};
+      {"model", &c.model},         {"integrator", &c.integ},
+      {"level", &c.level},         {"dt_s", &c.dt},
+      {"step_us_median", &c.med},  {"step_us_p99", &c.p99},
+      {"error_pct", &c.err},       {"kernel", &c.kernel},
+      {"substeps", &c.substeps},   {"lamb_s2_pct", &c.s2},
+      {"lamb_t2_pct", &c.t2},      {"lamb_s0_pct", &c.s0},
+      {"press_5mm_pct", &c.press}, {"mass_scaling_step_s", &c.mass_scaling}};
   bool old_error = false;
   for (int i = 0; i < static_cast<int>(header.size()); ++i) {
     const std::string& h = header[static_cast<std::size_t>(i)];
@@ -208,11 +210,13 @@ TableColumns table_columns(const std::vector<std::string>& header, const std::st
   }
   if (c.model < 0 || c.integ < 0 || c.level < 0 || c.dt < 0 || c.med < 0 || c.p99 < 0 ||
       c.err < 0) {
-    throw ConfigError(where +
-                      ": the header must name the columns model, integrator, level, dt_s, "
-                      "step_us_median, step_us_p99, error_pct (and optionally kernel, substeps, "
-                      "lamb_s2_pct, lamb_t2_pct, lamb_s0_pct, press_5mm_pct), as `teleop_bench "
-                      "deformable` writes them");
+    throw ConfigError(
+        where +
+        ": the header must name the columns model, integrator, level, dt_s, "
+        "step_us_median, step_us_p99, error_pct (and optionally kernel, substeps, "
+        "lamb_s2_pct, lamb_t2_pct, lamb_s0_pct, press_5mm_pct, mass_scaling_step_s), as "
+        "`teleop_bench "
+        "deformable` writes them");
   }
   return c;
 }
@@ -264,6 +268,17 @@ TableEntry table_entry(const std::vector<std::string>& cells, const TableColumns
   e.t2_pct = optional(c.t2);
   e.s0_pct = optional(c.s0);
   e.press_pct = optional(c.press);
+  const double scaling = optional(c.mass_scaling);
+  if (!std::isnan(scaling)) {
+    if (!(scaling >= 0.0 && scaling <= 1.0)) {
+      throw ConfigError(where + ": mass_scaling_step_s " + cell(c.mass_scaling) +
+                        " is not in [0, 1] s");
+    }
+    if (scaling > 0.0 && e.model != ModelKind::kFem) {
+      throw ConfigError(where + ": mass_scaling_step_s is for model fem only");
+    }
+    e.mass_scaling_step_s = scaling;
+  }
   return e;
 }
 
@@ -493,6 +508,7 @@ DeformableParams chosen_params(const config::Node& node, const ModelChoice& c) {
   y["level"] = c.entry.level;
   y["kernel"] = to_string(c.entry.kernel);
   if (c.substeps > 1) y["min_substeps"] = c.substeps;
+  if (c.entry.mass_scaling_step_s > 0.0) y["mass_scaling_step_s"] = c.entry.mass_scaling_step_s;
   // as in the table, a mass-spring body's springs come from its material (the default one when
   // it gives none), unless it gives the springs themselves
   if (!node.has("edge_stiffness_n_per_m") && !node.has("radial_stiffness_n_per_m3") &&

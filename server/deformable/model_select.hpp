@@ -28,9 +28,12 @@ struct TableEntry {
   ModelKind model = ModelKind::kMassSpring;
   IntegratorKind integrator = IntegratorKind::kSymplecticEuler;
   KernelKind kernel = KernelKind::kScalar;
-  int level = 4;                ///< icosphere level, or the shipped tet ball's (model fem)
-  double dt_s = 1e-3;           ///< the world step the entry was measured at [s]
-  int substeps = 1;             ///< stability sub-steps the body took per world step [-]
+  int level = 4;       ///< icosphere level, or the shipped tet ball's (model fem)
+  double dt_s = 1e-3;  ///< the world step the entry was measured at [s]
+  int substeps = 1;    ///< stability sub-steps the body took per world step [-]
+  /// Model fem: the mass scaling's stable step the entry ran with [s] (0: none;
+  /// params.mass_scaling_step_s)
+  double mass_scaling_step_s = 0.0;
   double step_us_median = 0.0;  ///< wall time of one world step, sub-steps included, median [us]
   double step_us_p99 = 0.0;     ///< [us]
   /// Physical error: the largest |error| of the quantities below [%]; +inf when a quantity could

@@ -33,10 +33,11 @@ def main():
     fig, ax = plt.subplots(figsize=(13, 7.5))
     series = {}
     for r in rows:
-        series.setdefault((r["model"], r["integrator"], r["kernel"]), []).append(r)
-    for (model, integ, kernel), rs in series.items():
+        scaled = float(r.get("mass_scaling_step_s") or 0) > 0
+        series.setdefault((r["model"], r["integrator"], r["kernel"], scaled), []).append(r)
+    for (model, integ, kernel, scaled), rs in series.items():
         rs.sort(key=lambda r: int(r["level"]))
-        c = COLOURS.get(integ, "tab:purple")
+        c = "tab:orange" if scaled else COLOURS.get(integ, "tab:purple")
         simd = kernel == "simd"
         xs = [float(r["step_us_median"]) for r in rs]
         ys = [float(r["error_pct"]) for r in rs]
@@ -66,6 +67,9 @@ def main():
                for k, m in MARKERS.items()]
     handles += [plt.Line2D([], [], color=c, marker="o", ls="", label=LABELS.get(k, k))
                 for k, c in COLOURS.items() if any(r["integrator"] == k for r in rows)]
+    if any(float(r.get("mass_scaling_step_s") or 0) > 0 for r in rows):
+        handles.append(plt.Line2D([], [], color="tab:orange", marker="D", ls="",
+                                  label="fem symplectic, mass-scaled to one step per 1 ms"))
     handles.append(plt.Line2D([], [], color="tab:blue", marker="o", ls="", fillstyle="none",
                               label="hollow: mass_spring kernel simd; on the top line: no result"))
     ax.legend(handles=handles, fontsize=8, loc="lower left", ncol=2)
