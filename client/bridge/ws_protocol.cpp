@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 
 namespace teleop::bridge {
 
@@ -116,9 +117,14 @@ ClientRequest parse_client_request(const std::string& text) {
   std::unique_ptr<Json::CharReader> reader(b.newCharReader());
   Json::Value v;
   std::string errs;
-  if (!reader->parse(text.data(), text.data() + text.size(), &v, &errs)) {
-    std::string first = errs.substr(0, errs.find('\n'));
-    return invalid("not valid JSON: " + first);
+  try {
+    if (!reader->parse(text.data(), text.data() + text.size(), &v, &errs)) {
+      std::string first = errs.substr(0, errs.find('\n'));
+      return invalid("not valid JSON: " + first);
+    }
+  } catch (const std::exception& e) {
+    // jsoncpp throws past its nesting limit
+    return invalid(std::string("not valid JSON: ") + e.what());
   }
   if (!v.isObject()) return invalid("a client message must be a JSON object");
   const Json::Value& op = v["op"];
