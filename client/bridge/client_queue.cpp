@@ -8,6 +8,12 @@ ClientQueue::ClientQueue(std::size_t bound_bytes, std::size_t bulk_channels, std
       bulk_(bulk_channels),
       bulk_full_(bulk_channels, false) {}
 
+void ClientQueue::emptied(std::vector<std::uint8_t>& slot) {
+  if (retained_ <= 2 * bound_) return;
+  retained_ -= slot.capacity();
+  std::vector<std::uint8_t>().swap(slot);
+}
+
 bool ClientQueue::drop_one_bulk() {
   for (std::size_t i = 0; i < bulk_.size(); ++i) {
     if (!bulk_full_[i]) continue;
@@ -15,6 +21,7 @@ bool ClientQueue::drop_one_bulk() {
     bulk_full_[i] = false;
     --bulk_waiting_;
     ++counts_.dropped_bulk;
+    emptied(bulk_[i]);
     return true;
   }
   return false;
@@ -22,6 +29,7 @@ bool ClientQueue::drop_one_bulk() {
 
 void ClientQueue::drop_oldest_kept() {
   bytes_ -= kept_[kept_head_].size();
+  emptied(kept_[kept_head_]);
   kept_head_ = (kept_head_ + 1) % kept_.size();
   --kept_count_;
   ++counts_.dropped_kept;
@@ -58,8 +66,10 @@ void ClientQueue::push(FrameClass cls, std::size_t bulk_channel, std::span<const
     slot = &kept_[(kept_head_ + kept_count_) % kept_.size()];
     ++kept_count_;
   }
-  // assign keeps the slot's capacity: no allocation once the slot has held a frame this large
+  // resize keeps the slot's capacity: no allocation once the slot has held a frame this large
+  const std::size_t before = slot->capacity();
   slot->resize(n);
+  retained_ += slot->capacity() - before;
   std::copy(head.begin(), head.end(), slot->begin());
   std::copy(body.begin(), body.end(), slot->begin() + static_cast<std::ptrdiff_t>(head.size()));
   bytes_ += n;
@@ -79,6 +89,7 @@ const std::vector<std::uint8_t>* ClientQueue::front() const {
 void ClientQueue::pop() {
   if (kept_count_ > 0) {
     bytes_ -= kept_[kept_head_].size();
+    emptied(kept_[kept_head_]);
     kept_head_ = (kept_head_ + 1) % kept_.size();
     --kept_count_;
     ++counts_.sent;
@@ -90,6 +101,7 @@ void ClientQueue::pop() {
     bytes_ -= bulk_[i].size();
     bulk_full_[i] = false;
     --bulk_waiting_;
+    emptied(bulk_[i]);
     bulk_next_ = (i + 1) % bulk_.size();  // round robin over the bulk channels
     ++counts_.sent;
     return;

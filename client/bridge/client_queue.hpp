@@ -4,7 +4,9 @@
 // the bound is reached) and bulk frames (mesh vertex frames: at most one waiting per channel, a
 // newer one replaces it). When the bound is reached bulk frames go first, then the oldest kept
 // frames. Every drop is counted. The slots keep their capacity, so once warm, queuing a frame
-// allocates nothing and the queue never holds more than `bound_bytes` of frames.
+// allocates nothing; the queue never holds more than `bound_bytes` of frames, and the capacity
+// its slots keep stays under three times that (a slot emptied while they keep more than twice
+// the bound gives its memory back).
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -39,14 +41,19 @@ class ClientQueue {
   void pop();
   bool empty() const { return kept_count_ == 0 && bulk_waiting_ == 0; }
   std::size_t bytes() const { return bytes_; }
+  /// Memory the slots keep (their capacities) [bytes].
+  std::size_t retained_bytes() const { return retained_; }
   std::size_t bound() const { return bound_; }
   const QueueCounts& counts() const { return counts_; }
 
  private:
   bool drop_one_bulk();
   void drop_oldest_kept();
+  /// A slot just emptied: frees its memory when the slots keep more than twice the bound.
+  void emptied(std::vector<std::uint8_t>& slot);
   std::size_t bound_;
   std::size_t bytes_ = 0;
+  std::size_t retained_ = 0;
   std::vector<std::vector<std::uint8_t>> kept_;  // ring
   std::size_t kept_head_ = 0, kept_count_ = 0;
   std::vector<std::vector<std::uint8_t>> bulk_;  // one per bulk channel

@@ -68,6 +68,23 @@ TEST(ClientQueue, WarmQueueDoesNotAllocate) {
   EXPECT_EQ(scope.allocations(), 0u);
 }
 
+TEST(ClientQueue, MemoryKeptBySlotsIsBounded) {
+  // 4096 kept slots, each of which may once have held a large frame: the slots' capacity must
+  // not add up beyond the bound (a client that reads slowly, frames of every size)
+  const std::size_t bound = 256u << 10;
+  ClientQueue q(bound, 2);
+  const auto head = bytes(13, 1);
+  for (int i = 0; i < 20'000; ++i) {
+    const std::size_t n = 100 + static_cast<std::size_t>(i % 7) * 9000;  // 100 B .. 54 KB
+    q.push(FrameClass::kKept, 0, head, bytes(n, 5));
+    if (i % 2 == 0)
+      q.push(FrameClass::kBulk, static_cast<std::size_t>(i % 4 / 2), head, bytes(30'000, 6));
+    if (i % 5 == 0) q.pop();
+    ASSERT_LE(q.bytes(), bound);
+    ASSERT_LE(q.retained_bytes(), 3 * bound) << "after " << i << " frames";
+  }
+}
+
 TEST(ClientRequest, SubscribeAndUnsubscribeParse) {
   auto r = parse_client_request(
       R"({"op":"subscribe","subscriptions":[{"id":7,"channelId":2},{"id":8,"channelId":3}]})");
