@@ -70,5 +70,6 @@ inline constexpr int kOwnerKilled = 142;   // ownership_test: the owner killed, 
 inline constexpr int kOwnerRestart = 143;  // ownership_test: server restart mid-contact
 // 144-149: reserved for ownership tests; 150-159, 160-169: transparency and contact tests
 // 170: smoke.bench-observers-live (tests/CMakeLists.txt: teleop_bench observers --live)
+// 171: tests/bench/bridge_load.sh
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
