@@ -57,7 +57,7 @@ run() {  # run MODE QUEUE_KB
   pids+=("$server" "$bridge")
   local port=""
   for _ in $(seq 100); do
-    port="$(grep -o '127.0.0.1:[0-9]*' "$tmp/b.out" | cut -d: -f2 || true)"
+    port="$(grep -o '127.0.0.1:[0-9]*' "$tmp/b.out" 2>/dev/null | cut -d: -f2 || true)"
     [ -n "$port" ] && break
     sleep 0.1
   done
