@@ -7,12 +7,9 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <map>
 #include <mutex>
-#include <set>
 #include <sstream>
-#include <stdexcept>
 
 #include "client/bridge/client_queue.hpp"
 #include "client/bridge/ws_protocol.hpp"
