@@ -18,6 +18,7 @@ packages=(
   googletest libgtest-dev libgmock-dev libbenchmark-dev
   libyaml-cpp-dev libcli11-dev
   libsqlite3-dev libzstd-dev libevdev-dev tmux
+  libwebsocketpp-dev libasio-dev libjsoncpp-dev  # teleop_bridge (Foxglove WebSocket protocol)
   openssl libssl-dev  # DDS Security: deploy/make_security.sh; common/dds/security_check.cpp
   python3-matplotlib python3-numpy
   clang-format

@@ -56,7 +56,7 @@ TEST(Layering, CommonIncludesNeitherSide) {
 }
 
 TEST(Layering, ObserversNeverIncludeTheControlLoop) {
-  for (const char* folder : {"client/record", "client/monitor", "client/viewer"}) {
+  for (const char* folder : {"client/record", "client/monitor", "client/viewer", "client/bridge"}) {
     const auto bad = offending_includes(
         folder, {"client/control/", "client/cycle/", "client/sim/", "client/node/"});
     EXPECT_TRUE(bad.empty()) << folder << " includes the control loop:" << joined(bad);

@@ -36,6 +36,9 @@ inline constexpr int kHostileInputs = 78;  // tests/tools/hostile_inputs.sh (cte
 inline constexpr int kRecordMcap = 79;     // record_play_test: an MCAP session, a kill -9
 inline constexpr int kNodeMcapCheck = 85;  // tests/node/run_mcap_check.sh (ctest node.*)
 inline constexpr int kPlaybackMcap = 86;   // record_play_test: an MCAP file played back
+inline constexpr int kBridgeSession = 87;  // bridge_test: a client of teleop_bridge
+inline constexpr int kBridgeSlowClient = 88;  // bridge_test: a client that never reads
+inline constexpr int kNodeBridgeCheck = 89;   // tests/node/run_bridge_check.sh (ctest node.*)
 inline constexpr int kSecureOutsiders = 105;  // security_test: no credentials / foreign CA
 inline constexpr int kSecureObserver = 106;   // security_test: observer reads, cannot command
 inline constexpr int kSecureSession = 107;    // security_test: server + master, secure
@@ -67,5 +70,6 @@ inline constexpr int kOwnerKilled = 142;   // ownership_test: the owner killed, 
 inline constexpr int kOwnerRestart = 143;  // ownership_test: server restart mid-contact
 // 144-149: reserved for ownership tests; 150-159, 160-169: transparency and contact tests
 // 170: smoke.bench-observers-live (tests/CMakeLists.txt: teleop_bench observers --live)
+// 171: tests/bench/bridge_load.sh
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains

@@ -117,6 +117,15 @@ check 2 "--speed: ''" 20 -- "$play" "$tmp/good.db" --speed ""
 check 2 "--bogus" 20 -- "$play" "$tmp/good.db" --bogus
 check 2 "--period: 'nan'" 20 -- "$monitor" --period nan
 check 2 "--bogus" 20 -- "$monitor" --bogus
+bridge="$build/client/teleop_bridge"
+if [ -x "$bridge" ]; then
+  check 2 "--port: '70000' is out of the allowed range [0, 65535]" 20 -- "$bridge" --port 70000
+  check 2 "--port: ''" 20 -- "$bridge" --port ""
+  check 2 "--queue-kb: 'nan'" 20 -- "$bridge" --queue-kb nan
+  check 2 "--queue-kb: '1' is out of the allowed range" 20 -- "$bridge" --queue-kb 1
+  check 2 "--max-clients: '0'" 20 -- "$bridge" --max-clients 0
+  check 2 "--bogus" 20 -- "$bridge" --bogus
+fi
 check 2 "--out is given more than once" 20 -- "$experiment" sphere-zero-g --out "$out/e" --out "$out/f"
 check 2 "'--bogus' is not an option of sphere-zero-g" 20 -- \
   "$experiment" sphere-zero-g --out "$out/e" --bogus 1
