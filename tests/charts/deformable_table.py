@@ -26,7 +26,9 @@ def main():
             continue
         err = float(r["error_pct"])
         err_text = f"{err:.1f}" if math.isfinite(err) else "none"
-        print(f"| {r['model']} | {r['integrator']} | {r['kernel']} | {r['level']} | "
+        scaled = float(r.get("mass_scaling_step_s") or 0) > 0
+        model = r["model"] + (" mass-scaled" if scaled else "")
+        print(f"| {model} | {r['integrator']} | {r['kernel']} | {r['level']} | "
               f"{r['nodes']} / {r['elements']} | {r['substeps']} | "
               f"{float(r['step_us_median']):.1f} | {float(r['step_us_p99']):.1f} | "
               f"{pct(r['lamb_s2_pct'])} | {pct(r['lamb_t2_pct'])} | {pct(r['lamb_s0_pct'])} | "
