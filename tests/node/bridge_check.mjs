@@ -13,6 +13,7 @@
 //  - the scene (latched) arrives, as do states and mesh frames.
 // Exit status 0 when all hold, 1 otherwise.
 import { createRequire } from "node:module";
+import { checkFiniteForces } from "./decoded_checks.mjs";
 
 const require = createRequire(import.meta.url);
 const { FoxgloveClient } = require("@foxglove/ws-protocol");
@@ -41,19 +42,6 @@ const ordered = new Set(["teleop/slave_state_view", "teleop/master_state_view", 
   "teleop/master_state_monitor", "teleop/slave_state", "teleop/master_state", "teleop/master_command"]);
 let serverInfo;
 
-const finiteForces = (value, path, topic) => {
-  if (value === null || typeof value !== "object") return;
-  for (const [key, v] of Object.entries(value)) {
-    if (/force/.test(key) && (typeof v === "number" || ArrayBuffer.isView(v) || Array.isArray(v))) {
-      const values = typeof v === "number" ? [v] : Array.from(v);
-      if (!values.every((x) => typeof x !== "number" || Number.isFinite(x))) {
-        fail(`${topic}: ${path}${key} is not finite: ${values}`);
-      }
-    } else if (typeof v === "object") {
-      finiteForces(v, `${path}${key}.`, topic);
-    }
-  }
-};
 
 client.on("error", (e) => fail(`websocket error: ${e?.message ?? e}`));
 client.on("serverInfo", (info) => {
@@ -89,7 +77,7 @@ client.on("message", ({ subscriptionId, timestamp, data }) => {
     return;
   }
   c.count++;
-  finiteForces(decoded, "", c.topic);
+  checkFiniteForces(decoded, c.topic, fail);
   if (ordered.has(c.topic)) {
     const seq = BigInt(decoded.seq);
     if (seq <= c.seq || timestamp < c.time) c.backwards++;

@@ -21,6 +21,7 @@ import { createRequire } from "node:module";
 
 import { McapIndexedReader, McapStreamReader } from "@mcap/core";
 import { loadDecompressHandlers } from "@mcap/support";
+import { checkFiniteForces } from "./decoded_checks.mjs";
 
 const require = createRequire(import.meta.url);
 const { parseIDL } = require("@foxglove/omgidl-parser");
@@ -80,19 +81,6 @@ for (const [id, channel] of reader.channelsById) {
 // 3. every message, with the chunks' CRCs checked, decoded with its schema
 const checked = new Set(["teleop/master_command", "teleop/slave_state", "teleop/master_state"]);
 const perChannel = new Map();
-const finiteForces = (value, path, topic) => {
-  if (value === null || typeof value !== "object") return;
-  for (const [key, v] of Object.entries(value)) {
-    if (/force/.test(key) && (typeof v === "number" || ArrayBuffer.isView(v) || Array.isArray(v))) {
-      const values = typeof v === "number" ? [v] : Array.from(v);
-      if (!values.every((x) => typeof x !== "number" || Number.isFinite(x))) {
-        fail(`${topic}: ${path}${key} is not finite: ${values}`);
-      }
-    } else if (typeof v === "object") {
-      finiteForces(v, `${path}${key}.`, topic);
-    }
-  }
-};
 let total = 0;
 let decodeFailures = 0;
 for await (const message of reader.readMessages({ validateCrcs: true })) {
@@ -112,7 +100,7 @@ for await (const message of reader.readMessages({ validateCrcs: true })) {
     perChannel.set(message.channelId, c);
   }
   c.count++;
-  finiteForces(decoded, "", channel.topic);
+  checkFiniteForces(decoded, channel.topic, fail);
   if (checked.has(channel.topic)) {
     const seq = BigInt(decoded.seq);
     if (seq <= c.seq || message.sequence <= c.sequence) c.backwards++;
