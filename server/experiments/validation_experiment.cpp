@@ -32,7 +32,7 @@ struct Case {
   df::IntegratorKind integrator;
   int level;
   va::Material material;
-  bool nodal_pressure = true;  // the fem default; false: the element law
+  bool nodal_pressure = true;        // the fem default; false: the element law
   double mass_scaling_step_s = 0.0;  // fem: mass scaling to this stable step (0: none)
 };
 
