@@ -4,8 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
-#include "common/util/csv.hpp"
 #include "server/deformable/conjugate_gradient.hpp"
 #include "server/deformable/hot.hpp"
 #include "server/deformable/integrators.hpp"
@@ -19,6 +20,12 @@ using Vec3 = Eigen::Vector3d;
 
 [[noreturn]] void bad(const std::string& what) {
   throw config::ConfigError("deformable parameters (model fem): " + what);
+}
+
+std::string number_text(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
 }
 
 // Polar-decomposition iterations per element and step, and the increment at which they stop.
@@ -848,11 +855,11 @@ void fem_scale_masses(DeformableModel& m) {
   double added = set_scaled_masses(m, row, lo);
   while (m.stable_step_s < target) {
     if (added > allowed || lo < 1e-12 * hi) {
-      bad("mass_scaling_step_s " + teleop::format_number(target) + " s: the stable step is " +
-          teleop::format_number(m.stable_step_s) + " s with " + teleop::format_number(1e3 * added) +
-          " g added (" + teleop::format_number(100.0 * added / m.total_mass_kg) +
+      bad("mass_scaling_step_s " + number_text(target) + " s: the stable step is " +
+          number_text(m.stable_step_s) + " s with " + number_text(1e3 * added) + " g added (" +
+          number_text(100.0 * added / m.total_mass_kg) +
           " % of the body's mass), and mass_scaling_max_fraction allows " +
-          teleop::format_number(100.0 * p.mass_scaling_max_fraction) +
+          number_text(100.0 * p.mass_scaling_max_fraction) +
           " %: lower mass_scaling_step_s, raise mass_scaling_max_fraction or use a coarser mesh");
     }
     hi = lo;
