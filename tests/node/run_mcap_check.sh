@@ -11,14 +11,9 @@ set -u
 build="$1"
 domain="$2"
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
-if ! command -v node >/dev/null 2>&1; then
-  echo "skipped: node is not installed (deploy/setup.sh installs nodejs and npm)"
-  exit 77
-fi
-if [ ! -d "$here/node_modules/@mcap/core" ]; then
-  echo "FAILED: $here/node_modules is missing: run 'npm ci' in tests/node (deploy/build.sh does)"
-  exit 1
-fi
+# shellcheck source=require_node.sh
+. "$here/require_node.sh"
+require_node "$here" @mcap/core
 export TELEOP_PROFILE=loopback
 unset TELEOP_DOMAIN
 tmp="$(mktemp -d)"
