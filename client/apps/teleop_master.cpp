@@ -14,6 +14,7 @@
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -163,6 +164,13 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
       ->check(integer_in(0.0, 99.0));
   app.add_option("--cpu", o.realtime.cpu, "pin the haptic loop to this CPU (-1 = no pinning)")
       ->check(integer_in(-1.0, 4096.0));
+  app.add_option("--spin-us", o.realtime.spin_us,
+                 "busy-wait this long before each cycle's deadline [us], 0 to the period (0 = "
+                 "sleep to it)")
+      ->check(integer_in(0.0, 1e5));
+  app.add_option("--dma-latency-us", o.realtime.dma_latency_us,
+                 "hold /dev/cpu_dma_latency at this value while running [us] (-1 = no)")
+      ->check(integer_in(-1.0, 1e5));
   app.add_option("--name", o.name,
                  "who this master is in the server's ownership events, up to 48 characters "
                  "(default IDENTITY@HOST:PID)");
@@ -189,6 +197,7 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   check_flag("--realtime", o.realtime.priority, 0.0, 99.0);
   check_flag("--cpu", o.realtime.cpu, -1.0,
              static_cast<double>(std::thread::hardware_concurrency()) - 1.0);
+  check_flag("--dma-latency-us", o.realtime.dma_latency_us, -1.0, 1e5);
   if (o.reconnect_s != 0.0) check_flag("--reconnect", o.reconnect_s, 0.5, 3600.0);
   if (o.name.size() > 48) {
     throw teleop::config::ConfigError("command line: --name '" + o.name + "' has " +
@@ -276,6 +285,7 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
     if (!app.count("--command-rate")) o.command_rate_hz = std::min(1000.0, o.rate_hz);
   }
   if (o.command_rate_hz != 0.0) check_flag("--command-rate", o.command_rate_hz, 1.0, o.rate_hz);
+  check_flag("--spin-us", o.realtime.spin_us, 0.0, std::ceil(1e6 / o.rate_hz) - 1.0);
 }
 
 }  // namespace

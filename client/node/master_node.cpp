@@ -470,7 +470,13 @@ struct MasterNode::Impl {
     // rendered), then the session
     SessionReport rep;
     rep.wait_s = wait_s;
-    RateLoop loop(options.rate_hz);
+    const DmaLatencyHold dma(options.realtime.dma_latency_us);
+    if (!dma.problem().empty()) {
+      std::fprintf(stderr, "teleop_master: warning: the cores may sleep deeply: %s\n",
+                   dma.problem().c_str());
+    }
+    RateLoop loop(options.rate_hz, 65536,
+                  static_cast<std::int64_t>(options.realtime.spin_us) * 1000);
     run_loop(cycle, loop, link, external, tip0, rep);
     cycle.stop();
 

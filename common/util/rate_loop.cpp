@@ -10,12 +10,15 @@
 
 namespace teleop {
 
-RateLoop::RateLoop(double rate_hz, std::size_t jitter_capacity)
-    : period_ns_(0), next_ns_(0), lateness_us_(jitter_capacity) {
+RateLoop::RateLoop(double rate_hz, std::size_t jitter_capacity, std::int64_t spin_ns)
+    : period_ns_(0), next_ns_(0), spin_ns_(spin_ns), lateness_us_(jitter_capacity) {
   if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) {
     throw std::invalid_argument("RateLoop: rate_hz must be a positive finite number");
   }
   period_ns_ = static_cast<std::int64_t>(std::llround(1e9 / rate_hz));
+  if (spin_ns < 0 || spin_ns >= period_ns_) {
+    throw std::invalid_argument("RateLoop: spin_ns must be in [0, period)");
+  }
   // the default 50 us timer slack of a normal thread would show up as wake-up jitter
   prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
   reset();
@@ -34,13 +37,17 @@ bool RateLoop::wait() {
     next_ns_ += missed * period_ns_;
     on_time = false;
   }
-  timespec ts{};
-  ts.tv_sec = static_cast<time_t>(next_ns_ / 1000000000LL);
-  ts.tv_nsec = static_cast<long>(next_ns_ % 1000000000LL);
-  // steady_clock is CLOCK_MONOTONIC on Linux
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
+  const std::int64_t wake_ns = next_ns_ - spin_ns_;
+  if (now < wake_ns) {
+    timespec ts{};
+    ts.tv_sec = static_cast<time_t>(wake_ns / 1000000000LL);
+    ts.tv_nsec = static_cast<long>(wake_ns % 1000000000LL);
+    // steady_clock is CLOCK_MONOTONIC on Linux
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
+    }
   }
   now = now_ns();
+  while (now < next_ns_) now = now_ns();
   lateness_us_.record(static_cast<double>(now - next_ns_) * 1e-3);
   next_ns_ += period_ns_;
   return on_time;

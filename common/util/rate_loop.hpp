@@ -10,15 +10,18 @@ namespace teleop {
 
 class RateLoop {
  public:
-  /// rate_hz > 0. `jitter_capacity` samples of wake-up lateness are kept.
-  explicit RateLoop(double rate_hz, std::size_t jitter_capacity = 65536);
+  /// rate_hz > 0. `jitter_capacity` samples of wake-up lateness are kept. `spin_ns` > 0: sleep
+  /// until that long before each deadline, then busy-wait to it (the core stays awake and its
+  /// caches warm, at the price of that much CPU per period); 0 sleeps to the deadline.
+  explicit RateLoop(double rate_hz, std::size_t jitter_capacity = 65536, std::int64_t spin_ns = 0);
 
-  /// Sleeps until the next period boundary. Returns false when the deadline had already
+  /// Waits until the next period boundary. Returns false when the deadline had already
   /// passed (an overrun); the schedule then skips the missed periods instead of bursting.
   bool wait();
 
   double period_s() const { return static_cast<double>(period_ns_) * 1e-9; }
   std::int64_t period_ns() const { return period_ns_; }
+  std::int64_t spin_ns() const { return spin_ns_; }
   std::uint64_t overruns() const { return overruns_; }
   std::uint64_t iterations() const { return iterations_; }
   /// Lateness of each wake-up relative to its deadline [us].
@@ -29,6 +32,7 @@ class RateLoop {
  private:
   std::int64_t period_ns_;
   std::int64_t next_ns_;
+  std::int64_t spin_ns_;
   std::uint64_t overruns_ = 0;
   std::uint64_t iterations_ = 0;
   SampleWindow lateness_us_;

@@ -1,13 +1,52 @@
 #include "common/util/realtime.hpp"
 
+#include <fcntl.h>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 
 namespace teleop {
+
+DmaLatencyHold::DmaLatencyHold(int latency_us) {
+  if (latency_us < 0) return;
+  fd_ = ::open("/dev/cpu_dma_latency", O_WRONLY | O_CLOEXEC);
+  if (fd_ < 0) {
+    problem_ = std::string("/dev/cpu_dma_latency: ") + std::strerror(errno);
+    return;
+  }
+  // the device takes a binary 32-bit value
+  const std::int32_t v = latency_us;
+  if (::write(fd_, &v, sizeof(v)) != static_cast<ssize_t>(sizeof(v))) {
+    problem_ = std::string("/dev/cpu_dma_latency: writing ") + std::to_string(latency_us) + ": " +
+               std::strerror(errno);
+    ::close(fd_);
+    fd_ = -1;
+  }
+}
+
+DmaLatencyHold::~DmaLatencyHold() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+DmaLatencyHold::DmaLatencyHold(DmaLatencyHold&& o) noexcept
+    : fd_(o.fd_), problem_(std::move(o.problem_)) {
+  o.fd_ = -1;
+}
+
+DmaLatencyHold& DmaLatencyHold::operator=(DmaLatencyHold&& o) noexcept {
+  if (this != &o) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = o.fd_;
+    problem_ = std::move(o.problem_);
+    o.fd_ = -1;
+  }
+  return *this;
+}
 
 std::string make_thread_realtime(const RealtimeOptions& o) {
   std::string problems;

@@ -9,8 +9,32 @@ namespace teleop {
 
 /// What to ask for. priority 0 = stay SCHED_OTHER; cpu < 0 = no pinning.
 struct RealtimeOptions {
-  int priority = 0;  ///< SCHED_FIFO priority, 1-99
-  int cpu = -1;      ///< pin the calling thread to this CPU
+  int priority = 0;         ///< SCHED_FIFO priority, 1-99
+  int cpu = -1;             ///< pin the calling thread to this CPU
+  int spin_us = 0;          ///< busy-wait this long before each deadline (RateLoop), 0 = sleep
+  int dma_latency_us = -1;  ///< hold /dev/cpu_dma_latency at this value while the loop runs
+};
+
+/// Holds /dev/cpu_dma_latency at a value for its lifetime (the kernel then keeps the cores out
+/// of idle states whose exit latency exceeds it); the request ends when the holder is
+/// destroyed. A value < 0 holds nothing.
+class DmaLatencyHold {
+ public:
+  DmaLatencyHold() = default;
+  /// Opens and writes the request; `problem()` says why when it could not.
+  explicit DmaLatencyHold(int latency_us);
+  ~DmaLatencyHold();
+  DmaLatencyHold(const DmaLatencyHold&) = delete;
+  DmaLatencyHold& operator=(const DmaLatencyHold&) = delete;
+  DmaLatencyHold(DmaLatencyHold&& o) noexcept;
+  DmaLatencyHold& operator=(DmaLatencyHold&& o) noexcept;
+
+  bool held() const { return fd_ >= 0; }
+  const std::string& problem() const { return problem_; }
+
+ private:
+  int fd_ = -1;
+  std::string problem_;
 };
 
 /// Applies `o` to the calling thread. Returns "" on success, else what failed and why (the

@@ -7,6 +7,7 @@
 // 1 runtime failure (e.g. DDS could not start).
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -61,6 +62,13 @@ int main(int argc, char** argv) {
       ->check(teleop::config::integer_in(0.0, 99.0));
   app.add_option("--cpu", realtime.cpu, "pin the physics loop to this CPU (-1 = no pinning)")
       ->check(teleop::config::integer_in(-1.0, 4096.0));
+  app.add_option("--spin-us", realtime.spin_us,
+                 "busy-wait this long before each step's deadline [us], 0 to the period (0 = "
+                 "sleep to it)")
+      ->check(teleop::config::integer_in(0.0, 1e5));
+  app.add_option("--dma-latency-us", realtime.dma_latency_us,
+                 "hold /dev/cpu_dma_latency at this value while running [us] (-1 = no)")
+      ->check(teleop::config::integer_in(-1.0, 1e5));
   app.add_flag("--quiet", quiet, "print only warnings and errors");
   if (const int status = teleop::config::parse_command_line(app, "teleop_server", argc, argv);
       status >= 0) {
@@ -98,6 +106,10 @@ int main(int argc, char** argv) {
         static_cast<int>(teleop::config::check_flag("--realtime", realtime.priority, 0.0, 99.0));
     o.realtime.cpu = static_cast<int>(teleop::config::check_flag(
         "--cpu", realtime.cpu, -1.0, static_cast<double>(std::thread::hardware_concurrency()) - 1));
+    o.realtime.spin_us = static_cast<int>(teleop::config::check_flag(
+        "--spin-us", realtime.spin_us, 0.0, std::ceil(1e6 / o.rate_hz) - 1.0));
+    o.realtime.dma_latency_us = static_cast<int>(
+        teleop::config::check_flag("--dma-latency-us", realtime.dma_latency_us, -1.0, 1e5));
     o.quiet = quiet;
     teleop::server::ServerNode node(o, scene);
     return node.run();

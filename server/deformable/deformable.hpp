@@ -398,15 +398,13 @@ struct DeformableState {
   // padded to 4); per node 4 (the edge reactions gathered so far in a step)
   std::vector<double> corot_pack, corot_frame, corot_force;
 
-  // model fem: per tet its frame (quaternion warm start, 4; its matrix, 9, column-major); the
-  // implicit solve's contact count (s.contact_*: plane contacts, then the tip's as ~node)
+  // model fem: per tet its frame (quaternion warm start, 4; its matrix, 9, column-major, kept
+  // for the implicit solve only); the implicit solve's contact count (s.contact_*: plane
+  // contacts, then the tip's as ~node)
   std::vector<double> fem_q, fem_r;
   int fem_contacts = 0;
   // params.nodal_pressure: each tet's volumetric strain, and each node's average of them
   std::vector<double> fem_theta, fem_node_theta;
-  /// model fem with nodal pressure: per group of four tets, their deviatoric node forces and the
-  /// forces of a unit pressure (72 values; element_forces' second pass)
-  std::vector<double> fem_group;
   /// Model fem: a rigid sphere the surface nodes are kept out of within step() (the slave's
   /// tip): its centre moves linearly from tip_from_m to tip_to_m over the step. Set by the
   /// caller before step(); tip_radius_m <= 0: none.

@@ -158,7 +158,7 @@ TELEOP_ALWAYS_INLINE void nodal_pressure_forces(const DeformableModel& m, const 
 // converged after it (the increment's square above the tolerance, or no Newton step) is finished
 // by the scalar iteration.
 TELEOP_ALWAYS_INLINE void group_frames(DeformableState& s, int t0, const V4* fg, int iterations,
-                                       double tolerance, V4* r) {
+                                       double tolerance, bool keep_frames, V4* r) {
   // frames: one Newton step from the warm start in four lanes
   double* qd = s.fem_q.data() + 4 * t0;
   V4 qw = {qd[0], qd[4], qd[8], qd[12]}, qx = {qd[1], qd[5], qd[9], qd[13]},
@@ -206,14 +206,25 @@ TELEOP_ALWAYS_INLINE void group_frames(DeformableState& s, int t0, const V4* fg,
       for (int k = 0; k < 9; ++k) r[k][l] = rl[k];
     }
   }
-  double* rd = s.fem_r.data() + 9 * t0;
   for (int l = 0; l < 4; ++l) {
     qd[4 * l] = qw[l];
     qd[4 * l + 1] = qx[l];
     qd[4 * l + 2] = qy[l];
     qd[4 * l + 3] = qz[l];
+  }
+  if (!keep_frames) return;
+  double* rd = s.fem_r.data() + 9 * t0;
+  for (int l = 0; l < 4; ++l) {
     for (int k = 0; k < 9; ++k) rd[9 * l + k] = r[k][l];
   }
+}
+
+// The frames of tetrahedra t0 .. t0 + 3 (one per lane) from their quaternions in s.fem_q.
+TELEOP_ALWAYS_INLINE void group_frames_from_q(const DeformableState& s, int t0, V4* r) {
+  const double* qd = s.fem_q.data() + 4 * t0;
+  const V4 qw = {qd[0], qd[4], qd[8], qd[12]}, qx = {qd[1], qd[5], qd[9], qd[13]},
+           qy = {qd[2], qd[6], qd[10], qd[14]}, qz = {qd[3], qd[7], qd[11], qd[15]};
+  quaternion_matrix(qw, qx, qy, qz, r);
 }
 
 // Adds the node forces h (h[3 j + i]: component i on node j + 1 of the lane's tetrahedron; node 0
@@ -247,14 +258,15 @@ TELEOP_ALWAYS_INLINE void node_forces4(const V4* p, const V4* b, V4 vol, V4* h) 
 }
 
 // The elastic and damping forces of tetrahedra 4g .. 4g + 3, one per lane: the arithmetic of the
-// scalar loop below in four lanes (the frames: group_frames). Without nodal pressure they are
-// added to out; with it (`group` set) the deviatoric forces and -vol R B^T are kept in group[72]
-// for pressure_group, which adds both once the nodes' pressures are known (one scatter per tet).
+// scalar loop below in four lanes (the frames: group_frames), added to out. With nodal pressure
+// (`nodal`) these are the deviatoric forces and each tetrahedron's tr(eps) goes to s.fem_theta;
+// pressure_group adds the pressure's share once the nodes' pressures are known. The frames are
+// kept in s.fem_r only when `keep_frames` (the implicit solve reads them); s.fem_q always.
 TELEOP_ALWAYS_INLINE void element_group(const DeformableModel& m, DeformableState& s, int g,
-                                        double beta, int iterations, double tolerance,
-                                        double* group, double* out) {
+                                        double beta, int iterations, double tolerance, bool nodal,
+                                        bool keep_frames, double* out) {
   const DeformableModel::Fem& f = m.fem;
-  const double mu = m.lame_mu_pa, lambda = group != nullptr ? 0.0 : m.lame_lambda_pa;
+  const double mu = m.lame_mu_pa, lambda = nodal ? 0.0 : m.lame_lambda_pa;
   const int t0 = 4 * g;
   const int* ix[4] = {f.tets.col(t0).data(), f.tets.col(t0 + 1).data(), f.tets.col(t0 + 2).data(),
                       f.tets.col(t0 + 3).data()};
@@ -264,7 +276,7 @@ TELEOP_ALWAYS_INLINE void element_group(const DeformableModel& m, DeformableStat
   for (int k = 0; k < 9; ++k) b[k] = load4(b4 + 4 * k);
   mul33(ds, b, fg);
   V4 r[9];
-  group_frames(s, t0, fg, iterations, tolerance, r);
+  group_frames(s, t0, fg, iterations, tolerance, keep_frames, r);
   V4 gm[9], sig[9], p[9];
   if (beta > 0.0) {
     // R^T (F + beta F') = R^T (Ds + beta Dv) B
@@ -281,23 +293,15 @@ TELEOP_ALWAYS_INLINE void element_group(const DeformableModel& m, DeformableStat
   const V4 vol = load4(f.volume4.data() + 4 * g);
   V4 h[9];
   node_forces4(p, b, vol, h);
-  if (group == nullptr) {
-    scatter4(h, ix, out);
-    return;
-  }
-  const V4 theta = gm[0] + gm[4] + gm[8] - 3.0;  // tr(eps) (+ beta its rate)
-  store4(s.fem_theta.data() + t0, theta);
-  V4 rb[9];
-  node_forces4(r, b, vol, rb);  // -vol R B^T: the force of a unit pressure
-  for (int k = 0; k < 9; ++k) {
-    store4(group + 4 * k, h[k]);
-    store4(group + 36 + 4 * k, rb[k]);
-  }
+  scatter4(h, ix, out);
+  if (nodal) store4(s.fem_theta.data() + t0, gm[0] + gm[4] + gm[8] - 3.0);  // tr(eps) (+ rate)
 }
 
-// The forces of tetrahedra 4g .. 4g + 3 with their nodal pressure p_e = lambda (mean of their
-// nodes' theta_a): group[72] from element_group, node_theta the nodes' mean volumetric strains.
-TELEOP_ALWAYS_INLINE void pressure_group(const DeformableModel& m, int g, const double* group,
+// The pressure forces of tetrahedra 4g .. 4g + 3, p_e = lambda (mean of their nodes' theta_a,
+// node_theta) times -vol R B^T (the force of a unit pressure), R from the quaternions the
+// element pass left in s.fem_q: recomputed rather than kept, so the pass writes nothing per
+// tetrahedron but its quaternion and tr(eps).
+TELEOP_ALWAYS_INLINE void pressure_group(const DeformableModel& m, const DeformableState& s, int g,
                                          const double* node_theta, double* out) {
   const DeformableModel::Fem& f = m.fem;
   const int t0 = 4 * g;
@@ -309,8 +313,11 @@ TELEOP_ALWAYS_INLINE void pressure_group(const DeformableModel& m, int g, const 
         node_theta[ix[l][0]] + node_theta[ix[l][1]] + node_theta[ix[l][2]] + node_theta[ix[l][3]];
   }
   pe *= 0.25 * m.lame_lambda_pa;
-  V4 h[9];
-  for (int k = 0; k < 9; ++k) h[k] = load4(group + 4 * k) + pe * load4(group + 36 + 4 * k);
+  V4 r[9], b[9], h[9];
+  group_frames_from_q(s, t0, r);
+  const double* b4 = f.dm_inv4.data() + 36 * g;
+  for (int k = 0; k < 9; ++k) b[k] = load4(b4 + 4 * k);
+  node_forces4(r, b, pe * load4(f.volume4.data() + 4 * g), h);
   scatter4(h, ix, out);
 }
 
@@ -326,9 +333,9 @@ void element_forces(const DeformableModel& m, DeformableState& s, double beta, i
   const double* x = s.x.data();
   const double* v = s.v.data();
   const int groups = f.tet_count / 4;
-  double* kept = s.fem_group.data();
+  const bool keep_frames = m.params.integrator == IntegratorKind::kImplicitEuler;
   for (int g = 0; g < groups; ++g) {
-    element_group(m, s, g, beta, iterations, tolerance, nodal ? kept + 72 * g : nullptr, out);
+    element_group(m, s, g, beta, iterations, tolerance, nodal, keep_frames, out);
   }
   for (int t = 4 * groups; t < f.tet_count; ++t) {
     const int* ix = f.tets.col(t).data();
@@ -366,7 +373,7 @@ void element_forces(const DeformableModel& m, DeformableState& s, double beta, i
     for (int k = 0; k < 4; ++k) node_theta[f.tets(k, t)] += w;
   }
   for (int i = 0; i < f.node_count; ++i) node_theta[i] *= f.inv_node_volume(i);
-  for (int g = 0; g < groups; ++g) pressure_group(m, g, kept + 72 * g, node_theta, out);
+  for (int g = 0; g < groups; ++g) pressure_group(m, s, g, node_theta, out);
   for (int t = 4 * groups; t < f.tet_count; ++t) {
     const int* ix = f.tets.col(t).data();
     const double pe =
@@ -728,7 +735,6 @@ void init_fem_state(const DeformableModel& m, DeformableState& s) {
   s.fem_r.assign(9 * static_cast<std::size_t>(f.tet_count), 0.0);
   s.fem_theta.assign(static_cast<std::size_t>(f.tet_count), 0.0);
   s.fem_node_theta.assign(static_cast<std::size_t>(f.node_count), 0.0);
-  s.fem_group.assign(72 * static_cast<std::size_t>(f.tet_count / 4), 0.0);
   for (int t = 0; t < f.tet_count; ++t) {
     s.fem_q[4 * static_cast<std::size_t>(t)] = 1.0;
     for (int k = 0; k < 3; ++k) s.fem_r[9 * static_cast<std::size_t>(t) + 4 * k] = 1.0;
@@ -887,7 +893,10 @@ double fem_elastic_energy(const DeformableModel& m, const DeformableState& s) {
     double ds[9], fg[9], g[9];
     edge_matrix(s.x.data(), ix, ds);
     mul33(ds, b, fg);
-    mul33_tn(s.fem_r.data() + 9 * t, fg, g);
+    const double* q = s.fem_q.data() + 4 * t;
+    double r[9];
+    quaternion_matrix(q[0], q[1], q[2], q[3], r);
+    mul33_tn(r, fg, g);
     double eps[9];
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j)

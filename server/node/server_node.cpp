@@ -318,7 +318,12 @@ struct ServerNode::Impl {
                   << "\n";
       }
     }
-    RateLoop loop(options.rate_hz);
+    const DmaLatencyHold dma(options.realtime.dma_latency_us);
+    if (!dma.problem().empty()) {
+      std::cerr << "teleop_server: warning: the cores may sleep deeply: " << dma.problem() << "\n";
+    }
+    RateLoop loop(options.rate_hz, 65536,
+                  static_cast<std::int64_t>(options.realtime.spin_us) * 1000);
     SlaveState state;
     ReceivedCommand rc;
     std::uint64_t seen = 0;
@@ -400,6 +405,8 @@ struct ServerNode::Impl {
       << part_json("deformable", deformable_us) << ", " << part_json("slave", slave_us) << ", "
       << part_json("publish", publish_us) << "},\n"
       << "  \"realtime_priority\": " << options.realtime.priority << ",\n"
+      << "  \"spin_us\": " << options.realtime.spin_us << ",\n"
+      << "  \"dma_latency_us\": " << options.realtime.dma_latency_us << ",\n"
       << "  \"loop_jitter_us\": {\"p50\": " << json_number(late.p50)
       << ", \"p99\": " << json_number(late.p99) << "},\n"
       << "  \"commands_received\": " << counters.received.load() << ",\n"

@@ -180,8 +180,15 @@ double last_count(const std::string& out, const std::string& topic) {
   return std::atof(out.c_str() + pos + key.size());
 }
 
+/// Scheduling flags given to the server's and the master's loops in a live session.
+struct LoopFlags {
+  std::string name = "normal";
+  std::vector<std::string> server, master;
+};
+
 SessionResult run_session(const Binaries& bin, int observers, bool full_rate, int nice, int domain,
-                          double duration_s, const fs::path& work, int realtime = 0) {
+                          double duration_s, const fs::path& work,
+                          const LoopFlags& loops = LoopFlags{}) {
   SessionResult r;
   double load[3] = {0, 0, 0};
   if (getloadavg(load, 3) > 0) r.load1 = load[0];
@@ -193,7 +200,7 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   fs::remove(server_json);
   fs::remove(master_json);
   std::vector<std::string> sargs = {"--domain", d, "--summary-json", server_json, "--quiet"};
-  if (realtime > 0) sargs.insert(sargs.end(), {"--realtime", std::to_string(realtime)});
+  sargs.insert(sargs.end(), loops.server.begin(), loops.server.end());
   Process server(bin.server, sargs, "obs_bench_server");
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
   std::vector<std::unique_ptr<Process>> obs;
@@ -228,7 +235,7 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   std::vector<std::string> margs = {
       "--domain",       d,           "--duration", std::to_string(duration_s),
       "--summary-json", master_json, "--quiet"};
-  if (realtime > 0) margs.insert(margs.end(), {"--realtime", std::to_string(realtime)});
+  margs.insert(margs.end(), loops.master.begin(), loops.master.end());
   Process master(bin.master, margs, "obs_bench_master");
   const int mst = master.wait_for(duration_s + 60.0);
   const double stopped_s = seconds_between(t0, now_ns());
@@ -299,11 +306,72 @@ std::vector<int> parse_counts(const std::string& flag, const std::string& text) 
   return out;
 }
 
-/// A live session (issue 14 part 5): server, master and N observers on the 2 cores, with the
-/// loops as normal threads or SCHED_FIFO; rounds interleave every (priority, count) pair.
+/// One --variants item: remedies joined by '+': normal, fifoP (SCHED_FIFO priority P), spinN
+/// (busy-wait N us before each deadline), dmaN (hold /dev/cpu_dma_latency at N us), pin (the
+/// server's loop on CPU 2, the master's on CPU 3).
+LoopFlags parse_variant(const std::string& text) {
+  LoopFlags f;
+  f.name = text;
+  std::stringstream ss(text);
+  std::string item;
+  const auto both = [&](const std::string& flag, const std::string& v) {
+    f.server.insert(f.server.end(), {flag, v});
+    f.master.insert(f.master.end(), {flag, v});
+  };
+  const auto number_after = [&](const std::string& word, std::size_t at) {
+    const std::string digits = word.substr(at);
+    if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos) {
+      throw config::ConfigError("--variants '" + text + "': '" + word +
+                                "' needs a non-negative integer after its name");
+    }
+    return digits;
+  };
+  while (std::getline(ss, item, '+')) {
+    if (item == "normal") continue;
+    if (item == "pin") {
+      f.server.insert(f.server.end(), {"--cpu", "2"});
+      f.master.insert(f.master.end(), {"--cpu", "3"});
+    } else if (item.rfind("fifo", 0) == 0) {
+      both("--realtime", number_after(item, 4));
+    } else if (item.rfind("spin", 0) == 0) {
+      both("--spin-us", number_after(item, 4));
+    } else if (item.rfind("dma", 0) == 0) {
+      both("--dma-latency-us", number_after(item, 3));
+    } else {
+      throw config::ConfigError("--variants '" + text + "': '" + item +
+                                "' is not one of normal, fifoP, spinN, dmaN, pin");
+    }
+  }
+  return f;
+}
+
+std::vector<LoopFlags> live_variants(const CommandArgs& args) {
+  std::vector<LoopFlags> out;
+  const std::string variants = args.option("--variants", "");
+  if (variants.empty()) {
+    for (const int p : parse_counts("--realtime", args.option("--realtime", "0,20"))) {
+      out.push_back(parse_variant(p > 0 ? "fifo" + std::to_string(p) : "normal"));
+    }
+    return out;
+  }
+  std::stringstream ss(variants);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (!item.empty()) out.push_back(parse_variant(item));
+  }
+  return out;
+}
+
+/// A live session: server, master and N observers, with the loops as normal threads or with
+/// the remedies of --variants (or the priorities of --realtime); rounds interleave every
+/// (variant, count) pair.
 int live_bench(const CommandArgs& args, const Binaries& bin, const fs::path& work) {
   const std::vector<int> counts = parse_counts("--counts", args.option("--counts", "0,8"));
-  const std::vector<int> prios = parse_counts("--realtime", args.option("--realtime", "0,20"));
+  std::vector<LoopFlags> variants = live_variants(args);
+  const std::string scene = args.option("--scene", "");
+  if (!scene.empty()) {
+    for (LoopFlags& v : variants) v.server.insert(v.server.end(), {"--scene", scene});
+  }
   const double rounds = std::stod(args.option("--rounds", args.quick ? "1" : "3"));
   config::check_flag("--rounds", rounds, 1.0, 100.0);
   const double duration_s = std::stod(args.option("--duration", args.quick ? "3" : "10"));
@@ -311,34 +379,34 @@ int live_bench(const CommandArgs& args, const Binaries& bin, const fs::path& wor
   const double domain = std::stod(args.option("--domain", "110"));
   const std::string csv_path = (args.out_dir / "live.csv").string();
   CsvWriter csv(csv_path,
-                {"realtime", "observers", "round", "load1", "server_steps", "server_overruns",
+                {"loops", "observers", "round", "load1", "server_steps", "server_overruns",
                  "server_overrun_percent", "server_step_us_p50", "server_step_us_p99",
                  "collision_us_p99", "deformable_us_p99", "slave_us_p99", "publish_us_p99",
                  "rtt_ms_p99", "master_overruns", "link_losses", "watchdog_trips", "verdict"});
   for (int round = 1; round <= static_cast<int>(rounds); ++round) {
-    for (const int prio : prios) {
+    for (const LoopFlags& loops : variants) {
       for (const int n : counts) {
         const SessionResult r =
-            run_session(bin, n, false, 19, static_cast<int>(domain), duration_s, work, prio);
+            run_session(bin, n, false, 19, static_cast<int>(domain), duration_s, work, loops);
         const double pct = 100.0 * r.server_overruns / r.server_steps;
-        csv.row_text({std::to_string(prio), std::to_string(n), std::to_string(round),
-                      format_number(r.load1), format_number(r.server_steps),
-                      format_number(r.server_overruns), format_number(pct),
-                      format_number(r.server_step_p50_us), format_number(r.server_step_p99_us),
-                      format_number(r.collision_p99_us), format_number(r.deformable_p99_us),
-                      format_number(r.slave_p99_us), format_number(r.publish_p99_us),
-                      format_number(r.rtt_p99), format_number(r.master_overruns),
-                      format_number(r.link_losses), format_number(r.watchdog_trips), r.verdict});
+        csv.row_text({loops.name, std::to_string(n), std::to_string(round), format_number(r.load1),
+                      format_number(r.server_steps), format_number(r.server_overruns),
+                      format_number(pct), format_number(r.server_step_p50_us),
+                      format_number(r.server_step_p99_us), format_number(r.collision_p99_us),
+                      format_number(r.deformable_p99_us), format_number(r.slave_p99_us),
+                      format_number(r.publish_p99_us), format_number(r.rtt_p99),
+                      format_number(r.master_overruns), format_number(r.link_losses),
+                      format_number(r.watchdog_trips), r.verdict});
         csv.flush();
         std::printf(
-            "live rt %2d %2d observers round %d load %.2f: server step p50 %.1f p99 %.1f "
+            "live %-12s %2d observers round %d load %.2f: server step p50 %.1f p99 %.1f "
             "us, overruns %.0f of %.0f (%.3f %%), parts p99 collision %.1f deformable "
             "%.1f slave %.1f publish %.1f us; master rtt p99 %.3f ms overruns %.0f; link losses "
             "%.0f, watchdog trips %.0f; verdict %s\n",
-            prio, n, round, r.load1, r.server_step_p50_us, r.server_step_p99_us, r.server_overruns,
-            r.server_steps, pct, r.collision_p99_us, r.deformable_p99_us, r.slave_p99_us,
-            r.publish_p99_us, r.rtt_p99, r.master_overruns, r.link_losses, r.watchdog_trips,
-            r.verdict.c_str());
+            loops.name.c_str(), n, round, r.load1, r.server_step_p50_us, r.server_step_p99_us,
+            r.server_overruns, r.server_steps, pct, r.collision_p99_us, r.deformable_p99_us,
+            r.slave_p99_us, r.publish_p99_us, r.rtt_p99, r.master_overruns, r.link_losses,
+            r.watchdog_trips, r.verdict.c_str());
         std::fflush(stdout);
       }
     }
@@ -422,6 +490,10 @@ TELEOP_REGISTER_COMMAND(bench, "observers",
                         text_option("--full-rate-counts", "counts with --full-rate observers"),
                         text_option("--nice0-counts", "counts with observers at nice 0"),
                         text_option("--realtime", "priorities P,P,... (live)"),
+                        text_option("--scene", "the server's scene (live; default: default.yaml)"),
+                        text_option("--variants",
+                                    "loop remedies V,V,... (live): normal, fifoP, spinN, dmaN, "
+                                    "pin, joined by +"),
                         integer_option("--rounds", 1, 100, "rounds"),
                         number_option("--duration", 1, 600, "session length [s]"),
                         integer_option("--domain", 0, 232, "DDS domain id"),

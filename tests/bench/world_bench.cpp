@@ -2,14 +2,25 @@
 // (PUMA 560 in ODE, level-4 elastic sphere, tip-mesh contact, planes) in the phases of a
 // session: the sphere settling under gravity, resting untouched (asleep), free motion of the
 // robot above it, and the tip pressing into it. Writes DIR/world.csv (median, p90, p99, max)
-// and DIR/world.png. --scene FILE benchmarks another scene; --dt S another step.
+// and DIR/world.png. --scene FILE benchmarks another scene; --dt S another step; --steps N
+// another number of steps per phase.
+//
+// --pace 1 runs each step at its own deadline, one every dt, as the live server's loop does
+// (RateLoop), instead of back to back: the difference is what sleeping between steps costs the
+// step (idle states, caches and TLB refilled, clock ramp), apart from any network work.
+// With it: --spin-us N busy-waits the last N us before each deadline, --dma-latency-us N holds
+// /dev/cpu_dma_latency, --cpu N pins the thread, --realtime P runs it SCHED_FIFO (the remedies
+// of common/util/realtime.hpp). The CSV's `pacing` column names the variant.
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
 
+#include "common/config/config.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/csv.hpp"
+#include "common/util/rate_loop.hpp"
+#include "common/util/realtime.hpp"
 #include "common/util/registry.hpp"
 #include "common/util/stats.hpp"
 #include "server/world/world.hpp"
@@ -21,13 +32,37 @@ int world(const CommandArgs& args) {
   const std::string scene_file =
       args.option("--scene", std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
   const double dt = std::stod(args.option("--dt", "0.001"));
-  const int n = args.quick ? 300 : 3000;
+  const int n = std::stoi(args.option("--steps", args.quick ? "300" : "3000"));
+  const bool paced = args.option("--pace", "0") == "1";
+  RealtimeOptions rt;
+  rt.spin_us = std::stoi(args.option("--spin-us", "0"));
+  rt.dma_latency_us = std::stoi(args.option("--dma-latency-us", "-1"));
+  rt.cpu = std::stoi(args.option("--cpu", "-1"));
+  rt.priority = std::stoi(args.option("--realtime", "0"));
+  if (!paced && (rt.spin_us > 0 || rt.dma_latency_us >= 0)) {
+    throw config::ConfigError("--spin-us and --dma-latency-us need --pace 1");
+  }
+  if (rt.spin_us * 1e-6 >= dt) {
+    throw config::ConfigError("--spin-us " + std::to_string(rt.spin_us) +
+                              ": must be shorter than the step (--dt)");
+  }
+  const DmaLatencyHold dma(rt.dma_latency_us);
+  if (!dma.problem().empty()) std::fprintf(stderr, "world: %s\n", dma.problem().c_str());
+  if (rt.cpu >= 0 || rt.priority > 0) {
+    const std::string problem = make_thread_realtime(rt);
+    if (!problem.empty()) std::fprintf(stderr, "world: %s\n", problem.c_str());
+  }
+  const std::string pacing = std::string(paced ? "paced" : "back_to_back") +
+                             (rt.spin_us > 0 ? "_spin" + std::to_string(rt.spin_us) + "us" : "") +
+                             (dma.held() ? "_dma" + std::to_string(rt.dma_latency_us) : "") +
+                             (rt.cpu >= 0 ? "_cpu" + std::to_string(rt.cpu) : "") +
+                             (rt.priority > 0 ? "_fifo" + std::to_string(rt.priority) : "");
   const sim::WorldModel model = sim::load_world_model(scene_file);
   sim::WorldData w = sim::make_world_data(model);
   sim::EventQueue events;
   sim::SimEvent e;
   CsvWriter csv((args.out_dir / "world.csv").string(),
-                {"phase", "dt_s", "steps", "step_us_median", "step_us_p90", "step_us_p99",
+                {"pacing", "phase", "dt_s", "steps", "step_us_median", "step_us_p90", "step_us_p99",
                  "step_us_max", "in_contact_fraction", "sleeping_fraction"});
   const Eigen::Vector3d start = w.out.tip_position_m;
   Eigen::Vector3d top(0.6, 0.0, 0.5);
@@ -41,7 +76,9 @@ int world(const CommandArgs& args) {
     std::vector<double> us;
     us.reserve(static_cast<std::size_t>(steps));
     int contact = 0, sleeping = 0;
+    RateLoop loop(1.0 / dt, 16, static_cast<std::int64_t>(rt.spin_us) * 1000);
     for (int k = 0; k < steps; ++k) {
+      if (paced) loop.wait();
       sim::WorldCommand c;
       c.position_m = target(k);
       const auto t0 = now_ns();
@@ -53,14 +90,15 @@ int world(const CommandArgs& args) {
       }
     }
     const Summary s = summarize(us);
-    csv.row_text({phase, format_number(dt), std::to_string(steps), format_number(s.p50),
+    csv.row_text({pacing, phase, format_number(dt), std::to_string(steps), format_number(s.p50),
                   format_number(s.p90), format_number(s.p99), format_number(s.max),
                   format_number(static_cast<double>(contact) / steps),
                   format_number(static_cast<double>(sleeping) / steps)});
     std::printf(
-        "%-10s dt %.4f s  step p50 %7.1f us  p90 %7.1f us  p99 %7.1f us  max %7.1f us  "
+        "%-10s %s dt %.4f s  step p50 %7.1f us  p90 %7.1f us  p99 %7.1f us  max %7.1f us  "
         "contact %3.0f%%  asleep %3.0f%%\n",
-        phase, dt, s.p50, s.p90, s.p99, s.max, 100.0 * contact / steps, 100.0 * sleeping / steps);
+        phase, pacing.c_str(), dt, s.p50, s.p90, s.p99, s.max, 100.0 * contact / steps,
+        100.0 * sleeping / steps);
   };
   const Eigen::Vector3d above = top + Eigen::Vector3d(0, 0, 0.1);
   run("settling", n, [&](int) { return start; });
@@ -87,7 +125,14 @@ int world(const CommandArgs& args) {
 
 TELEOP_REGISTER_COMMAND(bench, "world", "physics step of the assembled default scene, by phase",
                         world, text_option("--scene", "scene YAML"),
-                        number_option("--dt", 1e-5, 0.1, "time step [s]"));
+                        number_option("--dt", 1e-5, 0.1, "time step [s]"),
+                        integer_option("--steps", 30, 1000000, "steps per phase (3000)"),
+                        integer_option("--pace", 0, 1, "1: one step per dt, as the live loop"),
+                        integer_option("--spin-us", 0, 100000, "busy-wait before each deadline"),
+                        integer_option("--dma-latency-us", -1, 100000,
+                                       "hold /dev/cpu_dma_latency (-1 = no)"),
+                        integer_option("--cpu", -1, 1023, "pin to this CPU (-1 = no)"),
+                        integer_option("--realtime", 0, 99, "SCHED_FIFO priority (0 = no)"));
 
 }  // namespace
 }  // namespace teleop::bench

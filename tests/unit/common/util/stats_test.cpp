@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "common/util/rate_loop.hpp"
+#include "common/util/realtime.hpp"
 #include "tests/support/alloc_counter.hpp"
 
 namespace {
@@ -81,6 +82,31 @@ TEST(RateLoop, HoldsRateAndCountsOverruns) {
 TEST(RateLoop, RejectsNonPositiveRate) {
   EXPECT_THROW(teleop::RateLoop(0.0), std::invalid_argument);
   EXPECT_THROW(teleop::RateLoop(-5.0), std::invalid_argument);
+}
+
+TEST(RateLoop, SpinningNeverWakesBeforeTheDeadline) {
+  EXPECT_THROW(teleop::RateLoop(1000.0, 16, -1), std::invalid_argument);
+  EXPECT_THROW(teleop::RateLoop(1000.0, 16, 1'000'000), std::invalid_argument);
+  teleop::RateLoop loop(1000.0, 64, 200'000);
+  EXPECT_EQ(loop.spin_ns(), 200'000);
+  for (int i = 0; i < 50; ++i) loop.wait();
+  EXPECT_EQ(loop.iterations(), 50u);
+  // the busy-wait ends at the deadline, never before it: no negative lateness
+  const teleop::Summary s = teleop::summarize(loop.lateness_us().snapshot());
+  EXPECT_GE(s.min, 0.0);
+}
+
+TEST(DmaLatencyHold, NegativeHoldsNothingAndAFailureIsExplained) {
+  const teleop::DmaLatencyHold none(-1);
+  EXPECT_FALSE(none.held());
+  EXPECT_TRUE(none.problem().empty());
+  teleop::DmaLatencyHold h(0);
+  // root on a machine with the device holds it; anywhere else the reason names the device
+  if (!h.held()) {
+    EXPECT_NE(h.problem().find("/dev/cpu_dma_latency"), std::string::npos);
+  }
+  teleop::DmaLatencyHold moved(std::move(h));
+  EXPECT_FALSE(h.held());  // NOLINT(bugprone-use-after-move): the moved-from holder is empty
 }
 
 }  // namespace
