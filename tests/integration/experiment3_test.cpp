@@ -78,7 +78,7 @@ TEST(Experiment3, TheoreticallyUnstableLoopIsReportedUnstableAndKeptWithinTheSpe
                  {"--domain", d, "--summary-json", mj, "--scheme", "position-position", "--kps",
                   "3000", "--kpm", "3000", "--delay", "100ms", "--duration", "8", "--homing", "1"},
                  "e3u_master");
-  ASSERT_EQ(master.wait_for(120.0), 0) << master.err();
+  ASSERT_EQ(master.wait_for(120.0), 8) << master.err();  // exit status 8: unstable
   server.signal(SIGTERM);
   ASSERT_EQ(server.wait_for(30.0), 0);
   const std::string m = Process::slurp(mj);
