@@ -27,8 +27,11 @@ LinkJudgement judge_link(const LinkCounts& c, const LinkTolerance& t) {
     j.degraded = true;
   };
   const std::uint64_t left = c.issued - std::min(c.in_flight, c.issued);
-  const std::uint64_t lost = lost_commands(c);
-  if (left > 0 && static_cast<double>(lost) > t.max_lost_fraction * static_cast<double>(left)) {
+  const bool mostly_rejected = c.rejected > 0 && c.rejected > c.received;
+  // rejected commands reached the server: only the rest were lost on the way
+  const std::uint64_t lost = lost_commands(c) - std::min(lost_commands(c), c.rejected);
+  if (!mostly_rejected && left > 0 &&
+      static_cast<double>(lost) > t.max_lost_fraction * static_cast<double>(left)) {
     std::snprintf(buf, sizeof(buf), "%llu of %llu commands lost (%.1f %%, more than %.3g %%)",
                   static_cast<unsigned long long>(lost), static_cast<unsigned long long>(left),
                   100.0 * static_cast<double>(lost) / static_cast<double>(left),
@@ -41,8 +44,9 @@ LinkJudgement judge_link(const LinkCounts& c, const LinkTolerance& t) {
                   t.round_trip_ms);
     add(buf);
   }
-  if (c.received > 0 && c.rejected > c.received / 2) {
-    std::snprintf(buf, sizeof(buf), "the server rejected %llu of the %llu commands it received",
+  if (mostly_rejected) {
+    std::snprintf(buf, sizeof(buf),
+                  "the server rejected %llu commands and accepted %llu of this master's",
                   static_cast<unsigned long long>(c.rejected),
                   static_cast<unsigned long long>(c.received));
     add(buf);

@@ -4,12 +4,15 @@
 //   - lost:      more than max_lost_fraction of the commands that left the master's loop never
 //                reached the server (injected loss counts: the slave never saw them); commands
 //                still held in the injected delay when the master stopped are in flight, not
-//                lost, and are left out of the fraction;
+//                lost, and are left out of the fraction; commands the server rejected reached
+//                it, so the server's rejections are taken off the lost ones, and when most were
+//                rejected the loss is not judged (the server's rejection count lags by up to a
+//                ServerStats period);
 //   - round trip: the network round trip's p99 (echoes, injected delay excluded) above the
 //                scheme's tolerance (round_trip_tolerance_ms()), judged over at least
 //                min_echoes echoes;
-//   - rejected:  the server rejected more than half of the commands it received (outside the
-//                workspace, non-finite, stale, ...): the slave mostly held still.
+//   - rejected:  the server rejected more commands (outside the workspace, non-finite, stale,
+//                ...) than it accepted from this master: the slave mostly held still.
 // The session verdict is the loop's (SessionMetrics) when that is worse than stable, else
 // "degraded" when any of the above holds, else "stable"; each maps to its exit status
 // (common/util/exit_codes.hpp).
@@ -25,8 +28,8 @@ namespace teleop::master {
 struct LinkCounts {
   std::uint64_t issued = 0;     ///< commands the loop issued (into the forward channel)
   std::uint64_t in_flight = 0;  ///< of them, still held in the injected delay at the end
-  std::uint64_t received = 0;   ///< received by the server
-  std::uint64_t rejected = 0;   ///< of the received, rejected by the server
+  std::uint64_t received = 0;   ///< accepted by the server from this master
+  std::uint64_t rejected = 0;   ///< rejected by the server during the session (any sender)
   double rtt_p99_ms = 0.0;      ///< network round trip p99 [ms] (NaN: no echo)
   std::uint64_t echoes = 0;     ///< echoes behind rtt_p99_ms
 };
@@ -45,7 +48,7 @@ double round_trip_tolerance_ms(const std::string& scheme);
 /// The tolerance of `scheme` with the default loss threshold.
 LinkTolerance link_tolerance(const std::string& scheme);
 
-/// Commands lost: issued, not in flight, never received.
+/// Commands lost: issued, not in flight, never accepted by the server (the summary's "lost").
 inline std::uint64_t lost_commands(const LinkCounts& c) {
   const std::uint64_t left = c.issued - std::min(c.in_flight, c.issued);
   return left - std::min(c.received, left);
