@@ -69,6 +69,12 @@ void prepare_output_file(const std::string& flag, const std::string& path) {
   if (fs::is_directory(path, ec)) {
     throw config::ConfigError(what + " is a folder; a file name is needed");
   }
+  if (fs::exists(path, ec)) {  // replaced in place (or a device such as /dev/full)
+    if (::access(path.c_str(), W_OK) != 0) {
+      throw config::ConfigError(what + ": cannot write it: " + reason(errno));
+    }
+    return;
+  }
   const fs::path dir = fs::path(path).parent_path();
   if (!dir.empty()) make_folder(what, dir);
 }

@@ -163,6 +163,9 @@ TEST(PrepareOutput, MakesMissingFoldersAndRefusesImpossibleOnes) {
   EXPECT_NO_THROW(teleop::prepare_output_dir("--out", root + "/c/d"));
   EXPECT_EQ(stat((root + "/c/d").c_str(), &st), 0);
   EXPECT_NO_THROW(teleop::prepare_output_file("--log", "log.csv"));  // the working folder
+  // an existing file is replaced in place, whatever its folder allows (a write error on a full
+  // device comes later, naming the file)
+  EXPECT_NO_THROW(teleop::prepare_output_file("--log", "/dev/full"));
   // a folder under a file, a file where a folder is wanted, a folder as the file: refused
   const std::string file = root + "/file";
   std::FILE* f = std::fopen(file.c_str(), "w");
