@@ -11,8 +11,6 @@
 #include <functional>
 #include <sstream>
 #include <thread>
-#include <utility>
-#include <vector>
 
 #include "common/dds/endpoint.hpp"
 #include "common/dds/teleop_idl.hpp"
@@ -105,22 +103,10 @@ FaultRun session(int domain, const std::string& name, const std::vector<std::str
   return r;
 }
 
-/// The exit status docs/exit_codes.md gives a master session's verdict.
-int status_of_verdict(const std::string& json) {
-  for (const auto& [name, status] : std::vector<std::pair<std::string, int>>{{"stable", 0},
-                                                                             {"degraded", 5},
-                                                                             {"oscillating", 6},
-                                                                             {"out-of-spec", 7},
-                                                                             {"unstable", 8}}) {
-    if (json.find("\"verdict\": \"" + name + "\"") != std::string::npos) return status;
-  }
-  return -1;
-}
-
 /// What every fault run must show: an exit status that says its verdict, the force in spec, the
 /// counts consistent (commands held in the injected delay at the end are in flight, not lost).
 void expect_safe(const FaultRun& r) {
-  EXPECT_EQ(r.master_rc, status_of_verdict(r.master_json)) << r.master_err << r.master_json;
+  EXPECT_EQ(r.master_rc, verdict_exit_status(r.master_json)) << r.master_err << r.master_json;
   ASSERT_FALSE(r.master_json.empty()) << r.master_err;
   ASSERT_FALSE(r.server_json.empty());
   EXPECT_GT(r.force.rows, 5000u);
