@@ -45,10 +45,9 @@ LinkJudgement judge_link(const LinkCounts& c, const LinkTolerance& t) {
     add(buf);
   }
   if (mostly_rejected) {
-    std::snprintf(buf, sizeof(buf),
-                  "the server rejected %llu commands and accepted %llu of this master's",
-                  static_cast<unsigned long long>(c.rejected),
-                  static_cast<unsigned long long>(c.received));
+    std::snprintf(
+        buf, sizeof(buf), "the server rejected %llu commands and accepted %llu of this master's",
+        static_cast<unsigned long long>(c.rejected), static_cast<unsigned long long>(c.received));
     add(buf);
   }
   return j;
