@@ -179,10 +179,13 @@ CommandArgs parse_command_args(const CommandEntry& entry, const std::vector<std:
   return args;
 }
 
+namespace {
+/// `<exe> <name> ... --help`: the words ask for the command's help (nothing runs).
 bool wants_help(const std::vector<std::string>& words) {
   return std::find(words.begin(), words.end(), "--help") != words.end() ||
          std::find(words.begin(), words.end(), "-h") != words.end();
 }
+}  // namespace
 
 int run_registry_main(const std::string& group, const std::string& exe, int argc, char** argv) {
   const std::string first = argc < 2 ? "" : argv[1];
