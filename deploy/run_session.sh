@@ -28,14 +28,20 @@ echo "== teleop session (experiment 3): default scene, loopback, domain ${domain
   --summary-json "$out/server.json" &
 server_pid=$!
 trap 'kill $server_pid 2>/dev/null || true' EXIT
+# the master's exit status says its verdict (docs/exit_codes.md): the charts are drawn whatever
+# it is, and the script exits with it
+master_status=0
 "$build_dir/client/teleop_master" --domain "$domain" --duration "$duration" --realtime 20 \
-  --log "$out/master.csv" --summary-json "$out/master.json" "${extra[@]}"
+  --log "$out/master.csv" --summary-json "$out/master.json" "${extra[@]}" || master_status=$?
 kill -TERM "$server_pid"
 wait "$server_pid" || true
 trap - EXIT
+# 1-4: no session was judged (an error, a bad flag, no server, refused): nothing to draw
+if [ "$master_status" -ge 1 ] && [ "$master_status" -le 4 ]; then exit "$master_status"; fi
 
 /usr/bin/python3 "$root/tests/charts/session.py" "$out/master.csv" "$out" \
   "experiment 3: $(grep -o '"scheme": "[^"]*"' "$out/master.json" | cut -d'"' -f4), default scene" \
   && echo "charts: $out/session.png $out/force_deformation.png"
 echo "server summary: $out/server.json"
 echo "master summary: $out/master.json"
+exit "$master_status"

@@ -10,7 +10,9 @@
 //                 [--duration S] [--samples N] [--domain D] [--profile P]
 //                 [--log FILE.csv] [--summary-json FILE]
 //
-// Exit status: 0 session done, 2 bad command line or config, 3 no server, 1 runtime failure.
+// Exit status (docs/exit_codes.md): 0 session stable, 1 runtime failure, 2 bad command line,
+// config or output path, 3 no server, 4 refused the slave, 5 degraded (the link), 6 oscillating,
+// 7 out of spec, 8 unstable or cut.
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
@@ -26,6 +28,7 @@
 #include "common/config/flags.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/dds/participant.hpp"
+#include "common/util/files.hpp"
 
 namespace {
 
@@ -126,11 +129,12 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
       ->check(number_in(1e-3, 1e3));
   app.add_option("--max-force", f.max_force, "device force saturation [N], 0-1e4 (0 = the spec's)")
       ->check(number_in(0.0, 1e4));
-  app.add_option("--delay", f.delay, "one-way injected f.delay, each direction (e.g. 50ms)");
-  app.add_option("--jitter", f.jitter, "jitter scale (e.g. 5ms)");
+  app.add_option("--delay", f.delay,
+                 "one-way injected delay, each direction, with its unit (e.g. 50ms)");
+  app.add_option("--jitter", f.jitter, "jitter scale, with its unit (e.g. 5ms)");
   app.add_option("--jitter-dist", f.jitter_dist, "uniform | normal");
   app.add_flag("--reorder", f.reorder, "let jittered samples overtake each other");
-  app.add_option("--loss", f.loss, "Bernoulli f.loss probability (e.g. 1%)");
+  app.add_option("--loss", f.loss, "Bernoulli loss probability (e.g. 1%)");
   app.add_option("--burst-loss", f.burst_loss, "Gilbert-Elliott P_GB,P_BG (e.g. 0.01,0.2)");
   app.add_option("--delay-spike", f.delay_spike,
                  "AT,DURATION,EXTRA: samples sent in [AT, AT+DURATION) after the first get EXTRA "
@@ -213,6 +217,8 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
     o.name =
         who.substr(0, 16) + "@" + std::string(host).substr(0, 20) + ":" + std::to_string(getpid());
   }
+  if (!o.log_csv.empty()) teleop::prepare_output_file("--log", o.log_csv);
+  if (!o.summary_json.empty()) teleop::prepare_output_file("--summary-json", o.summary_json);
   check_flag("--press-depth", o.press_depth_m, 0.0, 0.2);
   check_flag("--tremor", o.tremor_m, 0.0, 0.01);
   if (o.device == "replay" && o.replay_file.empty()) {

@@ -38,6 +38,7 @@
 #include "common/record/commands.hpp"
 #include "common/record/convert.hpp"
 #include "common/record/recording.hpp"
+#include "common/util/files.hpp"
 #include "common/util/signals.hpp"
 
 int main(int argc, char** argv) {
@@ -100,6 +101,8 @@ int main(int argc, char** argv) {
       }
     }
     config::require_regular_file(po.file, "recording");
+    if (!convert.empty()) prepare_output_file("--convert", convert);
+    if (!export_commands.empty()) prepare_output_file("--export-commands", export_commands);
     if (info) {
       std::cout << record::recording_info(po.file);
       return 0;

@@ -21,7 +21,8 @@
 // valid file holding its complete chunks, an SQLite file keeps every committed sample; the
 // recorder says how many and exits 1.
 //
-// Exit status: 0 done, 2 bad command line, 1 runtime failure (file, DDS, a full disk).
+// Exit status (docs/exit_codes.md): 0 done, 1 runtime failure (file, DDS, a full disk), 2 bad
+// command line or output path, 3 nothing recorded (no sample arrived on any topic).
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
@@ -35,6 +36,7 @@
 #include "common/config/flags.hpp"
 #include "common/record/recording.hpp"
 #include "common/util/clock.hpp"
+#include "common/util/exit_codes.hpp"
 #include "common/util/files.hpp"
 #include "common/util/signals.hpp"
 
@@ -102,7 +104,14 @@ int report(const record::Recorder& recorder, const std::string& out, bool quiet,
     }
   }
   if (!summary_json.empty()) write_text_file(summary_json, recorder.summary_json() + "\n");
-  return 0;
+  if (recorder.samples() == 0) {
+    std::fprintf(stderr,
+                 "teleop_record: nothing was recorded: no sample arrived on any topic (is a "
+                 "server or master running on this domain and profile?); %s holds no sample\n",
+                 out.c_str());
+    return exit_code::kNoPeer;
+  }
+  return exit_code::kOk;
 }
 
 }  // namespace
@@ -156,6 +165,8 @@ int main(int argc, char** argv) {
     using namespace teleop;
     config::check_flag("--duration", duration_s, 0.0, 1e6);
     check_options(ro, format, queue_mb, chunk_mb, chunk_s);
+    prepare_output_file("--out", ro.out);
+    if (!summary_json.empty()) prepare_output_file("--summary-json", summary_json);
     const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_record");
     teleop::dds::profile_file(opts.profile);
     install_stop_signal_handlers();

@@ -871,6 +871,7 @@ int main(int argc, char** argv) {
   }
   try {
     validate(o);
+    if (!o.drive_json.empty()) prepare_output_file("--drive-json", o.drive_json);
     // driving publishes the device and tuning topics: the secure profiles' operator role
     if (o.drive) net_flags.default_identity = "operator";
     // An observer must not take the CPU from the control loops on the same machine. Lower the

@@ -99,6 +99,17 @@ bool delay_flag_takes_value(const std::string& flag) {
 
 namespace {
 
+/// A duration flag's value: its unit is required ("--delay 5": 5 s or 5 ms?); "0" alone is
+/// allowed.
+double duration_flag_s(const std::string& flag, const std::string& text) {
+  const std::size_t digits = text.find_last_of("0123456789.");
+  if (digits != std::string::npos && digits + 1 == text.size() && text != "0") {
+    throw ConfigError("command line: " + flag + " '" + text +
+                      "' has no unit; write it with one of s, ms, us, ns (e.g. " + text + "ms)");
+  }
+  return config::parse_duration_s(flag, text);
+}
+
 std::uint64_t parse_u64(const std::string& flag, const std::string& text, std::uint64_t lo,
                         std::uint64_t hi) {
   std::size_t pos = 0;
@@ -149,8 +160,8 @@ void parse_window(const std::string& flag, const std::string& text, double& at, 
     throw ConfigError("command line: " + flag + " '" + text +
                       "' must be AT,DURATION,VALUE (example: " + example + ")");
   }
-  at = config::parse_duration_s(flag + " (at)", text.substr(0, c1));
-  duration = config::parse_duration_s(flag + " (duration)", text.substr(c1 + 1, c2 - c1 - 1));
+  at = duration_flag_s(flag + " (at)", text.substr(0, c1));
+  duration = duration_flag_s(flag + " (duration)", text.substr(c1 + 1, c2 - c1 - 1));
   third = third_parser(text.substr(c2 + 1));
 }
 
@@ -158,9 +169,9 @@ void parse_window(const std::string& flag, const std::string& text, double& at, 
 
 bool apply_delay_flag(DelayConfig& cfg, const std::string& flag, const std::string& value) {
   if (flag == "--delay") {
-    cfg.delay_s = config::parse_duration_s(flag, value);
+    cfg.delay_s = duration_flag_s(flag, value);
   } else if (flag == "--jitter") {
-    cfg.jitter_s = config::parse_duration_s(flag, value);
+    cfg.jitter_s = duration_flag_s(flag, value);
   } else if (flag == "--jitter-dist") {
     cfg.jitter_dist = parse_jitter_dist("command line: " + flag, value);
   } else if (flag == "--reorder") {
@@ -170,9 +181,8 @@ bool apply_delay_flag(DelayConfig& cfg, const std::string& flag, const std::stri
   } else if (flag == "--burst-loss") {
     parse_burst(cfg, flag, value);
   } else if (flag == "--delay-spike") {
-    parse_window(
-        flag, value, cfg.spike_at_s, cfg.spike_duration_s, cfg.spike_extra_s, "3s,1s,1s",
-        [&](const std::string& t) { return config::parse_duration_s(flag + " (extra delay)", t); });
+    parse_window(flag, value, cfg.spike_at_s, cfg.spike_duration_s, cfg.spike_extra_s, "3s,1s,1s",
+                 [&](const std::string& t) { return duration_flag_s(flag + " (extra delay)", t); });
   } else if (flag == "--loss-window") {
     parse_window(
         flag, value, cfg.window_at_s, cfg.window_duration_s, cfg.window_loss, "3s,1s,50%",

@@ -7,7 +7,8 @@
 //          --loss 1% --burst-loss p_gb,p_bg --seed N --channel-capacity N
 // YAML:    {delay: 50ms, jitter: 5ms, jitter_dist: normal, reorder: false, loss: 1%,
 //           burst_loss: [0.01, 0.3], seed: 7, capacity: 4096}
-// (durations may also be plain numbers in seconds, probabilities plain numbers in [0, 1]).
+// A duration flag needs its unit (s, ms, us, ns; "--delay 5" is refused, "0" alone is
+// allowed); in YAML a plain number is seconds. Probabilities may be plain numbers in [0, 1].
 #include <cstddef>
 #include <cstdint>
 #include <random>

@@ -20,6 +20,7 @@
 #include "client/device/external_device.hpp"
 #include "client/device/replay_device.hpp"
 #include "client/device/simulated_device.hpp"
+#include "client/metrics/link_verdict.hpp"
 #include "client/metrics/session_metrics.hpp"
 #include "client/net/delay_channel.hpp"
 #include "client/node/dds_slave_link.hpp"
@@ -30,10 +31,12 @@
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/csv.hpp"
+#include "common/util/exit_codes.hpp"
 #include "common/util/files.hpp"
 #include "common/util/json.hpp"
 #include "common/util/rate_loop.hpp"
 #include "common/util/signals.hpp"
+#include "common/util/version.hpp"
 #include "teleop/idl/DevicePubSubTypes.h"
 #include "teleop/idl/TeleopPubSubTypes.h"
 
@@ -67,10 +70,11 @@ struct SessionReport {
   double elapsed_s = 0.0;
   double session_s = 0.0;
   double wait_s = 0.0;
-  std::uint64_t issued = 0;    // commands the cycle issued (into the injected forward channel)
-  std::uint64_t dropped = 0;   // of them, dropped by the injected channel (loss, burst, overflow)
-  std::uint64_t sent = 0;      // written to DDS
-  std::uint64_t received = 0;  // received by the server (across its restarts)
+  std::uint64_t issued = 0;     // commands the cycle issued (into the injected forward channel)
+  std::uint64_t in_flight = 0;  // of them, still held in the injected delay when it stopped
+  std::uint64_t dropped = 0;    // of them, dropped by the injected channel (loss, burst, overflow)
+  std::uint64_t sent = 0;       // written to DDS
+  std::uint64_t received = 0;   // received by the server (across its restarts)
   std::uint64_t echoed = 0;
   std::uint64_t states_received = 0;
   std::uint64_t overruns = 0;
@@ -98,28 +102,28 @@ struct SessionReport {
   std::string owner_message;               // the server's word on who owns the slave
 };
 
-/// True when the server rejected more than half of the commands it received (outside the
-/// workspace, non-finite, stale, ...): the slave mostly held still, so the session says nothing
-/// about the loop's stability.
-inline bool mostly_rejected(const SessionReport& rep) {
-  return rep.received > 0 && rep.server_rejected > rep.received / 2;
+/// The link's figures of a session, as the verdict judges them.
+inline LinkCounts link_counts(const SessionReport& rep) {
+  LinkCounts counts;
+  counts.issued = rep.issued;
+  counts.in_flight = rep.in_flight;
+  counts.received = rep.received;
+  counts.rejected = rep.server_rejected;
+  counts.rtt_p99_ms = rep.rtt_ms.p99;
+  counts.echoes = rep.rtt_ms.count;
+  return counts;
 }
 
-/// The verdict of a session; "refused" when it never had the slave (nothing was judged);
-/// "rejected" when the server rejected most of its commands and the loop was otherwise stable.
-inline const char* session_verdict(const SessionMetrics& m, const SessionReport& rep) {
-  if (rep.refused && rep.issued == 0) return "refused";
-  if (mostly_rejected(rep) && m.verdict() == Verdict::kStable) return "rejected";
-  return verdict_name(m.verdict());
-}
-
-/// Why: the metrics' reason, or how many commands the server rejected.
-inline std::string session_verdict_reason(const SessionMetrics& m, const SessionReport& rep) {
-  if (std::string(session_verdict(m, rep)) == "rejected") {
-    return "the server rejected " + std::to_string(rep.server_rejected) + " of the " +
-           std::to_string(rep.received) + " commands it received";
+/// The session's verdict (client/metrics/link_verdict.hpp): the loop's, or "degraded" when the
+/// link did not carry a loop that stayed stable; "refused" (exit status 4) when it never had the
+/// slave (nothing was judged).
+inline SessionVerdict session_verdict(const SessionMetrics& m, const SessionReport& rep,
+                                      const std::string& scheme) {
+  if (rep.refused && rep.issued == 0) {
+    return SessionVerdict{"refused", "another master owns the slave", exit_code::kRefused};
   }
-  return m.verdict_reason();
+  return combine_verdict(m.verdict(), m.verdict_reason(),
+                         judge_link(link_counts(rep), link_tolerance(scheme)));
 }
 
 /// One driver at a time on teleop/device_state: the first writer is the device until it has been
@@ -495,6 +499,7 @@ struct MasterNode::Impl {
           link.first_owned_seq() > 0 ? link.first_owned_seq() - 1 : cycle.command_seq();
     }
     rep.issued = cycle.command_seq() - rep.issued_before_owning;
+    rep.in_flight = std::min<std::uint64_t>(cycle.forward().in_flight(), rep.issued);
     {
       const ChannelCounters& fw = cycle.forward().counters();
       rep.dropped = fw.lost_random + fw.lost_burst + fw.lost_overflow + fw.lost_window;
@@ -539,9 +544,9 @@ struct MasterNode::Impl {
                         ? "; waited " + std::to_string(rep.waited_for_owner_s) + " s for it"
                         : "; --wait-owner SECONDS waits for it")
                 << "\n";
-      return 4;
+      return exit_code::kRefused;
     }
-    return 0;
+    return session_verdict(cycle.metrics(), rep, cycle.config().controller.scheme).exit_status;
   }
 
   /// Ownership, once per cycle (see OwnershipWatch): a master refused the slave holds (renders
@@ -754,8 +759,10 @@ struct MasterNode::Impl {
     const Summary& r = rep.rtt_ms;
     const Summary& ld = rep.loop_delay_ms;
     const Summary& j = rep.jitter_us;
+    const SessionVerdict verdict = session_verdict(metrics, rep, cycle.config().controller.scheme);
     std::ostringstream out;
     out << "{\n"
+        << "  \"version\": \"" << json_escape(version_string()) << "\",\n"
         << "  \"duration_s\": " << json_number(rep.elapsed_s) << ",\n"
         << "  \"session_s\": " << json_number(rep.session_s) << ",\n"
         << "  \"rate_hz\": " << json_number(options.rate_hz) << ",\n"
@@ -767,7 +774,8 @@ struct MasterNode::Impl {
         << "  \"dropped_by_channel\": " << rep.dropped << ",\n"
         << "  \"sent\": " << rep.sent << ",\n"
         << "  \"received\": " << rep.received << ",\n"
-        << "  \"lost\": " << (rep.issued - std::min(rep.received, rep.issued)) << ",\n"
+        << "  \"in_flight\": " << rep.in_flight << ",\n"
+        << "  \"lost\": " << lost_commands(link_counts(rep)) << ",\n"
         << "  \"server\": {\"faults\": " << rep.server_faults
         << ", \"watchdog_trips\": " << rep.server_watchdog_trips
         << ", \"overruns\": " << rep.server_overruns << ", \"rejected\": " << rep.server_rejected
@@ -791,9 +799,8 @@ struct MasterNode::Impl {
         << "  \"stalls\": {\"count\": " << rep.stalls
         << ", \"longest_s\": " << json_number(rep.longest_stall_s) << "},\n"
         << "  \"wait_server_s\": " << json_number(rep.wait_s) << ",\n"
-        << "  \"verdict\": \"" << session_verdict(metrics, rep) << "\",\n"
-        << "  \"verdict_reason\": \"" << json_escape(session_verdict_reason(metrics, rep))
-        << "\",\n"
+        << "  \"verdict\": \"" << verdict.name << "\",\n"
+        << "  \"verdict_reason\": \"" << json_escape(verdict.reason) << "\",\n"
         << "  \"metrics\": " << metrics.summary_json() << ",\n"
         << "  \"transparency\": " << metrics.transparency_json() << ",\n"
         << "  \"delay\": {\"forward\": " << channel_json(rep.forward)
@@ -846,7 +853,8 @@ struct MasterNode::Impl {
     const Summary& r = rep.rtt_ms;
     const Summary& ld = rep.loop_delay_ms;
     const Summary& j = rep.jitter_us;
-    const std::uint64_t lost = rep.issued - std::min(rep.received, rep.issued);
+    const std::uint64_t lost = lost_commands(link_counts(rep));
+    const std::uint64_t left = rep.issued - rep.in_flight;
     const double rel = relative_force_error(metrics);
     char rel_buf[32];
     std::snprintf(rel_buf, sizeof(rel_buf), "%.0f%%", 100.0 * rel);
@@ -876,14 +884,15 @@ struct MasterNode::Impl {
                     v.slave_stiffness_n_per_m, v.forward_delay_s * 1e3, v.backward_delay_s * 1e3);
       tuning_line = buf;
     }
-    const std::string reason = session_verdict_reason(metrics, rep);
+    const SessionVerdict verdict = session_verdict(metrics, rep, cycle.config().controller.scheme);
+    const std::string& reason = verdict.reason;
     char text[8192];
     std::snprintf(
         text, sizeof(text),
         "session summary (%s, %s, script %s)\n"
         "  duration        %.2f s (%.2f s of session after homing) at %.0f Hz\n"
         "  commands        %llu issued, %llu received by the server, %llu lost (%.2f%%; "
-        "%llu dropped by the injected channel, %llu sent)\n"
+        "%llu dropped by the injected channel, %llu sent), %llu in flight at the end\n"
         "  injected delay  forward %s; measured mean %.2f ms, p99 %.2f ms, lost %.2f%%\n"
         "                  backward %s; measured mean %.2f ms, p99 %.2f ms, lost %.2f%%\n"
         "  round trip      p50 %.3f ms  p99 %.3f ms  max %.3f ms  (%zu echoes, network)\n"
@@ -907,20 +916,21 @@ struct MasterNode::Impl {
         cycle.config().controller.scheme.c_str(), options.device.c_str(), options.script.c_str(),
         rep.elapsed_s, rep.session_s, options.rate_hz, static_cast<unsigned long long>(rep.issued),
         static_cast<unsigned long long>(rep.received), static_cast<unsigned long long>(lost),
-        rep.issued ? 100.0 * static_cast<double>(lost) / static_cast<double>(rep.issued) : 0.0,
+        left ? 100.0 * static_cast<double>(lost) / static_cast<double>(left) : 0.0,
         static_cast<unsigned long long>(rep.dropped), static_cast<unsigned long long>(rep.sent),
-        options.forward.describe().c_str(), fwd.delay_mean_ms, fwd.delay_p99_ms,
-        100.0 * fwd.loss_fraction, options.backward.describe().c_str(), bwd.delay_mean_ms,
-        bwd.delay_p99_ms, 100.0 * bwd.loss_fraction, r.p50, r.p99, r.max, r.count, ld.p50, ld.p99,
-        j.p50, j.p99, static_cast<unsigned long long>(rep.overruns),
-        metrics.position_error_rms_m() * 1e3, metrics.position_error_max_m() * 1e3,
-        metrics.max_device_force_n(), metrics.force_error_rms_n(), relative.c_str(),
-        metrics.contact_time_s(), metrics.mean_contact_force_n(), metrics.free_force_mean_n(),
-        metrics.free_force_p99_n(), metrics.free_force_max_n(), metrics.felt_force_ratio(),
-        metrics.felt_force_error_rms_n(), metrics.felt_stiffness_n_per_m(),
-        metrics.environment_stiffness_n_per_m(), metrics.stiffness_ratio(), metrics.energy_j(),
-        metrics.energy_min_j(), safety.cut() ? "CUT: " : "ok",
-        safety.cut() ? safety.cut_reason() : "", static_cast<unsigned long long>(rep.link_losses),
+        static_cast<unsigned long long>(rep.in_flight), options.forward.describe().c_str(),
+        fwd.delay_mean_ms, fwd.delay_p99_ms, 100.0 * fwd.loss_fraction,
+        options.backward.describe().c_str(), bwd.delay_mean_ms, bwd.delay_p99_ms,
+        100.0 * bwd.loss_fraction, r.p50, r.p99, r.max, r.count, ld.p50, ld.p99, j.p50, j.p99,
+        static_cast<unsigned long long>(rep.overruns), metrics.position_error_rms_m() * 1e3,
+        metrics.position_error_max_m() * 1e3, metrics.max_device_force_n(),
+        metrics.force_error_rms_n(), relative.c_str(), metrics.contact_time_s(),
+        metrics.mean_contact_force_n(), metrics.free_force_mean_n(), metrics.free_force_p99_n(),
+        metrics.free_force_max_n(), metrics.felt_force_ratio(), metrics.felt_force_error_rms_n(),
+        metrics.felt_stiffness_n_per_m(), metrics.environment_stiffness_n_per_m(),
+        metrics.stiffness_ratio(), metrics.energy_j(), metrics.energy_min_j(),
+        safety.cut() ? "CUT: " : "ok", safety.cut() ? safety.cut_reason() : "",
+        static_cast<unsigned long long>(rep.link_losses),
         static_cast<unsigned long long>(rep.stalls), rep.longest_stall_s,
         static_cast<unsigned long long>(cycle.rehomes()),
         static_cast<unsigned long long>(cycle.rehomes(RehomeReason::kLinkBack)),
@@ -932,7 +942,7 @@ struct MasterNode::Impl {
         static_cast<unsigned long long>(rep.server_watchdog_trips),
         static_cast<unsigned long long>(rep.server_overruns),
         static_cast<unsigned long long>(rep.server_rejected),
-        static_cast<unsigned long long>(rep.server_restarts), session_verdict(metrics, rep),
+        static_cast<unsigned long long>(rep.server_restarts), verdict.name.c_str(),
         reason.empty() ? "" : " - ", reason.c_str());
     std::fputs(nan_as_na(text).c_str(), stdout);
   }

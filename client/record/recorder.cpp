@@ -16,6 +16,7 @@
 #include "client/record/raw_reader.hpp"
 #include "client/record/raw_type.hpp"
 #include "client/record/topic_table.hpp"
+#include "common/util/version.hpp"
 
 namespace teleop::record {
 
@@ -257,7 +258,8 @@ std::string Recorder::summary_json() const {
   }
   o << "}, \"format\": \"" << format_name(file_->format()) << "\", \"samples\": " << total
     << ", \"gaps\": " << gaps << ", \"dropped\": " << dropped
-    << ", \"payload_bytes\": " << raw_bytes() << ", \"stored_bytes\": " << stored_bytes() << "}";
+    << ", \"payload_bytes\": " << raw_bytes() << ", \"stored_bytes\": " << stored_bytes()
+    << ", \"version\": \"" << version_string() << "\"}";
   return o.str();
 }
 

@@ -2,6 +2,8 @@
 
 #include <cstdio>
 
+#include "common/util/version.hpp"
+
 namespace teleop::master {
 
 MasterCycleConfig LoopbackSession::cycle_config(const LoopbackConfig& cfg) {
@@ -59,7 +61,7 @@ std::string LoopbackSession::summary_json() const {
   s += safety().cut() ? "true" : "false";
   s += ",\"reason\":\"";
   s += safety().cut_reason();
-  s += "\"}}";
+  s += "\"},\"version\":\"" + version_string() + "\"}";
   return s;
 }
 

@@ -10,6 +10,7 @@
 #include "common/util/clock.hpp"
 #include "common/util/json.hpp"
 #include "common/util/rate_loop.hpp"
+#include "common/util/version.hpp"
 
 namespace teleop::viewer {
 
@@ -146,7 +147,7 @@ std::string DriveSession::summary_json() const {
            ", \"master_damping_ns_per_m\": " + json_number(s.master_damping_ns_per_m()) +
            ", \"forward_delay_ms\": " + json_number(s.forward_delay_ms()) + "}";
   }
-  return out + "}";
+  return out + ", \"version\": \"" + json_escape(version_string()) + "\"}";
 }
 
 }  // namespace teleop::viewer

@@ -7,17 +7,21 @@
 //   - harden_flags(app), called once every option is declared: every option that takes a value
 //     refuses an empty value (`--out ''`, `--domain=`), and every single-valued option refuses
 //     to be given twice (`--out a --out b`); CLI11 itself refuses unknown arguments;
-//   - parse_command_line(app, exe, argc, argv) parses, prints a refusal as
-//     "<exe>: <flag>: '<value>' ..." with the usage, and gives the exit status: 2 for a mistake,
-//     0 for --help, -1 to go on.
+//   - parse_command_line(app, exe, argc, argv) adds --version, parses, prints a refusal as
+//     "<exe>: <flag>: '<value>' ..." with the usage (an unknown flag with the closest known one:
+//     "'--levle' is not an option of <exe> (did you mean '--level'?)"), and gives the exit
+//     status: 2 for a mistake, 0 for --help or --version (nothing runs), -1 to go on.
 // Checks that need another flag's value (a range that depends on --rate) stay after the parse,
 // with config::check_flag / parse_number, which refuse the same texts.
 #include <CLI/CLI.hpp>
 
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "common/config/config.hpp"
+#include "common/config/suggest.hpp"
+#include "common/util/version.hpp"
 
 namespace teleop::config {
 
@@ -53,14 +57,47 @@ inline void harden_flags(CLI::App& app) {
   }
 }
 
+/// The long names of `app`'s options ("--out", "--help", ...).
+inline std::vector<std::string> option_names(const CLI::App& app) {
+  std::vector<std::string> names;
+  for (const CLI::Option* opt : app.get_options()) {
+    for (const std::string& n : opt->get_lnames()) names.push_back("--" + n);
+  }
+  return names;
+}
+
+/// The refusal of arguments CLI11 did not expect: each unknown flag with the closest known one
+/// (the words after it, likely its value, are not listed), else each stray word.
+inline std::string unexpected_arguments_text(const CLI::App& app, const std::string& exe) {
+  std::string flags, words;
+  const std::vector<std::string> names = option_names(app);
+  for (const std::string& word : app.remaining(false)) {
+    if (word.size() > 1 && word[0] == '-') {
+      const std::string flag = word.substr(0, word.find('='));
+      flags += (flags.empty() ? "" : "; ") + ("'" + flag + "' is not an option of " + exe) +
+               did_you_mean(flag, names);
+    } else {
+      words +=
+          (words.empty() ? "" : "; ") + ("'" + word + "' is not expected (no option takes it)");
+    }
+  }
+  return flags.empty() ? words : flags;
+}
+
 /// Parses the command line with the shared rules. Returns -1 to go on, else the exit status:
-/// 0 after --help, 2 after a mistake (printed to stderr with the usage).
+/// 0 after --help or --version, 2 after a mistake (printed to stderr with the usage).
 inline int parse_command_line(CLI::App& app, const std::string& exe, int argc, char** argv) {
+  app.set_version_flag("--version", version_line(exe), "print the version and exit");
   harden_flags(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ExtrasError&) {
+    std::cerr << exe << ": " << unexpected_arguments_text(app, exe) << "\n\n" << app.help();
+    return 2;
   } catch (const CLI::ParseError& e) {
     // CLI11 says "--out: At Most 1 required but received 2" for a repeated flag
     std::string what = e.what();

@@ -11,6 +11,16 @@ namespace teleop {
 /// written (a full disk, /dev/full) or closed.
 void write_text_file(const std::string& path, const std::string& text);
 
+/// Makes the folder that will hold the output file `path` of `flag` (its parents, as
+/// `mkdir -p`), before any work starts. Refuses a path that is a folder, an existing file that
+/// cannot be written, or a new file whose folder cannot be made or written. "-" (stdout) and a
+/// path without a folder part need nothing.
+/// @throws config::ConfigError "<flag> '<path>': cannot create the folder '<dir>': <reason>".
+void prepare_output_file(const std::string& flag, const std::string& path);
+/// The same for an output folder (`teleop_experiment --out DIR`): made with its parents, refused
+/// when it is a file or cannot be written. @throws config::ConfigError naming flag and folder.
+void prepare_output_dir(const std::string& flag, const std::string& dir);
+
 /// Flushes `out` and throws std::runtime_error "<path>: write error: <reason>" unless every
 /// write to it succeeded.
 void check_written(std::ostream& out, const std::string& path);

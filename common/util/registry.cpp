@@ -9,7 +9,9 @@
 #include <optional>
 
 #include "common/config/config.hpp"
+#include "common/config/suggest.hpp"
 #include "common/util/files.hpp"
+#include "common/util/version.hpp"
 
 #ifndef TELEOP_SOURCE_DIR
 #define TELEOP_SOURCE_DIR "."
@@ -87,22 +89,39 @@ std::string option_usage(const OptionSpec& o) {
   return v;
 }
 
-void usage(const std::string& group, const std::string& exe, std::ostream& os) {
-  os << "usage: " << exe << " <name> --out DIR [--quick] [--no-chart] [command options]\n\n"
-     << "names:\n";
-  for (const auto* e : CommandRegistry::get(group).list()) {
-    os << "  " << e->name << std::string(e->name.size() < 24 ? 24 - e->name.size() : 1, ' ')
-       << e->description << "\n";
-    for (const OptionSpec& o : e->options) {
-      os << "      " << option_usage(o) << (o.help.empty() ? "" : ": " + o.help) << "\n";
-    }
+/// One command: its name, description and options.
+void command_usage(const CommandEntry& e, std::ostream& os) {
+  os << "  " << e.name << std::string(e.name.size() < 24 ? 24 - e.name.size() : 1, ' ')
+     << e.description << "\n";
+  for (const OptionSpec& o : e.options) {
+    os << "      " << option_usage(o) << (o.help.empty() ? "" : ": " + o.help) << "\n";
   }
 }
 
+void usage(const std::string& group, const std::string& exe, std::ostream& os) {
+  os << "usage: " << exe << " <name> --out DIR [--quick] [--no-chart] [command options]\n"
+     << "       " << exe << " <name> --help\n"
+     << "       " << exe << " list | --help | --version\n\n"
+     << "names:\n";
+  for (const auto* e : CommandRegistry::get(group).list()) command_usage(*e, os);
+}
+
+std::vector<std::string> option_names(const CommandEntry& entry) {
+  std::vector<std::string> names = {"--out", "--quick", "--no-chart", "--help"};
+  for (const OptionSpec& o : entry.options) names.push_back(o.name);
+  return names;
+}
+
 std::string known_options(const CommandEntry& entry) {
-  std::string list = "--out, --quick, --no-chart";
-  for (const OptionSpec& o : entry.options) list += ", " + o.name;
+  std::string list;
+  for (const std::string& n : option_names(entry)) list += (list.empty() ? "" : ", ") + n;
   return list;
+}
+
+std::vector<std::string> command_names(const std::string& group) {
+  std::vector<std::string> names;
+  for (const auto* e : CommandRegistry::get(group).list()) names.push_back(e->name);
+  return names;
 }
 }  // namespace
 
@@ -127,8 +146,9 @@ CommandArgs parse_command_args(const CommandEntry& entry, const std::vector<std:
       if (o.name == key) spec = &o;
     }
     if (key != "--out" && !spec) {
-      throw config::ConfigError("command line: '" + words[i] + "' is not an option of " +
-                                entry.name + " (its options: " + known_options(entry) + ")");
+      throw config::ConfigError("command line: '" + key + "' is not an option of " + entry.name +
+                                config::did_you_mean(key, option_names(entry)) +
+                                " (its options: " + known_options(entry) + ")");
     }
     if (!value) {
       if (i + 1 >= words.size())
@@ -159,22 +179,45 @@ CommandArgs parse_command_args(const CommandEntry& entry, const std::vector<std:
   return args;
 }
 
+namespace {
+/// `<exe> <name> ... --help`: the words ask for the command's help (nothing runs).
+bool wants_help(const std::vector<std::string>& words) {
+  return std::find(words.begin(), words.end(), "--help") != words.end() ||
+         std::find(words.begin(), words.end(), "-h") != words.end();
+}
+}  // namespace
+
 int run_registry_main(const std::string& group, const std::string& exe, int argc, char** argv) {
-  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
+  const std::string first = argc < 2 ? "" : argv[1];
+  if (argc < 2 || first == "--help" || first == "-h") {
     usage(group, exe, argc < 2 ? std::cerr : std::cout);
     return argc < 2 ? 2 : 0;
   }
-  const std::string name = argv[1];
-  const CommandEntry* entry = CommandRegistry::get(group).find(name);
+  if (first == "--version" && argc == 2) {
+    std::cout << version_line(exe) << "\n";
+    return 0;
+  }
+  if (first == "list" && argc == 2) {
+    for (const std::string& n : command_names(group)) std::cout << n << "\n";
+    return 0;
+  }
+  const CommandEntry* entry = CommandRegistry::get(group).find(first);
   if (!entry) {
-    std::cerr << exe << ": unknown name '" << name << "'\n";
-    usage(group, exe, std::cerr);
+    std::cerr << exe << ": unknown name '" << first << "'"
+              << config::did_you_mean(first, command_names(group)) << " (`" << exe
+              << " list` lists them)\n";
     return 2;
   }
+  const std::string& name = first;
+  const std::vector<std::string> words(argv + 2, argv + argc);
+  if (wants_help(words)) {  // help for the command; nothing runs
+    std::cout << "usage: " << exe << " " << name << " --out DIR [--quick] [--no-chart] [options]\n";
+    command_usage(*entry, std::cout);
+    return 0;
+  }
   try {
-    const CommandArgs args =
-        parse_command_args(*entry, std::vector<std::string>(argv + 2, argv + argc));
-    std::filesystem::create_directories(args.out_dir);
+    const CommandArgs args = parse_command_args(*entry, words);
+    prepare_output_dir("--out", args.out_dir.string());
     const int status = entry->run(args);
     const std::vector<std::string> failed = failed_writes();
     for (const std::string& f : failed) std::cerr << exe << " " << name << ": error: " << f << "\n";

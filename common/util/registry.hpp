@@ -75,7 +75,9 @@ int run_chart_script(const std::string& script, const std::vector<std::string>& 
 CommandArgs parse_command_args(const CommandEntry& entry, const std::vector<std::string>& words);
 
 /// Shared main() of the tool executables: `<exe> <name> --out DIR [--quick] [--no-chart] ...`.
-/// A mistake on the command line exits 2 before the command runs.
+/// A mistake on the command line exits 2 before the command runs (an unknown name or option
+/// with the closest known one); `<name> --help`, `list`, `--help` and `--version` print and exit
+/// 0 without running anything; --out is made (with its parents) or refused with exit 2.
 int run_registry_main(const std::string& group, const std::string& exe, int argc, char** argv);
 
 }  // namespace teleop

@@ -17,6 +17,7 @@
 #include "common/config/flags.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/dds/participant.hpp"
+#include "common/util/files.hpp"
 #include "server/node/server_node.hpp"
 #include "server/world/world_model.hpp"
 
@@ -102,6 +103,7 @@ int main(int argc, char** argv) {
     o.duration_s = teleop::config::check_flag("--duration", duration_s, 0.0, 1e7);
     o.stats_period_s = teleop::config::check_flag("--stats-period", stats_period_s, 0.1, 10.0);
     o.summary_json = summary_json;
+    if (!summary_json.empty()) teleop::prepare_output_file("--summary-json", summary_json);
     o.realtime.priority =
         static_cast<int>(teleop::config::check_flag("--realtime", realtime.priority, 0.0, 99.0));
     o.realtime.cpu = static_cast<int>(teleop::config::check_flag(

@@ -17,6 +17,7 @@
 #include "common/util/rate_loop.hpp"
 #include "common/util/signals.hpp"
 #include "common/util/stats.hpp"
+#include "common/util/version.hpp"
 #include "server/node/command_gate.hpp"
 #include "server/node/mesh_publisher.hpp"
 #include "server/node/scene_objects.hpp"
@@ -394,6 +395,7 @@ struct ServerNode::Impl {
     const Summary late = summarize(loop.lateness_us().snapshot());
     std::ostringstream f;
     f << "{\n"
+      << "  \"version\": \"" << version_string() << "\",\n"
       << "  \"scene\": \"" << model.name << "\",\n"
       << "  \"elapsed_s\": " << json_number(elapsed_s) << ",\n"
       << "  \"steps\": " << cycle.steps() << ",\n"

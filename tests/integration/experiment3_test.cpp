@@ -78,7 +78,7 @@ TEST(Experiment3, TheoreticallyUnstableLoopIsReportedUnstableAndKeptWithinTheSpe
                  {"--domain", d, "--summary-json", mj, "--scheme", "position-position", "--kps",
                   "3000", "--kpm", "3000", "--delay", "100ms", "--duration", "8", "--homing", "1"},
                  "e3u_master");
-  ASSERT_EQ(master.wait_for(120.0), 0) << master.err();
+  ASSERT_EQ(master.wait_for(120.0), 8) << master.err();  // exit status 8: unstable
   server.signal(SIGTERM);
   ASSERT_EQ(server.wait_for(30.0), 0);
   const std::string m = Process::slurp(mj);
@@ -148,9 +148,12 @@ TEST(ExternalDevice, ADriverProcessTakesPartThroughTheDeviceTopics) {
   stop = true;
   driver.join();
   server.signal(SIGTERM);
-  ASSERT_EQ(rc, 0) << master.err();
   ASSERT_EQ(server.wait_for(30.0), 0);
   const std::string m = Process::slurp(mj);
+  // the session ran and was judged: its exit status is its verdict's (docs/exit_codes.md; the
+  // press holds the hand 2 cm into the floor, which may drive the device beyond its continuous
+  // rating: out-of-spec, 7)
+  ASSERT_EQ(rc, verdict_exit_status(m)) << master.err() << m;
   EXPECT_NE(m.find("\"device\": \"external\""), std::string::npos) << m;
   // the master commanded the driver at the haptic rate (generous: a loaded 2-core machine can
   // starve the fake driver past the 10 ms staleness window, and stale means disabled)

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace teleop::test {
@@ -16,6 +17,18 @@ namespace teleop::test {
 inline const std::string kServerBinary = std::string(TELEOP_BINARY_DIR) + "/server/teleop_server";
 inline const std::string kMasterBinary = std::string(TELEOP_BINARY_DIR) + "/client/teleop_master";
 inline const std::string kViewerBinary = std::string(TELEOP_BINARY_DIR) + "/client/teleop_viewer";
+
+/// The exit status docs/exit_codes.md gives the verdict of a master's JSON summary (-1: none).
+inline int verdict_exit_status(const std::string& summary_json) {
+  const std::pair<const char*, int> statuses[] = {
+      {"stable", 0}, {"degraded", 5}, {"oscillating", 6}, {"out-of-spec", 7}, {"unstable", 8}};
+  for (const auto& [name, status] : statuses) {
+    if (summary_json.find(std::string("\"verdict\": \"") + name + "\"") != std::string::npos) {
+      return status;
+    }
+  }
+  return -1;
+}
 
 /// A scene file of deploy/scenes/, e.g. scene_file("tool_only.yaml").
 inline std::string scene_file(const std::string& name) {

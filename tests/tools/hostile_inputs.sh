@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Hostile inputs (issue 29, items 1, 2 and 4): every program's file inputs fed a FIFO, /dev/zero,
-# huge gaps and sizes, damaged MCAP recordings (issue 26), its outputs /dev/full or a missing
-# folder, its flags empty, negative-zero,
-# partial or repeated values, each under `timeout` and a memory limit. Every case must end (no
-# hang), exit with the expected status and print a message naming the flag or the file. Last, a
-# master stopped for 1 s (SIGSTOP) must report the stall of its loop (item 6).
+# Hostile inputs and the exit statuses of docs/exit_codes.md: every program's file inputs fed a
+# FIFO, /dev/zero, huge gaps and sizes, damaged MCAP recordings, its outputs /dev/full, a missing
+# folder (made) or one that cannot be made (exit 2), its flags empty, negative-zero, partial,
+# repeated, unknown (with the closest known one) or durations without a unit, --help and
+# --version (nothing runs), each under `timeout` and a memory limit. Every case must end (no
+# hang), exit with the expected status and print a message naming the flag or the file. Then a
+# recorder that heard nothing (exit 3), sessions whose verdict is degraded (exit 5) or that end
+# with commands in flight, and a master stopped for 1 s (SIGSTOP) that reports the stall.
 #
 #   hostile_inputs.sh BUILD_DIR DOMAIN
 #
@@ -21,6 +23,9 @@ monitor="$build/client/teleop_monitor"
 experiment="$build/server/teleop_experiment"
 export TELEOP_PROFILE=loopback
 unset TELEOP_DOMAIN
+# "0.1.0 (git " from the top CMakeLists.txt's project() version
+version_prefix="$(sed -n 's/^project(teleop VERSION \([0-9.]*\).*/\1/p' \
+  "$(dirname "$0")/../../CMakeLists.txt") (git "
 tmp="$(mktemp -d)"
 pids=()
 cleanup() {
@@ -133,6 +138,34 @@ check 2 "--level '-0'" 20 -- "$experiment" sphere-zero-g --out "$out/e" --level 
 check 2 "--dt '' is empty" 20 -- "$experiment" sphere-zero-g --out "$out/e" --dt ""
 check 2 "--rate '20000x'" 20 -- "$experiment" resim --out "$out/e" --rate 20000x
 check 2 "'stray' is not an option of sphere-zero-g" 20 -- "$experiment" sphere-zero-g --out "$out/e" stray
+check 2 "'--levle' is not an option of sphere-zero-g (did you mean '--level'?)" 20 -- \
+  "$experiment" sphere-zero-g --out "$out/e" --levle 3
+check 2 "unknown name 'sphere-zero' (did you mean 'sphere-zero-g'?)" 20 -- \
+  "$experiment" sphere-zero --out "$out/e"
+check 2 "'--duraton' is not an option of teleop_master (did you mean '--duration'?)" 20 -- \
+  "$master" --duraton 5
+check 2 "'--qiet' is not an option of teleop_server (did you mean '--quiet'?)" 20 -- \
+  "$server" --qiet
+check 2 "--delay '5' has no unit" 20 -- "$master" --delay 5
+check 2 "--jitter '2' has no unit" 20 -- "$master" --delay 5ms --jitter 2
+
+echo "--- --help and --version run nothing; teleop_experiment list"
+check 0 "usage: teleop_experiment sphere-zero-g" 20 -- \
+  "$experiment" sphere-zero-g --out "$tmp/never" --levle 3 --help
+cases=$((cases + 1))
+if [ -e "$tmp/never" ]; then
+  failures=$((failures + 1))
+  echo "FAILED  teleop_experiment sphere-zero-g --help made its --out folder (it ran)"
+else
+  echo "ok      teleop_experiment sphere-zero-g --help ran nothing"
+fi
+check 0 "sphere-zero-g" 20 -- "$experiment" list
+check 0 "--duration" 20 -- "$master" --help --duration 5
+for exe in "$server" "$master" "$record" "$play" "$monitor" "$experiment" \
+  "$build/client/teleop_bridge" "$build/client/teleop_viewer"; do
+  [ -x "$exe" ] || continue
+  check 0 "$(basename "$exe") $version_prefix" 20 -- "$exe" --version
+done
 
 echo "--- file inputs: FIFOs, devices, huge sizes and gaps"
 check 2 "FIFO" 20 -- "$server" --scene "$tmp/fifo"
@@ -180,21 +213,50 @@ check 2 "--format 'bag' is not a recording format" 20 -- "$record" --out "$out/a
 check 2 "does not match the extension" 20 -- "$record" --out "$out/a.mcap" --format sqlite
 check 2 "--chunk-s" 20 -- "$record" --out "$out/a.mcap" --chunk-s 0
 
-echo "--- outputs: /dev/full and a missing folder"
+echo "--- outputs: /dev/full, a missing folder (made), a folder that cannot be made (exit 2)"
+touch "$tmp/afile"
 check nz "/dev/full" 60 -- "$play" "$tmp/good.db" --export-commands /dev/full
-check nz "$tmp/missing/x.csv" 60 -- "$play" "$tmp/good.db" --export-commands "$tmp/missing/x.csv"
+check 0 "-> $tmp/missing/x.csv" 60 -- "$play" "$tmp/good.db" --export-commands "$tmp/missing/x.csv"
+check 2 "--export-commands '$tmp/afile/x.csv': '$tmp/afile' exists and is not a folder" 20 -- \
+  "$play" "$tmp/good.db" --export-commands "$tmp/afile/x.csv"
 check 2 "not a regular file" 20 -- "$record" --out /dev/full --duration 1
+check 2 "--out '$tmp/afile/r.mcap'" 20 -- "$record" --out "$tmp/afile/r.mcap" --duration 1
+check 2 "--summary-json '$tmp/afile/s.json'" 20 -- \
+  "$server" --duration 1 --summary-json "$tmp/afile/s.json"
+check 2 "--log '$tmp/afile/m.csv'" 20 -- "$master" --log "$tmp/afile/m.csv"
+check 2 "--out '$tmp/afile'" 20 -- "$experiment" sphere-zero-g --out "$tmp/afile"
 check nz "/dev/full" 60 -- "$server" --domain "$domain" --duration 1 --summary-json /dev/full --quiet
-check nz "$tmp/missing/s.json" 60 -- \
-  "$server" --domain "$domain" --duration 1 --summary-json "$tmp/missing/s.json" --quiet
+check 0 "" 60 -- \
+  "$server" --domain "$domain" --duration 1 --summary-json "$tmp/made/s.json" --quiet
+cases=$((cases + 1))
+if grep -qF "\"version\": \"$version_prefix" "$tmp/made/s.json" 2>/dev/null; then
+  echo "ok      a missing --summary-json folder is made; the summary names the version"
+else
+  failures=$((failures + 1))
+  echo "FAILED  $tmp/made/s.json missing or without \"version\": \"$version_prefix..."
+fi
+check 3 "nothing was recorded" 30 -- "$record" --domain "$domain" --out "$tmp/empty.mcap" --duration 1
 
 # the cases below need a running server (loopback, this test's domain)
 "$server" --domain "$domain" --duration 90 --quiet >"$tmp/server.log" 2>&1 &
 pids+=($!)
 sleep 1
 check nz "/dev/full" 60 -- "$master" --domain "$domain" --duration 1 --log /dev/full --quiet
-check nz "$tmp/missing/m.json" 60 -- \
-  "$master" --domain "$domain" --duration 1 --summary-json "$tmp/missing/m.json" --quiet
+
+echo "--- commands still in the injected delay at the end are in flight, not lost"
+cases=$((cases + 1))
+timeout -k 5 60 "$master" --domain "$domain" --duration 1 --homing 0.5 --delay 50ms --quiet \
+  --summary-json "$tmp/inflight/m.json" >"$tmp/inflight.log" 2>&1
+inflight_status=$?
+in_flight="$(grep -o '"in_flight": [0-9]*' "$tmp/inflight/m.json" 2>/dev/null | grep -o '[0-9]*$')"
+lost="$(grep -o '"lost": [0-9]*' "$tmp/inflight/m.json" 2>/dev/null | grep -o '[0-9]*$')"
+if [ "$inflight_status" -eq 0 ] && [ "${in_flight:-0}" -ge 10 ] && [ "${lost:-99}" -le 5 ]; then
+  echo "ok      [0] 50 ms of delay: $in_flight in flight at the end, $lost lost"
+else
+  failures=$((failures + 1))
+  echo "FAILED  [$inflight_status] in flight '${in_flight}', lost '${lost}' (wanted >= 10 and <= 5)"
+  tail -3 "$tmp/inflight.log" | sed 's/^/        /'
+fi
 
 echo "--- a full disk under teleop_record, SQLite (a file size limit, SIGXFSZ ignored)"
 "$master" --domain "$domain" --duration 8 --quiet >"$tmp/master_rec.log" 2>&1 &
@@ -232,17 +294,19 @@ else
 fi
 wait "${pids[-1]}" 2>/dev/null
 
-echo "--- a session whose commands the server mostly rejects is not 'stable'"
+echo "--- a session whose commands the server mostly rejects is degraded (exit 5), not 'stable'"
 cases=$((cases + 1))
-timeout -k 5 60 "$master" --domain "$domain" --duration 1 --contact-point 99,99,99 \
+timeout -k 5 60 "$master" --domain "$domain" --duration 1 --contact-point 100,100,100 \
   --summary-json "$tmp/rejected.json" >"$tmp/rejected.log" 2>&1
-if grep -qF '"verdict": "rejected"' "$tmp/rejected.json" 2>/dev/null &&
-  grep -qF "verdict         rejected - the server rejected" "$tmp/rejected.log" &&
+rejected_status=$?
+if [ "$rejected_status" -eq 5 ] && grep -qF '"verdict": "degraded"' "$tmp/rejected.json" &&
+  grep -qF "verdict         degraded - the server rejected" "$tmp/rejected.log" &&
+  grep -qF "\"version\": \"$version_prefix" "$tmp/rejected.json" &&
   ! grep -qE '(^| )-?nan( |$)' "$tmp/rejected.log"; then
-  echo "ok      verdict rejected, no 'nan' in the text summary"
+  echo "ok      [5] verdict degraded, no 'nan' in the text summary"
 else
   failures=$((failures + 1))
-  echo "FAILED  verdict of a mostly rejected session"
+  echo "FAILED  [$rejected_status, wanted 5] verdict of a mostly rejected session"
   grep -E "verdict|nan" "$tmp/rejected.log" "$tmp/rejected.json" | head -5 | sed 's/^/        /'
 fi
 

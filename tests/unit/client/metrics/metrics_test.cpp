@@ -14,6 +14,7 @@
 #include "client/sim/loopback_session.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/sim/tool.hpp"
+#include "common/util/version.hpp"
 #include "tests/support/alloc_counter.hpp"
 #include "tests/support/master_helpers.hpp"
 #include "tests/support/press_world.hpp"
@@ -122,6 +123,7 @@ TEST(Verdict, LossesAreReportedInTheSummary) {
   const std::string j = session.summary_json();
   EXPECT_NE(j.find("\"forward_loss\":0.0"), std::string::npos) << j;
   EXPECT_NE(j.find("\"backward\":{\"pushed\""), std::string::npos) << j;
+  EXPECT_NE(j.find("\"version\":\"" + teleop::version_string() + "\"}"), std::string::npos) << j;
 }
 
 TEST(Verdict, SustainedOscillationWithoutGrowthIsOscillating) {

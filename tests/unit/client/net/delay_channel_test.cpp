@@ -252,6 +252,28 @@ TEST(DelayConfig, BadFlagsGiveClearErrors) {
   EXPECT_NE(m.find("[0, 10]"), std::string::npos) << m;
 }
 
+TEST(DelayConfig, ADurationFlagNeedsItsUnit) {
+  auto err = [](std::vector<std::string> args) {
+    return error_of([&] {
+      DelayConfig c;
+      parse_delay_flags(c, args);
+    });
+  };
+  for (const char* bad : {"5", "0.05", "1e3", "-0", "5."}) {
+    const std::string m = err({"--delay", bad});
+    EXPECT_NE(m.find(std::string("--delay '") + bad + "' has no unit"), std::string::npos) << m;
+  }
+  EXPECT_NE(err({"--jitter", "2"}).find("--jitter '2' has no unit"), std::string::npos);
+  EXPECT_NE(err({"--delay-spike", "3,1s,1s"}).find("has no unit"), std::string::npos);
+  DelayConfig c;
+  parse_delay_flags(c, {"--delay", "0", "--jitter", "2ms"});  // a bare zero is zero in any unit
+  EXPECT_EQ(c.delay_s, 0.0);
+  EXPECT_DOUBLE_EQ(c.jitter_s, 0.002);
+  // YAML keeps plain numbers as seconds (docs/configuration.md)
+  const DelayConfig y = delay_config_from_yaml(teleop::config::Node::parse("{delay: 0.05}", "t"));
+  EXPECT_DOUBLE_EQ(y.delay_s, 0.05);
+}
+
 TEST(DelayConfig, ParsesYamlAndRejectsBadFields) {
   const auto n = teleop::config::Node::parse(
       "forward: {delay: 80ms, jitter: 0.002, jitter_dist: normal, reorder: true, loss: 2%,\n"

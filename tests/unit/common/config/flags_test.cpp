@@ -1,12 +1,17 @@
 // The shared command-line rules (common/config/flags.hpp, config.hpp: parse_number & co).
 #include "common/config/flags.hpp"
 
+#include "common/util/files.hpp"
+#include "common/util/version.hpp"
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -107,6 +112,77 @@ TEST(HardenFlags, RefusesEmptyRepeatedUnknownAndOutOfRange) {
   EXPECT_EQ(run({"--exclude", ""}), 2);
   EXPECT_EQ(run({"--bogus"}), 2);
   EXPECT_EQ(run({"stray"}), 2);
+}
+
+TEST(DidYouMean, NamesTheClosestKnownFlag) {
+  using teleop::config::closest_name;
+  const std::vector<std::string> names = {"--level", "--duration", "--out", "--quick"};
+  EXPECT_EQ(closest_name("--levle", names), "--level");       // two letters swapped
+  EXPECT_EQ(closest_name("--duraton", names), "--duration");  // one left out
+  EXPECT_EQ(closest_name("--ot", names), "--out");
+  EXPECT_EQ(closest_name("--bogus", names), "");  // nothing close
+  EXPECT_EQ(closest_name("", names), "");
+  EXPECT_EQ(teleop::config::did_you_mean("--levle", names), " (did you mean '--level'?)");
+  EXPECT_EQ(teleop::config::did_you_mean("--zzzzzz", names), "");
+}
+
+TEST(HardenFlags, AnUnknownFlagIsRefusedWithTheClosestOne) {
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({"--duraton", "1"}), 2);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("'--duraton' is not an option of prog (did you mean '--duration'?)"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(err.find("'1' is not expected"), std::string::npos) << err;  // its value, not listed
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run({"stray"}), 2);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("'stray' is not expected"),
+            std::string::npos);
+}
+
+TEST(HardenFlags, VersionAndHelpRunNothing) {
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(run({"--version"}), 0);
+  const std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("prog " + std::string(teleop::project_version()) + " (git "),
+            std::string::npos)
+      << out;
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(run({"--help", "--duration", "1"}), 0);
+  testing::internal::GetCapturedStdout();
+}
+
+TEST(PrepareOutput, MakesMissingFoldersAndRefusesImpossibleOnes) {
+  char dir[] = "/tmp/flags_out_XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::string root = dir;
+  // a missing folder is made, with its parents
+  EXPECT_NO_THROW(teleop::prepare_output_file("--summary-json", root + "/a/b/s.json"));
+  struct stat st {};
+  EXPECT_EQ(stat((root + "/a/b").c_str(), &st), 0);
+  EXPECT_NO_THROW(teleop::prepare_output_dir("--out", root + "/c/d"));
+  EXPECT_EQ(stat((root + "/c/d").c_str(), &st), 0);
+  EXPECT_NO_THROW(teleop::prepare_output_file("--log", "log.csv"));  // the working folder
+  // an existing file is replaced in place, whatever its folder allows (a write error on a full
+  // device comes later, naming the file)
+  EXPECT_NO_THROW(teleop::prepare_output_file("--log", "/dev/full"));
+  // a folder under a file, a file where a folder is wanted, a folder as the file: refused
+  const std::string file = root + "/file";
+  std::FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fclose(f);
+  auto refused = [](const std::function<void()>& call, const std::string& names) {
+    try {
+      call();
+      ADD_FAILURE() << names << " accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
+    }
+  };
+  refused([&] { teleop::prepare_output_file("--log", file + "/x.csv"); }, "--log '" + file);
+  refused([&] { teleop::prepare_output_dir("--out", file); }, "is not a folder");
+  refused([&] { teleop::prepare_output_file("--summary-json", root); }, "is a folder");
+  std::filesystem::remove_all(root);
 }
 
 TEST(RequireRegularFile, RefusesFifosDevicesAndDirectories) {
