@@ -507,9 +507,7 @@ struct MasterNode::Impl {
     run_loop(cycle, loop, link, external, tip0, rep);
     cycle.stop();
 
-    // 4. drain: late echoes and the server's final receive count (the release commands are
-    // written by the command writer's thread first)
-    command_writer.flush(0.5);
+    // 4. drain: late echoes and the server's final receive count
     const std::int64_t drain_start = now_ns();
     while (seconds_between(drain_start, now_ns()) < options.drain_s) {
       link.drain();
@@ -544,14 +542,7 @@ struct MasterNode::Impl {
     rep.forward = cycle.forward().report();
     rep.backward = cycle.backward().report();
     rep.rtt_ms = summarize(link.rtt().rtt_ms().snapshot());
-    rep.commands_replaced = command_writer.replaced();
-    rep.command_write_failures = command_writer.failures();
-    rep.states_replaced = state_writer.replaced();
-    event_writer.flush(0.5);
-    rep.events_dropped = event_writer.dropped();
-    rep.write_failures = state_writer.failures() + event_writer.failures() +
-                         (device_command_writer ? device_command_writer->failures() : 0) +
-                         tuning->write_failures();
+    count_network_threads(rep);
     rep.jitter_us = summarize(loop.lateness_us().snapshot());
     {
       std::lock_guard<std::mutex> lock(owner_event_mutex);
@@ -618,6 +609,18 @@ struct MasterNode::Impl {
     }
   }
 
+  /// What the loop's network threads replaced, dropped or saw refused (after the session).
+  void count_network_threads(SessionReport& rep) {
+    rep.commands_replaced = command_writer.replaced();
+    rep.command_write_failures = command_writer.failures();
+    rep.states_replaced = state_writer.replaced();
+    event_writer.flush(0.5);
+    rep.events_dropped = event_writer.dropped();
+    rep.write_failures = state_writer.failures() + event_writer.failures() +
+                         (device_command_writer ? device_command_writer->failures() : 0) +
+                         tuning->write_failures();
+  }
+
   /// Once per session: a warning when another participant wrote the server's topics (a second
   /// server, or a rogue); its samples are ignored and counted for the summary.
   void report_second_server() {
@@ -677,6 +680,7 @@ struct MasterNode::Impl {
       link.send(release);
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
+    command_writer.flush(0.5);  // the releases leave (the network thread writes them) first
     return cycles;
   }
 
@@ -910,7 +914,13 @@ struct MasterNode::Impl {
         static_cast<unsigned long long>(rep.states_replaced),
         static_cast<unsigned long long>(rep.events_dropped),
         static_cast<unsigned long long>(rep.write_failures));
-    return buf;
+    std::string lines = buf;
+    if (options.device == "external") {
+      // teleop/device_state: one driver at a time (DeviceDriverLatch)
+      lines += "  device driver   " + std::to_string(device_driver.ignored()) +
+               " teleop/device_state samples of a second driver ignored\n";
+    }
+    return lines;
   }
 
   /// {"accepting":..,"received":..,"applied":..,"rejected":..,"ignored":..,"dropped":..,

@@ -34,10 +34,11 @@ namespace {
 
 std::string tmp(const std::string& name) { return temp_path("trust", name); }
 
-/// From a master --log: largest rendered force, largest change between cycles, longest gap
-/// between cycles, first cycle with the link lost at or after `after_s`, rows.
+/// From a master --log: largest rendered force, largest change between cycles (overall, and
+/// from `after_s` on between cycles either of which had the link lost), longest gap between cycles,
+/// first cycle with the link lost at or after `after_s`, rows.
 struct Trace {
-  double peak_n = 0.0, max_step_n = 0.0, max_gap_s = 0.0, first_lost_s = -1.0;
+  double peak_n = 0.0, max_step_n = 0.0, window_step_n = 0.0, max_gap_s = 0.0, first_lost_s = -1.0;
   std::size_t rows = 0;
 };
 
@@ -56,6 +57,7 @@ Trace read_trace(const std::string& log, double after_s = 1e300) {
   const int it = col("t_s"), ix = col("fm_x"), il = col("link_ok");
   if (it < 0 || ix < 0 || il < 0) return t;
   double pt = 0, px = 0, py = 0, pz = 0;
+  bool plost = false;
   while (std::getline(in, line)) {
     const std::vector<std::string> f = split_csv_line(line);
     if (f.size() < names.size()) continue;
@@ -63,12 +65,17 @@ Trace read_trace(const std::string& log, double after_s = 1e300) {
     const double time = v(it), x = v(ix), y = v(ix + 1), z = v(ix + 2);
     t.peak_n = std::max(t.peak_n, std::sqrt(x * x + y * y + z * z));
     if (t.rows > 0) {
-      t.max_step_n = std::max(
-          t.max_step_n, std::sqrt((x - px) * (x - px) + (y - py) * (y - py) + (z - pz) * (z - pz)));
+      const double step =
+          std::sqrt((x - px) * (x - px) + (y - py) * (y - py) + (z - pz) * (z - pz));
+      t.max_step_n = std::max(t.max_step_n, step);
+      if (time >= after_s && (v(il) == 0.0 || plost)) {
+        t.window_step_n = std::max(t.window_step_n, step);
+      }
       t.max_gap_s = std::max(t.max_gap_s, time - pt);
     }
     if (t.first_lost_s < 0 && time >= after_s && v(il) == 0.0) t.first_lost_s = time;
     pt = time, px = x, py = y, pz = z;
+    plost = v(il) == 0.0;
     ++t.rows;
   }
   return t;
@@ -258,9 +265,11 @@ TEST(Trust, TcpLinkCutKeepsTheHapticLoopsPeriod) {
   const double rate_hz = json_value(m, "rate_hz");
   std::printf(
       "trust_test TcpLinkCut: longest cycle gap %.1f ms, link lost %.0f ms after the cut, "
-      "largest force change %.4f N per cycle (bound %.0f N/s), %s issued in %.2f s\n",
-      t.max_gap_s * 1e3, (t.first_lost_s - cut_at_s) * 1e3, t.max_step_n, rate_bound,
-      std::to_string(json_value(m, "issued")).c_str(), json_value(m, "duration_s"));
+      "largest force change %.4f N per cycle (%.4f N with the link lost; bound %.0f N/s), %s "
+      "issued "
+      "in %.2f s\n",
+      t.max_gap_s * 1e3, (t.first_lost_s - cut_at_s) * 1e3, t.max_step_n, t.window_step_n,
+      rate_bound, std::to_string(json_value(m, "issued")).c_str(), json_value(m, "duration_s"));
   // the loop kept its period through the cut (generous for a loaded 2-core machine: the loop
   // that waited on TCP froze for the whole cut and more)
   EXPECT_LT(t.max_gap_s, 0.1) << m;
@@ -270,6 +279,9 @@ TEST(Trust, TcpLinkCutKeepsTheHapticLoopsPeriod) {
   EXPECT_LT(t.first_lost_s - cut_at_s, 0.5) << m;
   EXPECT_GE(json_value(m, "link_losses"), 1.0) << m;
   EXPECT_LE(t.max_step_n, 2.0 * rate_bound / rate_hz + 1e-9) << m;
+  // with the link lost the force faded over the link fade (0.2 s), it did not jump to zero: a
+  // tenth of a newton per cycle is generous (a fade of the session's force takes thousandths)
+  EXPECT_LE(t.window_step_n, 0.1) << m;
 }
 
 }  // namespace
