@@ -1,10 +1,10 @@
 #pragma once
 // DdsSlaveLink: the master cycle's link over DDS. send() hands a MasterCommand, stamped with its
-// send time, to the command writer's network thread (dds::LatestWriter: it never waits on the
-// network; when that thread falls behind, the newest command replaces the unwritten one); receive()
-// takes the newest SlaveState from the reader's mailbox, and, as each state echoes the seq and send
-// time of the newest command the server applied, measures the network round trip on the master's
-// own clock (no synchronised clocks needed).
+// send time, to the command writer's network thread (dds::QueuedWriter: it never waits on the
+// network; when the thread is blocked for the ring's length, new commands are dropped, counted);
+// receive() takes the newest SlaveState from the reader's mailbox, and, as each state echoes the
+// seq and send time of the newest command the server applied, measures the network round trip on
+// the master's own clock (no synchronised clocks needed).
 //
 // Ownership (docs/topics.md): every command carries this master's session id and name; each
 // SlaveState says whose session owns the slave and how many of the owner's commands the server
@@ -43,9 +43,12 @@ class DdsSlaveLink final : public SlaveLink {
   };
 
   /// `master_session`: this master's session id (not 0); `master_name`: for the server's events.
-  DdsSlaveLink(dds::LatestWriter<MasterCommandPubSubType>& writer,
-               dds::Mailbox<ReceivedState>& mailbox, std::uint32_t master_session = 1,
-               const std::string& master_name = "")
+  /// The command writer: a ring of kCommandRing commands (a quarter second at 1 kHz).
+  static constexpr std::size_t kCommandRing = 256;
+  using CommandWriter = dds::QueuedWriter<MasterCommandPubSubType, kCommandRing>;
+
+  DdsSlaveLink(CommandWriter& writer, dds::Mailbox<ReceivedState>& mailbox,
+               std::uint32_t master_session = 1, const std::string& master_name = "")
       : writer_(writer), mailbox_(mailbox), rtt_(1 << 20), session_(master_session) {
     message_.master_session(master_session);
     message_.master_name(master_name.substr(0, 48));
@@ -139,7 +142,7 @@ class DdsSlaveLink final : public SlaveLink {
     }
   }
 
-  dds::LatestWriter<MasterCommandPubSubType>& writer_;
+  CommandWriter& writer_;
   dds::Mailbox<ReceivedState>& mailbox_;
   RttTracker rtt_;
   ReceivedState rx_;

@@ -99,9 +99,9 @@ struct SessionReport {
   std::uint64_t releases_sent = 0;         // release commands written at the very end
   std::string owner_message;               // the server's word on who owns the slave
   // the loop's writes, handed to network threads (common/dds/async_writer.hpp)
-  std::uint64_t commands_replaced = 0;  // replaced by a newer one before they were written
+  std::uint64_t commands_dropped = 0;  // found the command ring full (a blocked network thread)
   std::uint64_t command_write_failures = 0;
-  std::uint64_t states_replaced = 0;  // MasterState samples replaced the same way
+  std::uint64_t states_replaced = 0;  // MasterState samples replaced by a newer one unwritten
   std::uint64_t events_dropped = 0;   // events that found the event ring full
   std::uint64_t write_failures = 0;   // refused by the middleware (states, events, device, tuning)
 };
@@ -177,7 +177,7 @@ struct MasterNode::Impl {
   dds::Participant participant;
   // every write of the haptic loop goes through a network thread: it never waits on the
   // network (a TCP link that is cut or congested blocks the DataWriter, not the loop)
-  dds::LatestWriter<MasterCommandPubSubType> command_writer;
+  DdsSlaveLink::CommandWriter command_writer;
   dds::LatestWriter<MasterStatePubSubType> state_writer;
   dds::QueuedWriter<EventPubSubType, 64> event_writer;
   // observers' rate-limited copies of MasterState, written from their own thread: the haptic
@@ -611,7 +611,7 @@ struct MasterNode::Impl {
 
   /// What the loop's network threads replaced, dropped or saw refused (after the session).
   void count_network_threads(SessionReport& rep) {
-    rep.commands_replaced = command_writer.replaced();
+    rep.commands_dropped = command_writer.dropped();
     rep.command_write_failures = command_writer.failures();
     rep.states_replaced = state_writer.replaced();
     event_writer.flush(0.5);
@@ -828,7 +828,7 @@ struct MasterNode::Impl {
         << ", \"overruns\": " << rep.server_overruns << ", \"rejected\": " << rep.server_rejected
         << ", \"restarts\": " << rep.server_restarts << "},\n"
         << "  \"server_binding\": " << binding_json() << ",\n"
-        << "  \"network_threads\": {\"commands_replaced\": " << rep.commands_replaced
+        << "  \"network_threads\": {\"commands_dropped\": " << rep.commands_dropped
         << ", \"command_write_failures\": " << rep.command_write_failures
         << ", \"states_replaced\": " << rep.states_replaced
         << ", \"events_dropped\": " << rep.events_dropped
@@ -900,7 +900,7 @@ struct MasterNode::Impl {
         buf, sizeof(buf),
         "  server binding  %s %s (%llu moves); ignored from other participants: %llu states, "
         "%llu stats, %llu server events%s%s\n"
-        "  network thread  commands: %llu replaced by a newer one, %llu refused; states: %llu "
+        "  network thread  commands: %llu dropped (ring full), %llu refused; states: %llu "
         "replaced; events: %llu dropped; other writes refused: %llu\n",
         binding.bound() ? "bound to" : "never bound, followed", binding.server().c_str(),
         static_cast<unsigned long long>(binding.rebinds()),
@@ -909,7 +909,7 @@ struct MasterNode::Impl {
         static_cast<unsigned long long>(binding.foreign(ServerBinding::kEvent)),
         binding.foreign_total() > 0 ? " (first from " : "",
         binding.foreign_total() > 0 ? (binding.first_foreign() + ")").c_str() : "",
-        static_cast<unsigned long long>(rep.commands_replaced),
+        static_cast<unsigned long long>(rep.commands_dropped),
         static_cast<unsigned long long>(rep.command_write_failures),
         static_cast<unsigned long long>(rep.states_replaced),
         static_cast<unsigned long long>(rep.events_dropped),

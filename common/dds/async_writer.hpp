@@ -14,10 +14,12 @@
 //
 //   LatestWriter: newest-value hand-off (a triple buffer). When the network thread falls behind,
 //                 the newest sample replaces the one not yet written (counted: replaced()):
-//                 for streams whose newest sample is the only one that matters (commands,
-//                 states).
+//                 for topics written at most once a cycle whose newest sample is all that
+//                 matters to their readers (observers' states, the device's commands).
 //   QueuedWriter: a single-producer ring of N samples, written in order. When the ring is full
-//                 the sample is dropped (counted: dropped()): for event logs.
+//                 (the network thread blocked for N samples' time) the sample is dropped
+//                 (counted: dropped()): for streams where each sample counts or several may be
+//                 written in one cycle (commands, slave states, events).
 //
 // One thread calls write() (the producer); the writer's own thread is the only consumer. A
 // write that the middleware refuses is counted (failures()), never silently lost.
@@ -220,7 +222,10 @@ class QueuedWriter {
 
   bool flush(double timeout_s) { return wait_until_flushed(counters_, timeout_s); }
 
+  /// Matched readers now (asks the DataWriter: not from a loop).
   int matched() const { return writer_.matched(); }
+  /// Matched readers as the network thread last saw them (-1 before its first write): for loops.
+  int matched_cached() const { return matched_cache_.load(std::memory_order_relaxed); }
   std::uint64_t handed() const { return counters_.handed.load(); }
   /// Samples dropped because the ring was full.
   std::uint64_t dropped() const { return counters_.skipped.load(); }
@@ -239,10 +244,12 @@ class QueuedWriter {
       tail_.store(tail, std::memory_order_release);
       counters_.processed.fetch_add(1, std::memory_order_release);
     }
+    matched_cache_.store(writer_.matched(), std::memory_order_relaxed);
   }
 
   Writer<PubSub> writer_;
   std::unique_ptr<std::array<Sample, N>> ring_;
+  std::atomic<int> matched_cache_{-1};
   std::atomic<std::uint64_t> head_{0};  // producer's
   std::atomic<std::uint64_t> tail_{0};  // consumer's
   AsyncWriterCounters counters_;

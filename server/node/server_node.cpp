@@ -65,7 +65,7 @@ struct ServerNode::Impl {
   ServerCycle cycle;
   dds::Participant participant;
   // the step loop's writes go through network threads: the loop never waits on the network
-  dds::LatestWriter<SlaveStatePubSubType> state_writer;
+  dds::QueuedWriter<SlaveStatePubSubType, 64> state_writer;
   dds::Writer<SceneDescriptionPubSubType> scene_writer;
   dds::QueuedWriter<EventPubSubType, 128> event_writer;
   dds::Writer<MeshTopologyPubSubType> topology_writer;
@@ -427,7 +427,7 @@ struct ServerNode::Impl {
       << "  \"commands_refused_owner\": " << counters.refused_owner.load() << ",\n"
       << "  \"ownership_changes\": " << ownership_changes << ",\n"
       << "  \"watchdog_trips\": " << cycle.watchdog_trips() << ",\n"
-      << "  \"network_threads\": {\"states_replaced\": " << state_writer.replaced()
+      << "  \"network_threads\": {\"states_dropped\": " << state_writer.dropped()
       << ", \"events_dropped\": " << event_writer.dropped()
       << ", \"write_failures\": " << state_writer.failures() + event_writer.failures() << "},\n"
       << "  \"faults\": " << faults << "\n"
