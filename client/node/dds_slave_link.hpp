@@ -1,7 +1,8 @@
 #pragma once
 // DdsSlaveLink: the master cycle's link over DDS. send() hands a MasterCommand, stamped with its
 // send time, to the command writer's network thread (dds::QueuedWriter: it never waits on the
-// network; when the thread is blocked for the ring's length, new commands are dropped, counted);
+// network; when the thread falls behind by the ring's length, the newest command replaces the
+// unwritten one, counted);
 // receive() takes the newest SlaveState from the reader's mailbox, and, as each state echoes the
 // seq and send time of the newest command the server applied, measures the network round trip on
 // the master's own clock (no synchronised clocks needed).
@@ -43,8 +44,9 @@ class DdsSlaveLink final : public SlaveLink {
   };
 
   /// `master_session`: this master's session id (not 0); `master_name`: for the server's events.
-  /// The command writer: a ring of kCommandRing commands (a quarter second at 1 kHz).
-  static constexpr std::size_t kCommandRing = 256;
+  /// The command writer: a ring of kCommandRing commands (16 ms at 1 kHz: the most queueing
+  /// delay the hand-off adds), then the newest.
+  static constexpr std::size_t kCommandRing = 16;
   using CommandWriter = dds::QueuedWriter<MasterCommandPubSubType, kCommandRing>;
 
   DdsSlaveLink(CommandWriter& writer, dds::Mailbox<ReceivedState>& mailbox,

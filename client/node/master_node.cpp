@@ -99,7 +99,7 @@ struct SessionReport {
   std::uint64_t releases_sent = 0;         // release commands written at the very end
   std::string owner_message;               // the server's word on who owns the slave
   // the loop's writes, handed to network threads (common/dds/async_writer.hpp)
-  std::uint64_t commands_dropped = 0;  // found the command ring full (a blocked network thread)
+  std::uint64_t commands_dropped = 0;  // replaced by a newer one (the network thread behind)
   std::uint64_t command_write_failures = 0;
   std::uint64_t states_replaced = 0;  // MasterState samples replaced by a newer one unwritten
   std::uint64_t events_dropped = 0;   // events that found the event ring full
@@ -526,7 +526,8 @@ struct MasterNode::Impl {
       const ChannelCounters& fw = cycle.forward().counters();
       rep.dropped = fw.lost_random + fw.lost_burst + fw.lost_overflow + fw.lost_window;
     }
-    rep.sent = link.sent();
+    // handed to the network thread and not replaced by a newer command before it was written
+    rep.sent = link.sent() - std::min(link.sent(), command_writer.dropped());
     rep.received = std::min(link.received_in_session(), rep.sent);
     rep.server_faults = update_health();
     if (rep.server_faults > 0) {
@@ -900,7 +901,7 @@ struct MasterNode::Impl {
         buf, sizeof(buf),
         "  server binding  %s %s (%llu moves); ignored from other participants: %llu states, "
         "%llu stats, %llu server events%s%s\n"
-        "  network thread  commands: %llu dropped (ring full), %llu refused; states: %llu "
+        "  network thread  commands: %llu replaced by a newer one, %llu refused; states: %llu "
         "replaced; events: %llu dropped; other writes refused: %llu\n",
         binding.bound() ? "bound to" : "never bound, followed", binding.server().c_str(),
         static_cast<unsigned long long>(binding.rebinds()),

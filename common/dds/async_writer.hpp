@@ -16,10 +16,12 @@
 //                 the newest sample replaces the one not yet written (counted: replaced()):
 //                 for topics written at most once a cycle whose newest sample is all that
 //                 matters to their readers (observers' states, the device's commands).
-//   QueuedWriter: a single-producer ring of N samples, written in order. When the ring is full
-//                 (the network thread blocked for N samples' time) the sample is dropped
-//                 (counted: dropped()): for streams where each sample counts or several may be
-//                 written in one cycle (commands, slave states, events).
+//   QueuedWriter: a single-producer ring of N samples, written in order, so that every sample
+//                 goes out while the thread keeps up (several commands in one cycle, every
+//                 physics step's state). When the ring is full (the thread blocked, or slower
+//                 than the loop) samples go to an overflow slot where the newest replaces the
+//                 unwritten one (counted: dropped()): the thread writes the ring's older samples,
+//                 then the newest, and the queue never holds more than N samples of latency.
 //
 // One thread calls write() (the producer); the writer's own thread is the only consumer. A
 // write that the middleware refuses is counted (failures()), never silently lost.
@@ -55,6 +57,8 @@ class TripleBuffer {
     front_ = old & kIndex;
     return &buffers_[front_];
   }
+  /// Whether a published buffer waits for the consumer (either side may ask).
+  bool pending() const { return (middle_.load(std::memory_order_acquire) & kFresh) != 0; }
   /// Before any publish(): copies `value` into all three buffers (gives them their capacity).
   void fill(const T& value) {
     for (T& b : buffers_) b = value;
@@ -202,19 +206,28 @@ class QueuedWriter {
   /// Before the first write(): gives every slot the capacity of `prototype`.
   void prime(const Sample& prototype) {
     for (Sample& s : *ring_) s = prototype;
+    Stamped p;
+    p.sample = prototype;
+    overflow_.fill(p);
   }
 
-  /// Queues the sample for the network thread; never waits. False (and counted) when the ring
-  /// is full.
+  /// Hands the sample to the network thread; never waits. Into the ring, in order; when the
+  /// ring is full (or the overflow slot still holds a sample), into the overflow slot, where the
+  /// newest sample replaces one not yet written (counted: dropped()). So the thread writes every
+  /// sample while it keeps up, and the newest one next when it falls behind. Always true.
   bool write(const Sample& sample) {
+    const std::uint64_t stamp = ++stamp_;
     const std::uint64_t head = head_.load(std::memory_order_relaxed);
-    if (head - tail_.load(std::memory_order_acquire) >= N) {
-      counters_.skipped.fetch_add(1, std::memory_order_relaxed);
-      counters_.handed.fetch_add(1, std::memory_order_relaxed);
-      return false;
+    if (!overflow_.pending() && head - tail_.load(std::memory_order_acquire) < N) {
+      (*ring_)[head % N] = sample;
+      stamps_[head % N] = stamp;
+      head_.store(head + 1, std::memory_order_release);
+    } else {
+      Stamped& b = overflow_.back();
+      b.stamp = stamp;
+      b.sample = sample;
+      if (overflow_.publish()) counters_.skipped.fetch_add(1, std::memory_order_relaxed);
     }
-    (*ring_)[head % N] = sample;
-    head_.store(head + 1, std::memory_order_release);
     counters_.handed.fetch_add(1, std::memory_order_release);
     thread_.signal();
     return true;
@@ -227,28 +240,49 @@ class QueuedWriter {
   /// Matched readers as the network thread last saw them (-1 before its first write): for loops.
   int matched_cached() const { return matched_cache_.load(std::memory_order_relaxed); }
   std::uint64_t handed() const { return counters_.handed.load(); }
-  /// Samples dropped because the ring was full.
+  /// Samples replaced by a newer one in the overflow slot before the thread could write them.
   std::uint64_t dropped() const { return counters_.skipped.load(); }
   /// Samples the middleware took.
   std::uint64_t written() const { return counters_.processed.load() - counters_.failures.load(); }
   std::uint64_t failures() const { return counters_.failures.load(); }
 
  private:
+  struct Stamped {
+    std::uint64_t stamp = 0;  // hand-off order
+    Sample sample{};
+  };
+
+  void put(Sample& s) {
+    if (!writer_.write(s)) counters_.failures.fetch_add(1, std::memory_order_relaxed);
+    counters_.processed.fetch_add(1, std::memory_order_release);
+  }
+
+  /// In hand-off order: the ring's samples older than the overflow sample, the overflow sample,
+  /// then the rest (the producer fills the ring again only once the overflow slot was taken).
   void drain() {
     std::uint64_t tail = tail_.load(std::memory_order_relaxed);
-    while (tail != head_.load(std::memory_order_acquire)) {
-      if (!writer_.write((*ring_)[tail % N])) {
-        counters_.failures.fetch_add(1, std::memory_order_relaxed);
+    for (;;) {
+      Stamped* y = overflow_.take();
+      while (tail != head_.load(std::memory_order_acquire) &&
+             (y == nullptr || stamps_[tail % N] < y->stamp)) {
+        put((*ring_)[tail % N]);
+        ++tail;
+        tail_.store(tail, std::memory_order_release);
       }
-      ++tail;
-      tail_.store(tail, std::memory_order_release);
-      counters_.processed.fetch_add(1, std::memory_order_release);
+      if (y != nullptr) {
+        put(y->sample);
+        continue;
+      }
+      if (tail == head_.load(std::memory_order_acquire)) break;
     }
     matched_cache_.store(writer_.matched(), std::memory_order_relaxed);
   }
 
   Writer<PubSub> writer_;
   std::unique_ptr<std::array<Sample, N>> ring_;
+  std::array<std::uint64_t, N> stamps_{};
+  TripleBuffer<Stamped> overflow_;
+  std::uint64_t stamp_ = 0;  // producer's
   std::atomic<int> matched_cache_{-1};
   std::atomic<std::uint64_t> head_{0};  // producer's
   std::atomic<std::uint64_t> tail_{0};  // consumer's
