@@ -26,6 +26,7 @@
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <deque>
@@ -34,11 +35,13 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <vector>
 
 #include "client/monitor/monitor_state.hpp"
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
 #include "common/dds/endpoint.hpp"
+#include "common/dds/guid_text.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/dds/observer_topics.hpp"
 #include "common/util/clock.hpp"
@@ -187,10 +190,12 @@ class Readers {
         m_(m),
         snap_(snap),
         table_(table),
-        slave_(p, topics.slave_state.name, topics.slave_state.qos,
-               [this, count_commands = !topics.master_command](const SlaveState& s, const Info&) {
-                 on_slave(s, count_commands);
-               }),
+        slave_(
+            p, topics.slave_state.name, topics.slave_state.qos,
+            [this, count_commands = !topics.master_command](const SlaveState& s, const Info& info) {
+              note_server(info, true);
+              on_slave(s, count_commands);
+            }),
         master_(p, topics.master_state.name, topics.master_state.qos,
                 [this](const MasterState& s, const Info&) {
                   std::lock_guard<std::mutex> l(m_);
@@ -199,7 +204,8 @@ class Readers {
                   table_["master_state"].hit();
                 }),
         stats_(p, tdds::topics::kServerStats, tdds::TopicQos::kReliableStream,
-               [this](const ServerStats& s, const Info&) {
+               [this](const ServerStats& s, const Info& info) {
+                 note_server(info, false);
                  std::lock_guard<std::mutex> l(m_);
                  snap_.stats = s;
                  snap_.have_stats = true;
@@ -221,6 +227,18 @@ class Readers {
   }
 
  private:
+  /// Which participant writes the server's topics: the one whose slave_state is shown is the
+  /// server watched; each other one is counted (a second server or a rogue).
+  void note_server(const Info& info, bool state) {
+    const auto& prefix = info.sample_identity.writer_guid().guidPrefix;
+    std::lock_guard<std::mutex> l(m_);
+    if (std::find(writers_.begin(), writers_.end(), prefix) == writers_.end()) {
+      writers_.push_back(prefix);
+      snap_.servers = static_cast<int>(writers_.size());
+    }
+    if (state) snap_.server = tdds::guid_prefix_text(prefix);
+  }
+
   // without --full-rate, master_command's row is the server's count of commands received
   void on_slave(const SlaveState& s, bool count_commands) {
     std::lock_guard<std::mutex> l(m_);
@@ -264,6 +282,7 @@ class Readers {
   std::mutex& m_;
   Snapshot& snap_;
   TopicTable& table_;
+  std::vector<eprosima::fastrtps::rtps::GuidPrefix_t> writers_;
   bool have_commands_base_ = false;
   std::uint64_t commands_seen_ = 0;
   tdds::Reader<SlaveStatePubSubType> slave_;

@@ -41,9 +41,11 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "client/viewer/gl/gl_api.hpp"
 #define GLFW_INCLUDE_NONE
@@ -64,6 +66,7 @@
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
 #include "common/dds/endpoint.hpp"
+#include "common/dds/guid_text.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/dds/observer_topics.hpp"
 #include "common/util/clock.hpp"
@@ -256,13 +259,19 @@ class ViewerApp {
         [this](const MeshFrame& f, const SampleInfo&) { data_.on_mesh_frame(f); });
     r_slave_ = std::make_unique<teleop::dds::Reader<SlaveStatePubSubType>>(
         p, topics.slave_state.name, topics.slave_state.qos,
-        [this](const SlaveState& s, const SampleInfo&) { data_.on_slave_state(s, now_ns()); });
+        [this](const SlaveState& s, const SampleInfo& info) {
+          note_server(info, true);
+          data_.on_slave_state(s, now_ns());
+        });
     r_master_ = std::make_unique<teleop::dds::Reader<MasterStatePubSubType>>(
         p, topics.master_state.name, topics.master_state.qos,
         [this](const MasterState& s, const SampleInfo&) { data_.on_master_state(s, now_ns()); });
     r_stats_ = std::make_unique<teleop::dds::Reader<ServerStatsPubSubType>>(
         p, teleop::dds::topics::kServerStats, teleop::dds::TopicQos::kReliableStream,
-        [this](const ServerStats& s, const SampleInfo&) { data_.on_server_stats(s, now_ns()); });
+        [this](const ServerStats& s, const SampleInfo& info) {
+          note_server(info, false);
+          data_.on_server_stats(s, now_ns());
+        });
     r_events_ = std::make_unique<teleop::dds::Reader<EventPubSubType>>(
         p, teleop::dds::topics::kEvents, teleop::dds::TopicQos::kEventLog,
         [this](const Event& e, const SampleInfo&) { data_.on_event(e, now_ns()); });
@@ -700,6 +709,11 @@ class ViewerApp {
     if (dt < 1.0) return;
     const viewer::Counters c = data_.counters();
     panel_info_.slave_hz = static_cast<double>(c.slave_states - last_counters_.slave_states) / dt;
+    {
+      std::lock_guard<std::mutex> lock(server_mutex_);
+      panel_info_.server = server_;
+      panel_info_.servers = static_cast<int>(server_writers_.size());
+    }
     panel_info_.master_hz =
         static_cast<double>(c.master_states - last_counters_.master_states) / dt;
     panel_info_.mesh_hz = static_cast<double>(c.frames - last_counters_.frames) / dt;
@@ -758,6 +772,22 @@ class ViewerApp {
   ViewerData data_;
   ViewerView view_;
   std::unique_ptr<teleop::dds::Participant> participant_;
+  // which server the viewer watches (the participant writing slave_state), and every participant
+  // that wrote the server's topics (reader threads)
+  std::mutex server_mutex_;
+  std::string server_;
+  std::vector<eprosima::fastrtps::rtps::GuidPrefix_t> server_writers_;
+
+  void note_server(const eprosima::fastdds::dds::SampleInfo& info, bool state) {
+    const auto& prefix = info.sample_identity.writer_guid().guidPrefix;
+    std::lock_guard<std::mutex> lock(server_mutex_);
+    if (std::find(server_writers_.begin(), server_writers_.end(), prefix) ==
+        server_writers_.end()) {
+      server_writers_.push_back(prefix);
+    }
+    if (state) server_ = teleop::dds::guid_prefix_text(prefix);
+  }
+
   std::unique_ptr<teleop::dds::Reader<SceneDescriptionPubSubType>> r_scene_;
   std::unique_ptr<teleop::dds::Reader<MeshTopologyPubSubType>> r_topology_;
   std::unique_ptr<teleop::dds::Reader<MeshFramePubSubType>> r_frames_;

@@ -57,7 +57,9 @@ std::string Snapshot::status() const {
   const TopicView* st = topic("slave_state");
   if (!st || !st->seen()) return "server present, no slave_state yet";
   if (st->stale()) return fmt("STALE: no slave_state for %.1f s (server gone?)", st->age_s);
-  return "LIVE";
+  std::string live = server.empty() ? "LIVE" : "LIVE: server " + server;
+  if (servers > 1) live += fmt("; WARNING: %d participants write the server's topics", servers);
+  return live;
 }
 
 const char* event_kind(std::uint8_t k) {

@@ -45,6 +45,11 @@ struct Snapshot {
   MasterState master;
   ServerStats stats;
   std::deque<EventView> events;  ///< newest last
+  /// The server watched: GUID prefix of the participant whose slave_state is shown ("" none),
+  /// and how many participants have written slave_state or server_stats (more than one: a
+  /// second server or a rogue on this domain).
+  std::string server;
+  int servers = 0;
 
   const TopicView* topic(const std::string& name) const;
   /// Nothing from a server yet (no slave_state, server_stats or scene).

@@ -1,8 +1,11 @@
 #pragma once
-// DdsSlaveLink: the master cycle's link over DDS. send() writes a MasterCommand stamped with
-// its DDS write time; receive() takes the newest SlaveState from the reader's mailbox, and, as
-// each state echoes the seq and send time of the newest command the server applied, measures
-// the network round trip on the master's own clock (no synchronised clocks needed).
+// DdsSlaveLink: the master cycle's link over DDS. send() hands a MasterCommand, stamped with its
+// send time, to the command writer's network thread (dds::QueuedWriter: it never waits on the
+// network; when the thread falls behind by the ring's length, the newest command replaces the
+// unwritten one, counted);
+// receive() takes the newest SlaveState from the reader's mailbox, and, as each state echoes the
+// seq and send time of the newest command the server applied, measures the network round trip on
+// the master's own clock (no synchronised clocks needed).
 //
 // Ownership (docs/topics.md): every command carries this master's session id and name; each
 // SlaveState says whose session owns the slave and how many of the owner's commands the server
@@ -17,6 +20,7 @@
 #include "client/cycle/slave_link.hpp"
 #include "client/node/rtt.hpp"
 #include "client/node/server_health.hpp"
+#include "common/dds/async_writer.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
@@ -40,11 +44,17 @@ class DdsSlaveLink final : public SlaveLink {
   };
 
   /// `master_session`: this master's session id (not 0); `master_name`: for the server's events.
-  DdsSlaveLink(dds::Writer<MasterCommandPubSubType>& writer, dds::Mailbox<ReceivedState>& mailbox,
+  /// The command writer: a ring of kCommandRing commands (16 ms at 1 kHz: the most queueing
+  /// delay the hand-off adds), then the newest.
+  static constexpr std::size_t kCommandRing = 16;
+  using CommandWriter = dds::QueuedWriter<MasterCommandPubSubType, kCommandRing>;
+
+  DdsSlaveLink(CommandWriter& writer, dds::Mailbox<ReceivedState>& mailbox,
                std::uint32_t master_session = 1, const std::string& master_name = "")
       : writer_(writer), mailbox_(mailbox), rtt_(1 << 20), session_(master_session) {
     message_.master_session(master_session);
     message_.master_name(master_name.substr(0, 48));
+    writer_.prime(message_);  // the hand-off buffers get the name's capacity now, not in the loop
   }
 
   /// Takes the newest state already waiting (before the session starts): the baseline of the
@@ -56,7 +66,7 @@ class DdsSlaveLink final : public SlaveLink {
   }
 
   void send(const SlaveCommand& command) override {
-    // send time = DDS write time: the echo gives the network round trip
+    // send time = hand-off time: the echo gives the network round trip
     to_idl(command, now_ns(), message_);
     if (!writer_.write(message_)) return;
     if (command.release) {
@@ -134,7 +144,7 @@ class DdsSlaveLink final : public SlaveLink {
     }
   }
 
-  dds::Writer<MasterCommandPubSubType>& writer_;
+  CommandWriter& writer_;
   dds::Mailbox<ReceivedState>& mailbox_;
   RttTracker rtt_;
   ReceivedState rx_;

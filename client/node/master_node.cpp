@@ -24,8 +24,10 @@
 #include "client/metrics/session_metrics.hpp"
 #include "client/net/delay_channel.hpp"
 #include "client/node/dds_slave_link.hpp"
+#include "client/node/server_binding.hpp"
 #include "client/node/server_health.hpp"
 #include "client/node/tuning_endpoint.hpp"
+#include "common/dds/async_writer.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/dds/rate_limited_publisher.hpp"
 #include "common/dds/teleop_idl.hpp"
@@ -100,6 +102,12 @@ struct SessionReport {
   std::uint64_t closing_cycles = 0;        // cycles of the final fade-out (after --samples)
   std::uint64_t releases_sent = 0;         // release commands written at the very end
   std::string owner_message;               // the server's word on who owns the slave
+  // the loop's writes, handed to network threads (common/dds/async_writer.hpp)
+  std::uint64_t commands_dropped = 0;  // replaced by a newer one (the network thread behind)
+  std::uint64_t command_write_failures = 0;
+  std::uint64_t states_replaced = 0;  // MasterState samples replaced by a newer one unwritten
+  std::uint64_t events_dropped = 0;   // events that found the event ring full
+  std::uint64_t write_failures = 0;   // refused by the middleware (states, events, device, tuning)
 };
 
 /// The link's figures of a session, as the verdict judges them.
@@ -165,10 +173,17 @@ struct OwnershipWatch {
 
 struct MasterNode::Impl {
   MasterOptions options;
+  // this master's session id; the one server it believes (SlaveState, ServerStats, server
+  // events): declared before the readers whose threads use it
+  std::uint32_t master_session = static_cast<std::uint32_t>(now_ns() >> 10) | 1u;
+  ServerBinding binding{master_session,
+                        static_cast<std::int64_t>(options.safety.link_timeout_s * 1e9)};
   dds::Participant participant;
-  dds::Writer<MasterCommandPubSubType> command_writer;
-  dds::Writer<MasterStatePubSubType> state_writer;
-  dds::Writer<EventPubSubType> event_writer;
+  // every write of the haptic loop goes through a network thread: it never waits on the
+  // network (a TCP link that is cut or congested blocks the DataWriter, not the loop)
+  DdsSlaveLink::CommandWriter command_writer;
+  dds::LatestWriter<MasterStatePubSubType> state_writer;
+  dds::QueuedWriter<EventPubSubType, 64> event_writer;
   // observers' rate-limited copies of MasterState, written from their own thread: the haptic
   // loop's cost does not grow with the number of observers (docs/topics.md)
   dds::RateLimitedPublisher<MasterStatePubSubType> state_views;
@@ -178,7 +193,7 @@ struct MasterNode::Impl {
   std::unique_ptr<dds::Reader<SlaveStatePubSubType>> state_reader;
   std::unique_ptr<dds::Reader<SceneDescriptionPubSubType>> scene_reader;
   // external device transport (only with --device external)
-  std::unique_ptr<dds::Writer<DeviceCommandPubSubType>> device_command_writer;
+  std::unique_ptr<dds::LatestWriter<DeviceCommandPubSubType>> device_command_writer;
   std::unique_ptr<dds::Reader<DeviceStatePubSubType>> device_state_reader;
   dds::Mailbox<DeviceState> device_box;
   DeviceDriverLatch device_driver;  // one driver at a time on teleop/device_state
@@ -193,10 +208,10 @@ struct MasterNode::Impl {
   std::atomic<std::uint64_t> server_fault_events{0};
   ServerHealth health;
   std::uint64_t stats_seen = 0;
-  // ownership: this master's session id, and the newest server event about it
-  std::uint32_t master_session = static_cast<std::uint32_t>(now_ns() >> 10) | 1u;
+  // ownership: the newest server event about this master's session
   std::mutex owner_event_mutex;
   std::string owner_event;
+  bool second_server_reported = false;
 
   std::unique_ptr<TuningEndpoint> tuning;  // live tuning (teleop/tuning, teleop/tuning_status)
   double waited_s = 0.0;  // time run() waited for the server before returning kReconnect
@@ -214,10 +229,19 @@ struct MasterNode::Impl {
     dds::ProfileKind kind = dds::ProfileKind::kUdp;
     (void)dds::participant_qos(o.dds, &kind);
     tcp_client = kind == dds::ProfileKind::kTcp;
+    Event
+        event_prototype;  // the strings' capacity: the loop's copies into the ring do not allocate
+    event_prototype.source(std::string(32, ' '));
+    event_prototype.message(std::string(256, ' '));
+    event_writer.prime(event_prototype);
 
     state_reader = std::make_unique<dds::Reader<SlaveStatePubSubType>>(
         participant, dds::topics::kSlaveState, dds::TopicQos::kStream,
-        [this](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo&) {
+        [this](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo& info) {
+          if (!binding.accept_state(info.sample_identity.writer_guid().guidPrefix,
+                                    s.owner_session(), s.owner_active(), now_ns())) {
+            return;  // another participant's: counted by the binding
+          }
           states_received.fetch_add(1);
           mailbox.put(ReceivedState{s, now_ns()});
         });
@@ -228,12 +252,21 @@ struct MasterNode::Impl {
         });
     stats_reader = std::make_unique<dds::Reader<ServerStatsPubSubType>>(
         participant, dds::topics::kServerStats, dds::TopicQos::kReliableStream,
-        [this](const ServerStats& s, const eprosima::fastdds::dds::SampleInfo&) {
-          stats_box.put(s);
+        [this](const ServerStats& s, const eprosima::fastdds::dds::SampleInfo& info) {
+          if (binding.accept(ServerBinding::kStats,
+                             info.sample_identity.writer_guid().guidPrefix)) {
+            stats_box.put(s);
+          }
         });
     events_reader = std::make_unique<dds::Reader<EventPubSubType>>(
         participant, dds::topics::kEvents, dds::TopicQos::kEventLog,
-        [this](const Event& e, const eprosima::fastdds::dds::SampleInfo&) {
+        [this](const Event& e, const eprosima::fastdds::dds::SampleInfo& info) {
+          // the server's events only from the server this master is bound to
+          if (e.source() == "server" &&
+              !binding.accept(ServerBinding::kEvent,
+                              info.sample_identity.writer_guid().guidPrefix)) {
+            return;
+          }
           // a fault on the server during this session (the event log's history from before
           // the session arrives earlier and is not counted)
           if (e.source() == "server" &&
@@ -253,7 +286,7 @@ struct MasterNode::Impl {
         });
     tuning = std::make_unique<TuningEndpoint>(participant, master_session, o.accept_tuning);
     if (o.device == "external") {
-      device_command_writer = std::make_unique<dds::Writer<DeviceCommandPubSubType>>(
+      device_command_writer = std::make_unique<dds::LatestWriter<DeviceCommandPubSubType>>(
           participant, "teleop/device_command", dds::TopicQos::kStream);
       device_state_reader = std::make_unique<dds::Reader<DeviceStatePubSubType>>(
           participant, "teleop/device_state", dds::TopicQos::kStream,
@@ -504,7 +537,8 @@ struct MasterNode::Impl {
       const ChannelCounters& fw = cycle.forward().counters();
       rep.dropped = fw.lost_random + fw.lost_burst + fw.lost_overflow + fw.lost_window;
     }
-    rep.sent = link.sent();
+    // handed to the network thread and not replaced by a newer command before it was written
+    rep.sent = link.sent() - std::min(link.sent(), command_writer.dropped());
     rep.received = std::min(link.received_in_session(), rep.sent);
     rep.server_faults = update_health();
     if (rep.server_faults > 0) {
@@ -520,6 +554,7 @@ struct MasterNode::Impl {
     rep.forward = cycle.forward().report();
     rep.backward = cycle.backward().report();
     rep.rtt_ms = summarize(link.rtt().rtt_ms().snapshot());
+    count_network_threads(rep);
     rep.jitter_us = summarize(loop.lateness_us().snapshot());
     {
       std::lock_guard<std::mutex> lock(owner_event_mutex);
@@ -586,6 +621,31 @@ struct MasterNode::Impl {
     }
   }
 
+  /// What the loop's network threads replaced, dropped or saw refused (after the session).
+  void count_network_threads(SessionReport& rep) {
+    rep.commands_dropped = command_writer.dropped();
+    rep.command_write_failures = command_writer.failures();
+    rep.states_replaced = state_writer.replaced();
+    event_writer.flush(0.5);
+    rep.events_dropped = event_writer.dropped();
+    rep.write_failures = state_writer.failures() + event_writer.failures() +
+                         (device_command_writer ? device_command_writer->failures() : 0) +
+                         tuning->write_failures();
+  }
+
+  /// Once per session: a warning when another participant wrote the server's topics (a second
+  /// server, or a rogue); its samples are ignored and counted for the summary.
+  void report_second_server() {
+    if (second_server_reported || binding.foreign_total() == 0) return;
+    second_server_reported = true;
+    event(static_cast<std::uint8_t>(sim::EventKind::kOwnership), 1,
+          "ignoring teleop/slave_state, server_stats and server events from a second "
+          "participant (" +
+              binding.first_foreign() + "): this master is bound to server " + binding.server() +
+              "; all such samples are counted in the summary",
+          static_cast<double>(binding.foreign_total()));
+  }
+
   /// A cycle that begins this long after the previous one is a stall of this master's own loop
   /// (the process was stopped, starved or swapped out): the device held its last force meanwhile
   /// [s]. Far above any overrun of a loaded machine (tens of ms).
@@ -632,6 +692,7 @@ struct MasterNode::Impl {
       link.send(release);
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
+    command_writer.flush(0.5);  // the releases leave (the network thread writes them) first
     return cycles;
   }
 
@@ -725,6 +786,7 @@ struct MasterNode::Impl {
         device_command_writer->write(dc);
       }
       watch_ownership(cycle, link, now_s, t0_s, grace_s, owner);
+      report_second_server();
       cycle.finish(now_s);
       // a session whose slave faulted is never stable
       if (const std::uint64_t faults = update_health(); faults > faults_seen) {
@@ -780,6 +842,12 @@ struct MasterNode::Impl {
         << ", \"watchdog_trips\": " << rep.server_watchdog_trips
         << ", \"overruns\": " << rep.server_overruns << ", \"rejected\": " << rep.server_rejected
         << ", \"restarts\": " << rep.server_restarts << "},\n"
+        << "  \"server_binding\": " << binding_json() << ",\n"
+        << "  \"network_threads\": {\"commands_dropped\": " << rep.commands_dropped
+        << ", \"command_write_failures\": " << rep.command_write_failures
+        << ", \"states_replaced\": " << rep.states_replaced
+        << ", \"events_dropped\": " << rep.events_dropped
+        << ", \"write_failures\": " << rep.write_failures << "},\n"
         << "  \"force_error_relative\": " << json_number(relative_force_error(metrics)) << ",\n"
         << "  \"echoed\": " << rep.echoed << ",\n"
         << "  \"states_received\": " << rep.states_received << ",\n"
@@ -824,6 +892,49 @@ struct MasterNode::Impl {
         << json_escape(rep.owner_message) << "\"}\n"
         << "}\n";
     write_text_file(options.summary_json, out.str());
+  }
+
+  /// {"server": prefix, "bound":.., "rebinds":.., "foreign": {"states":.., "stats":..,
+  /// "events":..}, "first_foreign": prefix}: which server this master believed, and what it
+  /// ignored from other participants.
+  std::string binding_json() const {
+    return "{\"server\": \"" + binding.server() +
+           "\", \"bound\": " + (binding.bound() ? "true" : "false") +
+           ", \"rebinds\": " + std::to_string(binding.rebinds()) +
+           ", \"foreign\": {\"states\": " + std::to_string(binding.foreign(ServerBinding::kState)) +
+           ", \"stats\": " + std::to_string(binding.foreign(ServerBinding::kStats)) +
+           ", \"events\": " + std::to_string(binding.foreign(ServerBinding::kEvent)) +
+           "}, \"first_foreign\": \"" + binding.first_foreign() + "\"}";
+  }
+
+  /// The summary's lines on the server binding and the loop's network threads.
+  std::string binding_lines(const SessionReport& rep) const {
+    char buf[512];
+    std::snprintf(
+        buf, sizeof(buf),
+        "  server binding  %s %s (%llu moves); ignored from other participants: %llu states, "
+        "%llu stats, %llu server events%s%s\n"
+        "  network thread  commands: %llu replaced by a newer one, %llu refused; states: %llu "
+        "replaced; events: %llu dropped; other writes refused: %llu\n",
+        binding.bound() ? "bound to" : "never bound, followed", binding.server().c_str(),
+        static_cast<unsigned long long>(binding.rebinds()),
+        static_cast<unsigned long long>(binding.foreign(ServerBinding::kState)),
+        static_cast<unsigned long long>(binding.foreign(ServerBinding::kStats)),
+        static_cast<unsigned long long>(binding.foreign(ServerBinding::kEvent)),
+        binding.foreign_total() > 0 ? " (first from " : "",
+        binding.foreign_total() > 0 ? (binding.first_foreign() + ")").c_str() : "",
+        static_cast<unsigned long long>(rep.commands_dropped),
+        static_cast<unsigned long long>(rep.command_write_failures),
+        static_cast<unsigned long long>(rep.states_replaced),
+        static_cast<unsigned long long>(rep.events_dropped),
+        static_cast<unsigned long long>(rep.write_failures));
+    std::string lines = buf;
+    if (options.device == "external") {
+      // teleop/device_state: one driver at a time (DeviceDriverLatch)
+      lines += "  device driver   " + std::to_string(device_driver.ignored()) +
+               " teleop/device_state samples of a second driver ignored\n";
+    }
+    return lines;
   }
 
   /// {"accepting":..,"received":..,"applied":..,"rejected":..,"ignored":..,"dropped":..,
@@ -884,6 +995,7 @@ struct MasterNode::Impl {
                     v.slave_stiffness_n_per_m, v.forward_delay_s * 1e3, v.backward_delay_s * 1e3);
       tuning_line = buf;
     }
+    tuning_line += binding_lines(rep);
     const SessionVerdict verdict = session_verdict(metrics, rep, cycle.config().controller.scheme);
     const std::string& reason = verdict.reason;
     char text[8192];

@@ -17,6 +17,11 @@ TuningEndpoint::TuningEndpoint(dds::Participant& participant, std::uint32_t mast
     : master_session_(master_session),
       accepting_(accepting),
       status_writer_(participant, dds::topics::kTuningStatus, dds::TopicQos::kLatched) {
+  TuningStatus prototype;  // the strings' capacity, so that the loop's copies do not allocate
+  prototype.scheme(std::string(32, ' '));
+  prototype.request_source(std::string(32, ' '));
+  prototype.message(std::string(256, ' '));
+  status_writer_.prime(prototype);
   if (!accepting_) return;
   reader_ = std::make_unique<dds::Reader<TuningRequestPubSubType>>(
       participant, dds::topics::kTuning, dds::TopicQos::kReliableStream,

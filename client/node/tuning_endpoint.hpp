@@ -16,6 +16,7 @@
 #include <string>
 
 #include "client/control/tuning.hpp"
+#include "common/dds/async_writer.hpp"
 #include "common/dds/endpoint.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
 
@@ -31,6 +32,8 @@ class TuningEndpoint {
 
   /// Publishes the status: the values in force in `cycle`, its bounds, the newest answer.
   void publish_status(const MasterCycle& cycle, std::int64_t now_ns);
+  /// Status writes the middleware refused.
+  std::uint64_t write_failures() const { return status_writer_.failures(); }
 
   /// Applies the queued requests to `cycle` at `now_s`; calls `report(severity, message)` once
   /// per request handled (severity 0 applied, 1 rejected) and republishes the status. Returns
@@ -54,7 +57,8 @@ class TuningEndpoint {
 
   std::uint32_t master_session_;
   bool accepting_;
-  dds::Writer<TuningStatusPubSubType> status_writer_;
+  // the status is answered from the haptic loop: written by the writer's network thread
+  dds::LatestWriter<TuningStatusPubSubType> status_writer_;
   std::unique_ptr<dds::Reader<TuningRequestPubSubType>> reader_;
   std::mutex mutex_;
   static constexpr std::size_t kQueue = 16;

@@ -8,7 +8,9 @@
 #include <sstream>
 #include <vector>
 
+#include "common/dds/async_writer.hpp"
 #include "common/dds/endpoint.hpp"
+#include "common/dds/guid_text.hpp"
 #include "common/dds/rate_limited_publisher.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
@@ -63,9 +65,10 @@ struct ServerNode::Impl {
   const sim::WorldModel& model;
   ServerCycle cycle;
   dds::Participant participant;
-  dds::Writer<SlaveStatePubSubType> state_writer;
+  // the step loop's writes go through network threads: the loop never waits on the network
+  dds::QueuedWriter<SlaveStatePubSubType, 64> state_writer;
   dds::Writer<SceneDescriptionPubSubType> scene_writer;
-  dds::Writer<EventPubSubType> event_writer;
+  dds::QueuedWriter<EventPubSubType, 128> event_writer;
   dds::Writer<MeshTopologyPubSubType> topology_writer;
   dds::Writer<MeshFramePubSubType> frame_writer;
   dds::Writer<MeshFramePubSubType> frame_monitor_writer;
@@ -118,6 +121,15 @@ struct ServerNode::Impl {
         gate(m.workspace_min_m, m.workspace_max_m,
              static_cast<std::int64_t>(std::llround(o.owner_timeout_s * 1e9))) {
     scratch.reserve(step_us.capacity());
+    SlaveState state_prototype;  // the sequences' capacity: the loop's copies do not allocate
+    state_prototype.joint_position_rad().assign(16, 0.0);
+    state_prototype.joint_velocity_radps().assign(16, 0.0);
+    state_prototype.joint_torque_nm().assign(16, 0.0);
+    state_writer.prime(state_prototype);
+    Event event_prototype;
+    event_prototype.source(std::string(32, ' '));
+    event_prototype.message(std::string(256, ' '));
+    event_writer.prime(event_prototype);
     command_reader = std::make_unique<dds::Reader<MasterCommandPubSubType>>(
         participant, dds::topics::kMasterCommand, dds::TopicQos::kStream,
         [this](const MasterCommand& c, const eprosima::fastdds::dds::SampleInfo& info) {
@@ -189,8 +201,10 @@ struct ServerNode::Impl {
     scene_writer.write(d);
     sim::SimEvent start{};
     std::snprintf(start.message, sizeof(start.message),
-                  "server started: scene '%s', %.0f Hz, domain %d, profile %s", model.name.c_str(),
-                  options.rate_hz, options.dds.domain, options.dds.profile.c_str());
+                  "server started: scene '%s', %.0f Hz, domain %d, profile %s, participant %s",
+                  model.name.c_str(), options.rate_hz, options.dds.domain,
+                  options.dds.profile.c_str(),
+                  dds::guid_prefix_text(participant.raw()->guid().guidPrefix).c_str());
     publish_event(start);
     if (!options.quiet) std::cerr << "teleop_server: " << start.message << "\n";
     for (const sim::DeformableBodyModel& b : model.bodies) {
@@ -292,7 +306,7 @@ struct ServerNode::Impl {
     st.commands_rejected_stale(counters.rejected_stale.load());
     st.watchdog_trips(cycle.watchdog_trips());
     st.faults(faults);
-    st.matched_state_readers(state_writer.matched());
+    st.matched_state_readers(state_writer.matched_cached());  // never waits on the writer
     st.matched_command_writers(command_reader->matched());
     st.commands_rejected_passivity(counters.rejected_passivity.load());
     st.commands_refused_owner(counters.refused_owner.load());
@@ -354,6 +368,8 @@ struct ServerNode::Impl {
       loop.wait();
     }
     command_reader->stop();
+    state_writer.flush(0.5);  // what the loop handed over goes out before the summary
+    event_writer.flush(0.5);
     finish(loop, seconds_between(t_start, now_ns()));
     return 0;
   }
@@ -420,6 +436,9 @@ struct ServerNode::Impl {
       << "  \"commands_refused_owner\": " << counters.refused_owner.load() << ",\n"
       << "  \"ownership_changes\": " << ownership_changes << ",\n"
       << "  \"watchdog_trips\": " << cycle.watchdog_trips() << ",\n"
+      << "  \"network_threads\": {\"states_dropped\": " << state_writer.dropped()
+      << ", \"events_dropped\": " << event_writer.dropped()
+      << ", \"write_failures\": " << state_writer.failures() + event_writer.failures() << "},\n"
       << "  \"faults\": " << faults << "\n"
       << "}\n";
     write_text_file(options.summary_json, f.str());

@@ -64,12 +64,17 @@ inline constexpr int kBadScenes = 101;          // bad_scene_test: refused scene
 inline constexpr int kSubstepScene = 102;       // bad_scene_test: a scene that sub-steps runs
 inline constexpr int kMalformedCommands = 103;  // bad_scene_test: malformed command payloads
 // kExperiment3 + 20 = 67: the unstable-loop test; + 21 = 68: the external device test
-inline constexpr int kOwnerRefused = 140;  // ownership_test: a second master is refused
-inline constexpr int kOwnerRelease = 141;  // ownership_test: a waiting master after a release
-inline constexpr int kOwnerKilled = 142;   // ownership_test: the owner killed, taken over
-inline constexpr int kOwnerRestart = 143;  // ownership_test: server restart mid-contact
-// 144-149: reserved for ownership tests; 150-159, 160-169: transparency and contact tests
+inline constexpr int kOwnerRefused = 140;      // ownership_test: a second master is refused
+inline constexpr int kOwnerRelease = 141;      // ownership_test: a waiting master after a release
+inline constexpr int kOwnerKilled = 142;       // ownership_test: the owner killed, taken over
+inline constexpr int kOwnerRestart = 143;      // ownership_test: server restart mid-contact
+inline constexpr int kRogueBaseline = 144;     // trust_test: the session without a rogue
+inline constexpr int kRogueParticipant = 145;  // trust_test: forged states, stats and events
+inline constexpr int kTcpLinkCut = 146;        // trust_test: wan_tcp, the master's link cut
+inline constexpr int kAsyncWriterUnit = 147;   // async_writer_test: 147, 148
+// 149: reserved for ownership tests; 150-159, 160-169: transparency and contact tests
 // 170: smoke.bench-observers-live (tests/CMakeLists.txt: teleop_bench observers --live)
 // 171: tests/bench/bridge_load.sh
+// 173: tests/bench/tcp_link_cut.sh (in network namespaces of its own)
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains

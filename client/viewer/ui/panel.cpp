@@ -186,6 +186,11 @@ void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& lay
   ImGui::Begin("teleop_viewer##panel", nullptr, flags);
 
   ImGui::Text("teleop_viewer   domain %d   %s", info.domain, info.profile.c_str());
+  if (!info.server.empty()) ImGui::Text("server %s", info.server.c_str());
+  if (info.servers > 1) {
+    ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.3f, 1.0f), "%d participants write the server's topics",
+                       info.servers);
+  }
   if (view.have_scene()) {
     ImGui::Text("scene '%s'  %u joints  %lu objects", view.scene.name().c_str(),
                 view.scene.joint_count(), static_cast<unsigned long>(view.scene.objects().size()));

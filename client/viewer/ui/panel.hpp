@@ -13,7 +13,9 @@ namespace teleop::viewer {
 struct PanelInfo {
   int domain = 0;
   std::string profile;
-  double now_s = 0.0;       ///< plot clock [s since the viewer started]
+  std::string server;  ///< GUID prefix of the server watched ("" none yet)
+  int servers = 0;     ///< participants that wrote the server's topics (more than 1: a warning)
+  double now_s = 0.0;  ///< plot clock [s since the viewer started]
   double history_s = 10.0;  ///< plot window [s]
   // receive rates of the last second [Hz]
   double slave_hz = 0.0, master_hz = 0.0, mesh_hz = 0.0, stats_hz = 0.0;
