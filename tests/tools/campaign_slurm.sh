@@ -131,14 +131,17 @@ sweeps:
     stiffness_n_per_m: 2000
     delay_ms: [0, 40]
 EOF
+t0="$(date +%s.%N)"
 "$campaign" run "$tmp/small.yaml" --out "$tmp/local" --no-chart --jobs 2 >/dev/null ||
   fail "local run failed"
+t1="$(date +%s.%N)"
 "$campaign" slurm "$tmp/small.yaml" --out "$tmp/cluster" --shards 4 --submit ||
   { show_logs; fail "teleop_campaign slurm --submit failed"; }
 for _ in $(seq 200); do
   [ -f "$tmp/cluster/results.csv" ] && [ -z "$(squeue -h 2>/dev/null)" ] && break
   sleep 0.2
 done
+t2="$(date +%s.%N)"
 [ -f "$tmp/cluster/results.csv" ] || { show_logs; cat "$tmp"/cluster/slurm/*.out; squeue; fail "the merge job wrote no table"; }
 tasks="$(ls "$tmp"/cluster/slurm/*_*.out 2>/dev/null | grep -vc merge_)"
 [ "$tasks" = 4 ] || fail "expected 4 array task logs, found $tasks"
@@ -146,4 +149,6 @@ runs="$(ls "$tmp"/cluster/runs | wc -l)"
 [ "$runs" = 8 ] || fail "expected 8 run files, found $runs"
 cmp "$tmp/local/results.csv" "$tmp/cluster/results.csv" ||
   fail "the table made through Slurm differs from the local one"
+echo "wall time, same 8 runs: local (2 threads) $(echo "$t2 $t1 $t0" | awk '{printf "%.2f", $2 - $3}') s;" \
+  "through Slurm (submit, 4 array tasks, merge job) $(echo "$t2 $t1" | awk '{printf "%.2f", $1 - $2}') s"
 echo "PASS: 8 runs in 4 array tasks + merge job: the table equals the local run's byte for byte"

@@ -263,5 +263,44 @@ TEST(CampaignRun, AWorldRunHomesTheRobotAndPressesTheSphere) {
   EXPECT_EQ(at("watchdog_trips"), "0");
 }
 
+TEST_F(CampaignDir, WorldRunsOnTwoThreadsGiveTheRowsOfOne) {
+  const std::string scene = std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml";
+  const Campaign c = parse_campaign(
+      "name: w2\nmodel: world\nduration_s: 0.5\nhoming_s: 0.3\n"
+      "sweeps:\n  - name: s\n    scene: " +
+          scene +
+          "\n    scheme: [force-position, position-position]\n"
+          "    delay_ms: [0, 20]\n",
+      "w2.yaml");
+  RunOptions o;
+  o.out_dir = path("two");
+  o.jobs = 2;
+  run_campaign(c, o);
+  o.out_dir = path("one");
+  o.jobs = 1;
+  run_campaign(c, o);
+  ASSERT_EQ(merge_runs(path("one")).missing, 0u);
+  ASSERT_EQ(merge_runs(path("two")).missing, 0u);
+  EXPECT_EQ(read(path("two/results.csv")), read(path("one/results.csv")));
+  EXPECT_EQ(read(path("one/results.csv")).find(",error,"), std::string::npos);
+}
+
+TEST_F(CampaignDir, TheProgressLineCountsRunsAndGivesAnEta) {
+  const Campaign c = parse_campaign(kSmall, "small.yaml");
+  RunOptions o;
+  o.out_dir = path("p");
+  o.jobs = 2;
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  o.progress = f;
+  run_campaign(c, o);
+  std::rewind(f);
+  std::string text;
+  for (int ch; (ch = std::fgetc(f)) != EOF;) text += static_cast<char>(ch);
+  std::fclose(f);
+  EXPECT_NE(text.find("10/10 runs (100.0 %)"), std::string::npos) << text;
+  EXPECT_NE(text.find("ETA"), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace teleop::campaign
