@@ -38,6 +38,11 @@ Y_AXES = [("gain", "gain (K_pm = K_ps [N/m] or K_f [-])"), ("stiffness_n_per_m",
           ("seed", "seed")]
 
 
+def style(verdict):
+    """Marker and colour of a verdict (a verdict this script does not know: grey plus)."""
+    return STYLE.get(verdict, ("P", "tab:gray"))
+
+
 def f(v):
     return float(v) if v not in ("", "-") else math.nan
 
@@ -54,55 +59,74 @@ def y_axis(rows):
     return None, ""
 
 
+def panel(ax, scheme, sweep, sel, legend):
+    """One stability panel: the runs of one (scheme, sweep); `legend`: the verdicts to list."""
+    key, label = y_axis(sel)
+    ys = [f(r[key]) if key else 0.0 for r in sel]
+    xs = [f(r["delay_ms"]) for r in sel]
+    if any(r.get("theory_stable", "-1") != "-1" for r in sel):
+        for want, shade in (("1", "#c8ecc8"), ("0", "#f6c8c8")):
+            pts = [(x, y) for r, x, y in zip(sel, xs, ys) if r["theory_stable"] == want]
+            if pts:
+                ax.scatter([p[0] for p in pts], [p[1] for p in pts], marker="s", s=110, c=shade,
+                           zorder=1, linewidths=0)
+        margin = defaultdict(lambda: math.inf)
+        for r, y in zip(sel, ys):
+            margin[y] = min(margin[y], f(r["analytic_margin_ms"]))
+        line = sorted((y, m) for y, m in margin.items() if math.isfinite(m))
+        if line:
+            ax.plot([m for _, m in line], [y for y, _ in line], "k-", lw=1,
+                    label="first delay margin", zorder=2)
+    for verdict in dict.fromkeys(list(STYLE) + [r["verdict"] for r in sel]):
+        marker, color = style(verdict)
+        pts = [(x, y) for r, x, y in zip(sel, xs, ys) if r["verdict"] == verdict]
+        if pts:
+            ax.scatter([p[0] for p in pts], [p[1] for p in pts], marker=marker, c=color, s=18,
+                       label=verdict, zorder=3)
+    if key in ("gain", "stiffness_n_per_m") and min(ys) > 0:
+        ax.set_yscale("log")
+    ax.set_xlim(-5, max(xs) + 5)
+    ax.set_title(f"{scheme}: {sweep} ({where(sel[0])})", fontsize=9)
+    ax.set_xlabel("one-way delay [ms]")
+    ax.set_ylabel(label)
+    ax.grid(alpha=0.3)
+    if legend:
+        for verdict in legend:  # verdicts seen in other panels only
+            if not any(r["verdict"] == verdict for r in sel):
+                marker, color = style(verdict)
+                ax.scatter([], [], marker=marker, c=color, s=18, label=verdict)
+        ax.legend(fontsize=7, loc="upper right")
+
+
 def stability_map(rows, out):
     schemes = [s for s in SCHEMES if any(r["scheme"] == s for r in rows)]
-    panels = {s: [w for w in dict.fromkeys(r["sweep"] for r in rows if r["scheme"] == s)]
+    panels = {s: list(dict.fromkeys(r["sweep"] for r in rows if r["scheme"] == s))
               for s in schemes}
     ncol = max(len(p) for p in panels.values())
-    fig, axes = plt.subplots(len(schemes), ncol, figsize=(4.6 * ncol, 3.6 * len(schemes)),
-                             squeeze=False)
-    for i, scheme in enumerate(schemes):
+    cells = []  # (row, column, scheme, sweep)
+    if ncol == 1:  # one sweep per scheme: the schemes side by side, three to a row
+        ncol = min(3, len(schemes))
+        for k, s in enumerate(schemes):
+            cells.append((k // ncol, k % ncol, s, panels[s][0]))
+    else:
+        for i, s in enumerate(schemes):
+            cells += [(i, j, s, w) for j, w in enumerate(panels[s])]
+    nrow = max(c[0] for c in cells) + 1
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 3.6 * nrow + 0.6), squeeze=False)
+    used = set()
+    verdicts = [v for v in dict.fromkeys(list(STYLE) + [r["verdict"] for r in rows])
+                if any(r["verdict"] == v for r in rows)]
+    for i, j, scheme, sweep in cells:
+        sel = [r for r in rows if r["scheme"] == scheme and r["sweep"] == sweep]
+        panel(axes[i][j], scheme, sweep, sel, [] if used else verdicts)
+        used.add((i, j))
+    for i in range(nrow):
         for j in range(ncol):
-            ax = axes[i][j]
-            if j >= len(panels[scheme]):
-                ax.axis("off")
-                continue
-            sweep = panels[scheme][j]
-            sel = [r for r in rows if r["scheme"] == scheme and r["sweep"] == sweep]
-            key, label = y_axis(sel)
-            ys = [f(r[key]) if key else 0.0 for r in sel]
-            xs = [f(r["delay_ms"]) for r in sel]
-            theory = "theory_stable" in sel[0] and any(r["theory_stable"] != "-1" for r in sel)
-            if theory:
-                for want, shade in (("1", "#c8ecc8"), ("0", "#f6c8c8")):
-                    pts = [(x, y) for r, x, y in zip(sel, xs, ys) if r["theory_stable"] == want]
-                    if pts:
-                        ax.scatter([p[0] for p in pts], [p[1] for p in pts], marker="s", s=110,
-                                   c=shade, zorder=1, linewidths=0)
-                margin = defaultdict(lambda: math.inf)
-                for r, y in zip(sel, ys):
-                    margin[y] = min(margin[y], f(r["analytic_margin_ms"]))
-                line = sorted((y, m) for y, m in margin.items() if math.isfinite(m))
-                if line:
-                    ax.plot([m for _, m in line], [y for y, _ in line], "k-", lw=1,
-                            label="first delay margin", zorder=2)
-            for verdict, (marker, color) in STYLE.items():
-                pts = [(x, y) for r, x, y in zip(sel, xs, ys) if r["verdict"] == verdict]
-                if pts:
-                    ax.scatter([p[0] for p in pts], [p[1] for p in pts], marker=marker, c=color,
-                               s=18, label=verdict, zorder=3)
-            if key in ("gain", "stiffness_n_per_m") and min(ys) > 0:
-                ax.set_yscale("log")
-            ax.set_xlim(-5, max(xs) + 5 if xs else 1)
-            ax.set_title(f"{scheme}: {sweep} ({where(sel[0])})", fontsize=9)
-            ax.set_xlabel("one-way delay [ms]")
-            ax.set_ylabel(label if key else "")
-            ax.grid(alpha=0.3)
-            if i == 0 and j == 0:
-                ax.legend(fontsize=7, loc="upper right")
-    fig.suptitle("Stability map per scheme (markers: simulated verdict; shade: exact verdict of "
-                 "the linear model, point model only)", fontsize=11)
-    fig.tight_layout(rect=(0, 0, 1, 0.97))
+            if (i, j) not in used:
+                axes[i][j].axis("off")
+    fig.suptitle("Stability map per scheme\nmarkers: simulated verdict; shade: exact verdict of "
+                 "the linear model (point model)", fontsize=10)
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.5 / (3.6 * nrow + 0.6)))
     fig.savefig(out, dpi=90, metadata={"Software": None})
     plt.close(fig)
 
