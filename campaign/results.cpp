@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "client/analysis/press_scenario.hpp"
+#include "common/dds/contact_point.hpp"
 #include "common/util/csv.hpp"
 #include "server/node/scene_objects.hpp"
 #include "server/node/world_slave.hpp"
@@ -262,25 +263,6 @@ Outcome run_point(const Campaign& c, const RunParams& p) {
   return o;
 }
 
-/// Where teleop_master maps the master origin in the scene it is sent: the tip centre touching
-/// the top of the first deformable body (its highest node at rest), else the floor under the
-/// tip, else the tip itself.
-Eigen::Vector3d contact_point(const SceneDescription& scene, const Eigen::Vector3d& tip) {
-  const double r = scene.tip_radius_m() > 0 ? scene.tip_radius_m() : 0.05;
-  for (const auto& o : scene.objects()) {
-    if (o.kind() == OBJECT_DEFORMABLE_MESH && o.size_m()[0] > 0.0) {
-      const double top = o.size_m()[1] > 0.0 ? o.size_m()[1] : o.size_m()[0];
-      return Eigen::Vector3d(o.position_m()[0], o.position_m()[1], o.position_m()[2] + top + r);
-    }
-  }
-  for (const auto& o : scene.objects()) {
-    if (o.kind() == OBJECT_PLANE && o.normal()[2] > 0.99) {
-      return Eigen::Vector3d(tip.x(), tip.y(), o.offset_m() + r);
-    }
-  }
-  return tip;
-}
-
 /// The world model: the scene stepped by the server's cycle, the master homing it first.
 Outcome run_world(const Campaign& c, const RunParams& p) {
   const sim::WorldModel& model = *c.scenes.at(p.scene);
@@ -300,7 +282,7 @@ Outcome run_world(const Campaign& c, const RunParams& p) {
     loop.controller.slave_stiffness_n_per_m = p.gain;
     loop.controller.master_stiffness_n_per_m = p.gain;
   }
-  loop.controller.workspace.offset_m = contact_point(scene, slave.sample().position_m);
+  loop.controller.workspace.offset_m = dds::scene_contact_point(&scene, slave.sample().position_m);
   loop.forward = channel(p, p.seed);
   loop.backward = channel(p, p.seed + 1);
   loop.dt_s = dt;
