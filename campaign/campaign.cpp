@@ -3,7 +3,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <sstream>
 
 #include "campaign/results.hpp"
@@ -20,142 +19,66 @@ namespace {
 using config::ConfigError;
 using config::Node;
 
-/// One axis a sweep may list: its key, what its values are and where it goes in RunParams.
+/// One axis a sweep may list: its key, what its values are and which RunParams field takes
+/// them (a number, a whole number or a text field: one of the three is set).
 struct Axis {
   const char* key;
   enum class Kind { kNumber, kInteger, kText } kind;
   double lo, hi;                     ///< range of a number
   std::vector<std::string> allowed;  ///< choices of a text ({}: any non-empty text)
   bool point, world;                 ///< models it applies to
-  std::function<void(RunParams&, const std::string&, double)> set;
+  double RunParams::*number = nullptr;
+  std::uint64_t RunParams::*integer = nullptr;
+  std::string RunParams::*text = nullptr;
+
+  void set(RunParams& p, const std::string& t, double v) const {
+    if (number) p.*number = v;
+    if (integer) p.*integer = static_cast<std::uint64_t>(v);
+    if (text) p.*text = t;
+  }
 };
 
+Axis number_axis(const char* key, double lo, double hi, bool point, bool world,
+                 double RunParams::*field) {
+  Axis a{key, Axis::Kind::kNumber, lo, hi, {}, point, world};
+  a.number = field;
+  return a;
+}
+
+Axis text_axis(const char* key, std::vector<std::string> allowed, bool point, bool world,
+               std::string RunParams::*field) {
+  Axis a{key, Axis::Kind::kText, 0.0, 0.0, std::move(allowed), point, world};
+  a.text = field;
+  return a;
+}
+
+/// Every axis, in expansion order (the last varies fastest).
 const std::vector<Axis>& axes() {
-  using K = Axis::Kind;
-  static const std::vector<Axis> a = {
-      {"scene",
-       K::kText,
-       0,
-       0,
-       {},
-       false,
-       true,
-       [](RunParams& p, const std::string& s, double) { p.scene = s; }},
-      {"environment",
-       K::kText,
-       0,
-       0,
-       {"sphere", "wall"},
-       true,
-       false,
-       [](RunParams& p, const std::string& s, double) { p.environment = s; }},
-      {"stiffness_n_per_m",
-       K::kNumber,
-       1.0,
-       1e6,
-       {},
-       true,
-       false,
-       [](RunParams& p, const std::string&, double v) { p.stiffness_n_per_m = v; }},
-      {"damping_ns_per_m",
-       K::kNumber,
-       0.0,
-       1e4,
-       {},
-       true,
-       false,
-       [](RunParams& p, const std::string&, double v) { p.damping_ns_per_m = v; }},
-      {"script",
-       K::kText,
-       0,
-       0,
-       {"press-slip", "hold", "line", "circle", "step"},
-       true,
-       true,
-       [](RunParams& p, const std::string& s, double) { p.script = s; }},
-      {"press_depth_m",
-       K::kNumber,
-       0.0,
-       0.2,
-       {},
-       true,
-       true,
-       [](RunParams& p, const std::string&, double v) { p.press_depth_m = v; }},
-      {"tremor_m",
-       K::kNumber,
-       0.0,
-       0.01,
-       {},
-       true,
-       true,
-       [](RunParams& p, const std::string&, double v) { p.tremor_m = v; }},
-      {"scheme", K::kText, 0, 0, scheme_labels(), true, true,
-       [](RunParams& p, const std::string& s, double) { p.scheme = s; }},
-      {"gain",
-       K::kNumber,
-       0.0,
-       1e5,
-       {},
-       true,
-       true,
-       [](RunParams& p, const std::string&, double v) { p.gain = v; }},
-      {"delay_ms",
-       K::kNumber,
-       0.0,
-       10000.0,
-       {},
-       true,
-       true,
-       [](RunParams& p, const std::string&, double v) { p.delay_ms = v; }},
-      {"jitter_ms",
-       K::kNumber,
-       0.0,
-       1000.0,
-       {},
-       true,
-       true,
-       [](RunParams& p, const std::string&, double v) { p.jitter_ms = v; }},
-      {"loss",
-       K::kNumber,
-       0.0,
-       1.0,
-       {},
-       true,
-       true,
-       [](RunParams& p, const std::string&, double v) { p.loss = v; }},
-      {"burst_p_gb",
-       K::kNumber,
-       0.0,
-       1.0,
-       {},
-       true,
-       true,
-       [](RunParams& p, const std::string&, double v) { p.burst_p_gb = v; }},
-      {"burst_p_bg",
-       K::kNumber,
-       1e-6,
-       1.0,
-       {},
-       true,
-       true,
-       [](RunParams& p, const std::string&, double v) { p.burst_p_bg = v; }},
-      {"max_force_n",
-       K::kNumber,
-       0.0,
-       1000.0,
-       {},
-       true,
-       true,
-       [](RunParams& p, const std::string&, double v) { p.max_force_n = v; }},
-      {"seed",
-       K::kInteger,
-       0.0,
-       9007199254740992.0,
-       {},
-       true,
-       true,
-       [](RunParams& p, const std::string&, double v) { p.seed = static_cast<std::uint64_t>(v); }},
-  };
+  static const std::vector<Axis> a = [] {
+    using P = RunParams;
+    std::vector<Axis> v = {
+        text_axis("scene", {}, false, true, &P::scene),
+        text_axis("environment", {"sphere", "wall"}, true, false, &P::environment),
+        number_axis("stiffness_n_per_m", 1.0, 1e6, true, false, &P::stiffness_n_per_m),
+        number_axis("damping_ns_per_m", 0.0, 1e4, true, false, &P::damping_ns_per_m),
+        text_axis("script", {"press-slip", "hold", "line", "circle", "step"}, true, true,
+                  &P::script),
+        number_axis("press_depth_m", 0.0, 0.2, true, true, &P::press_depth_m),
+        number_axis("tremor_m", 0.0, 0.01, true, true, &P::tremor_m),
+        text_axis("scheme", scheme_labels(), true, true, &P::scheme),
+        number_axis("gain", 0.0, 1e5, true, true, &P::gain),
+        number_axis("delay_ms", 0.0, 10000.0, true, true, &P::delay_ms),
+        number_axis("jitter_ms", 0.0, 1000.0, true, true, &P::jitter_ms),
+        number_axis("loss", 0.0, 1.0, true, true, &P::loss),
+        number_axis("burst_p_gb", 0.0, 1.0, true, true, &P::burst_p_gb),
+        number_axis("burst_p_bg", 1e-6, 1.0, true, true, &P::burst_p_bg),
+        number_axis("max_force_n", 0.0, 1000.0, true, true, &P::max_force_n),
+    };
+    Axis seed{"seed", Axis::Kind::kInteger, 0.0, 9007199254740992.0, {}, true, true};
+    seed.integer = &P::seed;
+    v.push_back(seed);
+    return v;
+  }();
   return a;
 }
 
