@@ -74,7 +74,20 @@ int capture(const std::string& cmd, std::string& out) {
   return rc == -1 ? -1 : WEXITSTATUS(rc);
 }
 
+/// A value that goes into an #SBATCH line: letters, digits and _ . , : - only.
+void check_sbatch_word(const std::string& flag, const std::string& v) {
+  for (char ch : v) {
+    if (!std::isalnum(static_cast<unsigned char>(ch)) &&
+        std::string("_.,:-").find(ch) == std::string::npos) {
+      throw teleop::config::ConfigError("command line: " + flag + " '" + v +
+                                        "' may hold only letters, digits and _ . , : -");
+    }
+  }
+}
+
 int slurm(const Options& o) {
+  check_sbatch_word("--partition", o.partition);
+  check_sbatch_word("--time", o.time_limit);
   const Campaign c = teleop::campaign::load_campaign(o.file);
   teleop::campaign::SlurmOptions so;
   so.exe = fs::canonical("/proc/self/exe").string();
@@ -134,7 +147,9 @@ void add_flags(CLI::App& app, Options& o, CLI::App*& run_cmd, CLI::App*& slurm_c
   slurm_cmd = app.add_subcommand("slurm", "write (and submit) a Slurm array job of the campaign");
   slurm_cmd->add_option("FILE", o.file, "campaign file (YAML)")->required();
   slurm_cmd->add_option("--out", o.out, "output folder, on storage every node sees")->required();
-  slurm_cmd->add_option("--shards", o.shards, "array tasks, 1-1e6 (default: min(runs, 100))")
+  slurm_cmd
+      ->add_option("--shards", o.shards,
+                   "array tasks, 1-1e6 (at most one per run; default: min(runs, 100))")
       ->check(integer_in(1, 1e6));
   slurm_cmd->add_option("--cpus-per-task", o.cpus_per_task, "threads per task, 1-4096")
       ->check(integer_in(1, 4096));
