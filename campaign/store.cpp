@@ -74,7 +74,10 @@ Shard parse_shard(const std::string& text) {
 void prepare_output(const Campaign& c, const std::string& dir) {
   std::error_code ec;
   fs::create_directories(fs::path(dir) / "runs", ec);
-  if (ec) throw std::runtime_error(dir + ": cannot create the output folder: " + ec.message());
+  if (ec) {
+    throw config::ConfigError("command line: --out '" + dir +
+                              "': cannot create the output folder: " + ec.message());
+  }
   const fs::path manifest = fs::path(dir) / "manifest.txt";
   const std::string mine = manifest_text(c);
   if (fs::exists(manifest)) {

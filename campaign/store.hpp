@@ -29,7 +29,8 @@ Shard parse_shard(const std::string& text);
 
 /// Creates DIR and DIR/runs, and writes DIR/manifest.txt or checks that the one there is this
 /// campaign's. Removes temporary files an interrupted run left. @throws config::ConfigError
-/// when DIR holds another campaign; std::runtime_error when it cannot be written.
+/// when DIR holds another campaign or cannot be created; std::runtime_error when a file cannot
+/// be written.
 void prepare_output(const Campaign& c, const std::string& dir);
 
 /// Ids of the shard's runs that have no run file yet, ascending.
