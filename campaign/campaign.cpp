@@ -63,6 +63,7 @@ const std::vector<Axis>& axes() {
         number_axis("damping_ns_per_m", 0.0, 1e4, true, false, &P::damping_ns_per_m),
         text_axis("script", {"press-slip", "hold", "line", "circle", "step"}, true, true,
                   &P::script),
+        text_axis("trajectory", {}, true, true, &P::trajectory),
         number_axis("press_depth_m", 0.0, 0.2, true, true, &P::press_depth_m),
         number_axis("tremor_m", 0.0, 0.01, true, true, &P::tremor_m),
         text_axis("scheme", scheme_labels(), true, true, &P::scheme),
@@ -227,8 +228,19 @@ void check_run(const Node& root, const RunParams& p) {
   }
 }
 
-void load_scenes(const Node& root, Campaign& c) {
-  const std::filesystem::path base = std::filesystem::path(c.file).parent_path();
+/// `name` as a path: as it is when absolute, else relative to the campaign file's folder.
+std::string beside(const Campaign& c, const std::string& name) {
+  const std::filesystem::path p(name);
+  return p.is_absolute() ? name : (std::filesystem::path(c.file).parent_path() / p).string();
+}
+
+/// Loads every scene and recorded trajectory the runs name, once each.
+void load_inputs(const Node& root, Campaign& c) {
+  for (const RunParams& p : c.runs) {
+    if (p.trajectory.empty() || c.trajectories.count(p.trajectory)) continue;
+    c.trajectories[p.trajectory] = std::make_shared<const std::vector<master::ReplaySample>>(
+        master::load_replay_csv(beside(c, p.trajectory)));
+  }
   for (const RunParams& p : c.runs) {
     if (c.model != SlaveModel::kWorld) break;
     if (p.scene.empty()) {
@@ -236,11 +248,8 @@ void load_scenes(const Node& root, Campaign& c) {
                               "') names no scene; model 'world' needs `scene:`");
     }
     if (c.scenes.count(p.scene)) continue;
-    const std::filesystem::path path = std::filesystem::path(p.scene).is_absolute()
-                                           ? std::filesystem::path(p.scene)
-                                           : base / p.scene;
     c.scenes[p.scene] =
-        std::make_shared<const sim::WorldModel>(sim::load_world_model(path.string()));
+        std::make_shared<const sim::WorldModel>(sim::load_world_model(beside(c, p.scene)));
   }
 }
 
@@ -316,13 +325,14 @@ Campaign parse_root(const Node& root, const std::string& file) {
   }
   for (const RunParams& p : c.runs) {
     check_run(root, p);
-    const bool endless = p.script == "hold" || p.script == "circle" || p.script == "step";
+    const bool endless =
+        p.trajectory.empty() && (p.script == "hold" || p.script == "circle" || p.script == "step");
     if (endless && c.duration_s <= 0.0) {
       root.fail("duration_s", "is 0 but sweep '" + p.sweep + "' runs script '" + p.script +
                                   "', which has no end: give a length in (0, 3600]");
     }
   }
-  load_scenes(root, c);
+  load_inputs(root, c);
   return c;
 }
 
@@ -361,6 +371,15 @@ std::string campaign_digest(const Campaign& c) {
   for (const auto& [name, model] : c.scenes) {
     std::ifstream in(model->file, std::ios::binary);
     s << name << '\n' << in.rdbuf() << '\n';
+  }
+  for (const auto& [name, samples] : c.trajectories) {
+    s << name << '\n';
+    for (const master::ReplaySample& r : *samples) {
+      s << format_number(r.time_s) << ' ' << format_number(r.position_m.x()) << ' '
+        << format_number(r.position_m.y()) << ' ' << format_number(r.position_m.z()) << ' '
+        << format_number(r.orientation.w()) << ' ' << format_number(r.orientation.x()) << ' '
+        << format_number(r.orientation.y()) << ' ' << format_number(r.orientation.z()) << '\n';
+    }
   }
   std::uint64_t h = 1469598103934665603ull;
   for (const unsigned char ch : s.str()) {

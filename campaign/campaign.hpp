@@ -21,6 +21,8 @@
 
 #include "common/config/config.hpp"
 
+#include "client/device/replay_device.hpp"
+
 namespace teleop::sim {
 struct WorldModel;
 }
@@ -39,8 +41,11 @@ struct RunParams {
   double stiffness_n_per_m = 2000.0;   ///< point: the object's k [N/m]
   double damping_ns_per_m = 0.0;       ///< point: the object's b [N s/m]; 0: sphere 5, wall 50
   std::string script = "press-slip";   ///< operator script
-  double press_depth_m = 0.02;         ///< press-slip depth below the surface [m]
-  double tremor_m = 1e-4;              ///< hand tremor amplitude [m]
+  /// A recorded operator trajectory (replay CSV, device frame, as the campaign names it) the
+  /// device plays instead of the script; "": the script.
+  std::string trajectory;
+  double press_depth_m = 0.02;  ///< press-slip depth below the surface [m]
+  double tremor_m = 1e-4;       ///< hand tremor amplitude [m]
   /// position-position | force-position | wave-variables | tdpa (on position-position) |
   /// tdpa-fp (tdpa on force-position) | model-mediated
   std::string scheme = "position-position";
@@ -72,6 +77,8 @@ struct Campaign {
   std::vector<RunParams> runs;
   /// world: each scene named by a run, loaded once (key: the name as in RunParams::scene).
   std::map<std::string, std::shared_ptr<const sim::WorldModel>> scenes;
+  /// Each recorded trajectory named by a run, loaded once (key as in RunParams::trajectory).
+  std::map<std::string, std::shared_ptr<const std::vector<master::ReplaySample>>> trajectories;
 };
 
 /// Largest number of runs a campaign may expand to.

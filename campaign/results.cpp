@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <exception>
 #include <limits>
+#include <memory>
 
 #include "client/analysis/press_scenario.hpp"
 #include "common/dds/contact_point.hpp"
@@ -127,6 +128,7 @@ void param_cells(const Campaign& c, const RunParams& p, Add&& add) {
   add("stiffness_n_per_m", c.model == SlaveModel::kPoint ? num(p.stiffness_n_per_m) : "nan");
   add("damping_ns_per_m", c.model == SlaveModel::kPoint ? num(p.damping_ns_per_m) : "nan");
   add("script", p.script);
+  add("trajectory", text(p.trajectory));
   add("press_depth_m", num(p.press_depth_m));
   add("tremor_m", num(p.tremor_m));
   add("scheme", p.scheme);
@@ -177,6 +179,25 @@ master::OperatorScript script_of(const RunParams& p) {
   s.line_end_m = s.start_m + Eigen::Vector3d(0.05, 0.0, 0.0);
   s.tremor_amplitude_m = p.tremor_m;
   return s;
+}
+
+/// The operator's device: the recorded trajectory of `p` if it names one, else the simulated
+/// device with its script.
+std::unique_ptr<master::HapticDevice> make_device(const Campaign& c, const RunParams& p,
+                                                  const master::SimulatedDeviceParams& dp) {
+  if (p.trajectory.empty()) return std::make_unique<master::SimulatedDevice>(dp);
+  return std::make_unique<master::ReplayDevice>(*c.trajectories.at(p.trajectory), dp.spec);
+}
+
+/// Session length when the campaign gives none: the script's or the trajectory's length plus
+/// `extra_s`, at least `at_least_s` [s].
+double default_length_s(const Campaign& c, const RunParams& p,
+                        const master::SimulatedDeviceParams& dp, double extra_s,
+                        double at_least_s) {
+  if (c.duration_s > 0.0) return c.duration_s;
+  const double len = p.trajectory.empty() ? master::script_duration_s(dp.script)
+                                          : c.trajectories.at(p.trajectory)->back().time_s;
+  return std::max(at_least_s, len + extra_s);
 }
 
 /// Steps `session` to its end, keeping the largest force the controller asked for.
@@ -247,12 +268,14 @@ Outcome run_point(const Campaign& c, const RunParams& p) {
   setup.loop.backward = channel(p, p.seed + 1);
   if (p.max_force_n > 0.0) setup.device.spec.max_force_n = p.max_force_n;
   if (p.script != "press-slip") setup.device.script = script_of(p);
-  master::SimulatedDevice device(setup.device);
+  // one pass of the script (or the trajectory) plus 3 s, as the press task's default
+  setup.loop.duration_s = default_length_s(c, p, setup.device, 3.0, 0.0);
+  const std::unique_ptr<master::HapticDevice> device = make_device(c, p, setup.device);
   server::WorldSlave slave(
       sim::tool_world_model(setup.slave, setup.loop.controller.workspace.offset_m,
                             1.0 / setup.loop.dt_s),
       setup.loop.dt_s);
-  LoopbackSession session(setup.loop, device, slave);
+  LoopbackSession session(setup.loop, *device, slave);
   Outcome o;
   drive(session, o);
   collect(session, slave, o);
@@ -287,10 +310,10 @@ Outcome run_world(const Campaign& c, const RunParams& p) {
   loop.backward = channel(p, p.seed + 1);
   loop.dt_s = dt;
   loop.homing_s = c.homing_s;
-  loop.duration_s =
-      c.duration_s > 0.0 ? c.duration_s : std::max(2.0, master::script_duration_s(dp.script) + 1.0);
-  master::SimulatedDevice device(dp);
-  LoopbackSession session(loop, device, slave);
+  // as teleop_master: the script's length plus 1 s after homing, at least 2 s
+  loop.duration_s = default_length_s(c, p, dp, 1.0, 2.0);
+  const std::unique_ptr<master::HapticDevice> device = make_device(c, p, dp);
+  LoopbackSession session(loop, *device, slave);
   Outcome o;
   drive(session, o);
   collect(session, slave, o);

@@ -285,6 +285,38 @@ TEST_F(CampaignDir, WorldRunsOnTwoThreadsGiveTheRowsOfOne) {
   EXPECT_EQ(read(path("one/results.csv")).find(",error,"), std::string::npos);
 }
 
+TEST_F(CampaignDir, ARecordedTrajectoryDrivesTheDeviceInsteadOfTheScript) {
+  // down from 5 cm above the sphere's top to 1 cm into it, held, and back up
+  std::ofstream(path("press.csv")) << "time_s,x,y,z\n0,0,0,0.05\n1,0,0,-0.01\n2,0,0,-0.01\n"
+                                      "3,0,0,0.05\n";
+  const std::string text =
+      "name: t\nsweeps:\n  - name: s\n    trajectory: press.csv\n"
+      "    scheme: force-position\n    stiffness_n_per_m: 2000\n";
+  const Campaign c = parse_campaign(text, path("t.yaml"));
+  ASSERT_EQ(c.runs.size(), 1u);
+  ASSERT_EQ(c.trajectories.size(), 1u);
+  std::vector<std::string> cells, names;
+  std::stringstream row(run_one(c, c.runs[0])), header(results_header(c));
+  for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+  for (std::string cell; std::getline(header, cell, ',');) names.push_back(cell);
+  const auto at = [&](const std::string& n) {
+    const auto it = std::find(names.begin(), names.end(), n);
+    return it == names.end() ? std::string("?") : cells[it - names.begin()];
+  };
+  EXPECT_EQ(at("trajectory"), "press.csv");
+  EXPECT_EQ(at("verdict"), "stable");
+  // in contact from about 0.8 s to 2.2 s of the 3 s record (+3 s after it)
+  EXPECT_GT(std::stod(at("contact_time_s")), 0.8);
+  EXPECT_LT(std::stod(at("contact_time_s")), 2.5);
+  EXPECT_GT(std::stod(at("mean_contact_force_n")), 2.0);
+  // a trajectory that cannot be read is refused naming its file
+  std::ofstream(path("bad.csv")) << "time_s,x,y,z\n0,0,0\n";
+  std::string bad = text;
+  bad.replace(bad.find("press.csv"), 9, "bad.csv");
+  EXPECT_NE(config_error_of([&] { parse_campaign(bad, path("t.yaml")); }).find("bad.csv"),
+            std::string::npos);
+}
+
 TEST_F(CampaignDir, TheProgressLineCountsRunsAndGivesAnEta) {
   const Campaign c = parse_campaign(kSmall, "small.yaml");
   RunOptions o;
