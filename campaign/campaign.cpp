@@ -1,8 +1,12 @@
 #include "campaign/campaign.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "campaign/results.hpp"

@@ -7,9 +7,11 @@
 //
 // Exit status: 0 done, 2 bad command line or campaign file, 1 runtime failure (a file that
 // cannot be written, runs missing at merge, sbatch failing).
+#include <sys/wait.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
