@@ -6,6 +6,8 @@
 #                                                 tests/integration/other_vendor_test.cpp)
 #        TELEOP_SETUP_PEERS=0 deploy/setup.sh    (skip the optional peer engines used only by
 #                                                 `teleop_bench peers`: Bullet, MuJoCo)
+#        TELEOP_SETUP_SLURM=0 deploy/setup.sh    (skip the Slurm daemons used only by
+#                                                 tests/tools/campaign_slurm.sh)
 #        TELEOP_SETUP_MESHER=0 deploy/setup.sh   (skip gmsh, which fills surface files with
 #                                                 tetrahedra for model fem)
 set -euo pipefail
@@ -37,6 +39,13 @@ fi
 # the other-vendor reader of the interoperability test; without it that test skips
 if [ "${TELEOP_SETUP_VENDORS:-1}" = "1" ]; then
   packages+=(cyclonedds-dev cyclonedds-tools)
+fi
+
+# optional, tests only: a single-node Slurm cluster (slurmctld, slurmd, munge, sbatch) that
+# tests/tools/campaign_slurm.sh starts in a temporary folder to run a campaign as an array job;
+# without them that test skips
+if [ "${TELEOP_SETUP_SLURM:-1}" = "1" ]; then
+  packages+=(slurmctld slurmd slurm-client munge)
 fi
 
 # optional: gmsh fills a closed surface file with tetrahedra for a `model: fem` body that names a

@@ -17,8 +17,12 @@ LoopbackSession::LoopbackSession(const LoopbackConfig& cfg, HapticDevice& device
     : cfg_(cfg), slave_(slave), cycle_(cycle_config(cfg), device, link_) {}
 
 void LoopbackSession::start() {
-  cycle_.start(0.0);
-  slave_.reset(cfg_.controller.workspace.to_slave_position(cycle_.reading().position_m));
+  if (cfg_.homing_s > 0.0) {
+    cycle_.start_homing(0.0, slave_.sample().position_m, cfg_.homing_s);
+  } else {
+    cycle_.start(0.0);
+    slave_.reset(cfg_.controller.workspace.to_slave_position(cycle_.reading().position_m));
+  }
   link_.command = SlaveCommand{};
   link_.command.enabled = false;  // hold until the first command arrives
   link_.pending = false;
@@ -27,7 +31,13 @@ void LoopbackSession::start() {
 }
 
 bool LoopbackSession::step() {
-  if (t_s_ >= cfg_.duration_s - 0.5 * cfg_.dt_s) return false;
+  if (cfg_.homing_s > 0.0) {
+    // as teleop_master: the session's length counts from the end of homing
+    if (!cycle_.homing() && t_s_ - cycle_.session_start_s() >= cfg_.duration_s - 0.5 * cfg_.dt_s)
+      return false;
+  } else if (t_s_ >= cfg_.duration_s - 0.5 * cfg_.dt_s) {
+    return false;
+  }
   const double now = t_s_;
   cycle_.step(now);
   // the slave steps with the newest command it has; its sample travels back next cycle

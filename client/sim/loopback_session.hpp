@@ -20,7 +20,12 @@ namespace teleop::master {
 /// Everything a loopback run needs besides the device and the slave: the master cycle's
 /// configuration (its delivery is always the newest due command) and the run length.
 struct LoopbackConfig : MasterCycleConfig {
-  double duration_s = 5.0;  ///< run() length [s]
+  double duration_s = 5.0;  ///< run() length [s]; with homing, counted from its end
+  /// 0: start() puts the slave at the mapped device position and the controller runs from the
+  /// first cycle. Above 0: as teleop_master does against a live server, the slave stays where
+  /// it is (a robot at home) and the cycle homes it there along a path of this length first;
+  /// no force is rendered and no metrics are recorded until homing is over [s].
+  double homing_s = 0.0;
 };
 
 /// The in-process loop. See the file comment.
@@ -30,9 +35,11 @@ class LoopbackSession {
   LoopbackSession(const LoopbackConfig& cfg, HapticDevice& device, SlaveSimulator& slave);
 
   /// Configures and activates device and controller; puts the slave at the mapped device
-  /// position. Call once before step().
+  /// position (or, with homing_s > 0, starts homing it from where it is). Call once before
+  /// step().
   void start();
-  /// One cycle. Returns false once duration_s is reached. Real-time safe.
+  /// One cycle. Returns false once duration_s is reached (with homing: duration_s after the
+  /// homing ended). Real-time safe.
   bool step();
   /// start() (if not started) and step() until the end.
   void run();

@@ -88,6 +88,10 @@ RobotSim::RobotSim(const RobotModel& model, const std::vector<Plane>& planes,
   const int n = model_.n;
 
   world_ = dWorldCreate();
+  // a self-threaded step of its own: worlds stepped on different threads share nothing
+  threading_ = dThreadingAllocateSelfThreadedImplementation();
+  dWorldSetStepThreadingImplementation(world_, dThreadingImplementationGetFunctions(threading_),
+                                       threading_);
   dWorldSetGravity(world_, model_.gravity_mps2.x(), model_.gravity_mps2.y(),
                    model_.gravity_mps2.z());
   dWorldSetERP(world_, options_.joint_erp);
@@ -198,6 +202,7 @@ RobotSim::~RobotSim() {
   }
   if (contact_group_) dJointGroupDestroy(contact_group_);
   if (world_) dWorldDestroy(world_);  // destroys bodies and joints
+  if (threading_) dThreadingFreeImplementation(threading_);
 }
 
 void RobotSim::place_bodies(const JointVector& q, const JointVector& qd) {

@@ -129,6 +129,9 @@ class RobotSim {
   RobotState state_;
 
   dWorldID world_ = nullptr;
+  /// The world's own step threading (ODE's default one is shared by every world of the
+  /// process and breaks when two threads step worlds at once).
+  dThreadingImplementationID threading_ = nullptr;
   dJointGroupID contact_group_ = nullptr;
   std::array<dBodyID, kMaxJoints> bodies_{};
   std::array<dJointID, kMaxJoints> hinges_{};

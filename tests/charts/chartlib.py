@@ -13,3 +13,9 @@ def load_columns_by(path, key):
                 if k != key:
                     d[k].append(float(v))
     return data
+
+
+def read_rows(path):
+    """Reads a CSV into a list of {column: text} rows."""
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
