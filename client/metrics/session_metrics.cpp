@@ -136,6 +136,7 @@ void SessionMetrics::update_transparency(const MetricsSample& s) {
     contact_sum_ += s.contact_force_n;
     felt_err_sq_ += (s.felt_force_n - s.contact_force_n) * (s.felt_force_n - s.contact_force_n);
     if (s.slave_depth_m > 0.0) {
+      max_slave_depth_m_ = std::max(max_slave_depth_m_, s.slave_depth_m);
       felt_fit_.add(s.master_depth_m, s.felt_force_n);
       env_fit_.add(s.slave_depth_m, s.contact_force_n);
     }

@@ -174,6 +174,8 @@ class SessionMetrics {
   double felt_force_error_rms_n() const;                 ///< RMS(felt - |f_e|) [N]
   double felt_stiffness_n_per_m() const { return felt_fit_.stiffness(); }
   double environment_stiffness_n_per_m() const { return env_fit_.stiffness(); }
+  /// The deepest the slave's tip went into an object [m] (slave_depth_m), 0 without contact.
+  double max_slave_depth_m() const { return max_slave_depth_m_; }
   double stiffness_ratio() const;  ///< felt / environment stiffness [-] (NaN if unknown)
   /// Time the force was above the continuous rating [s], and the peak of its average [N].
   double over_rating_time_s() const { return over_rating_time_; }
@@ -234,6 +236,7 @@ class SessionMetrics {
   std::uint64_t n_felt_ = 0;
   double felt_sum_ = 0.0, contact_sum_ = 0.0, felt_err_sq_ = 0.0;
   SecantFit felt_fit_, env_fit_;
+  double max_slave_depth_m_ = 0.0;
   double f_avg_ = 0.0, f_avg_max_ = 0.0, over_rating_time_ = 0.0;
 
   Verdict verdict_ = Verdict::kStable;

@@ -20,6 +20,7 @@
 #include "client/device/external_device.hpp"
 #include "client/device/replay_device.hpp"
 #include "client/device/simulated_device.hpp"
+#include "client/metrics/hertz_reference.hpp"
 #include "client/metrics/link_verdict.hpp"
 #include "client/metrics/session_metrics.hpp"
 #include "client/net/delay_channel.hpp"
@@ -189,6 +190,7 @@ struct MasterNode::Impl {
   dds::RateLimitedPublisher<MasterStatePubSubType> state_views;
   dds::Mailbox<ReceivedState> mailbox;
   dds::Mailbox<SceneDescription> scene_box;
+  SceneDescription scene_at_start;  ///< the scene as the session began (empty if none came)
   std::atomic<std::uint64_t> states_received{0};
   std::unique_ptr<dds::Reader<SlaveStatePubSubType>> state_reader;
   std::unique_ptr<dds::Reader<SceneDescriptionPubSubType>> scene_reader;
@@ -507,6 +509,7 @@ struct MasterNode::Impl {
     // rendered), then the session
     SessionReport rep;
     rep.wait_s = wait_s;
+    if (have_scene) scene_at_start = scene;
     const DmaLatencyHold dma(options.realtime.dma_latency_us);
     if (!dma.problem().empty()) {
       std::fprintf(stderr, "teleop_master: warning: the cores may sleep deeply: %s\n",
@@ -815,6 +818,20 @@ struct MasterNode::Impl {
     rep.releases_sent = link.releases_sent();
   }
 
+  /// Hertz for the scene's first deformable body with a material, at the deepest travel.
+  HertzReference hertz_for_session(const SessionMetrics& metrics) const {
+    double gravity = 0.0;
+    for (double g : scene_at_start.gravity_mps2()) gravity += g * g;
+    gravity = std::sqrt(gravity);
+    for (const SceneObject& o : scene_at_start.objects()) {
+      if (o.kind() != OBJECT_DEFORMABLE_MESH || !(o.youngs_modulus_pa() > 0.0)) continue;
+      return hertz_reference(o.youngs_modulus_pa(), o.poisson_ratio(), o.size_m()[0],
+                             scene_at_start.tip_radius_m(), o.mass_kg() * gravity,
+                             metrics.max_slave_depth_m());
+    }
+    return HertzReference{};
+  }
+
   void write_summary_json(const MasterCycle& cycle, const SessionReport& rep) const {
     const SessionMetrics& metrics = cycle.metrics();
     const SafetyLayer& safety = cycle.safety();
@@ -823,8 +840,14 @@ struct MasterNode::Impl {
     const Summary& j = rep.jitter_us;
     const SessionVerdict verdict = session_verdict(metrics, rep, cycle.config().controller.scheme);
     std::ostringstream out;
+    const HertzReference hz = hertz_for_session(metrics);
     out << "{\n"
         << "  \"version\": \"" << json_escape(version_string()) << "\",\n"
+        << "  \"hertz\": {\"valid\": " << (hz.valid ? "true" : "false")
+        << ", \"travel_m\": " << json_number(hz.travel_m)
+        << ", \"force_n\": " << json_number(hz.force_n)
+        << ", \"tangent_n_per_m\": " << json_number(hz.tangent_n_per_m)
+        << ", \"secant_n_per_m\": " << json_number(hz.secant_n_per_m) << "},\n"
         << "  \"duration_s\": " << json_number(rep.elapsed_s) << ",\n"
         << "  \"session_s\": " << json_number(rep.session_s) << ",\n"
         << "  \"rate_hz\": " << json_number(options.rate_hz) << ",\n"
@@ -1015,6 +1038,7 @@ struct MasterNode::Impl {
         "contact force), contact %.2f s, mean contact force %.2f N\n"
         "  transparency    free space %.3f N mean, %.3f N p99, %.3f N max; in contact felt %.2f x "
         "the environment's force (RMS %.3f N), stiffness felt %.0f N/m against %.0f N/m (%.2f)\n"
+        "%s"
         "  passivity       energy at the master port %.4f J (min %.4f J)\n"
         "  safety          %s%s, link losses %llu, loop stalls %llu (longest %.3f s), re-homed "
         "%llu times (link back %llu, slave "
@@ -1040,9 +1064,10 @@ struct MasterNode::Impl {
         metrics.mean_contact_force_n(), metrics.free_force_mean_n(), metrics.free_force_p99_n(),
         metrics.free_force_max_n(), metrics.felt_force_ratio(), metrics.felt_force_error_rms_n(),
         metrics.felt_stiffness_n_per_m(), metrics.environment_stiffness_n_per_m(),
-        metrics.stiffness_ratio(), metrics.energy_j(), metrics.energy_min_j(),
-        safety.cut() ? "CUT: " : "ok", safety.cut() ? safety.cut_reason() : "",
-        static_cast<unsigned long long>(rep.link_losses),
+        metrics.stiffness_ratio(),
+        hertz_line(hertz_for_session(metrics), metrics.felt_stiffness_n_per_m()).c_str(),
+        metrics.energy_j(), metrics.energy_min_j(), safety.cut() ? "CUT: " : "ok",
+        safety.cut() ? safety.cut_reason() : "", static_cast<unsigned long long>(rep.link_losses),
         static_cast<unsigned long long>(rep.stalls), rep.longest_stall_s,
         static_cast<unsigned long long>(cycle.rehomes()),
         static_cast<unsigned long long>(cycle.rehomes(RehomeReason::kLinkBack)),

@@ -61,6 +61,11 @@ SceneDescription describe_scene(const sim::WorldModel& model, const sim::WorldDa
     o.highest_frequency_radps(m.omega_max_rad_per_s);
     o.stable_step_s(std::isfinite(m.stable_step_s) ? m.stable_step_s : -1.0);
     o.substeps(static_cast<std::uint32_t>(m.substeps_for(1.0 / physics_rate_hz)));
+    // what the tip meets (measured at load for fem), the body's weight and its material
+    o.stiffness_n_per_m(data.bodies[i].contact_stiffness_n_per_m);
+    o.mass_kg(m.total_mass_kg);
+    o.youngs_modulus_pa(m.params.youngs_modulus_pa);
+    o.poisson_ratio(m.params.poisson_ratio);
     d.objects().push_back(o);
   }
   // the robot's frames at q = 0, so observers can draw the arm from the joint positions

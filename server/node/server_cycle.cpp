@@ -27,8 +27,10 @@ ServerCycle::ServerCycle(const sim::WorldModel& model, double dt_s, double comma
     const Eigen::Matrix3Xd& x = data_.bodies[i].state.x;
     const Eigen::Vector3d centre = x.rowwise().mean();
     const sim::DeformableBodyModel& b = model.bodies[i];
+    // the stiffness the tip meets: measured on the body at load for fem, else its contact's
     spheres_.push_back({b.object_id, centre, (x.colwise() - centre).colwise().norm().maxCoeff(),
-                        b.contact.stiffness_n_per_m, b.contact.damping_ns_per_m, x, false});
+                        data_.bodies[i].contact_stiffness_n_per_m, b.contact.damping_ns_per_m, x,
+                        false});
   }
 }
 

@@ -1,6 +1,8 @@
 // Measurements of a deformable ball against Hertz, Lamb and its sag (physics_validation.hpp).
 #include "server/world/physics_validation.hpp"
 
+#include "common/sim/hertz.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -33,36 +35,25 @@ double contact_modulus_pa(const Material& m) {
 }
 
 double hertz_force_n(double e_star_pa, double r_eff_m, double depth_m) {
-  if (!(depth_m > 0.0)) return 0.0;
-  return 4.0 / 3.0 * e_star_pa * std::sqrt(r_eff_m) * std::pow(depth_m, 1.5);
+  return hertz::force_n(e_star_pa, r_eff_m, depth_m);
 }
 
 double hertz_depth_m(double e_star_pa, double r_eff_m, double force_n) {
-  if (!(force_n > 0.0)) return 0.0;
-  return std::pow(force_n / (4.0 / 3.0 * e_star_pa * std::sqrt(r_eff_m)), 2.0 / 3.0);
+  return hertz::depth_m(e_star_pa, r_eff_m, force_n);
 }
 
 double hertz_floor_travel_m(const Material& m, double ball_r_m, double tip_r_m, double force_n,
                             double preload_n) {
-  const double es = contact_modulus_pa(m);
-  const double r_tip = 1.0 / (1.0 / tip_r_m + 1.0 / ball_r_m);
-  return hertz_depth_m(es, r_tip, force_n) + hertz_depth_m(es, ball_r_m, force_n + preload_n) -
-         hertz_depth_m(es, ball_r_m, preload_n);
+  return hertz::floor_travel_m(contact_modulus_pa(m), ball_r_m, tip_r_m, force_n, preload_n);
 }
 
 double hertz_floor_force_n(const Material& m, double ball_r_m, double tip_r_m, double travel_m,
                            double preload_n) {
-  double lo = 0.0, hi = 1.0;
-  while (hertz_floor_travel_m(m, ball_r_m, tip_r_m, hi, preload_n) < travel_m && hi < 1e9) hi *= 2;
-  for (int it = 0; it < 200; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (hertz_floor_travel_m(m, ball_r_m, tip_r_m, mid, preload_n) < travel_m ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
+  return hertz::floor_force_n(contact_modulus_pa(m), ball_r_m, tip_r_m, travel_m, preload_n);
 }
 
 double hertz_tip_force_n(const Material& m, double ball_r_m, double tip_r_m, double depth_m) {
-  return hertz_force_n(contact_modulus_pa(m), 1.0 / (1.0 / tip_r_m + 1.0 / ball_r_m), depth_m);
+  return hertz::force_n(contact_modulus_pa(m), 1.0 / (1.0 / tip_r_m + 1.0 / ball_r_m), depth_m);
 }
 
 const char* to_string(LambMode mode) {

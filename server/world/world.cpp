@@ -272,6 +272,9 @@ bool place_tool(const WorldModel& model, WorldData& d, const Eigen::Vector3d& po
 
 namespace {
 
+/// The indentation at which a fem body's contact stiffness is measured at load [m].
+constexpr double kProbeDepthM = 0.005;
+
 /// DeformableBodyModel::settle_s: steps of dt with the velocities relaxed, until the body is
 /// still (every node slower than 0.1 mm/s) or settle_s has passed; then its clock starts at 0.
 void settle(const deformable::DeformableModel& m, deformable::DeformableState& s, double dt_s,
@@ -288,6 +291,33 @@ void settle(const deformable::DeformableModel& m, deformable::DeformableState& s
 
 }  // namespace
 
+double probe_fem_stiffness(const deformable::DeformableModel& m,
+                           const deformable::DeformableState& at, const Eigen::Vector3d& gravity,
+                           double tip_radius_m, double dt_s, double depth_m) {
+  deformable::DeformableState s = at;
+  const Eigen::Vector3d up =
+      gravity.norm() > 0.0 ? Eigen::Vector3d(-gravity.normalized()) : Eigen::Vector3d::UnitZ();
+  Eigen::Index top = 0;
+  (up.transpose() * s.x).maxCoeff(&top);
+  const Eigen::Vector3d touch = s.x.col(top) + tip_radius_m * up;
+  const double clearance = 0.002;
+  const int ramp = static_cast<int>(std::ceil(0.3 / dt_s)), hold = ramp;
+  Eigen::Vector3d tip = touch + clearance * up;
+  s.tip_radius_m = tip_radius_m;
+  s.tip_velocity_mps = -(clearance + depth_m) / (ramp * dt_s) * up;
+  for (int k = 1; k <= ramp + hold; ++k) {
+    const double a = std::min(1.0, static_cast<double>(k) / ramp);
+    const Eigen::Vector3d next = touch + (clearance - a * (clearance + depth_m)) * up;
+    if (k > ramp) s.tip_velocity_mps.setZero();
+    s.tip_from_m = tip;
+    s.tip_to_m = next;
+    tip = next;
+    if (deformable::step(m, s, dt_s, nullptr) == deformable::StepStatus::kFaultReset) return 0.0;
+    if (k > ramp) s.v *= 0.97;
+  }
+  return s.tip_node_count > 0 ? s.tip_force_n.dot(up) / depth_m : 0.0;
+}
+
 WorldData make_world_data(const WorldModel& model) {
   WorldData d;
   if (model.has_robot()) {
@@ -302,6 +332,11 @@ WorldData make_world_data(const WorldModel& model) {
     DeformableBodyData& b = d.bodies.emplace_back();
     b.state = deformable::make_state(bm.body);
     if (bm.settle_s > 0.0) settle(bm.body, b.state, 1.0 / model.physics_rate_hz, bm.settle_s);
+    b.contact_stiffness_n_per_m =
+        bm.body.params.model == deformable::ModelKind::kFem
+            ? probe_fem_stiffness(bm.body, b.state, model.gravity_mps2, model.tip_radius_m(),
+                                  1.0 / model.physics_rate_hz, kProbeDepthM)
+            : bm.contact.stiffness_n_per_m;
     b.contact.set_params(bm.contact);
     b.contact.set_node_areas(bm.body.area_m2);
     b.contact.reset(b.state.x, bm.body.mesh.triangles);

@@ -87,6 +87,10 @@ struct DeformableBodyData {
   /// surface normal when the touch began, for the indentation since then.
   Eigen::Vector3d touch_centre_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d touch_normal = Eigen::Vector3d::UnitZ();
+  /// The contact stiffness the tip meets [N/m], for the local contact model's prior and the
+  /// scene description: model fem, measured on the settled body at load (probe_fem_stiffness);
+  /// the other models, their contact mapping's stiffness.
+  double contact_stiffness_n_per_m = 0.0;
 };
 
 struct WorldData {
@@ -103,6 +107,14 @@ struct WorldData {
 
 /// Everything that changes, at the scene's initial state. Allocates (ODE, meshes, trees).
 WorldData make_world_data(const WorldModel& model);
+
+/// The secant stiffness F / d [N/m] of a fem body pressed `depth_m` deep by a rigid tip of
+/// `tip_radius_m` at its highest node (against gravity, else +z), measured on a copy of `at`:
+/// the tip comes down from 2 mm above in 0.3 s and holds for 0.3 s with the velocities relaxed.
+/// 0 when the body faults or is not touched.
+double probe_fem_stiffness(const deformable::DeformableModel& m,
+                           const deformable::DeformableState& at, const Eigen::Vector3d& gravity,
+                           double tip_radius_m, double dt_s, double depth_m);
 
 /// Puts the tool slave at rest at `position_m` [m] without a step (its clock kept) and resets
 /// each body's tip contact on the body's present nodes: a jump breaks continuous detection.

@@ -46,6 +46,10 @@ struct Roles {
   bool discovery = false;                             ///< start discovery servers first
   bool lose_discovery_server_0 = false;               ///< stop server 0 before the session
   std::string delay = "";                             ///< one-way delay, e.g. "2ms"
+  /// the link carries fewer commands per second than the loop issues (DDS Security over TCP):
+  /// the loop keeps its period, the network thread replaces the commands it could not write
+  /// (counted), and the session may end degraded for the commands it lost
+  bool link_limited = false;
 };
 
 class MultiHost : public ::testing::Test {
@@ -150,17 +154,33 @@ class MultiHost : public ::testing::Test {
     for (auto& o : observers) EXPECT_EQ(o->wait_for(30.0), 0) << o->err();
     server->signal(SIGTERM);
     EXPECT_EQ(server->wait_for(20.0), 0) << server->err();
-    ASSERT_EQ(master_rc, 0) << master->err() << master->out();
-
     const std::string m = Process::slurp(master_json);
+    const double issued = json_value(m, "issued");
     const double sent = json_value(m, "sent"), received = json_value(m, "received");
+    const double replaced = json_nested(m, "network_threads", "commands_dropped");
     const double p50 = json_nested(m, "rtt_ms", "p50"), p99 = json_nested(m, "rtt_ms", "p99");
-    std::printf("multi_host %-16s commands %.0f/%.0f received, rtt p50 %.3f ms p99 %.3f ms\n",
-                name.c_str(), received, sent, p50, p99);
-    // with a delay, the last commands are still in the channel when the master stops
-    EXPECT_GE(sent, 2900) << m;
+    std::printf(
+        "multi_host %-16s commands %.0f issued, %.0f written, %.0f replaced unwritten, %.0f "
+        "received, rtt p50 %.3f ms p99 %.3f ms\n",
+        name.c_str(), issued, sent, replaced, received, p50, p99);
+    // the loop issues every command whatever the link carries
+    EXPECT_GE(issued, 2900) << m;
     EXPECT_GE(received, 0.99 * sent) << m;
-    EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;
+    if (r.link_limited) {
+      // every issued command is written or counted as replaced; the link carries at least
+      // 400 commands per second; the verdict says stable, or degraded for the lost commands
+      EXPECT_GE(sent + replaced, issued - 20) << m;
+      EXPECT_GE(sent, 1200) << m;
+      EXPECT_TRUE(master_rc == 0 || master_rc == 5) << master_rc << master->err() << m;
+      EXPECT_TRUE(m.find("\"verdict\": \"stable\"") != std::string::npos ||
+                  m.find("\"verdict\": \"degraded\"") != std::string::npos)
+          << m;
+    } else {
+      ASSERT_EQ(master_rc, 0) << master->err() << master->out();
+      // with a delay, the last commands are still in the channel when the master stops
+      EXPECT_GE(sent, 2900) << m;
+      EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;
+    }
     EXPECT_GT(p99, 0.0) << m;
     EXPECT_LT(p99, 100.0) << m;  // generous: a loaded 2-core machine
     for (std::size_t k = 0; k < observers.size(); ++k) {
@@ -231,12 +251,13 @@ TEST_F(MultiHost, SecureLanUnicastPeers) {
 TEST_F(MultiHost, SecureWanTcp) {
   const std::string sec = make_security_dir("secure_wan_tcp");
   ASSERT_FALSE(sec.empty()) << "deploy/make_security.sh failed";
-  session("secure_wan_tcp", domains::kMultiHostSecureWanTcp,
-          Roles{"secure_wan_tcp_server",
-                "secure_wan_tcp_client",
-                {"--listen", "5100", "--public-address", kH1, "--security-dir", sec},
-                {"--peer", kH1 + ":5100", "--security-dir", sec},
-                {"--peer", kH1 + ":5100", "--security-dir", sec}});
+  Roles r{"secure_wan_tcp_server",
+          "secure_wan_tcp_client",
+          {"--listen", "5100", "--public-address", kH1, "--security-dir", sec},
+          {"--peer", kH1 + ":5100", "--security-dir", sec},
+          {"--peer", kH1 + ":5100", "--security-dir", sec}};
+  r.link_limited = true;
+  session("secure_wan_tcp", domains::kMultiHostSecureWanTcp, r);
   std::filesystem::remove_all(sec);
 }
 

@@ -6,7 +6,7 @@
 #   campaign_resume.sh BUILD_DIR
 set -u
 build="$1"
-campaign="$build/campaign/teleop_campaign"
+campaign="$build/client/campaign/teleop_campaign"
 fail() {
   echo "FAIL: $*"
   exit 1

@@ -12,7 +12,7 @@
 # cluster did not come up).
 set -u
 build="$1"
-campaign="$build/campaign/teleop_campaign"
+campaign="$build/client/campaign/teleop_campaign"
 skip() {
   echo "SKIP: $*"
   exit 77

@@ -283,3 +283,32 @@ TEST(FemAgainstPhysics, MassScaledToOneStepPerMillisecondStaysWithinTheReference
     }
   }
 }
+
+#include "server/world/world.hpp"
+#include "server/world/world_model.hpp"
+
+namespace {
+
+// The stiffness the local contact model starts from on a fem body is measured on the body at
+// load: the shipped volumetric scene's ball, pressed 5 mm on the floor under its weight, against
+// the independent FEM (CalculiX) and Hertz.
+TEST(FemAgainstPhysics, TheContactStiffnessMeasuredAtLoadIsThePhysicalOne) {
+  const teleop::sim::WorldModel model = teleop::sim::load_world_model(
+      std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/ball_fem.yaml");
+  const teleop::sim::WorldData d = teleop::sim::make_world_data(model);
+  ASSERT_EQ(d.bodies.size(), 1u);
+  const double k = d.bodies[0].contact_stiffness_n_per_m;
+  const auto ref = va::calculix_reference();
+  const auto it = ref.find(va::calculix_key("foam", "tip_floor_gravity", "tip_force", 5e-3));
+  ASSERT_NE(it, ref.end()) << "tests/reference/calculix/ball_reference.csv";
+  const double calculix = it->second / 5e-3;
+  const double hertz =
+      va::hertz_floor_force_n(va::foam(), va::kBallRadiusM, va::kTipRadiusM, 5e-3, 2.0 * 9.81) /
+      5e-3;
+  std::printf("fem contact stiffness at 5 mm: %.1f N/m; CalculiX %.1f N/m; Hertz %.1f N/m\n", k,
+              calculix, hertz);
+  EXPECT_NEAR(k, calculix, 0.10 * calculix);
+  EXPECT_NEAR(k, hertz, 0.20 * hertz);
+}
+
+}  // namespace

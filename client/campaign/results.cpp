@@ -1,4 +1,4 @@
-#include "campaign/results.hpp"
+#include "client/campaign/results.hpp"
 
 #include <algorithm>
 #include <cmath>

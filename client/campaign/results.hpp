@@ -8,7 +8,7 @@
 // measured and "inf" for an unbounded margin, so a row is the same bytes wherever it is made.
 #include <string>
 
-#include "campaign/campaign.hpp"
+#include "client/campaign/campaign.hpp"
 
 namespace teleop::campaign {
 

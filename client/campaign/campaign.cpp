@@ -1,4 +1,4 @@
-#include "campaign/campaign.hpp"
+#include "client/campaign/campaign.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -9,7 +9,7 @@
 #include <set>
 #include <sstream>
 
-#include "campaign/results.hpp"
+#include "client/campaign/results.hpp"
 #include "client/control/bilateral_controller.hpp"
 #include "client/device/operator_model.hpp"
 #include "client/net/delay_config.hpp"

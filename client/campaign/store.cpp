@@ -1,4 +1,4 @@
-#include "campaign/store.hpp"
+#include "client/campaign/store.hpp"
 
 #include <unistd.h>
 
@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "campaign/results.hpp"
+#include "client/campaign/results.hpp"
 #include "common/util/files.hpp"
 
 namespace teleop::campaign {

@@ -1,4 +1,4 @@
-#include "campaign/runner.hpp"
+#include "client/campaign/runner.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -8,7 +8,7 @@
 #include <thread>
 #include <vector>
 
-#include "campaign/results.hpp"
+#include "client/campaign/results.hpp"
 
 namespace teleop::campaign {
 

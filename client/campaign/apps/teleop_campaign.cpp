@@ -16,8 +16,8 @@
 #include <filesystem>
 #include <iostream>
 
-#include "campaign/campaign.hpp"
-#include "campaign/runner.hpp"
+#include "client/campaign/campaign.hpp"
+#include "client/campaign/runner.hpp"
 #include "common/config/flags.hpp"
 #include "common/util/files.hpp"
 #include "common/util/registry.hpp"

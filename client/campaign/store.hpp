@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "campaign/campaign.hpp"
+#include "client/campaign/campaign.hpp"
 
 namespace teleop::campaign {
 

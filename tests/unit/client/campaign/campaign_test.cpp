@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "campaign/campaign.hpp"
-#include "campaign/results.hpp"
-#include "campaign/runner.hpp"
-#include "campaign/store.hpp"
+#include "client/campaign/campaign.hpp"
+#include "client/campaign/results.hpp"
+#include "client/campaign/runner.hpp"
+#include "client/campaign/store.hpp"
 #include "common/util/csv.hpp"
 #include "tests/support/config_error.hpp"
 #include "tests/support/press_world.hpp"

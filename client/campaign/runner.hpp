@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <string>
 
-#include "campaign/campaign.hpp"
-#include "campaign/store.hpp"
+#include "client/campaign/campaign.hpp"
+#include "client/campaign/store.hpp"
 
 namespace teleop::campaign {
 
