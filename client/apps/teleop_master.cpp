@@ -59,6 +59,23 @@ struct Flags {
   teleop::dds::NetworkFlags net_flags;
 };
 
+/// The haptic loop's scheduling (common/util/realtime.hpp).
+void add_loop_flags(CLI::App& app, teleop::RealtimeOptions& rt) {
+  using teleop::config::integer_in;
+  app.add_option("--realtime", rt.priority,
+                 "run the haptic loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)")
+      ->check(integer_in(0.0, 99.0));
+  app.add_option("--cpu", rt.cpu, "pin the haptic loop to this CPU (-1 = no pinning)")
+      ->check(integer_in(-1.0, 4096.0));
+  app.add_option("--spin-us", rt.spin_us,
+                 "busy-wait this long before each cycle's deadline [us], 0 to the period (0 = "
+                 "sleep to it)")
+      ->check(integer_in(0.0, 1e5));
+  app.add_option("--dma-latency-us", rt.dma_latency_us,
+                 "hold /dev/cpu_dma_latency at this value while running [us] (-1 = no)")
+      ->check(integer_in(-1.0, 1e5));
+}
+
 /// Declares every flag of teleop_master.
 void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   using teleop::config::integer_in;
@@ -163,18 +180,7 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
                  "haptic cycle; model-mediated: 1000 with the haptic loop at 4000), 1 to --rate")
       ->check(number_in(0.0, 20000.0));
   teleop::dds::add_reconnect_flag(app, o.reconnect_s);
-  app.add_option("--realtime", o.realtime.priority,
-                 "run the haptic loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)")
-      ->check(integer_in(0.0, 99.0));
-  app.add_option("--cpu", o.realtime.cpu, "pin the haptic loop to this CPU (-1 = no pinning)")
-      ->check(integer_in(-1.0, 4096.0));
-  app.add_option("--spin-us", o.realtime.spin_us,
-                 "busy-wait this long before each cycle's deadline [us], 0 to the period (0 = "
-                 "sleep to it)")
-      ->check(integer_in(0.0, 1e5));
-  app.add_option("--dma-latency-us", o.realtime.dma_latency_us,
-                 "hold /dev/cpu_dma_latency at this value while running [us] (-1 = no)")
-      ->check(integer_in(-1.0, 1e5));
+  add_loop_flags(app, o.realtime);
   app.add_option("--name", o.name,
                  "who this master is in the server's ownership events, up to 48 characters "
                  "(default IDENTITY@HOST:PID)");

@@ -458,6 +458,46 @@ struct MasterNode::Impl {
     log->row(vals.data(), vals.size());
   }
 
+  /// The session's figures once the loop and the drain are over.
+  void fill_report(MasterCycle& cycle, DdsSlaveLink& link, const RateLoop& loop,
+                   SessionReport& rep) {
+    // commands sent while another master owned the slave are not this session's (commands lost
+    // on the way before the first one arrived are: only a refusal seen moves the start)
+    if (rep.refused_first) {
+      rep.issued_before_owning =
+          link.first_owned_seq() > 0 ? link.first_owned_seq() - 1 : cycle.command_seq();
+    }
+    rep.issued = cycle.command_seq() - rep.issued_before_owning;
+    rep.in_flight = std::min<std::uint64_t>(cycle.forward().in_flight(), rep.issued);
+    {
+      const ChannelCounters& fw = cycle.forward().counters();
+      rep.dropped = fw.lost_random + fw.lost_burst + fw.lost_overflow + fw.lost_window;
+    }
+    // handed to the network thread and not replaced by a newer command before it was written
+    rep.sent = link.sent() - std::min(link.sent(), command_writer.dropped());
+    rep.received = std::min(link.received_in_session(), rep.sent);
+    rep.server_faults = update_health();
+    if (rep.server_faults > 0) {
+      cycle.metrics().mark_unstable("the slave faulted on the server", rep.elapsed_s);
+    }
+    rep.server_watchdog_trips = health.watchdog_trips.total();
+    rep.server_overruns = health.overruns.total();
+    rep.server_rejected = health.rejected.total();
+    rep.server_restarts = std::max(health.restarts, link.restarts());
+    rep.echoed = link.rtt().unique_echoes();
+    rep.states_received = states_received.load();
+    rep.overruns = loop.overruns();
+    rep.forward = cycle.forward().report();
+    rep.backward = cycle.backward().report();
+    rep.rtt_ms = summarize(link.rtt().rtt_ms().snapshot());
+    count_network_threads(rep);
+    rep.jitter_us = summarize(loop.lateness_us().snapshot());
+    {
+      std::lock_guard<std::mutex> lock(owner_event_mutex);
+      rep.owner_message = owner_event;
+    }
+  }
+
   int run(double waited_before_s = 0.0) {
     install_stop_signal_handlers();
     // 1. wait for the server: a matched command reader, a first SlaveState and the scene
@@ -528,41 +568,7 @@ struct MasterNode::Impl {
     }
     state_reader->stop();
 
-    // commands sent while another master owned the slave are not this session's (commands lost
-    // on the way before the first one arrived are: only a refusal seen moves the start)
-    if (rep.refused_first) {
-      rep.issued_before_owning =
-          link.first_owned_seq() > 0 ? link.first_owned_seq() - 1 : cycle.command_seq();
-    }
-    rep.issued = cycle.command_seq() - rep.issued_before_owning;
-    rep.in_flight = std::min<std::uint64_t>(cycle.forward().in_flight(), rep.issued);
-    {
-      const ChannelCounters& fw = cycle.forward().counters();
-      rep.dropped = fw.lost_random + fw.lost_burst + fw.lost_overflow + fw.lost_window;
-    }
-    // handed to the network thread and not replaced by a newer command before it was written
-    rep.sent = link.sent() - std::min(link.sent(), command_writer.dropped());
-    rep.received = std::min(link.received_in_session(), rep.sent);
-    rep.server_faults = update_health();
-    if (rep.server_faults > 0) {
-      cycle.metrics().mark_unstable("the slave faulted on the server", rep.elapsed_s);
-    }
-    rep.server_watchdog_trips = health.watchdog_trips.total();
-    rep.server_overruns = health.overruns.total();
-    rep.server_rejected = health.rejected.total();
-    rep.server_restarts = std::max(health.restarts, link.restarts());
-    rep.echoed = link.rtt().unique_echoes();
-    rep.states_received = states_received.load();
-    rep.overruns = loop.overruns();
-    rep.forward = cycle.forward().report();
-    rep.backward = cycle.backward().report();
-    rep.rtt_ms = summarize(link.rtt().rtt_ms().snapshot());
-    count_network_threads(rep);
-    rep.jitter_us = summarize(loop.lateness_us().snapshot());
-    {
-      std::lock_guard<std::mutex> lock(owner_event_mutex);
-      rep.owner_message = owner_event;
-    }
+    fill_report(cycle, link, loop, rep);
     // a file that could not be written is an error naming it, after everything else is out
     std::string write_error;
     try {
