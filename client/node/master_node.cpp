@@ -29,6 +29,7 @@
 #include "client/node/server_health.hpp"
 #include "client/node/tuning_endpoint.hpp"
 #include "common/dds/async_writer.hpp"
+#include "common/dds/contact_point.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/dds/rate_limited_publisher.hpp"
 #include "common/dds/teleop_idl.hpp"
@@ -311,28 +312,11 @@ struct MasterNode::Impl {
     if (!options.quiet && severity > 0) std::cerr << "teleop_master: " << msg << "\n";
   }
 
-  /// Where the master's origin lands in the slave world: the point where the tip centre is
-  /// when its surface just touches the target surface (top of the first deformable body, else
-  /// the floor under the tip).
+  /// Where the master's origin lands in the slave world: the flag's point, else where the tip
+  /// touches the scene's target (common/dds/contact_point.hpp).
   Eigen::Vector3d contact_point(const SceneDescription* scene, const Eigen::Vector3d& tip) {
     if (options.has_contact_point) return options.contact_point_m;
-    const double r = scene && scene->tip_radius_m() > 0 ? scene->tip_radius_m() : 0.05;
-    if (scene) {
-      for (const auto& o : scene->objects()) {
-        if (o.kind() == OBJECT_DEFORMABLE_MESH && o.size_m()[0] > 0.0) {
-          // its highest node where the server says (a body that sagged at load), else the top
-          // of its bounding sphere
-          const double top = o.size_m()[1] > 0.0 ? o.size_m()[1] : o.size_m()[0];
-          return Eigen::Vector3d(o.position_m()[0], o.position_m()[1], o.position_m()[2] + top + r);
-        }
-      }
-      for (const auto& o : scene->objects()) {
-        if (o.kind() == OBJECT_PLANE && o.normal()[2] > 0.99) {
-          return Eigen::Vector3d(tip.x(), tip.y(), o.offset_m() + r);
-        }
-      }
-    }
-    return tip;
+    return dds::scene_contact_point(scene, tip);
   }
 
   OperatorScript make_device_script() const {
