@@ -39,8 +39,15 @@ int rank(Verdict v) {
 }
 }  // namespace
 
-double SecantFit::stiffness() const {
-  return n >= 10 && depth_sum > 1e-12 ? force_sum / depth_sum : std::nan("");
+double LoadingFit::stiffness() const {
+  if (n < 10 || x_max - x_min < 1e-4) return std::nan("");
+  const double var = sxx - sx * sx / sw;
+  return var > 0.0 ? (sxy - sx * sy / sw) / var : std::nan("");
+}
+
+double LoadingFit::offset() const {
+  const double k = stiffness();
+  return std::isfinite(k) ? (sy - k * sx) / sw : std::nan("");
 }
 
 void SessionMetrics::reset() {
@@ -119,10 +126,30 @@ void SessionMetrics::update(const MetricsSample& s) {
   }
 }
 
+void SessionMetrics::update_loading(const MetricsSample& s) {
+  if (loading_over_) return;
+  if (contact_max_depth_m_ == 0.0) last_deeper_s_ = s.time_s;  // the touch
+  if (s.slave_depth_m >= contact_max_depth_m_ + kLoadingStepM) {
+    const double gained_m = s.slave_depth_m - contact_max_depth_m_;
+    contact_max_depth_m_ = s.slave_depth_m;
+    last_deeper_s_ = s.time_s;
+    felt_fit_.add(s.master_depth_m, s.felt_force_n, gained_m);
+    env_fit_.add(s.slave_depth_m, s.contact_force_n, gained_m);
+    last_loading_ = true;
+  } else if (s.time_s - last_deeper_s_ > kLoadingPauseS) {
+    loading_over_ = true;
+  }
+}
+
 void SessionMetrics::update_transparency(const MetricsSample& s) {
   const double dt = s.dt_s;
   const double fn = s.device_force_n.norm();
   const double fa = s.aligned_force_n;
+  last_loading_ = false;
+  if (!s.in_contact || s.slave_depth_m <= 0.0) {  // the contact ended: the next one loads anew
+    contact_max_depth_m_ = 0.0;
+    loading_over_ = false;
+  }
   if (s.transparency_valid && !s.in_contact && s.link_ok && s.have_slave) {
     ++n_free_;
     free_sum_ += fa;
@@ -137,8 +164,7 @@ void SessionMetrics::update_transparency(const MetricsSample& s) {
     felt_err_sq_ += (s.felt_force_n - s.contact_force_n) * (s.felt_force_n - s.contact_force_n);
     if (s.slave_depth_m > 0.0) {
       max_slave_depth_m_ = std::max(max_slave_depth_m_, s.slave_depth_m);
-      felt_fit_.add(s.master_depth_m, s.felt_force_n);
-      env_fit_.add(s.slave_depth_m, s.contact_force_n);
+      update_loading(s);
     }
   }
   // the device's continuous rating, judged as its thermal model does
@@ -242,7 +268,12 @@ std::string SessionMetrics::transparency_json() const {
          ",\"felt_force_ratio\":" + num(felt_force_ratio()) +
          ",\"felt_force_error_rms_n\":" + num(felt_force_error_rms_n()) +
          ",\"felt_stiffness_n_per_m\":" + num(felt_stiffness_n_per_m()) +
+         ",\"felt_offset_n\":" + num(felt_fit_.offset()) +
          ",\"environment_stiffness_n_per_m\":" + num(environment_stiffness_n_per_m()) +
+         ",\"environment_offset_n\":" + num(env_fit_.offset()) +
+         ",\"loading_samples\":" + num(static_cast<double>(env_fit_.n)) +
+         ",\"loading_depth_min_m\":" + num(env_fit_.n ? env_fit_.x_min : std::nan("")) +
+         ",\"loading_depth_max_m\":" + num(env_fit_.n ? env_fit_.x_max : std::nan("")) +
          ",\"stiffness_ratio\":" + num(stiffness_ratio()) +
          ",\"position_error_rms_m\":" + num(position_error_rms_m()) +
          ",\"over_rating_time_s\":" + num(over_rating_time_) +

@@ -34,12 +34,17 @@
 //   - in contact: the force felt, F_device along the contact normal in the slave's units
 //     (felt_force_n), against the environment's |f_e| (contact_force_n): ratio of the sums and
 //     the RMS of the difference;
-//   - stiffness, secant over the contact: sum of the felt force over sum of the master's depth
-//     (its position along the contact normal, master_depth_m = slave_depth_m + n . (x_s - x_m)),
-//     and sum of |f_e| over sum of the slave's depth (slave_depth_m): felt and environment
-//     stiffness, and their ratio (1 is transparent; below 1 the object feels softer than it is,
-//     e.g. force-position's slave lagging behind the master by its tracking error).
+//   - stiffness, from the loading phase of each contact: from the touch until the slave's depth
+//     (slave_depth_m) has not gone 10 um deeper for 50 ms (the first press, not the holding,
+//     slipping or letting go), a sample each time it went 10 um deeper, weighted by the depth it
+//     gained (uniform in depth, whatever the speed): the weighted least-squares line F = k x + b of
+//     the felt force against the master's depth (its position along the contact normal,
+//     master_depth_m = slave_depth_m + n . (x_s - x_m)), and of |f_e| against the slave's depth,
+//     over the same samples: felt and environment stiffness k, and their ratio (1 is transparent;
+//     below 1 the object feels softer than it is, e.g. force-position's slave lagging behind the
+//     master by its tracking error). The offset b takes the force already there at the touch.
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -97,17 +102,28 @@ struct MetricsSample {
   double aligned_force_n = 0.0;  ///< |device force| of that moment [N] (free space figures)
 };
 
-/// A secant stiffness: sum of forces over sum of depths, accumulated without allocation.
-struct SecantFit {
-  double force_sum = 0.0, depth_sum = 0.0;
+/// A stiffness from the loading phase of the contacts (see the file comment): the least-squares
+/// line F = k x + b through its samples. k is the stiffness, b the force already there at zero
+/// depth (the body's weight, the force at the touch). Accumulated without allocation.
+struct LoadingFit {
+  double sw = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0;  // weighted sums
+  double x_min = 0.0, x_max = 0.0;  ///< depth range of the samples taken [m]
   std::uint64_t n = 0;
-  void add(double depth_m, double force_n) {
-    depth_sum += depth_m;
-    force_sum += force_n;
+  /// A sample weighted by the depth it stands for (the depth gained since the previous one).
+  void add(double depth_m, double force_n, double weight) {
+    x_min = n ? std::min(x_min, depth_m) : depth_m;
+    x_max = n ? std::max(x_max, depth_m) : depth_m;
+    sw += weight;
+    sx += weight * depth_m;
+    sy += weight * force_n;
+    sxx += weight * depth_m * depth_m;
+    sxy += weight * depth_m * force_n;
     ++n;
   }
-  /// [N/m]; NaN with fewer than 10 samples or no depth.
+  /// k [N/m]; NaN with fewer than 10 samples or a depth range under 0.1 mm.
   double stiffness() const;
+  /// b [N]; NaN where stiffness() is.
+  double offset() const;
 };
 
 /// Accumulated metrics and the online verdict. See the file comment.
@@ -174,6 +190,12 @@ class SessionMetrics {
   double felt_force_error_rms_n() const;                 ///< RMS(felt - |f_e|) [N]
   double felt_stiffness_n_per_m() const { return felt_fit_.stiffness(); }
   double environment_stiffness_n_per_m() const { return env_fit_.stiffness(); }
+  /// The two loading fits (felt: felt force against the master's depth; environment: |f_e|
+  /// against the slave's depth), over the same samples.
+  const LoadingFit& felt_fit() const { return felt_fit_; }
+  const LoadingFit& environment_fit() const { return env_fit_; }
+  /// The newest sample was one of the loading phase (taken by both fits).
+  bool last_sample_loading() const { return last_loading_; }
   /// The deepest the slave's tip went into an object [m] (slave_depth_m), 0 without contact.
   double max_slave_depth_m() const { return max_slave_depth_m_; }
   double stiffness_ratio() const;  ///< felt / environment stiffness [-] (NaN if unknown)
@@ -195,6 +217,7 @@ class SessionMetrics {
  private:
   void close_window(double end_time_s);
   void update_transparency(const MetricsSample& s);
+  void update_loading(const MetricsSample& s);
   void set_verdict(Verdict v, const char* reason, double t);
 
   VerdictParams p_;
@@ -235,7 +258,15 @@ class SessionMetrics {
   double free_sum_ = 0.0, free_max_ = 0.0, free_time_ = 0.0;
   std::uint64_t n_felt_ = 0;
   double felt_sum_ = 0.0, contact_sum_ = 0.0, felt_err_sq_ = 0.0;
-  SecantFit felt_fit_, env_fit_;
+  // the loading phase of a contact: from the touch until the slave's depth has not gone
+  // kLoadingStepM deeper for kLoadingPauseS; one sample per kLoadingStepM of new depth
+  static constexpr double kLoadingStepM = 10e-6;
+  static constexpr double kLoadingPauseS = 0.05;
+  LoadingFit felt_fit_, env_fit_;
+  double contact_max_depth_m_ = 0.0;  // deepest sample taken of this contact (0: none yet)
+  double last_deeper_s_ = 0.0;        // when the contact last went kLoadingStepM deeper
+  bool loading_over_ = false;         // this contact's loading phase has ended
+  bool last_loading_ = false;
   double max_slave_depth_m_ = 0.0;
   double f_avg_ = 0.0, f_avg_max_ = 0.0, over_rating_time_ = 0.0;
 

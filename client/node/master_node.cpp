@@ -48,7 +48,7 @@ namespace teleop::master {
 
 namespace {
 
-constexpr std::size_t kCsvColumns = 34;
+constexpr std::size_t kCsvColumns = 38;
 /// A log row; the count must match the header exactly (checked at compile time).
 template <class... T>
 std::array<double, kCsvColumns> csv_row(T... v) {
@@ -394,7 +394,9 @@ struct MasterNode::Impl {
             "delay_injected_ms", "passivity_observer_j", "passivity_dissipated_j",
             // the device's own pose: the log
             // is a --device replay file
-            "dev_x", "dev_y", "dev_z", "dev_qw", "dev_qx", "dev_qy", "dev_qz"});
+            "dev_x", "dev_y", "dev_z", "dev_qw", "dev_qx", "dev_qy", "dev_qz",
+            // the samples of the summary's stiffness fits (docs/control.md, "Transparency")
+            "slave_depth_m", "master_depth_m", "felt_force_n", "loading"});
   }
 
   /// MasterState for observers (every state_every cycles).
@@ -438,7 +440,8 @@ struct MasterNode::Impl {
         cycle.safety().scale(), (xm - xs.position_m).norm(), xs.deformation_m, loop_delay_ms,
         (options.forward.delay_s + options.backward.delay_s) * 1e3, ps.observer_j, ps.dissipated_j,
         dev.position_m.x(), dev.position_m.y(), dev.position_m.z(), dev.orientation.w(),
-        dev.orientation.x(), dev.orientation.y(), dev.orientation.z());
+        dev.orientation.x(), dev.orientation.y(), dev.orientation.z(), m.slave_depth_m,
+        m.master_depth_m, m.felt_force_n, cycle.metrics().last_sample_loading() ? 1.0 : 0.0);
     log->row(vals.data(), vals.size());
   }
 
@@ -815,9 +818,12 @@ struct MasterNode::Impl {
     gravity = std::sqrt(gravity);
     for (const SceneObject& o : scene_at_start.objects()) {
       if (o.kind() != OBJECT_DEFORMABLE_MESH || !(o.youngs_modulus_pa() > 0.0)) continue;
+      const LoadingFit& fit = metrics.environment_fit();
+      const bool fitted = std::isfinite(metrics.environment_stiffness_n_per_m());
       return hertz_reference(o.youngs_modulus_pa(), o.poisson_ratio(), o.size_m()[0],
                              scene_at_start.tip_radius_m(), o.mass_kg() * gravity,
-                             metrics.max_slave_depth_m());
+                             metrics.max_slave_depth_m(), fitted ? fit.x_min : 0.0,
+                             fitted ? fit.x_max : 0.0);
     }
     return HertzReference{};
   }
@@ -837,7 +843,10 @@ struct MasterNode::Impl {
         << ", \"travel_m\": " << json_number(hz.travel_m)
         << ", \"force_n\": " << json_number(hz.force_n)
         << ", \"tangent_n_per_m\": " << json_number(hz.tangent_n_per_m)
-        << ", \"secant_n_per_m\": " << json_number(hz.secant_n_per_m) << "},\n"
+        << ", \"secant_n_per_m\": " << json_number(hz.secant_n_per_m)
+        << ", \"fit_from_m\": " << json_number(hz.fit_from_m)
+        << ", \"fit_to_m\": " << json_number(hz.fit_to_m)
+        << ", \"fit_n_per_m\": " << json_number(hz.fit_n_per_m) << "},\n"
         << "  \"duration_s\": " << json_number(rep.elapsed_s) << ",\n"
         << "  \"session_s\": " << json_number(rep.session_s) << ",\n"
         << "  \"rate_hz\": " << json_number(options.rate_hz) << ",\n"
@@ -1027,7 +1036,8 @@ struct MasterNode::Impl {
         "  force           max rendered %.2f N, force error RMS %.3f N (%s of the mean "
         "contact force), contact %.2f s, mean contact force %.2f N\n"
         "  transparency    free space %.3f N mean, %.3f N p99, %.3f N max; in contact felt %.2f x "
-        "the environment's force (RMS %.3f N), stiffness felt %.0f N/m against %.0f N/m (%.2f)\n"
+        "the environment's force (RMS %.3f N), stiffness felt %.0f N/m against %.0f N/m (%.2f; "
+        "loading fit F = k x + b, b %.2f N against %.2f N)\n"
         "%s"
         "  passivity       energy at the master port %.4f J (min %.4f J)\n"
         "  safety          %s%s, link losses %llu, loop stalls %llu (longest %.3f s), re-homed "
@@ -1054,8 +1064,10 @@ struct MasterNode::Impl {
         metrics.mean_contact_force_n(), metrics.free_force_mean_n(), metrics.free_force_p99_n(),
         metrics.free_force_max_n(), metrics.felt_force_ratio(), metrics.felt_force_error_rms_n(),
         metrics.felt_stiffness_n_per_m(), metrics.environment_stiffness_n_per_m(),
-        metrics.stiffness_ratio(),
-        hertz_line(hertz_for_session(metrics), metrics.felt_stiffness_n_per_m()).c_str(),
+        metrics.stiffness_ratio(), metrics.felt_fit().offset(), metrics.environment_fit().offset(),
+        hertz_line(hertz_for_session(metrics), metrics.felt_stiffness_n_per_m(),
+                   metrics.environment_stiffness_n_per_m())
+            .c_str(),
         metrics.energy_j(), metrics.energy_min_j(), safety.cut() ? "CUT: " : "ok",
         safety.cut() ? safety.cut_reason() : "", static_cast<unsigned long long>(rep.link_losses),
         static_cast<unsigned long long>(rep.stalls), rep.longest_stall_s,

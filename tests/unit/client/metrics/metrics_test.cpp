@@ -169,4 +169,82 @@ TEST(Metrics, EnergyFollowsTheSignConventionAndJsonAndCsvAreWellFormed) {
   EXPECT_EQ(commas(row), commas(SessionMetrics::csv_header()));
 }
 
+/// One contact: press to 4.8 mm at 12 mm/s along F = 0.1 N + 100 N/m x (master 0.5 mm deeper and
+/// felt at 80 %), hold 0.3 s creeping 1 um/s deeper while the force relaxes, then press 1 mm
+/// deeper along another law (a slip) and let go along a softer curve (hysteresis).
+void press_hold_slip_release(SessionMetrics& m, double t0_s) {
+  MetricsSample s;
+  s.in_contact = true;
+  s.have_slave = true;
+  s.link_ok = true;
+  s.transparency_valid = true;
+  double t = t0_s;
+  const auto add = [&](double depth_m, double force_n) {
+    s.time_s = t;
+    s.slave_depth_m = depth_m;
+    s.master_depth_m = depth_m + 0.0005;
+    s.contact_force_n = force_n;
+    s.felt_force_n = 0.8 * force_n;
+    m.update(s);
+    t += 1e-3;
+  };
+  for (int i = 1; i <= 400; ++i) add(i * 1.2e-5, 0.1 + 100.0 * i * 1.2e-5);        // press
+  for (int i = 0; i < 300; ++i) add(0.0048 + i * 1e-9, 0.58 - 1e-4 * i);           // hold, creep
+  for (int i = 1; i <= 100; ++i) add(0.0048 + i * 1e-5, 0.55 + 300.0 * i * 1e-5);  // slip
+  for (int i = 100; i >= 1; --i) add(i * 5e-5, 20.0 * i * 5e-5);                   // let go
+  s.in_contact = false;
+  s.slave_depth_m = s.master_depth_m = s.contact_force_n = s.felt_force_n = 0.0;
+  s.time_s = t;
+  m.update(s);
+}
+
+TEST(Metrics, TheStiffnessIsTheLineFitOfTheFirstPressOfEachContact) {
+  SessionMetrics m;
+  press_hold_slip_release(m, 0.0);
+  // only the press: k and b of its law, the hold, the slip and the letting go left out
+  EXPECT_NEAR(m.environment_stiffness_n_per_m(), 100.0, 1e-6);
+  EXPECT_NEAR(m.environment_fit().offset(), 0.1, 1e-9);
+  EXPECT_NEAR(m.felt_stiffness_n_per_m(), 80.0, 1e-6);  // 0.8 F against x + 0.5 mm
+  EXPECT_NEAR(m.felt_fit().offset(), 0.8 * (0.1 - 100.0 * 0.0005), 1e-9);
+  EXPECT_NEAR(m.stiffness_ratio(), 0.8, 1e-9);
+  EXPECT_EQ(m.environment_fit().n, 400u);  // every press sample went 12 um deeper
+  EXPECT_NEAR(m.environment_fit().x_max, 0.0048, 1e-12);
+  // a second contact loads anew; the same law keeps the same line
+  press_hold_slip_release(m, 10.0);
+  EXPECT_EQ(m.environment_fit().n, 800u);
+  EXPECT_NEAR(m.environment_stiffness_n_per_m(), 100.0, 1e-6);
+  const std::string j = m.transparency_json();
+  EXPECT_NE(j.find("\"environment_offset_n\":0.1"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"loading_samples\":800"), std::string::npos) << j;
+}
+
+TEST(Metrics, ASlowPressWeighsAsMuchAsAFastOne) {
+  // samples weighted by the depth they gained: 2 mm at 1 mm/s and 2 mm at 20 mm/s weigh the
+  // same, whatever the time spent on each
+  SessionMetrics m;
+  MetricsSample s;
+  s.in_contact = s.have_slave = s.link_ok = s.transparency_valid = true;
+  double t = 0.0, x = 0.0;
+  const auto add = [&](double v_mps) {
+    x += v_mps * 1e-3;
+    s.time_s = (t += 1e-3);
+    s.slave_depth_m = s.master_depth_m = x;
+    s.contact_force_n = s.felt_force_n = 150.0 * x;
+    m.update(s);
+  };
+  for (int i = 0; i < 2000; ++i) add(0.001);  // 2 mm slowly: a sample per 10 um
+  for (int i = 0; i < 100; ++i) add(0.02);    // 2 mm quickly: every sample, 20 um each
+  EXPECT_NEAR(m.environment_stiffness_n_per_m(), 150.0, 1e-6);
+  EXPECT_GT(m.environment_fit().n, 270u);  // about 200 + 100, not 2100
+  EXPECT_LT(m.environment_fit().n, 310u);
+  const LoadingFit& f = m.environment_fit();
+  EXPECT_NEAR(f.sw, 0.004, 1e-5);  // the weights add up to the depth pressed
+  // the two halves weigh the same: their weighted mean depth is the middle of 0-4 mm
+  EXPECT_NEAR(f.sx / f.sw, 0.002, 2e-5);
+  // no contact, no fit: NaN, printed null
+  SessionMetrics none;
+  EXPECT_TRUE(std::isnan(none.felt_stiffness_n_per_m()));
+  EXPECT_NE(none.transparency_json().find("\"felt_offset_n\":null"), std::string::npos);
+}
+
 }  // namespace
