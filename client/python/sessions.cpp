@@ -6,6 +6,7 @@
 #include <pybind11/stl.h>
 
 #include <charconv>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -34,7 +35,7 @@ std::vector<std::string> split_cells(const std::string& line) {
 }
 
 /// A cell as Python sees it: int for the integer columns, float for numbers ("nan", "inf"
-/// included), str for the rest.
+/// included), str for the text columns and anything that is not a number.
 py::object cell_value(const std::string& name, const std::string& text) {
   static const char* const kText[] = {"run_id", "sweep",      "model",  "scene",   "environment",
                                       "script", "trajectory", "scheme", "verdict", "reason"};
@@ -46,7 +47,10 @@ py::object cell_value(const std::string& name, const std::string& text) {
     const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
     if (r.ec == std::errc() && r.ptr == text.data() + text.size()) return py::int_(v);
   }
-  return py::float_(std::stod(text));
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size()) return py::str(text);
+  return py::float_(v);
 }
 
 /// Header names and row cells as a dict (the names of the campaign results table).
