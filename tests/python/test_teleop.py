@@ -121,6 +121,25 @@ def test_campaign_runs_equal_teleop_campaign_rows(campaign_file, tmp_path):
             assert float(want) == s[name] or (want == "nan" and np.isnan(s[name])), name
 
 
+def test_a_sweep_on_threads_is_the_sessions_one_by_one():
+    grid = dict(scheme=["position-position", "tdpa"], delay_ms=[0, 40, 80], loss=0.02, seed=5)
+    parallel = teleop.sweep(jobs=2, **grid)
+    assert [(r.summary["scheme"], r.summary["delay_ms"]) for r in parallel] == [
+        (s, d) for s in grid["scheme"] for d in grid["delay_ms"]]
+    for r in parallel:
+        one = teleop.run_session(scheme=r.summary["scheme"], delay_ms=r.summary["delay_ms"],
+                                 loss=0.02, seed=5)
+        assert r.row == one.row
+        np.testing.assert_array_equal(r.traces["device_force_n"], one.traces["device_force_n"])
+    t = teleop.table(parallel)
+    assert t["delay_ms"].tolist() == [0, 40, 80, 0, 40, 80]
+    assert t["seed"].dtype == np.int64 and t["verdict"].dtype.kind == "U"
+    # the grid holds both verdicts: position-position loses stability with delay, tdpa does not
+    assert "stable" in t["verdict"] and "unstable" in t["verdict"][:3]
+    with pytest.raises(ValueError, match="jobs = 0"):
+        teleop.sweep(jobs=0, delay_ms=[0])
+
+
 def test_a_scene_session_and_the_world_step(scene_file):
     scene = teleop.load_scene(scene_file)
     assert scene.description["name"] == "python-test"

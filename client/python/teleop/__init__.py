@@ -12,16 +12,18 @@ its ``traces`` one numpy array per recorded channel, one row per master cycle.
 Bad arguments raise ValueError naming the argument, the value and the allowed range.
 """
 
+import itertools
 import json
 import math
 import os
+from concurrent.futures import ThreadPoolExecutor
 
 from . import _teleop
 from ._teleop import Scene, World, load_scene, read_recording, scheme_labels
 
 __all__ = [
     "Scene", "World", "SessionResult", "load_scene", "run_session", "run_campaign_point",
-    "campaign_runs", "read_recording", "write_recording", "scheme_labels",
+    "campaign_runs", "sweep", "table", "read_recording", "write_recording", "scheme_labels",
 ]
 
 # Every argument of run_session that is a campaign axis: (allowed low, high) of the number.
@@ -154,6 +156,43 @@ def run_session(params=None, *, scene=None, scheme="position-position", delay_ms
                              args["environment"], args["trajectory"], args["duration_s"],
                              args["homing_s"], numbers)
     return SessionResult(_teleop.run_campaign_text(text, "teleop.run_session", 0))
+
+
+def sweep(jobs=1, **axes):
+    """Runs the Cartesian product of the axes given as lists (the others fixed), as a campaign
+    sweep does: the last axis varies fastest. Sessions run on `jobs` threads (they release the
+    GIL); the results come back in grid order, the same whatever `jobs` is.
+
+        rs = teleop.sweep(jobs=2, scheme=["tdpa", "wave-variables"], delay_ms=[0, 50, 100])
+    """
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or not 1 <= jobs <= 256:
+        raise _range_error("jobs", jobs, "an integer, 1 to 256")
+    names = [k for k, v in axes.items() if isinstance(v, (list, tuple))]
+    fixed = {k: v for k, v in axes.items() if k not in names}
+    points = [dict(fixed, **dict(zip(names, values)))
+              for values in itertools.product(*(axes[k] for k in names))]
+    if jobs == 1:
+        return [run_session(**p) for p in points]
+    with ThreadPoolExecutor(jobs) as pool:
+        return list(pool.map(lambda p: run_session(**p), points))
+
+
+def table(results):
+    """The summaries of several results as columns: {column: numpy array} (numbers as float64
+    or int64, text as str arrays), rows in the order of `results`."""
+    import numpy as np
+    if not results:
+        return {}
+    columns = {}
+    for name in results[0].summary:
+        values = [r.summary[name] for r in results]
+        if all(isinstance(v, int) for v in values):
+            columns[name] = np.array(values, dtype=np.int64)
+        elif all(isinstance(v, (int, float)) for v in values):
+            columns[name] = np.array(values, dtype=np.float64)
+        else:
+            columns[name] = np.array([str(v) for v in values])
+    return columns
 
 
 def run_campaign_point(campaign_file, index):
