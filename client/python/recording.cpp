@@ -7,6 +7,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -117,27 +118,65 @@ void decode(const ServerStats& s, Columns& cols) {
 
 #undef TELEOP_COL
 
-/// Deserializes `payload` as PubSub's type and adds its fields; false when it does not decode.
+/// Deserializes `payload` as PubSub's type into `value`; false when it does not decode.
 template <class PubSub>
-bool decode_as(std::vector<std::uint8_t>& payload, Columns& cols) {
+bool deserialize_into(std::vector<std::uint8_t>& payload, typename PubSub::type& value) {
   eprosima::fastrtps::rtps::SerializedPayload_t p;
   p.data = payload.data();
   p.length = static_cast<std::uint32_t>(payload.size());
   p.max_size = p.length;
-  typename PubSub::type value;
   const bool ok = dds::deserialize_checked<PubSub>(p, value);
   p.data = nullptr;  // not owned
+  return ok;
+}
+
+/// Deserializes `payload` as PubSub's type and adds its fields; false when it does not decode.
+template <class PubSub>
+bool decode_as(std::vector<std::uint8_t>& payload, Columns& cols) {
+  typename PubSub::type value;
+  const bool ok = deserialize_into<PubSub>(payload, value);
   if (ok) decode(value, cols);
   return ok;
 }
 
-/// What one topic of a recording holds.
+/// What one topic of a recording holds: per sample its times, sizes and decoded fields; the
+/// types whose samples are not rows of numbers keep them whole (events' texts, mesh frames and
+/// topologies, scene descriptions).
 struct TopicArrays {
   std::string type;
   std::vector<double> receive_ns, source_ns, writer_seq, payload_bytes;
   std::size_t malformed = 0;
   Columns fields;
+  std::vector<std::string> source, message;           // teleop::Event
+  std::vector<std::vector<float>> positions_m;        // teleop::MeshFrame, 3 per vertex
+  std::vector<std::vector<std::uint32_t>> triangles;  // teleop::MeshTopology, 3 per triangle
+  std::vector<SceneDescription> scenes;               // teleop::SceneDescription
 };
+
+/// Events, mesh frames and topologies: their numbers as columns, the rest kept whole.
+bool decode_whole(std::vector<std::uint8_t>& payload, TopicArrays& t) {
+  if (t.type == "teleop::Event") {
+    Event e;
+    const bool ok = deserialize_into<EventPubSubType>(payload, e);
+    if (ok) decode(e, t.fields);
+    t.source.push_back(ok ? e.source().to_string() : "");
+    t.message.push_back(ok ? e.message().to_string() : "");
+    return ok;
+  }
+  if (t.type == "teleop::MeshFrame") {
+    MeshFrame f;
+    const bool ok = deserialize_into<MeshFramePubSubType>(payload, f);
+    if (ok) t.fields.add("object_id", f.object_id()), t.fields.add("frame", f.frame());
+    if (ok) t.fields.add("sim_time_s", f.sim_time_s());
+    t.positions_m.push_back(ok ? f.positions_m() : std::vector<float>{});
+    return ok;
+  }
+  MeshTopology m;
+  const bool ok = deserialize_into<MeshTopologyPubSubType>(payload, m);
+  if (ok) t.fields.add("object_id", m.object_id()), t.fields.add("vertex_count", m.vertex_count());
+  t.triangles.push_back(ok ? m.triangle_indices() : std::vector<std::uint32_t>{});
+  return ok;
+}
 
 /// Decodes one sample into its topic's arrays.
 void add_sample(record::RecordedSample& s, TopicArrays& t) {
@@ -146,14 +185,51 @@ void add_sample(record::RecordedSample& s, TopicArrays& t) {
   t.writer_seq.push_back(static_cast<double>(s.writer_seq));
   t.payload_bytes.push_back(static_cast<double>(s.payload.size()));
   bool ok = true;
-  if (t.type == "teleop::MasterCommand")
-    ok = decode_as<MasterCommandPubSubType>(s.payload, t.fields);
-  if (t.type == "teleop::SlaveState") ok = decode_as<SlaveStatePubSubType>(s.payload, t.fields);
-  if (t.type == "teleop::MasterState") ok = decode_as<MasterStatePubSubType>(s.payload, t.fields);
-  if (t.type == "teleop::Event") ok = decode_as<EventPubSubType>(s.payload, t.fields);
-  if (t.type == "teleop::ServerStats") ok = decode_as<ServerStatsPubSubType>(s.payload, t.fields);
+  const std::string& type = t.type;
+  if (type == "teleop::MasterCommand") ok = decode_as<MasterCommandPubSubType>(s.payload, t.fields);
+  if (type == "teleop::SlaveState") ok = decode_as<SlaveStatePubSubType>(s.payload, t.fields);
+  if (type == "teleop::MasterState") ok = decode_as<MasterStatePubSubType>(s.payload, t.fields);
+  if (type == "teleop::ServerStats") ok = decode_as<ServerStatsPubSubType>(s.payload, t.fields);
+  if (type == "teleop::Event" || type == "teleop::MeshFrame" || type == "teleop::MeshTopology") {
+    ok = decode_whole(s.payload, t);
+  }
+  if (type == "teleop::SceneDescription") {
+    t.scenes.emplace_back();
+    ok = deserialize_into<SceneDescriptionPubSubType>(s.payload, t.scenes.back());
+    if (!ok) t.scenes.pop_back();
+  }
   if (!ok) ++t.malformed;
   t.fields.end_row();
+}
+
+/// The samples kept whole, as Python lists.
+void add_whole(const TopicArrays& t, py::dict& d) {
+  if (t.type == "teleop::Event") d["source"] = t.source, d["message"] = t.message;
+  if (t.type == "teleop::MeshFrame") {
+    py::list frames;
+    for (const std::vector<float>& p : t.positions_m) {
+      py::array_t<float> a({static_cast<py::ssize_t>(p.size() / 3), py::ssize_t{3}});
+      std::copy(p.begin(), p.begin() + static_cast<std::ptrdiff_t>(p.size() / 3 * 3),
+                a.mutable_data());
+      frames.append(a);
+    }
+    d["positions_m"] = frames;
+  }
+  if (t.type == "teleop::MeshTopology") {
+    py::list tris;
+    for (const std::vector<std::uint32_t>& v : t.triangles) {
+      py::array_t<std::int64_t> a({static_cast<py::ssize_t>(v.size() / 3), py::ssize_t{3}});
+      std::copy(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 3 * 3),
+                a.mutable_data());
+      tris.append(a);
+    }
+    d["triangles"] = tris;
+  }
+  if (t.type == "teleop::SceneDescription") {
+    py::list scenes;
+    for (const SceneDescription& s : t.scenes) scenes.append(scene_description_dict(s));
+    d["description"] = scenes;
+  }
 }
 
 py::dict read_recording(const std::string& path) {
@@ -185,6 +261,7 @@ py::dict read_recording(const std::string& path) {
       const Columns::Column& c = t.fields.columns.at(name);
       d[py::str(name)] = array_of(c.values.data(), t.fields.rows, c.width);
     }
+    add_whole(t, d);
     d["type"] = t.type;
     d["malformed"] = t.malformed;
     out[py::str(names[id])] = d;

@@ -52,23 +52,6 @@ py::dict object_dict(const SceneObject& o) {
   return d;
 }
 
-/// The scene description (teleop/scene) as a dict.
-py::dict description_dict(const SceneDescription& s) {
-  py::dict d;
-  d["name"] = s.name().to_string();
-  d["gravity_mps2"] = list_of(s.gravity_mps2());
-  d["physics_rate_hz"] = s.physics_rate_hz();
-  d["visual_rate_hz"] = s.visual_rate_hz();
-  d["tip_radius_m"] = s.tip_radius_m();
-  d["joint_count"] = s.joint_count();
-  d["workspace_min_m"] = list_of(s.workspace_min_m());
-  d["workspace_max_m"] = list_of(s.workspace_max_m());
-  py::list objects;
-  for (const SceneObject& o : s.objects()) objects.append(object_dict(o));
-  d["objects"] = objects;
-  return d;
-}
-
 /// A loaded scene: the immutable world model, shared by the worlds made from it.
 struct Scene {
   std::shared_ptr<const sim::WorldModel> model;
@@ -80,7 +63,7 @@ Scene load_scene(const std::string& path) {
   s.model = std::make_shared<const sim::WorldModel>(sim::load_world_model(path));
   const sim::WorldData data = sim::make_world_data(*s.model);
   s.description =
-      description_dict(server::describe_scene(*s.model, data, s.model->physics_rate_hz));
+      scene_description_dict(server::describe_scene(*s.model, data, s.model->physics_rate_hz));
   return s;
 }
 
@@ -196,6 +179,22 @@ void bind_scene(py::module_& m) {
 }
 
 }  // namespace
+
+py::dict scene_description_dict(const SceneDescription& s) {
+  py::dict d;
+  d["name"] = s.name().to_string();
+  d["gravity_mps2"] = list_of(s.gravity_mps2());
+  d["physics_rate_hz"] = s.physics_rate_hz();
+  d["visual_rate_hz"] = s.visual_rate_hz();
+  d["tip_radius_m"] = s.tip_radius_m();
+  d["joint_count"] = s.joint_count();
+  d["workspace_min_m"] = list_of(s.workspace_min_m());
+  d["workspace_max_m"] = list_of(s.workspace_max_m());
+  py::list objects;
+  for (const SceneObject& o : s.objects()) objects.append(object_dict(o));
+  d["objects"] = objects;
+  return d;
+}
 
 void bind_world(py::module_& m) {
   bind_scene(m);

@@ -1,9 +1,15 @@
 """The Python module teleop (client/python, docs/python.md), run by ctest as python.teleop:
-sessions against the C++ campaign runner, traces, the world step, recordings and bad input."""
+sessions against the C++ campaign runner, traces, the world step, recordings (one made here, one
+of a live session recorded by teleop_record) and bad input.
+
+The live session runs on the loopback profile in domain 180 (kPythonRecording of
+tests/support/domains.hpp)."""
 
 import csv
 import os
+import signal
 import subprocess
+import time
 
 import numpy as np
 import pytest
@@ -182,6 +188,65 @@ def test_read_recording_decodes_a_recording_made_here(tmp_path, name):
     np.testing.assert_array_equal(m["rendered_force_n"], r.traces["device_force_n"])
     np.testing.assert_array_equal(s["receive_ns"], np.round(r.traces["time_s"] * 1e9))
     assert s["joint_position_rad"].shape == (n, 16)
+
+
+LIVE_DOMAIN = "180"
+
+
+def test_read_recording_decodes_a_live_session_of_teleop_record(tmp_path):
+    build = os.environ["TELEOP_BUILD_DIR"]
+    env = dict(os.environ, TELEOP_PROFILE="loopback")
+    env.pop("TELEOP_DOMAIN", None)
+    mcap, db = str(tmp_path / "live.mcap"), str(tmp_path / "live.db")
+    log = open(tmp_path / "record.log", "w+")
+    procs = []
+    try:
+        rec = subprocess.Popen([build + "/client/teleop_record", "--domain", LIVE_DOMAIN,
+                                "--out", mcap], stdout=log, stderr=subprocess.STDOUT, env=env)
+        procs.append(rec)
+        for _ in range(100):  # until it listens
+            if "recording" in open(tmp_path / "record.log").read():
+                break
+            time.sleep(0.1)
+        server = subprocess.Popen([build + "/server/teleop_server", "--domain", LIVE_DOMAIN,
+                                   "--duration", "60", "--quiet"], stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.DEVNULL, env=env)
+        procs.append(server)
+        subprocess.run([build + "/client/teleop_master", "--domain", LIVE_DOMAIN, "--duration",
+                        "2", "--homing", "0.5", "--quiet"], check=True, timeout=60, env=env,
+                       stdout=subprocess.DEVNULL)
+        server.send_signal(signal.SIGTERM)
+        assert server.wait(timeout=30) == 0
+        time.sleep(0.2)
+        rec.send_signal(signal.SIGINT)
+        assert rec.wait(timeout=30) == 0
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+    subprocess.run([build + "/client/teleop_play", mcap, "--convert", db], check=True,
+                   stdout=subprocess.DEVNULL)
+    d = teleop.read_recording(mcap)
+    assert all(v["malformed"] == 0 for v in d.values())
+    cmd, state = d["teleop/master_command"], d["teleop/slave_state"]
+    assert len(cmd["seq"]) > 1000 and len(state["seq"]) > 1000  # 2.5 s at 1 kHz, most of it
+    assert np.all(np.diff(state["seq"]) > 0) and np.all(np.diff(cmd["seq"]) > 0)
+    assert cmd["position_m"].shape == (len(cmd["seq"]), 3)
+    assert np.all(np.isfinite(state["tip_position_m"]))
+    assert np.all(np.linalg.norm(state["contact_force_n"], axis=1) < 100)
+    assert any("server started" in m for m in d["teleop/events"]["message"])
+    scene = d["teleop/scene"]["description"][0]
+    assert scene["name"] == "default" and scene["physics_rate_hz"] == 1000
+    assert d["teleop/mesh_topology"]["triangles"][0].shape == (5120, 3)
+    assert d["teleop/mesh_frame"]["positions_m"][0].shape == (2562, 3)
+    # the same samples, decoded the same, from the SQLite copy
+    s = teleop.read_recording(db)
+    assert set(s) == set(d)
+    for topic in ("teleop/master_command", "teleop/slave_state", "teleop/master_state"):
+        for name, values in d[topic].items():
+            if isinstance(values, np.ndarray):
+                np.testing.assert_array_equal(s[topic][name], values, err_msg=topic + name)
 
 
 def test_bad_input_raises_value_error_naming_it(tmp_path, campaign_file, scene_file):
