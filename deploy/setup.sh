@@ -23,6 +23,7 @@ packages=(
   libwebsocketpp-dev libasio-dev libjsoncpp-dev  # teleop_bridge (Foxglove WebSocket protocol)
   openssl libssl-dev  # DDS Security: deploy/make_security.sh; common/dds/security_check.cpp
   python3-matplotlib python3-numpy
+  pybind11-dev python3-dev python3-pytest  # the Python module teleop (client/python) and its test
   clang-format
   clang libclang-rt-dev   # libFuzzer + sanitizers of the fuzz targets (tests/fuzz, deploy/fuzz.sh)
 )

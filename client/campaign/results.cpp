@@ -200,11 +200,50 @@ double default_length_s(const Campaign& c, const RunParams& p,
   return std::max(at_least_s, len + extra_s);
 }
 
-/// Steps `session` to its end, keeping the largest force the controller asked for.
-void drive(LoopbackSession& session, Outcome& o) {
+/// Writes a 3-vector into row `i` of a channel.
+void put3(std::vector<double>& d, std::size_t i, const Eigen::Vector3d& v) {
+  d[3 * i] = v.x();
+  d[3 * i + 1] = v.y();
+  d[3 * i + 2] = v.z();
+}
+
+/// Records the cycle just stepped into row t.size of `t` (nothing past its capacity).
+void record_cycle(const LoopbackSession& session, const server::WorldSlave& slave, RunTraces& t) {
+  if (t.size >= t.capacity) {
+    ++t.dropped;
+    return;
+  }
+  const std::size_t i = t.size++;
+  const master::MetricsSample& m = session.last_sample();
+  const SlaveSample& s = slave.sample();
+  auto* d = t.data;
+  d[RunTraces::kTime][i] = session.time_s();
+  d[RunTraces::kHoming][i] = session.cycle().homing() ? 1.0 : 0.0;
+  put3(d[RunTraces::kMasterPosition], i, m.master_position_m);
+  put3(d[RunTraces::kSlavePosition], i, s.position_m);
+  put3(d[RunTraces::kCommandPosition], i, session.slave_command().position_m);
+  put3(d[RunTraces::kControllerForce], i, session.controller_force_n());
+  put3(d[RunTraces::kDeviceForce], i, session.device_force_n());
+  put3(d[RunTraces::kContactForce], i, s.contact_force_n);
+  put3(d[RunTraces::kContactAtMaster], i, session.slave_at_master().contact_force_n);
+  d[RunTraces::kPenetration][i] = s.penetration_m;
+  d[RunTraces::kDeformation][i] = s.deformation_m;
+  d[RunTraces::kInContact][i] = s.in_contact ? 1.0 : 0.0;
+  d[RunTraces::kSafetyScale][i] = m.safety_scale;
+  d[RunTraces::kLinkOk][i] = m.link_ok ? 1.0 : 0.0;
+}
+
+/// Steps `session` to its end, keeping the largest force the controller asked for, and
+/// records each cycle into `traces` (when given), sized first for `cycles` cycles.
+void drive(LoopbackSession& session, const server::WorldSlave& slave, Outcome& o, RunTraces* traces,
+           double session_s, double dt_s) {
+  if (traces != nullptr) traces->reserve(static_cast<std::size_t>(std::ceil(session_s / dt_s)) + 8);
   session.start();
   double max_ctrl = 0.0;
-  while (session.step()) max_ctrl = std::max(max_ctrl, session.controller_force_n().norm());
+  while (session.step()) {
+    max_ctrl = std::max(max_ctrl, session.controller_force_n().norm());
+    if (traces != nullptr) record_cycle(session, slave, *traces);
+  }
   o.max_controller_force_n = max_ctrl;
 }
 
@@ -247,7 +286,7 @@ void collect(const LoopbackSession& session, const server::WorldSlave& slave, Ou
 }
 
 /// The point model: teleop_bench delay's press task with this run's channels and device.
-Outcome run_point(const Campaign& c, const RunParams& p) {
+Outcome run_point(const Campaign& c, const RunParams& p, RunTraces* traces) {
   const SchemeLaw law = scheme_law(p.scheme);
   master::PressScenario s;
   s.scheme = law.scheme;
@@ -277,7 +316,7 @@ Outcome run_point(const Campaign& c, const RunParams& p) {
       setup.loop.dt_s);
   LoopbackSession session(setup.loop, *device, slave);
   Outcome o;
-  drive(session, o);
+  drive(session, slave, o, traces, setup.loop.homing_s + setup.loop.duration_s, setup.loop.dt_s);
   collect(session, slave, o);
   master::PressResult r;
   master::fill_analytic(s, setup, r);
@@ -287,7 +326,7 @@ Outcome run_point(const Campaign& c, const RunParams& p) {
 }
 
 /// The world model: the scene stepped by the server's cycle, the master homing it first.
-Outcome run_world(const Campaign& c, const RunParams& p) {
+Outcome run_world(const Campaign& c, const RunParams& p, RunTraces* traces) {
   const sim::WorldModel& model = *c.scenes.at(p.scene);
   const double dt = 1.0 / model.physics_rate_hz;
   server::WorldSlave slave(model, dt);
@@ -315,7 +354,7 @@ Outcome run_world(const Campaign& c, const RunParams& p) {
   const std::unique_ptr<master::HapticDevice> device = make_device(c, p, dp);
   LoopbackSession session(loop, *device, slave);
   Outcome o;
-  drive(session, o);
+  drive(session, slave, o, traces, loop.homing_s + loop.duration_s, loop.dt_s);
   collect(session, slave, o);
   return o;
 }
@@ -341,10 +380,43 @@ std::string parameter_cells(const Campaign& c, const RunParams& p) {
   return j.out;
 }
 
-std::string run_one(const Campaign& c, const RunParams& p) {
+namespace {
+struct ChannelInfo {
+  const char* name;
+  std::size_t width;
+};
+constexpr ChannelInfo kChannels[RunTraces::kChannelCount] = {
+    {"time_s", 1},
+    {"homing", 1},
+    {"master_position_m", 3},
+    {"slave_position_m", 3},
+    {"command_position_m", 3},
+    {"controller_force_n", 3},
+    {"device_force_n", 3},
+    {"contact_force_n", 3},
+    {"contact_force_at_master_n", 3},
+    {"penetration_m", 1},
+    {"deformation_m", 1},
+    {"in_contact", 1},
+    {"safety_scale", 1},
+    {"link_ok", 1},
+};
+}  // namespace
+
+const char* RunTraces::name(std::size_t channel) { return kChannels[channel].name; }
+std::size_t RunTraces::width(std::size_t channel) { return kChannels[channel].width; }
+
+void RunTraces::reserve(std::size_t cycles) {
+  size = 0;
+  dropped = 0;
+  capacity = cycles;
+  for (std::size_t k = 0; k < kChannelCount; ++k) data[k].assign(cycles * width(k), 0.0);
+}
+
+std::string run_one(const Campaign& c, const RunParams& p, RunTraces* traces) {
   Outcome o;
   try {
-    o = c.model == SlaveModel::kPoint ? run_point(c, p) : run_world(c, p);
+    o = c.model == SlaveModel::kPoint ? run_point(c, p, traces) : run_world(c, p, traces);
   } catch (const std::exception& e) {
     o = Outcome{};
     o.reason = e.what();

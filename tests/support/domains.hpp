@@ -72,6 +72,8 @@ inline constexpr int kRogueBaseline = 144;     // trust_test: the session withou
 inline constexpr int kRogueParticipant = 145;  // trust_test: forged states, stats and events
 inline constexpr int kTcpLinkCut = 146;        // trust_test: wan_tcp, the master's link cut
 inline constexpr int kAsyncWriterUnit = 147;   // async_writer_test: 147, 148
+inline constexpr int kPythonRecording = 180;   // tests/python/test_teleop.py: a live session
+                                               // recorded by teleop_record, read from Python
 // 149: reserved for ownership tests; 150-159, 160-169: transparency and contact tests
 // 170: smoke.bench-observers-live (tests/CMakeLists.txt: teleop_bench observers --live)
 // 171: tests/bench/bridge_load.sh

@@ -119,6 +119,36 @@ TEST(CampaignFile, RefusesBadInputNamingFileFieldValueAndRange) {
             std::string::npos);
 }
 
+TEST(CampaignRun, TracesRecordEveryCycleAndLeaveTheRowAsItIs) {
+  const Campaign c = parse_campaign(kSmall, "small.yaml");
+  const RunParams& p = c.runs.back();
+  RunTraces t;
+  const std::string row = run_one(c, p, &t);
+  EXPECT_EQ(row, run_one(c, p));
+  // duration_s 4 at 1 kHz, nothing past the room made for it
+  EXPECT_EQ(t.dropped, 0u);
+  EXPECT_NEAR(static_cast<double>(t.size), 4000.0, 2.0);
+  EXPECT_GE(t.capacity, t.size);
+  for (std::size_t k = 0; k < RunTraces::kChannelCount; ++k) {
+    EXPECT_EQ(t.data[k].size(), t.capacity * RunTraces::width(k)) << RunTraces::name(k);
+  }
+  const std::vector<double>& time = t.data[RunTraces::kTime];
+  for (std::size_t i = 1; i < t.size; ++i) ASSERT_GT(time[i], time[i - 1]) << i;
+  // the press reaches the object: the tip feels an upward force while in contact
+  double touching = 0.0, up_n = 0.0;
+  for (std::size_t i = 0; i < t.size; ++i) {
+    if (t.data[RunTraces::kInContact][i] == 0.0) continue;
+    touching += 1.0;
+    up_n += t.data[RunTraces::kContactForce][3 * i + 2];
+  }
+  EXPECT_GT(touching, 100.0);
+  EXPECT_GT(up_n / touching, 0.1);
+  // a second run into the same traces starts them afresh
+  run_one(c, p, &t);
+  EXPECT_EQ(t.dropped, 0u);
+  EXPECT_NEAR(static_cast<double>(t.size), 4000.0, 2.0);
+}
+
 TEST(CampaignRun, APointRunIsTheDelaySweepsRun) {
   // the same press scenario teleop_bench delay runs (tests/support/press_world.hpp)
   const Campaign c = parse_campaign(R"(name: same
