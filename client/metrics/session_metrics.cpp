@@ -40,7 +40,7 @@ int rank(Verdict v) {
 }  // namespace
 
 double LoadingFit::stiffness() const {
-  if (n < 10 || x_max - x_min < 1e-4) return std::nan("");
+  if (n < 8 || x_max - x_min < 4e-5) return std::nan("");
   const double var = sxx - sx * sx / sw;
   return var > 0.0 ? (sxy - sx * sy / sw) / var : std::nan("");
 }
@@ -127,18 +127,12 @@ void SessionMetrics::update(const MetricsSample& s) {
 }
 
 void SessionMetrics::update_loading(const MetricsSample& s) {
-  if (loading_over_) return;
-  if (contact_max_depth_m_ == 0.0) last_deeper_s_ = s.time_s;  // the touch
-  if (s.slave_depth_m >= contact_max_depth_m_ + kLoadingStepM) {
-    const double gained_m = s.slave_depth_m - contact_max_depth_m_;
-    contact_max_depth_m_ = s.slave_depth_m;
-    last_deeper_s_ = s.time_s;
-    felt_fit_.add(s.master_depth_m, s.felt_force_n, gained_m);
-    env_fit_.add(s.slave_depth_m, s.contact_force_n, gained_m);
-    last_loading_ = true;
-  } else if (s.time_s - last_deeper_s_ > kLoadingPauseS) {
-    loading_over_ = true;
-  }
+  if (s.slave_depth_m < contact_max_depth_m_ + kLoadingStepM) return;
+  const double gained_m = s.slave_depth_m - contact_max_depth_m_;
+  contact_max_depth_m_ = s.slave_depth_m;
+  felt_fit_.add(s.master_depth_m, s.felt_force_n, gained_m);
+  env_fit_.add(s.slave_depth_m, s.contact_force_n, gained_m);
+  last_loading_ = true;
 }
 
 void SessionMetrics::update_transparency(const MetricsSample& s) {
@@ -146,10 +140,7 @@ void SessionMetrics::update_transparency(const MetricsSample& s) {
   const double fn = s.device_force_n.norm();
   const double fa = s.aligned_force_n;
   last_loading_ = false;
-  if (!s.in_contact || s.slave_depth_m <= 0.0) {  // the contact ended: the next one loads anew
-    contact_max_depth_m_ = 0.0;
-    loading_over_ = false;
-  }
+  if (!s.in_contact || s.slave_depth_m <= 0.0) contact_max_depth_m_ = 0.0;  // the contact ended
   if (s.transparency_valid && !s.in_contact && s.link_ok && s.have_slave) {
     ++n_free_;
     free_sum_ += fa;

@@ -34,15 +34,15 @@
 //   - in contact: the force felt, F_device along the contact normal in the slave's units
 //     (felt_force_n), against the environment's |f_e| (contact_force_n): ratio of the sums and
 //     the RMS of the difference;
-//   - stiffness, from the loading phase of each contact: from the touch until the slave's depth
-//     (slave_depth_m) has not gone 10 um deeper for 50 ms (the first press, not the holding,
-//     slipping or letting go), a sample each time it went 10 um deeper, weighted by the depth it
-//     gained (uniform in depth, whatever the speed): the weighted least-squares line F = k x + b of
-//     the felt force against the master's depth (its position along the contact normal,
-//     master_depth_m = slave_depth_m + n . (x_s - x_m)), and of |f_e| against the slave's depth,
-//     over the same samples: felt and environment stiffness k, and their ratio (1 is transparent;
-//     below 1 the object feels softer than it is, e.g. force-position's slave lagging behind the
-//     master by its tracking error). The offset b takes the force already there at the touch.
+//   - stiffness, from the loading phase of each contact (the samples at which the slave's depth
+//     slave_depth_m goes 5 um deeper than it has been in that contact: pressing in, not
+//     holding, trembling or letting go), each weighted by the depth it gained (uniform in depth,
+//     whatever the speed): the weighted least-squares line F = k x + b of the felt force against
+//     the master's depth (its position along the contact normal, master_depth_m =
+//     slave_depth_m + n . (x_s - x_m)), and of |f_e| against the slave's depth, over the same
+//     samples: felt and environment stiffness k, and their ratio (1 is transparent; below 1 the
+//     object feels softer than it is, e.g. force-position's slave lagging behind the master by
+//     its tracking error). The offset b takes the force already there at the touch.
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
@@ -120,7 +120,7 @@ struct LoadingFit {
     sxy += weight * depth_m * force_n;
     ++n;
   }
-  /// k [N/m]; NaN with fewer than 10 samples or a depth range under 0.1 mm.
+  /// k [N/m]; NaN with fewer than 8 samples or a depth range under 40 um.
   double stiffness() const;
   /// b [N]; NaN where stiffness() is.
   double offset() const;
@@ -258,14 +258,11 @@ class SessionMetrics {
   double free_sum_ = 0.0, free_max_ = 0.0, free_time_ = 0.0;
   std::uint64_t n_felt_ = 0;
   double felt_sum_ = 0.0, contact_sum_ = 0.0, felt_err_sq_ = 0.0;
-  // the loading phase of a contact: from the touch until the slave's depth has not gone
-  // kLoadingStepM deeper for kLoadingPauseS; one sample per kLoadingStepM of new depth
-  static constexpr double kLoadingStepM = 10e-6;
-  static constexpr double kLoadingPauseS = 0.05;
+  // the loading phase of a contact: a sample each time its depth goes kLoadingStepM deeper
+  // than it has been
+  static constexpr double kLoadingStepM = 5e-6;
   LoadingFit felt_fit_, env_fit_;
   double contact_max_depth_m_ = 0.0;  // deepest sample taken of this contact (0: none yet)
-  double last_deeper_s_ = 0.0;        // when the contact last went kLoadingStepM deeper
-  bool loading_over_ = false;         // this contact's loading phase has ended
   bool last_loading_ = false;
   double max_slave_depth_m_ = 0.0;
   double f_avg_ = 0.0, f_avg_max_ = 0.0, over_rating_time_ = 0.0;

@@ -170,8 +170,9 @@ TEST(Metrics, EnergyFollowsTheSignConventionAndJsonAndCsvAreWellFormed) {
 }
 
 /// One contact: press to 4.8 mm at 12 mm/s along F = 0.1 N + 100 N/m x (master 0.5 mm deeper and
-/// felt at 80 %), hold 0.3 s creeping 1 um/s deeper while the force relaxes, then press 1 mm
-/// deeper along another law (a slip) and let go along a softer curve (hysteresis).
+/// felt at 80 %), hold 0.3 s creeping 1 um/s deeper while the force relaxes, tremble 0.5 s
+/// (the depth up to 40 um shallower, the force +-0.2 N), then let go along a softer curve
+/// (hysteresis).
 void press_hold_slip_release(SessionMetrics& m, double t0_s) {
   MetricsSample s;
   s.in_contact = true;
@@ -188,20 +189,23 @@ void press_hold_slip_release(SessionMetrics& m, double t0_s) {
     m.update(s);
     t += 1e-3;
   };
-  for (int i = 1; i <= 400; ++i) add(i * 1.2e-5, 0.1 + 100.0 * i * 1.2e-5);        // press
-  for (int i = 0; i < 300; ++i) add(0.0048 + i * 1e-9, 0.58 - 1e-4 * i);           // hold, creep
-  for (int i = 1; i <= 100; ++i) add(0.0048 + i * 1e-5, 0.55 + 300.0 * i * 1e-5);  // slip
-  for (int i = 100; i >= 1; --i) add(i * 5e-5, 20.0 * i * 5e-5);                   // let go
+  for (int i = 1; i <= 400; ++i) add(i * 1.2e-5, 0.1 + 100.0 * i * 1.2e-5);  // press
+  for (int i = 0; i < 300; ++i) add(0.0048 + i * 1e-9, 0.58 - 1e-4 * i);     // hold, creep
+  for (int i = 0; i < 500; ++i) {                                            // tremble
+    const double w = std::sin(2.0 * M_PI * 8.0 * i * 1e-3);
+    add(0.0048 - 2e-5 * (1.0 + w), 0.55 + 0.2 * w);
+  }
+  for (int i = 100; i >= 1; --i) add(i * 4.8e-5, 20.0 * i * 4.8e-5);  // let go
   s.in_contact = false;
   s.slave_depth_m = s.master_depth_m = s.contact_force_n = s.felt_force_n = 0.0;
   s.time_s = t;
   m.update(s);
 }
 
-TEST(Metrics, TheStiffnessIsTheLineFitOfTheFirstPressOfEachContact) {
+TEST(Metrics, TheStiffnessIsTheLineFitOfTheLoadingPhaseOfEachContact) {
   SessionMetrics m;
   press_hold_slip_release(m, 0.0);
-  // only the press: k and b of its law, the hold, the slip and the letting go left out
+  // only the press: k and b of its law, the hold, the trembling and the letting go left out
   EXPECT_NEAR(m.environment_stiffness_n_per_m(), 100.0, 1e-6);
   EXPECT_NEAR(m.environment_fit().offset(), 0.1, 1e-9);
   EXPECT_NEAR(m.felt_stiffness_n_per_m(), 80.0, 1e-6);  // 0.8 F against x + 0.5 mm
@@ -232,11 +236,11 @@ TEST(Metrics, ASlowPressWeighsAsMuchAsAFastOne) {
     s.contact_force_n = s.felt_force_n = 150.0 * x;
     m.update(s);
   };
-  for (int i = 0; i < 2000; ++i) add(0.001);  // 2 mm slowly: a sample per 10 um
+  for (int i = 0; i < 2000; ++i) add(0.001);  // 2 mm slowly: a sample per 5 um
   for (int i = 0; i < 100; ++i) add(0.02);    // 2 mm quickly: every sample, 20 um each
   EXPECT_NEAR(m.environment_stiffness_n_per_m(), 150.0, 1e-6);
-  EXPECT_GT(m.environment_fit().n, 270u);  // about 200 + 100, not 2100
-  EXPECT_LT(m.environment_fit().n, 310u);
+  EXPECT_GT(m.environment_fit().n, 450u);  // about 400 + 100, not 2100
+  EXPECT_LT(m.environment_fit().n, 510u);
   const LoadingFit& f = m.environment_fit();
   EXPECT_NEAR(f.sw, 0.004, 1e-5);  // the weights add up to the depth pressed
   // the two halves weigh the same: their weighted mean depth is the middle of 0-4 mm
