@@ -281,7 +281,7 @@ void MasterCycle::step(double now_s) {
     command_.seq = ++seq_;
     command_.send_time_s = now_s;
     forward_.push(command_, now_s);
-    // what the master was and felt when it sent this command (transparency over a network)
+    // what the master was and felt when it sent this command (the transparency figures)
     sent_position_m_[seq_ % kSentRing] = sample_.master_position_m;
     sent_force_n_[seq_ % kSentRing] = cfg_.controller.workspace.to_slave_force(force_n_);
   }
@@ -309,13 +309,14 @@ void MasterCycle::finish(double now_s, const SlaveSample* slave_truth) {
   sample_.in_contact = slave.in_contact;
   sample_.link_ok = !safety_.link_lost();
   sample_.safety_scale = cfg_.safety_enabled ? safety_.scale() : 1.0;
-  // transparency: depths and forces along the contact normal, in the slave's units; over a
-  // network the master's side is taken at the time of the command the slave's sample echoes
+  // transparency: depths and forces along the contact normal, in the slave's units; the
+  // master's side is taken at the time of the command the slave's sample echoes (over a
+  // network the newest sample that arrived, in-process the slave's ground truth)
   Eigen::Vector3d x_m = sample_.master_position_m, f_m = w.to_slave_force(force_n_);
   sample_.transparency_valid = slave_truth != nullptr;
-  if (!slave_truth && sample_arrived_ && newest_.command_seq >= 1 && newest_.command_seq <= seq_ &&
-      seq_ - newest_.command_seq < kSentRing) {
-    const std::size_t k = newest_.command_seq % kSentRing;
+  if ((slave_truth || sample_arrived_) && slave.command_seq >= 1 && slave.command_seq <= seq_ &&
+      seq_ - slave.command_seq < kSentRing) {
+    const std::size_t k = slave.command_seq % kSentRing;
     x_m = sent_position_m_[k];
     f_m = sent_force_n_[k];
     sample_.transparency_valid = true;

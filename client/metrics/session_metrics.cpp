@@ -40,7 +40,7 @@ int rank(Verdict v) {
 }  // namespace
 
 double LoadingFit::stiffness() const {
-  if (n < 8 || x_max - x_min < 4e-5) return std::nan("");
+  if (n < 8 || x_max - x_min < 2e-5) return std::nan("");
   const double var = sxx - sx * sx / sw;
   return var > 0.0 ? (sxy - sx * sy / sw) / var : std::nan("");
 }
@@ -127,20 +127,27 @@ void SessionMetrics::update(const MetricsSample& s) {
 }
 
 void SessionMetrics::update_loading(const MetricsSample& s) {
-  if (s.slave_depth_m < contact_max_depth_m_ + kLoadingStepM) return;
-  const double gained_m = s.slave_depth_m - contact_max_depth_m_;
-  contact_max_depth_m_ = s.slave_depth_m;
-  felt_fit_.add(s.master_depth_m, s.felt_force_n, gained_m);
-  env_fit_.add(s.slave_depth_m, s.contact_force_n, gained_m);
-  last_loading_ = true;
+  // both sides press in: the slave and the master (at the moment of the exchange) each deeper
+  // than at the previous sample taken in this contact
+  if (s.slave_depth_m < slave_max_depth_m_ + kLoadingStepM ||
+      s.master_depth_m < master_max_depth_m_ + kLoadingStepM) {
+    return;
+  }
+  env_fit_.add(s.slave_depth_m, s.contact_force_n, s.slave_depth_m - slave_max_depth_m_);
+  felt_fit_.add(s.master_depth_m, s.felt_force_n, s.master_depth_m - master_max_depth_m_);
+  slave_max_depth_m_ = s.slave_depth_m;
+  master_max_depth_m_ = s.master_depth_m;
+  last_loading_ = kLoadingEnvironment | kLoadingFelt;
 }
 
 void SessionMetrics::update_transparency(const MetricsSample& s) {
   const double dt = s.dt_s;
   const double fn = s.device_force_n.norm();
   const double fa = s.aligned_force_n;
-  last_loading_ = false;
-  if (!s.in_contact || s.slave_depth_m <= 0.0) contact_max_depth_m_ = 0.0;  // the contact ended
+  last_loading_ = 0;
+  if (!s.in_contact || s.slave_depth_m <= 0.0) {  // the contact ended: the next loads anew
+    slave_max_depth_m_ = master_max_depth_m_ = 0.0;
+  }
   if (s.transparency_valid && !s.in_contact && s.link_ok && s.have_slave) {
     ++n_free_;
     free_sum_ += fa;

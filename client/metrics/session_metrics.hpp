@@ -34,15 +34,19 @@
 //   - in contact: the force felt, F_device along the contact normal in the slave's units
 //     (felt_force_n), against the environment's |f_e| (contact_force_n): ratio of the sums and
 //     the RMS of the difference;
-//   - stiffness, from the loading phase of each contact (the samples at which the slave's depth
-//     slave_depth_m goes 5 um deeper than it has been in that contact: pressing in, not
-//     holding, trembling or letting go), each weighted by the depth it gained (uniform in depth,
-//     whatever the speed): the weighted least-squares line F = k x + b of the felt force against
-//     the master's depth (its position along the contact normal, master_depth_m =
-//     slave_depth_m + n . (x_s - x_m)), and of |f_e| against the slave's depth, over the same
-//     samples: felt and environment stiffness k, and their ratio (1 is transparent; below 1 the
-//     object feels softer than it is, e.g. force-position's slave lagging behind the master by
-//     its tracking error). The offset b takes the force already there at the touch.
+//   - stiffness, from the loading phase of each contact: the samples at which both sides press
+//     in, the slave's depth (slave_depth_m) and the master's (its position along the contact
+//     normal, master_depth_m = slave_depth_m + n . (x_s - x_m)) each 2 um deeper than at the
+//     previous sample taken in that contact (not holding, slipping, trembling or letting go),
+//     each weighted by the depth it gained (uniform in depth, whatever the speed): the weighted
+//     least-squares line F = k x + b of the felt force against the master's depth and of |f_e|
+//     against the slave's depth: felt and environment stiffness k, and their ratio (1 is
+//     transparent; below 1 the object feels softer than it is, e.g. force-position's slave
+//     lagging behind the master by its tracking error; near 0 the force felt does not grow as
+//     the operator presses in: a drag felt as much in free space, or a force that arrives a
+//     round trip later). The offset b takes the force already there at the touch. The master's
+//     side of a sample is taken when it sent the command the slave's sample echoes (both sides
+//     at the same moment of the exchange, over a network and in-process alike).
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
@@ -120,7 +124,7 @@ struct LoadingFit {
     sxy += weight * depth_m * force_n;
     ++n;
   }
-  /// k [N/m]; NaN with fewer than 8 samples or a depth range under 40 um.
+  /// k [N/m]; NaN with fewer than 8 samples or a depth range under 20 um.
   double stiffness() const;
   /// b [N]; NaN where stiffness() is.
   double offset() const;
@@ -194,8 +198,10 @@ class SessionMetrics {
   /// against the slave's depth), over the same samples.
   const LoadingFit& felt_fit() const { return felt_fit_; }
   const LoadingFit& environment_fit() const { return env_fit_; }
-  /// The newest sample was one of the loading phase (taken by both fits).
-  bool last_sample_loading() const { return last_loading_; }
+  /// Which fits took the newest sample: kLoadingEnvironment | kLoadingFelt bits (0: none; the
+  /// two fits take the same samples, the bits let a log tell them apart should they differ).
+  static constexpr unsigned kLoadingEnvironment = 1, kLoadingFelt = 2;
+  unsigned last_sample_loading() const { return last_loading_; }
   /// The deepest the slave's tip went into an object [m] (slave_depth_m), 0 without contact.
   double max_slave_depth_m() const { return max_slave_depth_m_; }
   double stiffness_ratio() const;  ///< felt / environment stiffness [-] (NaN if unknown)
@@ -258,12 +264,13 @@ class SessionMetrics {
   double free_sum_ = 0.0, free_max_ = 0.0, free_time_ = 0.0;
   std::uint64_t n_felt_ = 0;
   double felt_sum_ = 0.0, contact_sum_ = 0.0, felt_err_sq_ = 0.0;
-  // the loading phase of a contact: a sample each time its depth goes kLoadingStepM deeper
-  // than it has been
-  static constexpr double kLoadingStepM = 5e-6;
+  // the loading phase of a contact: a sample each time both the slave's and the master's depth
+  // are kLoadingStepM deeper than at the previous sample taken in the contact
+  static constexpr double kLoadingStepM = 2e-6;
   LoadingFit felt_fit_, env_fit_;
-  double contact_max_depth_m_ = 0.0;  // deepest sample taken of this contact (0: none yet)
-  bool last_loading_ = false;
+  double slave_max_depth_m_ = 0.0;   // slave's depth at the last sample taken (0: the surface)
+  double master_max_depth_m_ = 0.0;  // the master's
+  unsigned last_loading_ = 0;
   double max_slave_depth_m_ = 0.0;
   double f_avg_ = 0.0, f_avg_max_ = 0.0, over_rating_time_ = 0.0;
 

@@ -441,7 +441,8 @@ struct MasterNode::Impl {
         (options.forward.delay_s + options.backward.delay_s) * 1e3, ps.observer_j, ps.dissipated_j,
         dev.position_m.x(), dev.position_m.y(), dev.position_m.z(), dev.orientation.w(),
         dev.orientation.x(), dev.orientation.y(), dev.orientation.z(), m.slave_depth_m,
-        m.master_depth_m, m.felt_force_n, cycle.metrics().last_sample_loading() ? 1.0 : 0.0);
+        m.master_depth_m, m.felt_force_n,
+        static_cast<double>(cycle.metrics().last_sample_loading()));
     log->row(vals.data(), vals.size());
   }
 

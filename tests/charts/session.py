@@ -92,14 +92,14 @@ def force_deformation(c, fe, summary, path):
     have_cols = "loading" in c
     fig, ax = plt.subplots(1, 2, figsize=(12, 5))
     panels = [
-        (ax[0], "slave_depth_m" if have_cols else "deformation_m", fe, env,
+        (ax[0], 1, "slave_depth_m" if have_cols else "deformation_m", fe, env,
          "environment (server)", "depth of the slave's tip in the body x [mm]",
          "|contact force on the tip| [N]"),
-        (ax[1], "master_depth_m", c.get("felt_force_n"), felt, "felt (master)",
+        (ax[1], 2, "master_depth_m", c.get("felt_force_n"), felt, "felt (master)",
          "depth of the master's command along the contact normal [mm]",
          "force felt along the normal [N]"),
     ]
-    for a, xcol, ys, fit, label, xlabel, ylabel in panels:
+    for a, bit, xcol, ys, fit, label, xlabel, ylabel in panels:
         a.set_xlabel(xlabel)
         a.set_ylabel(ylabel)
         a.grid(alpha=0.3)
@@ -114,7 +114,7 @@ def force_deformation(c, fe, summary, path):
             continue
         a.plot([p[0] * 1e3 for p in pts], [p[1] for p in pts], ".", color="0.75", markersize=2,
                label="in contact")
-        loading = [p for p in pts if p[2] == 1]
+        loading = [p for p in pts if int(p[2]) & bit]  # this side's loading samples
         a.plot([p[0] * 1e3 for p in loading], [p[1] for p in loading], ".", color="C0",
                markersize=3, label="loading phase (the fit's samples)")
         fit_line(a, fit, [p[0] for p in loading], "summary's fit")
