@@ -13,11 +13,11 @@ namespace teleop::dds {
 
 namespace detail {
 
-/// "a" when both directions agree, else "a/b" (each printed with `f`).
-inline std::string both_ways(const char* f, double a, double b) {
+/// "a" when both directions agree, else "a/b" (each with `digits` significant digits).
+inline std::string both_ways(int digits, double a, double b) {
   char x[48], y[48];
-  std::snprintf(x, sizeof(x), f, a);
-  std::snprintf(y, sizeof(y), f, b);
+  std::snprintf(x, sizeof(x), "%.*g", digits, a);
+  std::snprintf(y, sizeof(y), "%.*g", digits, b);
   return std::string(x) == y ? std::string(x) : std::string(x) + "/" + y;
 }
 
@@ -46,17 +46,17 @@ inline std::string experiment_text(const ExperimentDescription& e) {
     std::snprintf(buf, sizeof(buf), " b %.1f N s/m", e.wave_impedance_ns_per_m());
     gains += buf;
   }
-  std::string net = "delay " + both_ways("%.4g", e.forward_delay_ms(), e.backward_delay_ms()) +
+  std::string net = "delay " + both_ways(4, e.forward_delay_ms(), e.backward_delay_ms()) +
                     " ms jitter " +
-                    both_ways("%.4g", e.forward_jitter_ms(), e.backward_jitter_ms()) + " ms";
+                    both_ways(4, e.forward_jitter_ms(), e.backward_jitter_ms()) + " ms";
   if (e.forward_jitter_ms() > 0.0 || e.backward_jitter_ms() > 0.0) {
     const std::string fd = e.forward_jitter_dist().c_str(), bd = e.backward_jitter_dist().c_str();
     net += " " + (fd == bd ? fd : fd + "/" + bd);
   }
-  net += " loss " + both_ways("%.3g", 100.0 * e.forward_loss(), 100.0 * e.backward_loss()) + " %";
+  net += " loss " + both_ways(3, 100.0 * e.forward_loss(), 100.0 * e.backward_loss()) + " %";
   if (e.forward_burst_p_gb() > 0.0 || e.backward_burst_p_gb() > 0.0) {
-    net += " burst " + both_ways("%.3g", e.forward_burst_p_gb(), e.backward_burst_p_gb()) + "," +
-           both_ways("%.3g", e.forward_burst_p_bg(), e.backward_burst_p_bg());
+    net += " burst " + both_ways(3, e.forward_burst_p_gb(), e.backward_burst_p_gb()) + "," +
+           both_ways(3, e.forward_burst_p_bg(), e.backward_burst_p_bg());
   } else {
     net += " burst off";
   }
