@@ -131,7 +131,11 @@ std::string event_line(const EventView& e) {
 
 std::string experiment_line(const Snapshot& s) {
   if (!s.have_experiment) return "experiment (none yet: no master has described its session)";
-  return "experiment " + dds::experiment_text(s.experiment);
+  // latched: the description stays after its master left, and says so
+  const TopicView* m = s.topic("master_state");
+  const bool gone = m && m->stale();
+  return std::string(gone ? "experiment (master gone, its last description) " : "experiment ") +
+         dds::experiment_text(s.experiment);
 }
 
 std::string experiment_json(const ExperimentDescription& e) {

@@ -977,6 +977,13 @@ struct MasterNode::Impl {
   /// The summary's line on the device's silences (MasterCycle::check_driver).
   std::string driver_line(const MasterCycle& cycle, const SessionReport& rep) const {
     char buf[400];
+    if (rep.driver_silences == 0) {
+      std::snprintf(buf, sizeof(buf),
+                    "  device          live the whole session (never without a valid reading "
+                    "for over %.0f ms)\n",
+                    options.driver_timeout_s * 1e3);
+      return buf;
+    }
     std::snprintf(buf, sizeof(buf),
                   "  device          live %.2f s of %.2f s; silent %llu times, %.2f s in all (no "
                   "valid reading for over %.0f ms: the slave held, the force faded; not in the "
