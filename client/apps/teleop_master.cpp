@@ -302,8 +302,11 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
                                         "' has no unit; write it with one of s, ms, us, ns (e.g. " +
                                         t + "ms)");
     }
-    o.driver_timeout_s = check_flag(
-        "--driver-timeout", teleop::config::parse_duration_s("--driver-timeout", t), 0.001, 10.0);
+    o.driver_timeout_s = teleop::config::parse_duration_s("--driver-timeout", t);
+    if (!(o.driver_timeout_s >= 0.001 && o.driver_timeout_s <= 10.0)) {
+      throw teleop::config::ConfigError("command line: --driver-timeout '" + t +
+                                        "' is out of the allowed range [1ms, 10s]");
+    }
   }
   // model-mediated renders from its local model at 4 kHz and sends positions at 1 kHz, unless
   // told otherwise
