@@ -743,6 +743,7 @@ class ViewerApp {
   void shutdown() {
     drive_.reset();
     // readers first: their callbacks write into data_
+    r_experiment_.reset();
     r_events_.reset();
     r_stats_.reset();
     r_master_.reset();
