@@ -47,8 +47,8 @@ inline std::string experiment_text(const ExperimentDescription& e) {
     gains += buf;
   }
   std::string net = "delay " + both_ways(4, e.forward_delay_ms(), e.backward_delay_ms()) +
-                    " ms jitter " +
-                    both_ways(4, e.forward_jitter_ms(), e.backward_jitter_ms()) + " ms";
+                    " ms jitter " + both_ways(4, e.forward_jitter_ms(), e.backward_jitter_ms()) +
+                    " ms";
   if (e.forward_jitter_ms() > 0.0 || e.backward_jitter_ms() > 0.0) {
     const std::string fd = e.forward_jitter_dist().c_str(), bd = e.backward_jitter_dist().c_str();
     net += " " + (fd == bd ? fd : fd + "/" + bd);
