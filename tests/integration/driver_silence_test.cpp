@@ -122,13 +122,14 @@ TEST(DriverSilence, TheMasterHoldsFadesTheForceReportsItAndObserversSeeTheExperi
   // verdict's (docs/exit_codes.md)
   ASSERT_EQ(rc, verdict_exit_status(m));
   EXPECT_GE(rc, 5);
-  EXPECT_NE(m.find("fell silent 1 times"), std::string::npos);
-  // the silence: one, reported with its length; the figures cover the live time only
-  EXPECT_EQ(json_nested(m, "driver", "silences"), 1.0);
+  EXPECT_NE(m.find("the device fell silent"), std::string::npos);
+  // the silence, reported with its length (at least one: a loaded machine may starve the fake
+  // driver past the timeout before it stops for good); the figures cover the live time only
+  EXPECT_GE(json_nested(m, "driver", "silences"), 1.0);
   EXPECT_GT(json_nested(m, "driver", "silent_s"), 0.5);
   EXPECT_LT(json_nested(m, "driver", "live_s"), json_value(m, "session_s"));
   EXPECT_NE(master.err().find("device silent"), std::string::npos);
-  EXPECT_NE(master.out().find("silent 1 times"), std::string::npos) << master.out();
+  EXPECT_NE(master.out().find("device          live"), std::string::npos) << master.out();
   EXPECT_NE(master.out().find("the device was live"), std::string::npos);
   // no force step above the device's rate bound (1000 N/s: 1 N per 1 ms cycle), ever
   EXPECT_LE(json_nested(m, "safety", "max_step_n"), 1.0 + 1e-9);
@@ -138,10 +139,10 @@ TEST(DriverSilence, TheMasterHoldsFadesTheForceReportsItAndObserversSeeTheExperi
   const auto cols = csv_columns(Process::slurp(log),
                                 {"t_s", "phase", "fm_x", "fm_y", "fm_z", "xs_x", "xs_y", "xs_z"});
   ASSERT_GT(cols[0].size(), 1000u);
-  std::size_t live = 0;
-  while (live < cols[1].size() && cols[1][live] == 0.0) ++live;  // homing
-  std::size_t silent = live;
-  while (silent < cols[1].size() && cols[1][silent] == 1.0) ++silent;
+  // the driver's final silence: the last live cycle (phase 1) is followed by held ones to the end
+  std::size_t silent = cols[1].size();
+  while (silent > 0 && cols[1][silent - 1] == 0.0) --silent;
+  ASSERT_GT(silent, 0u) << "no live cycle in the log";
   ASSERT_LT(silent + 500, cols[1].size()) << "no silence in the log";
   auto force = [&](std::size_t i) {
     return std::sqrt(cols[2][i] * cols[2][i] + cols[3][i] * cols[3][i] + cols[4][i] * cols[4][i]);
@@ -171,7 +172,7 @@ TEST(DriverSilence, TheMasterHoldsFadesTheForceReportsItAndObserversSeeTheExperi
   EXPECT_NEAR(e.forward_jitter_ms(), 2.0, 1e-9);
   EXPECT_NEAR(e.forward_loss(), 0.01, 1e-12);
   EXPECT_FALSE(e.driver_live());
-  EXPECT_EQ(e.driver_silences(), 1u);
+  EXPECT_GE(e.driver_silences(), 1u);
   EXPECT_NEAR(e.driver_timeout_ms(), 100.0, 1e-9);
   // the loop delay the controller lives with: both injected delays and more
   EXPECT_GT(e.loop_delay_p50_ms(), 35.0);
