@@ -149,14 +149,21 @@ std::string experiment_json(const ExperimentDescription& e) {
          ", \"backward_delay_ms\": " + num(e.backward_delay_ms()) +
          ", \"forward_jitter_ms\": " + num(e.forward_jitter_ms()) +
          ", \"backward_jitter_ms\": " + num(e.backward_jitter_ms()) +
+         ", \"forward_jitter_dist\": " + json_string(e.forward_jitter_dist().to_string()) +
+         ", \"backward_jitter_dist\": " + json_string(e.backward_jitter_dist().to_string()) +
          ", \"forward_loss\": " + num(e.forward_loss()) +
-         ", \"backward_loss\": " + num(e.backward_loss()) +
+         ", \"backward_loss\": " + num(e.backward_loss()) + ", \"forward_burst\": [" +
+         num(e.forward_burst_p_gb()) + ", " + num(e.forward_burst_p_bg()) +
+         "], \"backward_burst\": [" + num(e.backward_burst_p_gb()) + ", " +
+         num(e.backward_burst_p_bg()) + "], \"seeds\": [" + std::to_string(e.forward_seed()) +
+         ", " + std::to_string(e.backward_seed()) + "], \"rate_hz\": " + num(e.rate_hz()) +
          ", \"loop_delay_p50_ms\": " + num(e.loop_delay_p50_ms()) +
          ", \"loop_delay_p99_ms\": " + num(e.loop_delay_p99_ms()) +
          ", \"device\": " + json_string(e.device().to_string()) +
          ", \"driver_live\": " + (e.driver_live() ? "true" : "false") +
          ", \"driver_silences\": " + std::to_string(e.driver_silences()) +
-         ", \"driver_silent_s\": " + num(e.driver_silent_s()) + "}";
+         ", \"driver_silent_s\": " + num(e.driver_silent_s()) +
+         ", \"driver_timeout_ms\": " + num(e.driver_timeout_ms()) + "}";
 }
 
 namespace {

@@ -115,6 +115,8 @@ TEST(MonitorExperiment, ScreenAndJsonCarryItAndSayWhenThereIsNone) {
   EXPECT_NE(json.find("\"forward_delay_ms\": 50"), std::string::npos) << json;
   EXPECT_NE(json.find("\"forward_loss\": 0.02"), std::string::npos) << json;
   EXPECT_NE(json.find("\"loop_delay_p99_ms\": 112.5"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"forward_jitter_dist\": \"normal\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"seeds\": [7, 8]"), std::string::npos) << json;
   // the description is latched: once its master is gone the line says so
   s.topics[1].age_s = 2.0;
   EXPECT_EQ(experiment_line(s).find("experiment (master gone"), 0u) << experiment_line(s);
