@@ -30,7 +30,7 @@
 #   server    publishes teleop/slave_state, scene, mesh_topology, mesh_frame, events,
 #             server_stats and the observers' copies slave_state_view, slave_state_monitor,
 #             mesh_frame_monitor; subscribes teleop/*
-#   master    publishes teleop/master_command, master_state, events, tuning_status,
+#   master    publishes teleop/master_command, master_state, events, tuning_status, experiment,
 #             device_command (to an external device driver) and the observers' copies
 #             master_state_view, master_state_monitor; subscribes teleop/*
 #   operator  a device driver or a tuning tool (teleop_viewer --drive): publishes
@@ -149,7 +149,7 @@ EOF
 publish_topics() {
   case "$1" in
     server) echo "teleop/slave_state teleop/scene teleop/mesh_topology teleop/mesh_frame teleop/events teleop/server_stats teleop/slave_state_view teleop/slave_state_monitor teleop/mesh_frame_monitor" ;;
-    master) echo "teleop/master_command teleop/master_state teleop/events teleop/tuning_status teleop/device_command teleop/master_state_view teleop/master_state_monitor" ;;
+    master) echo "teleop/master_command teleop/master_state teleop/events teleop/tuning_status teleop/experiment teleop/device_command teleop/master_state_view teleop/master_state_monitor" ;;
     operator) echo "teleop/device_state teleop/tuning" ;;
     observer) echo "" ;;
     bench) echo "bench/*" ;;

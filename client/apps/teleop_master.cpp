@@ -53,6 +53,7 @@ struct Flags {
   std::optional<std::uint64_t> seed;
   bool reorder = false;
   std::optional<double> link_timeout;
+  std::optional<std::string> driver_timeout;
   std::optional<double> wave_b;
   std::optional<std::string> tdpa_base;
   bool wave_unmatched = false;
@@ -187,6 +188,10 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   app.add_option("--link-timeout", f.link_timeout,
                  "no SlaveState for this long fades the force to zero [s], 0.001-10")
       ->check(number_in(0.001, 10.0));
+  app.add_option("--driver-timeout", f.driver_timeout,
+                 "no valid device reading for this long (a driver process such as teleop_viewer "
+                 "--drive that quit or hangs) holds the slave and fades the force to zero, with "
+                 "its unit, 1ms-10s (default 100ms)");
   app.add_option("--log", o.log_csv, "per-cycle CSV log");
   app.add_option("--summary-json", o.summary_json, "JSON summary at exit");
   app.add_flag("--quiet", o.quiet, "print only warnings and errors");
@@ -290,6 +295,19 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   }
   if (f.link_timeout)
     o.safety.link_timeout_s = check_flag("--link-timeout", *f.link_timeout, 0.001, 10.0);
+  if (f.driver_timeout) {
+    const std::string& t = *f.driver_timeout;
+    if (!t.empty() && t.find_last_of("0123456789.") + 1 == t.size()) {
+      throw teleop::config::ConfigError("command line: --driver-timeout '" + t +
+                                        "' has no unit; write it with one of s, ms, us, ns (e.g. " +
+                                        t + "ms)");
+    }
+    o.driver_timeout_s = teleop::config::parse_duration_s("--driver-timeout", t);
+    if (!(o.driver_timeout_s >= 0.001 && o.driver_timeout_s <= 10.0)) {
+      throw teleop::config::ConfigError("command line: --driver-timeout '" + t +
+                                        "' is out of the allowed range [1ms, 10s]");
+    }
+  }
   // model-mediated renders from its local model at 4 kHz and sends positions at 1 kHz, unless
   // told otherwise
   if (o.controller.scheme == "model-mediated") {

@@ -162,6 +162,7 @@ struct TopicTable {
              {"server_stats", false, std::max(stale_s, 3.0)},
              {"events", true, 0.0},
              {"scene", true, 0.0},
+             {"experiment", true, 0.0},
              {"mesh_topology", true, 0.0}},
         counters(defs.size()) {}
   Counter& operator[](const char* n) {
@@ -218,7 +219,14 @@ class Readers {
         frames_(p, topics.mesh_frame.name, topics.mesh_frame.qos,
                 [this](const MeshFrame&, const Info&) { table_["mesh_frame"].hit(); }),
         events_(p, tdds::topics::kEvents, tdds::TopicQos::kEventLog,
-                [this](const Event& e, const Info&) { on_event(e); }) {
+                [this](const Event& e, const Info&) { on_event(e); }),
+        experiment_(p, tdds::topics::kExperiment, tdds::TopicQos::kLatched,
+                    [this](const ExperimentDescription& e, const Info&) {
+                      std::lock_guard<std::mutex> l(m_);
+                      snap_.experiment = e;
+                      snap_.have_experiment = true;
+                      table_["experiment"].hit();
+                    }) {
     if (topics.master_command) {
       command_.emplace(
           p, tdds::topics::kMasterCommand, tdds::TopicQos::kStream,
@@ -292,6 +300,7 @@ class Readers {
   tdds::Reader<MeshTopologyPubSubType> topology_;
   tdds::Reader<MeshFramePubSubType> frames_;
   tdds::Reader<EventPubSubType> events_;
+  tdds::Reader<ExperimentDescriptionPubSubType> experiment_;
   std::optional<tdds::Reader<MasterCommandPubSubType>> command_;
 };
 

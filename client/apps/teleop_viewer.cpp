@@ -275,6 +275,9 @@ class ViewerApp {
     r_events_ = std::make_unique<teleop::dds::Reader<EventPubSubType>>(
         p, teleop::dds::topics::kEvents, teleop::dds::TopicQos::kEventLog,
         [this](const Event& e, const SampleInfo&) { data_.on_event(e, now_ns()); });
+    r_experiment_ = std::make_unique<teleop::dds::Reader<ExperimentDescriptionPubSubType>>(
+        p, teleop::dds::topics::kExperiment, teleop::dds::TopicQos::kLatched,
+        [this](const ExperimentDescription& e, const SampleInfo&) { data_.on_experiment(e); });
     if (options_.drive) {
       viewer::HandDriveParams hp;
       hp.position_scale = options_.drive_scale;
@@ -740,6 +743,7 @@ class ViewerApp {
   void shutdown() {
     drive_.reset();
     // readers first: their callbacks write into data_
+    r_experiment_.reset();
     r_events_.reset();
     r_stats_.reset();
     r_master_.reset();
@@ -794,6 +798,7 @@ class ViewerApp {
   std::unique_ptr<teleop::dds::Reader<SlaveStatePubSubType>> r_slave_;
   std::unique_ptr<teleop::dds::Reader<MasterStatePubSubType>> r_master_;
   std::unique_ptr<teleop::dds::Reader<ServerStatsPubSubType>> r_stats_;
+  std::unique_ptr<teleop::dds::Reader<ExperimentDescriptionPubSubType>> r_experiment_;
   std::unique_ptr<teleop::dds::Reader<EventPubSubType>> r_events_;
 
   GLFWwindow* window_ = nullptr;

@@ -14,6 +14,8 @@ const char* to_string(RehomeReason r) {
       return "the slave restarted";
     case RehomeReason::kTakeover:
       return "took the slave over";
+    case RehomeReason::kDriverBack:
+      return "the device's readings came back";
   }
   return "?";
 }
@@ -38,6 +40,11 @@ MasterCycle::MasterCycle(const MasterCycleConfig& cfg, HapticDevice& device, Sla
   if (!(cfg.dt_s > 0.0 && cfg.dt_s <= 0.1)) {
     throw config::ConfigError("master cycle: dt_s = " + std::to_string(cfg.dt_s) +
                               " is out of the allowed range (0, 0.1]");
+  }
+  if (!(cfg.driver_timeout_s > 0.0 && cfg.driver_timeout_s <= 10.0)) {
+    throw config::ConfigError(
+        "master cycle: driver_timeout_s = " + std::to_string(cfg.driver_timeout_s) +
+        " s is out of the allowed range (0, 10]");
   }
 }
 
@@ -81,6 +88,10 @@ void MasterCycle::prepare(double now_s) {
   workspace_violations_ = 0;
   outside_workspace_ = false;
   std::fill(std::begin(rehomes_by_), std::end(rehomes_by_), 0);
+  invalid_since_s_ = -1.0;
+  driver_silent_ = false;
+  driver_silences_ = 0;
+  driver_silent_total_s_ = 0.0;
   next_session_id_ = cfg_.session_id;
   reading_ = device_.read();
 }
@@ -222,6 +233,35 @@ void MasterCycle::check_workspace(double now_s) {
   outside_workspace_ = outside;
 }
 
+void MasterCycle::check_driver(double now_s) {
+  if (reading_.valid) {
+    if (driver_silent_) {
+      const double silent_s = now_s - invalid_since_s_;
+      driver_silent_total_s_ += silent_s;
+      driver_silent_ = false;
+      char msg[sizeof(sim::SimEvent::message)];
+      std::snprintf(msg, sizeof(msg), "device readings back after %.3f s of silence", silent_s);
+      safety_.events().push(sim::EventKind::kWatchdog, sim::Severity::kWarning, now_s - origin_s_,
+                            silent_s, msg);
+      if (!held_) rehome(now_s, RehomeReason::kDriverBack);
+    }
+    invalid_since_s_ = -1.0;
+    return;
+  }
+  if (invalid_since_s_ < 0.0) invalid_since_s_ = now_s;
+  if (driver_silent_ || now_s - invalid_since_s_ <= cfg_.driver_timeout_s) return;
+  driver_silent_ = true;
+  ++driver_silences_;
+  char msg[sizeof(sim::SimEvent::message)];
+  std::snprintf(msg, sizeof(msg),
+                "device silent: no valid reading for %.0f ms (timeout %.0f ms): the slave holds, "
+                "the force fades to zero at %.0f N/s",
+                (now_s - invalid_since_s_) * 1e3, cfg_.driver_timeout_s * 1e3,
+                device_.spec().max_force_rate_n_per_s);
+  safety_.events().push(sim::EventKind::kWatchdog, sim::Severity::kWarning, now_s - origin_s_,
+                        now_s - invalid_since_s_, msg);
+}
+
 std::string MasterCycle::tune(const TuningRequestData& request, double now_s) {
   std::string problem = check_tuning(request, tuning_limits_, cfg_.controller.scheme);
   if (!problem.empty()) {
@@ -256,9 +296,11 @@ void MasterCycle::step(double now_s) {
 
   reading_ = device_.read();
   check_workspace(now_s);
+  check_driver(now_s);
   check_rehome(now_s);
-  if (held_) {
-    render_nothing(slave_tip_m_, false);  // refused or closing: ask nothing of the slave
+  if (held_ || driver_silent_) {
+    // refused, closing or no device: ask nothing of the slave
+    render_nothing(slave_tip_m_, false);
   } else if (homing_) {
     homing_step(now_s);
   } else {
@@ -332,7 +374,12 @@ void MasterCycle::finish(double now_s, const SlaveSample* slave_truth) {
     sample_.felt_force_n = f_m.dot(n);
   }
   sample_.continuous_force_n = device_.spec().max_continuous_force_n;
-  if (homing_cycle_) return;  // homing is not part of the session's figures
+  // homing, holding and cycles without a valid device reading are not part of the figures
+  if (homing_cycle_) return;
+  if (!reading_.valid) {
+    device_.advance(cfg_.dt_s);
+    return;
+  }
 
   metrics_.update(sample_);
   const ChannelCounters& fw = forward_.counters();

@@ -15,8 +15,12 @@
 // (rehome(): a takeover of the slave). The force goes to zero at the device's rate bound while
 // homing and fades in from zero after it (SafetyLayer), so none of these makes a force step.
 // hold() keeps the cycle rendering nothing and commanding nothing (a master refused the
-// slave). The clock is an argument (seconds on any steady clock); metrics time counts from
-// start(). step() and finish() allocate nothing.
+// slave). A device whose readings stop (a driver process that quit or hangs: the external
+// device's samples go stale) for longer than driver_timeout_s is silent: the cycle holds the
+// same way, counts the silence and its length and raises an event; when readings return it
+// re-homes (the hand may have moved meanwhile). Cycles without a valid reading are not part
+// of the session's figures. The clock is an argument (seconds on any steady clock); metrics time
+// counts from start(). step() and finish() allocate nothing.
 #include <Eigen/Core>
 #include <memory>
 #include <string>
@@ -43,6 +47,7 @@ enum class RehomeReason : std::uint8_t {
   kLinkBack = 0,      ///< slave samples came back after a link loss
   kSlaveRestart = 1,  ///< the slave restarted (new server instance)
   kTakeover = 2,      ///< this master took the slave over from another
+  kDriverBack = 3,    ///< the device's readings came back after a silence
 };
 const char* to_string(RehomeReason r);
 
@@ -64,6 +69,9 @@ struct MasterCycleConfig {
   /// A command goes to the slave every this many cycles (a haptic loop faster than the network,
   /// e.g. model-mediated at 4 kHz with commands at 1 kHz); slave samples are taken every cycle.
   std::uint32_t command_every = 1;
+  /// A device without a valid reading for longer than this is silent: the slave holds and the
+  /// force fades to zero at the rate bound until readings return [s], (0, 10].
+  double driver_timeout_s = 0.1;
 };
 
 /// One master cycle. See the file comment.
@@ -122,6 +130,13 @@ class MasterCycle {
   std::uint64_t rehomes(RehomeReason why) const {
     return rehomes_by_[static_cast<std::size_t>(why)];
   }
+  /// Driver silences (see the file comment): how many began, whether one lasts now, and the
+  /// time silent so far [s] (from the last valid reading, the ongoing silence included).
+  std::uint64_t driver_silences() const { return driver_silences_; }
+  bool driver_silent() const { return driver_silent_; }
+  double driver_silent_s(double now_s) const {
+    return driver_silent_total_s_ + (driver_silent_ ? now_s - invalid_since_s_ : 0.0);
+  }
   /// True from rehome() until the controller runs again.
   bool rehoming() const { return homing_ && session_start_s_ >= 0.0; }
   /// True if the last step() was a homing cycle (nothing rendered, no metrics recorded).
@@ -161,6 +176,7 @@ class MasterCycle {
   void render_nothing(const Eigen::Vector3d& target_m, bool enabled);
   void check_rehome(double now_s);
   void check_workspace(double now_s);
+  void check_driver(double now_s);
 
   MasterCycleConfig cfg_;
   HapticDevice& device_;
@@ -204,7 +220,12 @@ class MasterCycle {
   std::uint32_t epoch_seen_ = 0;
   bool have_epoch_ = false;
   std::uint64_t rehomes_ = 0;
-  std::uint64_t rehomes_by_[3] = {0, 0, 0};
+  std::uint64_t rehomes_by_[4] = {0, 0, 0, 0};
+  // driver silence
+  double invalid_since_s_ = -1.0;  // first cycle of the current run without a valid reading
+  bool driver_silent_ = false;
+  std::uint64_t driver_silences_ = 0;
+  double driver_silent_total_s_ = 0.0;  // silences that ended [s]
   std::uint32_t next_session_id_ = 0;
   std::uint64_t workspace_violations_ = 0;
   bool outside_workspace_ = false;

@@ -50,6 +50,12 @@ LinkJudgement judge_link(const LinkCounts& c, const LinkTolerance& t) {
         static_cast<unsigned long long>(c.rejected), static_cast<unsigned long long>(c.received));
     add(buf);
   }
+  if (c.driver_silences > 0) {
+    std::snprintf(buf, sizeof(buf),
+                  "the device fell silent %llu times (%.2f s in all): the slave held meanwhile",
+                  static_cast<unsigned long long>(c.driver_silences), c.driver_silent_s);
+    add(buf);
+  }
   return j;
 }
 

@@ -12,7 +12,9 @@
 //                scheme's tolerance (round_trip_tolerance_ms()), judged over at least
 //                min_echoes echoes;
 //   - rejected:  the server rejected more commands (outside the workspace, non-finite, stale,
-//                ...) than it accepted from this master: the slave mostly held still.
+//                ...) than it accepted from this master: the slave mostly held still;
+//   - driver:    the device fell silent (no valid reading past the master's driver timeout) at
+//                least once: part of the session had no operator and the slave held.
 // The session verdict is the loop's (SessionMetrics) when that is worse than stable, else
 // "degraded" when any of the above holds, else "stable"; each maps to its exit status
 // (common/util/exit_codes.hpp).
@@ -26,12 +28,14 @@ namespace teleop::master {
 
 /// What the master counted of its commands and their echoes.
 struct LinkCounts {
-  std::uint64_t issued = 0;     ///< commands the loop issued (into the forward channel)
-  std::uint64_t in_flight = 0;  ///< of them, still held in the injected delay at the end
-  std::uint64_t received = 0;   ///< accepted by the server from this master
-  std::uint64_t rejected = 0;   ///< rejected by the server during the session (any sender)
-  double rtt_p99_ms = 0.0;      ///< network round trip p99 [ms] (NaN: no echo)
-  std::uint64_t echoes = 0;     ///< echoes behind rtt_p99_ms
+  std::uint64_t issued = 0;           ///< commands the loop issued (into the forward channel)
+  std::uint64_t in_flight = 0;        ///< of them, still held in the injected delay at the end
+  std::uint64_t received = 0;         ///< accepted by the server from this master
+  std::uint64_t rejected = 0;         ///< rejected by the server during the session (any sender)
+  double rtt_p99_ms = 0.0;            ///< network round trip p99 [ms] (NaN: no echo)
+  std::uint64_t echoes = 0;           ///< echoes behind rtt_p99_ms
+  std::uint64_t driver_silences = 0;  ///< times the device fell silent past the timeout
+  double driver_silent_s = 0.0;       ///< time silent in all [s]
 };
 
 /// The thresholds (see the file comment).

@@ -6,6 +6,8 @@
 #include <cstdarg>
 #include <cstdio>
 
+#include "common/dds/experiment_text.hpp"
+
 namespace teleop::monitor {
 
 namespace {
@@ -127,6 +129,43 @@ std::string event_line(const EventView& e) {
              e.event.message().c_str(), e.event.value());
 }
 
+std::string experiment_line(const Snapshot& s) {
+  if (!s.have_experiment) return "experiment (none yet: no master has described its session)";
+  // latched: the description stays after its master left, and says so
+  const TopicView* m = s.topic("master_state");
+  const bool gone = m && m->stale();
+  return std::string(gone ? "experiment (master gone, its last description) " : "experiment ") +
+         dds::experiment_text(s.experiment);
+}
+
+std::string experiment_json(const ExperimentDescription& e) {
+  return "{\"session\": " + std::to_string(e.master_session()) +
+         ", \"scheme\": " + json_string(e.scheme().to_string()) +
+         ", \"master_stiffness_n_per_m\": " + num(e.master_stiffness_n_per_m()) +
+         ", \"master_damping_ns_per_m\": " + num(e.master_damping_ns_per_m()) +
+         ", \"force_gain\": " + num(e.force_gain()) +
+         ", \"slave_stiffness_n_per_m\": " + num(e.slave_stiffness_n_per_m()) +
+         ", \"forward_delay_ms\": " + num(e.forward_delay_ms()) +
+         ", \"backward_delay_ms\": " + num(e.backward_delay_ms()) +
+         ", \"forward_jitter_ms\": " + num(e.forward_jitter_ms()) +
+         ", \"backward_jitter_ms\": " + num(e.backward_jitter_ms()) +
+         ", \"forward_jitter_dist\": " + json_string(e.forward_jitter_dist().to_string()) +
+         ", \"backward_jitter_dist\": " + json_string(e.backward_jitter_dist().to_string()) +
+         ", \"forward_loss\": " + num(e.forward_loss()) +
+         ", \"backward_loss\": " + num(e.backward_loss()) + ", \"forward_burst\": [" +
+         num(e.forward_burst_p_gb()) + ", " + num(e.forward_burst_p_bg()) +
+         "], \"backward_burst\": [" + num(e.backward_burst_p_gb()) + ", " +
+         num(e.backward_burst_p_bg()) + "], \"seeds\": [" + std::to_string(e.forward_seed()) +
+         ", " + std::to_string(e.backward_seed()) + "], \"rate_hz\": " + num(e.rate_hz()) +
+         ", \"loop_delay_p50_ms\": " + num(e.loop_delay_p50_ms()) +
+         ", \"loop_delay_p99_ms\": " + num(e.loop_delay_p99_ms()) +
+         ", \"device\": " + json_string(e.device().to_string()) +
+         ", \"driver_live\": " + (e.driver_live() ? "true" : "false") +
+         ", \"driver_silences\": " + std::to_string(e.driver_silences()) +
+         ", \"driver_silent_s\": " + num(e.driver_silent_s()) +
+         ", \"driver_timeout_ms\": " + num(e.driver_timeout_ms()) + "}";
+}
+
 namespace {
 
 std::string slave_text(const Snapshot& s, const TopicView* t) {
@@ -173,6 +212,7 @@ std::vector<std::string> render_screen(const Snapshot& s, int rows, int cols) {
                             : "topics  10 Hz monitor copies (*_monitor); master_command counted "
                               "by the server; --full-rate for every sample");
   out.push_back(s.have_scene ? scene_line(s.scene) : "scene   (none yet)");
+  out.push_back(experiment_line(s));
   out.push_back("");
   out.push_back(fmt("%-22s %10s %12s %10s", "topic", "rate Hz", "age", "samples"));
   for (const auto& t : s.topics) {
@@ -224,6 +264,7 @@ std::string render_lines(const Snapshot& s) {
   if (!slave.empty()) o += "           " + slave.substr(8) + "\n";
   const std::string master = master_text(s, s.topic("master_state"));
   if (!master.empty()) o += "           master " + master.substr(8) + "\n";
+  if (s.have_experiment) o += "           " + experiment_line(s) + "\n";
   return o;
 }
 
@@ -274,6 +315,7 @@ std::string render_json(const Snapshot& s) {
   } else {
     o += ", \"server\": null";
   }
+  o += ", \"experiment\": " + (s.have_experiment ? experiment_json(s.experiment) : "null");
   return o + "}";
 }
 

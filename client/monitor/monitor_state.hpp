@@ -41,6 +41,8 @@ struct Snapshot {
   bool have_scene = false;
   SceneDescription scene;
   bool have_slave = false, have_master = false, have_stats = false;
+  bool have_experiment = false;  ///< a teleop/experiment description arrived (latched)
+  ExperimentDescription experiment;
   SlaveState slave;
   MasterState master;
   ServerStats stats;
@@ -76,5 +78,10 @@ std::string scene_json(const SceneDescription& d);
 std::string scene_line(const SceneDescription& d);
 /// One event as a text line.
 std::string event_line(const EventView& e);
+/// The experiment line: scheme, gains, injected delay, jitter and loss, the loop delay the
+/// controller lives with, the device ("experiment (none yet: ...)" before a master wrote one).
+std::string experiment_line(const Snapshot& s);
+/// The experiment as a JSON object.
+std::string experiment_json(const ExperimentDescription& e);
 
 }  // namespace teleop::monitor

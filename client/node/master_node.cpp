@@ -25,6 +25,7 @@
 #include "client/metrics/session_metrics.hpp"
 #include "client/net/delay_channel.hpp"
 #include "client/node/dds_slave_link.hpp"
+#include "client/node/experiment_publisher.hpp"
 #include "client/node/server_binding.hpp"
 #include "client/node/server_health.hpp"
 #include "client/node/tuning_endpoint.hpp"
@@ -110,6 +111,10 @@ struct SessionReport {
   std::uint64_t states_replaced = 0;  // MasterState samples replaced by a newer one unwritten
   std::uint64_t events_dropped = 0;   // events that found the event ring full
   std::uint64_t write_failures = 0;   // refused by the middleware (states, events, device, tuning)
+  // the device's silences (MasterCycle): the slave held, the cycles are not in the figures
+  std::uint64_t driver_silences = 0;
+  double driver_silent_s = 0.0;
+  std::uint64_t experiment_writes = 0;  // teleop/experiment descriptions written
 };
 
 /// The link's figures of a session, as the verdict judges them.
@@ -121,6 +126,8 @@ inline LinkCounts link_counts(const SessionReport& rep) {
   counts.rejected = rep.server_rejected;
   counts.rtt_p99_ms = rep.rtt_ms.p99;
   counts.echoes = rep.rtt_ms.count;
+  counts.driver_silences = rep.driver_silences;
+  counts.driver_silent_s = rep.driver_silent_s;
   return counts;
 }
 
@@ -217,6 +224,7 @@ struct MasterNode::Impl {
   bool second_server_reported = false;
 
   std::unique_ptr<TuningEndpoint> tuning;  // live tuning (teleop/tuning, teleop/tuning_status)
+  std::unique_ptr<ExperimentPublisher> experiment;  // teleop/experiment, latched
   double waited_s = 0.0;  // time run() waited for the server before returning kReconnect
   bool tcp_client = false;
 
@@ -288,6 +296,7 @@ struct MasterNode::Impl {
           }
         });
     tuning = std::make_unique<TuningEndpoint>(participant, master_session, o.accept_tuning);
+    experiment = std::make_unique<ExperimentPublisher>(participant);
     if (o.device == "external") {
       device_command_writer = std::make_unique<dds::LatestWriter<DeviceCommandPubSubType>>(
           participant, "teleop/device_command", dds::TopicQos::kStream);
@@ -514,6 +523,7 @@ struct MasterNode::Impl {
           std::max(1.0, std::round(options.rate_hz / options.command_rate_hz)));
     }
     cc.delivery = ForwardDelivery::kEveryDue;
+    cc.driver_timeout_s = options.driver_timeout_s;
     // a session id the server has not seen from an earlier master (it restarts its wave /
     // TDPA state when the id changes)
     cc.session_id = static_cast<std::uint32_t>(now_ns() / 1000) | 1u;
@@ -625,9 +635,11 @@ struct MasterNode::Impl {
     rep.states_replaced = state_writer.replaced();
     event_writer.flush(0.5);
     rep.events_dropped = event_writer.dropped();
+    experiment->flush(0.5);
+    rep.experiment_writes = experiment->written();
     rep.write_failures = state_writer.failures() + event_writer.failures() +
                          (device_command_writer ? device_command_writer->failures() : 0) +
-                         tuning->write_failures();
+                         tuning->write_failures() + experiment->failures();
   }
 
   /// Once per session: a warning when another participant wrote the server's topics (a second
@@ -737,6 +749,7 @@ struct MasterNode::Impl {
     session_start_ns.store(t0);
     cycle.start_homing(t0_s, tip0, options.homing_s);
     tuning->publish_status(cycle, t0);
+    experiment->begin(cycle, master_session, options.name, options.device, options.rate_hz);
     // made once: the loop passes it by reference every cycle without building a std::function
     const std::function<void(std::uint8_t, const std::string&)> report_tuning =
         [this](std::uint8_t severity, const std::string& msg) {
@@ -776,6 +789,7 @@ struct MasterNode::Impl {
           last_used_seq = echoed;
           last_loop_delay_ms = (now_s - entry_time_s[echoed % kEntryRing]) * 1e3;
           loop_delay_ms.record(last_loop_delay_ms);
+          experiment->record_loop_delay(last_loop_delay_ms);
         }
       }
       if (external && device_command_writer) {
@@ -785,6 +799,7 @@ struct MasterNode::Impl {
       watch_ownership(cycle, link, now_s, t0_s, grace_s, owner);
       report_second_server();
       cycle.finish(now_s);
+      experiment->update(cycle, now_s, now);
       // a session whose slave faulted is never stable
       if (const std::uint64_t faults = update_health(); faults > faults_seen) {
         faults_seen = faults;
@@ -808,6 +823,8 @@ struct MasterNode::Impl {
     rep.refused = owner.give_up;
     rep.refused_first = owner.refused_first;
     rep.waited_for_owner_s = owner.waited_s + (owner.refused ? end_s - owner.refused_at_s : 0.0);
+    rep.driver_silences = cycle.driver_silences();
+    rep.driver_silent_s = cycle.driver_silent_s(end_s);
     rep.closing_cycles = close_session(cycle, loop, link, t0_s);
     rep.releases_sent = link.releases_sent();
   }
@@ -906,7 +923,14 @@ struct MasterNode::Impl {
         << "  \"rehomes\": {\"total\": " << cycle.rehomes()
         << ", \"link_back\": " << cycle.rehomes(RehomeReason::kLinkBack)
         << ", \"slave_restart\": " << cycle.rehomes(RehomeReason::kSlaveRestart)
-        << ", \"takeover\": " << cycle.rehomes(RehomeReason::kTakeover) << "},\n"
+        << ", \"takeover\": " << cycle.rehomes(RehomeReason::kTakeover)
+        << ", \"driver_back\": " << cycle.rehomes(RehomeReason::kDriverBack) << "},\n"
+        << "  \"driver\": {\"timeout_ms\": " << json_number(options.driver_timeout_s * 1e3)
+        << ", \"silences\": " << rep.driver_silences
+        << ", \"silent_s\": " << json_number(rep.driver_silent_s)
+        << ", \"live_s\": " << json_number(std::max(0.0, rep.session_s - rep.driver_silent_s))
+        << ", \"figures\": \"over the time the device was live\"},\n"
+        << "  \"experiment_writes\": " << rep.experiment_writes << ",\n"
         << "  \"tuning\": " << tuning_json(cycle) << ",\n"
         << "  \"ownership\": {\"session\": " << master_session
         << ", \"refused\": " << (rep.refused ? "true" : "false")
@@ -958,6 +982,27 @@ struct MasterNode::Impl {
                " teleop/device_state samples of a second driver ignored\n";
     }
     return lines;
+  }
+
+  /// The summary's line on the device's silences (MasterCycle::check_driver).
+  std::string driver_line(const MasterCycle& cycle, const SessionReport& rep) const {
+    char buf[400];
+    if (rep.driver_silences == 0) {
+      std::snprintf(buf, sizeof(buf),
+                    "  device          live the whole session (never without a valid reading "
+                    "for over %.0f ms)\n",
+                    options.driver_timeout_s * 1e3);
+      return buf;
+    }
+    std::snprintf(buf, sizeof(buf),
+                  "  device          live %.2f s of %.2f s; silent %llu times, %.2f s in all (no "
+                  "valid reading for over %.0f ms: the slave held, the force faded; not in the "
+                  "figures), came back %llu times\n",
+                  std::max(0.0, rep.session_s - rep.driver_silent_s), rep.session_s,
+                  static_cast<unsigned long long>(rep.driver_silences), rep.driver_silent_s,
+                  options.driver_timeout_s * 1e3,
+                  static_cast<unsigned long long>(cycle.rehomes(RehomeReason::kDriverBack)));
+    return buf;
   }
 
   /// {"accepting":..,"received":..,"applied":..,"rejected":..,"ignored":..,"dropped":..,
@@ -1018,7 +1063,7 @@ struct MasterNode::Impl {
                     v.slave_stiffness_n_per_m, v.forward_delay_s * 1e3, v.backward_delay_s * 1e3);
       tuning_line = buf;
     }
-    tuning_line += binding_lines(rep);
+    tuning_line += binding_lines(rep) + driver_line(cycle, rep);
     const SessionVerdict verdict = session_verdict(metrics, rep, cycle.config().controller.scheme);
     const std::string& reason = verdict.reason;
     char text[8192];
@@ -1036,7 +1081,8 @@ struct MasterNode::Impl {
         "  tracking        position error RMS %.2f mm, max %.2f mm\n"
         "  force           max rendered %.2f N, force error RMS %.3f N (%s of the mean "
         "contact force), contact %.2f s, mean contact force %.2f N\n"
-        "  transparency    free space %.3f N mean, %.3f N p99, %.3f N max; in contact felt %.2f x "
+        "  transparency    over the %.2f s the device was live: free space %.3f N mean, %.3f N "
+        "p99, %.3f N max; in contact felt %.2f x "
         "the environment's force (RMS %.3f N), stiffness felt %.0f N/m against %.0f N/m (%.2f; "
         "loading fit F = k x + b, b %.2f N against %.2f N)\n"
         "%s"
@@ -1062,8 +1108,9 @@ struct MasterNode::Impl {
         static_cast<unsigned long long>(rep.overruns), metrics.position_error_rms_m() * 1e3,
         metrics.position_error_max_m() * 1e3, metrics.max_device_force_n(),
         metrics.force_error_rms_n(), relative.c_str(), metrics.contact_time_s(),
-        metrics.mean_contact_force_n(), metrics.free_force_mean_n(), metrics.free_force_p99_n(),
-        metrics.free_force_max_n(), metrics.felt_force_ratio(), metrics.felt_force_error_rms_n(),
+        metrics.mean_contact_force_n(), std::max(0.0, rep.session_s - rep.driver_silent_s),
+        metrics.free_force_mean_n(), metrics.free_force_p99_n(), metrics.free_force_max_n(),
+        metrics.felt_force_ratio(), metrics.felt_force_error_rms_n(),
         metrics.felt_stiffness_n_per_m(), metrics.environment_stiffness_n_per_m(),
         metrics.stiffness_ratio(), metrics.felt_fit().offset(), metrics.environment_fit().offset(),
         hertz_line(hertz_for_session(metrics), metrics.felt_stiffness_n_per_m(),

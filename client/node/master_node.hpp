@@ -40,6 +40,9 @@ struct MasterOptions {
   /// TCP client profiles: with no answer from a server for this long, make a new participant
   /// (a new connection) and go on waiting [s]; 0 = never.
   double reconnect_s = 3.0;
+  /// No valid device reading for this long: the slave holds and the force fades to zero at the
+  /// device's rate bound until readings return (MasterCycle) [s], (0, 10].
+  double driver_timeout_s = 0.1;
   RealtimeOptions realtime;  ///< scheduling of the haptic loop (common/util/realtime)
   std::string name;  ///< who this master is, in the server's ownership events ("" = identity)
   /// Apply live tuning requests from teleop/tuning (client/control/tuning.hpp); off: the

@@ -30,6 +30,8 @@ const std::vector<TopicEntry>& known_topics() {
       // the master's answers to live tuning (what was applied, when); the requests themselves
       // are not recorded, so that playing a recording can never retune a running master
       {t::kTuningStatus, "", TopicQos::kLatched, &make<TuningStatusPubSubType>},
+      // what the session is (scheme, gains, injected delays, loop delay, device)
+      {t::kExperiment, "", TopicQos::kLatched, &make<ExperimentDescriptionPubSubType>},
       // the observers' rate-limited copies: recorded too, so that a played session reaches
       // monitors and viewers on their default (rate-limited) topics
       {t::kSlaveStateView, "", TopicQos::kLatest, &make<SlaveStatePubSubType>},

@@ -175,6 +175,12 @@ void ViewerData::on_server_stats(const ServerStats& stats, std::int64_t now_ns) 
   loop_rate_.add(t, stats.loop_rate_hz());
 }
 
+void ViewerData::on_experiment(const ExperimentDescription& experiment) {
+  std::lock_guard<std::mutex> lock(experiment_mutex_);
+  experiment_ = experiment;
+  ++experiment_version_;
+}
+
 void ViewerData::on_event(const Event& event, std::int64_t now_ns) {
   ++counters_.events;
   std::lock_guard<std::mutex> lock(events_mutex_);
@@ -246,6 +252,14 @@ void ViewerData::update(ViewerView& view) const {
       view.series[kStepP50Us].copy_from(step_p50_);
       view.series[kStepP99Us].copy_from(step_p99_);
       view.series[kLoopRateHz].copy_from(loop_rate_);
+    }
+  }
+  {
+    std::lock_guard<std::mutex> lock(experiment_mutex_);
+    if (experiment_version_ != view.experiment_version) {
+      view.experiment_version = experiment_version_;
+      view.experiment = experiment_;
+      view.have_experiment = true;
     }
   }
   {

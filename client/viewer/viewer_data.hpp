@@ -92,8 +92,11 @@ struct ViewerView {
   MasterState master;
   bool have_stats = false;
   ServerStats stats;
+  bool have_experiment = false;      ///< a teleop/experiment description arrived (latched)
+  ExperimentDescription experiment;  ///< what the session is: scheme, gains, delays, device
   std::uint64_t slave_version = 0, master_version = 0, stats_version = 0;  ///< copied versions
-  std::array<EventEntry, kMaxEvents> events;                               ///< newest first
+  std::uint64_t experiment_version = 0;
+  std::array<EventEntry, kMaxEvents> events;  ///< newest first
   int event_count = 0;
   std::array<TimeSeries, kSeriesCount> series;
   Counters counters;
@@ -121,6 +124,7 @@ class ViewerData {
   void on_master_state(const MasterState& state, std::int64_t now_ns);
   void on_server_stats(const ServerStats& stats, std::int64_t now_ns);
   void on_event(const Event& event, std::int64_t now_ns);
+  void on_experiment(const ExperimentDescription& experiment);
 
   /// Render thread: copies what changed since the last call into `view`. Allocation-free once
   /// `view` has seen every kind of sample (capacities are kept).
@@ -159,6 +163,10 @@ class ViewerData {
   std::uint64_t stats_version_ = 0;
   ServerStats stats_;
   TimeSeries step_p50_, step_p99_, loop_rate_;
+
+  mutable std::mutex experiment_mutex_;
+  std::uint64_t experiment_version_ = 0;
+  ExperimentDescription experiment_;
 
   mutable std::mutex events_mutex_;
   std::array<EventEntry, kMaxEvents> events_;  // ring

@@ -192,6 +192,7 @@ inline constexpr const char* kEvents = "teleop/events";
 inline constexpr const char* kServerStats = "teleop/server_stats";
 inline constexpr const char* kTuning = "teleop/tuning";               ///< tools -> master
 inline constexpr const char* kTuningStatus = "teleop/tuning_status";  ///< master -> tools
+inline constexpr const char* kExperiment = "teleop/experiment";       ///< master -> all, latched
 // Rate-limited copies for observers (docs/topics.md): written off the loops' threads, so the
 // number of observers does not load the 1 kHz path. `_view` at kViewRateHz for windows,
 // `_monitor` at kMonitorRateHz for terminals and services.

@@ -204,6 +204,10 @@ TEST_F(Security, ObserverReadsStateButCannotWriteCommands) {
   EXPECT_THROW(
       dds::Writer<TuningStatusPubSubType>(p, dds::topics::kTuningStatus, dds::TopicQos::kLatched),
       dds::DdsError);
+  // nor pose as a master describing its experiment
+  EXPECT_THROW(dds::Writer<ExperimentDescriptionPubSubType>(p, dds::topics::kExperiment,
+                                                            dds::TopicQos::kLatched),
+               dds::DdsError);
   {
     // an operator (a device driver, teleop_viewer --drive) may write the device state and
     // tuning requests, and still not commands

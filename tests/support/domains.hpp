@@ -39,6 +39,7 @@ inline constexpr int kPlaybackMcap = 86;   // record_play_test: an MCAP file pla
 inline constexpr int kBridgeSession = 87;  // bridge_test: a client of teleop_bridge
 inline constexpr int kBridgeSlowClient = 88;  // bridge_test: a client that never reads
 inline constexpr int kNodeBridgeCheck = 89;   // tests/node/run_bridge_check.sh (ctest node.*)
+inline constexpr int kDriverSilence = 94;     // driver_silence_test: an external driver goes silent
 inline constexpr int kSecureOutsiders = 105;  // security_test: no credentials / foreign CA
 inline constexpr int kSecureObserver = 106;   // security_test: observer reads, cannot command
 inline constexpr int kSecureSession = 107;    // security_test: server + master, secure

@@ -148,6 +148,9 @@ check 2 "'--qiet' is not an option of teleop_server (did you mean '--quiet'?)" 2
   "$server" --qiet
 check 2 "--delay '5' has no unit" 20 -- "$master" --delay 5
 check 2 "--jitter '2' has no unit" 20 -- "$master" --delay 5ms --jitter 2
+check 2 "--driver-timeout '100' has no unit" 20 -- "$master" --driver-timeout 100
+check 2 "--driver-timeout" 20 -- "$master" --driver-timeout 0.1us
+check 2 "--driver-timeout" 20 -- "$master" --driver-timeout 11s
 
 echo "--- --help and --version run nothing; teleop_experiment list"
 check 0 "usage: teleop_experiment sphere-zero-g" 20 -- \

@@ -1,5 +1,7 @@
 #include "client/viewer/ui/panel.hpp"
 
+#include "common/dds/experiment_text.hpp"
+
 #include <imgui.h>
 
 #include <algorithm>
@@ -295,6 +297,19 @@ void draw_overlay(const ViewerView& view, const PanelInfo& info) {
   if (view.have_master) {
     ImGui::Text("master: rtt %.2f ms  energy %.3g J  link %s", view.master.rtt_ms(),
                 view.master.passivity_energy_j(), view.master.link_ok() ? "ok" : "LOST");
+  }
+  if (view.have_experiment) {
+    // what the session is (teleop/experiment): the rtt above is the network's alone
+    ImGui::PushTextWrapPos(0.0f);
+    if (view.experiment.driver_live()) {
+      ImGui::TextUnformatted(("experiment: " + dds::experiment_text(view.experiment)).c_str());
+    } else {
+      ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.35f, 1.0f), "experiment: %s",
+                         dds::experiment_text(view.experiment).c_str());
+    }
+    ImGui::PopTextWrapPos();
+  } else {
+    ImGui::TextDisabled("experiment: none described yet (no master on teleop/experiment)");
   }
   if (info.displacement_colors) {
     ImGui::Text("colours: displacement from the first frame, max %.1f mm",

@@ -6,6 +6,7 @@
 
 #include <vector>
 
+#include "client/device/external_device.hpp"
 #include "client/device/simulated_device.hpp"
 #include "tests/support/alloc_counter.hpp"
 
@@ -393,6 +394,67 @@ TEST(MasterCycle, AReadingOutsideTheDeclaredWorkspaceRendersNothingAndHolds) {
   }
   EXPECT_EQ(ok.workspace_violations(), 0u);
   EXPECT_GT(ok.device_force_n().norm(), 1.0);
+}
+
+TEST(MasterCycle, ASilentDriverHoldsFadesTheForceAndIsLeftOutOfTheFigures) {
+  ExternalDevice device(DeviceSpec{}, 0.01);
+  ServoLink link(Eigen::Vector3d(0.6, 0.0, 0.5));
+  link.contact_force_n = Eigen::Vector3d(0.0, 0.0, 4.0);
+  MasterCycleConfig cfg = config("force-position");
+  cfg.driver_timeout_s = 0.1;
+  MasterCycle cycle(cfg, device, link);
+  ExternalDeviceSample hand;
+  hand.engaged = true;
+  auto feed = [&](std::uint64_t seq) {
+    hand.seq = seq;
+    device.on_sample(hand);
+  };
+  feed(1);
+  cycle.start(0.0);
+  int i = 0;
+  for (; i < 500; ++i) {  // live: the contact force is rendered
+    feed(static_cast<std::uint64_t>(i) + 2);
+    cycle.step(i * 1e-3);
+    cycle.finish(i * 1e-3);
+  }
+  const std::uint64_t live_samples = cycle.metrics().samples();
+  ASSERT_GT(cycle.device_force_n().norm(), 2.0);
+  EXPECT_FALSE(cycle.driver_silent());
+  // the driver stops: stale after 10 ms, silent after 100 ms more
+  double prev = cycle.device_force_n().norm();
+  double max_step = 0.0;
+  int silent_at = -1;
+  for (; i < 1000; ++i) {
+    cycle.step(i * 1e-3);
+    cycle.finish(i * 1e-3);
+    max_step = std::max(max_step, std::abs(cycle.device_force_n().norm() - prev));
+    prev = cycle.device_force_n().norm();
+    if (silent_at < 0 && cycle.driver_silent()) silent_at = i;
+  }
+  ASSERT_GT(silent_at, 500);
+  EXPECT_LT(silent_at, 500 + 10 + 100 + 5);
+  EXPECT_LE(max_step, DeviceSpec{}.max_force_rate_n_per_s * 1e-3 + 1e-9);  // 1 N per cycle
+  EXPECT_EQ(cycle.device_force_n(), Eigen::Vector3d::Zero());
+  EXPECT_FALSE(link.sent.back().enabled);  // the slave holds
+  EXPECT_EQ(cycle.driver_silences(), 1u);
+  // no cycle without a valid reading went into the figures
+  EXPECT_LE(cycle.metrics().samples(), live_samples + 11);
+  int events = 0;
+  sim::SimEvent e;
+  while (cycle.safety().events().pop(e)) {
+    if (e.kind == sim::EventKind::kWatchdog) ++events;
+  }
+  EXPECT_EQ(events, 1);
+  // the driver comes back: one more event, a re-homing, the silence closed and counted
+  for (; i < 1200; ++i) {
+    feed(static_cast<std::uint64_t>(i));
+    cycle.step(i * 1e-3);
+    cycle.finish(i * 1e-3);
+  }
+  EXPECT_FALSE(cycle.driver_silent());
+  EXPECT_EQ(cycle.rehomes(RehomeReason::kDriverBack), 1u);
+  EXPECT_NEAR(cycle.driver_silent_s(1.2), 0.49, 0.02);  // from the last valid reading
+  EXPECT_EQ(cycle.driver_silences(), 1u);
 }
 
 }  // namespace

@@ -49,13 +49,17 @@ TEST(RawType, KeyOfAKeyedTopicMatchesTheGeneratedOne) {
 }
 
 TEST(TopicTable, EveryDesignTopicWithItsQos) {
-  EXPECT_EQ(known_topics().size(), 16u);
+  EXPECT_EQ(known_topics().size(), 17u);
   // the master's tuning answers are recorded; the requests are not (playing a recording must
   // never retune a running master)
   ASSERT_NE(find_topic("teleop/tuning_status"), nullptr);
   EXPECT_EQ(find_topic("teleop/tuning_status")->qos, dds::TopicQos::kLatched);
   EXPECT_EQ(find_topic("teleop/tuning"), nullptr);
   ASSERT_NE(find_topic("teleop/events"), nullptr);
+  // the session's description is latched, so a played recording describes itself at once
+  ASSERT_NE(find_topic("teleop/experiment"), nullptr);
+  EXPECT_EQ(find_topic("teleop/experiment")->qos, dds::TopicQos::kLatched);
+  EXPECT_EQ(find_topic("teleop/experiment")->type, "teleop::ExperimentDescription");
   // the observers' rate-limited copies are recorded (and played) with their own QoS class
   ASSERT_NE(find_topic("teleop/slave_state_monitor"), nullptr);
   EXPECT_EQ(find_topic("teleop/slave_state_monitor")->qos, dds::TopicQos::kLatest);

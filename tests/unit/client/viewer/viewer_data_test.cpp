@@ -204,5 +204,29 @@ TEST(TimeSeries, KeepsTheNewestBucketsInARing) {
   EXPECT_DOUBLE_EQ(s.newest().t_s, 9.0);
 }
 
+TEST(ViewerData, TheExperimentReachesTheViewOnceAndOnEachChange) {
+  ViewerData data(10.0, 0);
+  ViewerView view;
+  data.update(view);
+  EXPECT_FALSE(view.have_experiment);
+  ExperimentDescription e;
+  e.scheme("wave-variables");
+  e.forward_delay_ms(50.0);
+  e.driver_live(true);
+  data.on_experiment(e);
+  data.update(view);
+  ASSERT_TRUE(view.have_experiment);
+  EXPECT_EQ(std::string(view.experiment.scheme().c_str()), "wave-variables");
+  EXPECT_DOUBLE_EQ(view.experiment.forward_delay_ms(), 50.0);
+  e.driver_live(false);  // the device fell silent: the next description says so
+  data.on_experiment(e);
+  {
+    test::NoAllocScope no_alloc;  // the copy into the view allocates nothing
+    data.update(view);
+    EXPECT_EQ(no_alloc.allocations(), 0u);
+  }
+  EXPECT_FALSE(view.experiment.driver_live());
+}
+
 }  // namespace
 }  // namespace teleop::viewer
