@@ -28,7 +28,7 @@ namespace {
 /// The installed layout's first component and where the source tree keeps the same folder.
 const std::vector<std::pair<std::string, std::string>>& source_folders() {
   static const std::vector<std::pair<std::string, std::string>> folders = {
-      {"scenes", "deploy/scenes"}, {"profiles", "deploy/profiles"}, {"data", "deploy/data"},
+      {"scenes", "deploy/scenes"}, {"profiles", "deploy/profiles"},  {"data", "deploy/data"},
       {"charts", "tests/charts"},  {"reference", "tests/reference"},
   };
   return folders;

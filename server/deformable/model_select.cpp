@@ -316,9 +316,7 @@ ModelTable parse_model_table(const std::string& csv_text, const std::string& fil
   return t;
 }
 
-std::string default_model_table_file() {
-  return data_path("data/deformable.csv");
-}
+std::string default_model_table_file() { return data_path("data/deformable.csv"); }
 
 ModelTable load_model_table(const std::string& file) {
   std::ifstream in(file);

@@ -277,8 +277,6 @@ RobotModel load_robot_model_file(const std::string& file) {
   return load_robot_model(root.at("robot"));
 }
 
-std::string default_robot_scene_path() {
-  return data_path("scenes/robot_puma560.yaml");
-}
+std::string default_robot_scene_path() { return data_path("scenes/robot_puma560.yaml"); }
 
 }  // namespace teleop::sim::robot
