@@ -86,6 +86,8 @@ set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_LICENSE "Apache-2.0")
 # the shared libraries the programs load, found by dpkg-shlibdeps (dpkg-dev)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+# programs and static libraries without their debug information (the build tree keeps it)
+set(CPACK_STRIP_FILES ON)
 # the charts of the programs' --out folders; the headers the libraries' users compile against
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "python3-matplotlib")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS
