@@ -3,7 +3,7 @@
 # (build-fuzz, clang; TELEOP_FUZZ=0 skips them). Exit status: non-zero if either failed.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-bash "$root/deploy/build.sh"
+bash "$root/deploy/build.sh" --tests
 build_dir="${BUILD_DIR:-$root/build}"
 cd "$build_dir"
 status=0

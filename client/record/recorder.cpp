@@ -53,6 +53,7 @@ Recorder::Recorder(dds::Participant& participant, const RecorderOptions& options
   file_->set_meta("domain", std::to_string(participant.options().domain));
   file_->set_meta("profile", participant.options().profile);
   file_->set_meta("started_unix_ns", std::to_string(started_ns_));
+  file_->set_meta("version", version_string());
   for (const auto& e : known_topics()) {
     if (std::find(options.exclude.begin(), options.exclude.end(), e.name) !=
         options.exclude.end()) {

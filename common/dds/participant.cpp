@@ -24,10 +24,7 @@
 
 #include "common/config/config.hpp"
 #include "common/dds/security_check.hpp"
-
-#ifndef TELEOP_DEFAULT_PROFILES_DIR
-#define TELEOP_DEFAULT_PROFILES_DIR "deploy/profiles"
-#endif
+#include "common/util/data_dir.hpp"
 
 namespace teleop::dds {
 
@@ -37,7 +34,7 @@ namespace fs = std::filesystem;
 namespace {
 std::string profiles_dir() {
   if (const char* env = std::getenv("TELEOP_PROFILES_DIR"); env && *env) return env;
-  return TELEOP_DEFAULT_PROFILES_DIR;
+  return data_path("profiles");
 }
 
 std::string slurp(const fs::path& p) {

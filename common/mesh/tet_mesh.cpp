@@ -14,6 +14,8 @@
 
 #include <unistd.h>
 
+#include "common/util/data_dir.hpp"
+
 namespace teleop::mesh {
 
 namespace {
@@ -272,11 +274,7 @@ TetMesh load_tet_mesh(const std::string& path, double scale, const Eigen::Vector
 }
 
 std::string ball_tet_mesh_path(int level) {
-#ifdef TELEOP_SOURCE_DIR
-  const std::string dir = std::string(TELEOP_SOURCE_DIR) + "/deploy/data/tet";
-#else
-  const std::string dir = "deploy/data/tet";
-#endif
+  const std::string dir = data_path("data/tet");
   return dir + "/ball_L" + std::to_string(level) + ".msh";
 }
 

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "common/config/config.hpp"
+#include "common/util/version.hpp"
 #include "idl/idl_text.hpp"
 
 namespace teleop::record {
@@ -16,7 +17,7 @@ mcap::WriterOptions writer_options(const McapOptions& o) {
   w.chunk_bytes = o.chunk_bytes;
   w.chunk_ns = o.chunk_ns;
   w.zstd_level = o.zstd_level;
-  w.library = "teleop_record";
+  w.library = "teleop " + version_string();
   return w;
 }
 

@@ -10,12 +10,10 @@
 
 #include "common/config/config.hpp"
 #include "common/config/suggest.hpp"
+#include "common/util/data_dir.hpp"
 #include "common/util/files.hpp"
 #include "common/util/version.hpp"
 
-#ifndef TELEOP_SOURCE_DIR
-#define TELEOP_SOURCE_DIR "."
-#endif
 #ifndef TELEOP_PYTHON3
 #define TELEOP_PYTHON3 "/usr/bin/python3"
 #endif
@@ -66,8 +64,7 @@ std::string shell_quote(const std::string& s) {
 }  // namespace
 
 int run_chart_script(const std::string& script, const std::vector<std::string>& args) {
-  std::string cmd = std::string(TELEOP_PYTHON3) + " " +
-                    shell_quote(std::string(TELEOP_SOURCE_DIR) + "/tests/charts/" + script);
+  std::string cmd = std::string(TELEOP_PYTHON3) + " " + shell_quote(data_path("charts/" + script));
   for (const auto& a : args) cmd += " " + shell_quote(a);
   const int rc = std::system(cmd.c_str());
   const int status = rc == -1 ? -1 : (WIFEXITED(rc) ? WEXITSTATUS(rc) : -1);

@@ -17,13 +17,14 @@
 #include "common/config/flags.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/dds/participant.hpp"
+#include "common/util/data_dir.hpp"
 #include "common/util/files.hpp"
 #include "server/node/server_node.hpp"
 #include "server/world/world_model.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"teleop_server: simulation server of the teleoperation system"};
-  std::string scene_file = std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml";
+  std::string scene_file = teleop::data_path("scenes/default.yaml");
   std::optional<double> rate_hz;
   std::optional<double> command_timeout_s;
   std::optional<double> owner_timeout_s;

@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 
+#include "common/util/data_dir.hpp"
 #include "server/deformable/material.hpp"
 
 namespace teleop::sim::deformable {
@@ -315,13 +316,7 @@ ModelTable parse_model_table(const std::string& csv_text, const std::string& fil
   return t;
 }
 
-std::string default_model_table_file() {
-#ifdef TELEOP_SOURCE_DIR
-  return std::string(TELEOP_SOURCE_DIR) + "/deploy/data/deformable.csv";
-#else
-  return "deploy/data/deformable.csv";
-#endif
-}
+std::string default_model_table_file() { return data_path("data/deformable.csv"); }
 
 ModelTable load_model_table(const std::string& file) {
   std::ifstream in(file);

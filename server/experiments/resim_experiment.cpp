@@ -22,6 +22,7 @@
 #include "common/record/commands.hpp"
 #include "common/util/command_stream.hpp"
 #include "common/util/csv.hpp"
+#include "common/util/data_dir.hpp"
 #include "common/util/registry.hpp"
 #include "server/node/resim.hpp"
 #include "server/world/world_model.hpp"
@@ -100,8 +101,7 @@ std::vector<teleop::StreamedCommand> resim_commands(const teleop::CommandArgs& a
 }
 
 int run_resim(const teleop::CommandArgs& args) {
-  const std::string scene =
-      args.option("--scene", std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
+  const std::string scene = args.option("--scene", teleop::data_path("scenes/default.yaml"));
   teleop::server::ResimOptions opt;
   opt.rate_hz = number_flag(args, "--rate", "1000", 10.0, 20000.0);
   opt.tail_s = number_flag(args, "--tail", "0.5", 0.0, 60.0);

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "common/dds/scene_objects.hpp"
+#include "common/util/version.hpp"
 #include "server/robot/kinematics.hpp"
 
 namespace teleop::server {
@@ -20,6 +21,7 @@ SceneDescription describe_scene(const sim::WorldModel& model, const sim::WorldDa
                                 double physics_rate_hz) {
   SceneDescription d;
   d.name(model.name);
+  d.build_version(version_string());
   copy3(d.gravity_mps2(), model.gravity_mps2);
   d.physics_rate_hz(physics_rate_hz);
   d.visual_rate_hz(model.visual_rate_hz);

@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "common/mesh/tri_mesh.hpp"
+#include "common/util/data_dir.hpp"
 
 namespace teleop::sim::robot {
 
@@ -276,12 +277,6 @@ RobotModel load_robot_model_file(const std::string& file) {
   return load_robot_model(root.at("robot"));
 }
 
-std::string default_robot_scene_path() {
-#ifdef TELEOP_SOURCE_DIR
-  return std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/robot_puma560.yaml";
-#else
-  return "deploy/scenes/robot_puma560.yaml";
-#endif
-}
+std::string default_robot_scene_path() { return data_path("scenes/robot_puma560.yaml"); }
 
 }  // namespace teleop::sim::robot

@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "common/mesh/tri_mesh.hpp"
+#include "common/util/data_dir.hpp"
 #include "server/deformable/material.hpp"
 #include "server/world/world.hpp"
 #include "server/world/world_model.hpp"
@@ -304,11 +305,7 @@ std::string calculix_key(const std::string& material, const std::string& case_na
 
 std::map<std::string, double> calculix_reference() {
   std::map<std::string, double> out;
-#ifdef TELEOP_SOURCE_DIR
-  std::ifstream in(std::string(TELEOP_SOURCE_DIR) + "/tests/reference/calculix/ball_reference.csv");
-#else
-  std::ifstream in("tests/reference/calculix/ball_reference.csv");
-#endif
+  std::ifstream in(data_path("reference/calculix/ball_reference.csv"));
   std::string line;
   std::getline(in, line);  // header: material,case,quantity,travel_mm,value,unit,theory,mesh,notes
   while (std::getline(in, line)) {

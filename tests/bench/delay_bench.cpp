@@ -31,6 +31,7 @@
 #include "common/util/csv.hpp"
 #include "common/util/registry.hpp"
 #include "common/util/stats.hpp"
+#include "common/util/version.hpp"
 #include "tests/support/press_world.hpp"
 
 namespace {
@@ -361,7 +362,7 @@ int run_delay_bench(const teleop::CommandArgs& args) {
                   rows.size(), sweep_s, judged ? static_cast<double>(agree) / judged : 0.0, judged,
                   tool_pairs ? static_cast<double>(tool_agree) / tool_pairs : 0.0, tool_pairs,
                   st.p50, st.p99, st.max, st_wave.p50, st_wave.p99, st_tdpa.p50, st_tdpa.p99);
-    json = buf;
+    json = "{\"version\":\"" + teleop::version_string() + "\"," + std::string(buf + 1);
     for (std::size_t i = 0; i < std::size(kSchemes); ++i) {
       const SchemeStats& c = stats[i];
       std::snprintf(buf, sizeof(buf),

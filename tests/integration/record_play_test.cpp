@@ -13,6 +13,7 @@
 
 #include "common/dds/endpoint.hpp"
 #include "common/record/recording.hpp"
+#include "common/util/version.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
 #include "tests/support/domains.hpp"
 #include "tests/support/integration.hpp"
@@ -274,6 +275,8 @@ TEST(RecordPlay, McapSessionPlaysReSimulatesAndSurvivesAKill) {
   EXPECT_NE(info.out().find("whole file: ok"), std::string::npos) << info.out();
   const auto whole = samples_of(full);
   EXPECT_EQ(static_cast<double>(whole.size()), total_samples(rec)) << rec;
+  // which build wrote it
+  EXPECT_EQ(record::RecordingReader(full).meta().at("version"), version_string());
 
   // the killed recorder's file: recovered, each of its samples as the finished file has it,
   // and what it lost is the end of the session: the open chunk (--chunk-s 0.5) and the queue

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "common/dds/scene_objects.hpp"
+#include "common/util/version.hpp"
 #include "server/robot/kinematics.hpp"
 #include "server/world/world_model.hpp"
 
@@ -109,6 +110,17 @@ TEST(SceneObjects, AFemBallSettledAtLoadIsDescribedByItsSaggedTop) {
     EXPECT_GE(o.size_m()[0], o.size_m()[1]);                     // inside its bounding sphere
   }
   EXPECT_TRUE(found);
+}
+
+TEST(SceneObjects, TheDescriptionSaysWhichBuildMadeIt) {
+  const sim::WorldModel model =
+      sim::load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/tool_only.yaml");
+  const sim::WorldData data = sim::make_world_data(model);
+  const SceneDescription scene = describe_scene(model, data, 1000.0);
+  EXPECT_EQ(std::string(scene.build_version()), version_string());
+  EXPECT_EQ(std::string(scene.build_version()).rfind(std::string(project_version()) + " (git ", 0),
+            0u)
+      << scene.build_version();
 }
 
 }  // namespace
