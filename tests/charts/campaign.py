@@ -156,7 +156,7 @@ def transparency(rows, out):
         axes[0][j].axhline(1.0, color="k", lw=0.8, ls=":")
         axes[0][j].set_ylabel("stiffness ratio [-]")
         axes[1][j].set_title(f"{env}: force felt in free space (median of means)", fontsize=9)
-        axes[1][j].set_ylabel("[N]")
+        axes[1][j].set_ylabel("force in free space [N]")
         for ax in (axes[0][j], axes[1][j]):
             ax.set_xlabel("one-way delay [ms]")
             ax.grid(alpha=0.3)

@@ -41,12 +41,13 @@ def main():
     ax[2].semilogy(t, [max(e * 1e3, 1e-3) for e in col("error_m")], lw=1, label="position error")
     ax[2].semilogy(t, [max(p * 1e3, 1e-3) for p in col("penetration_m")], lw=1,
                    label="penetration")
-    ax[2].set_ylabel("[mm]")
+    ax[2].set_ylabel("error, penetration [mm]")
     ax[2].legend(fontsize=7)
 
     ax[3].plot(t, col("sigma_min_m"), lw=1, label="sigma_min of weighted J [m]")
     ax[3].plot(t, col("orientation_error_rad"), lw=1, label="orientation error [rad]")
     ax[3].set_xlabel("time [s]")
+    ax[3].set_ylabel("sigma_min [m], angle [rad]")
     ax[3].legend(fontsize=7)
     for a in ax:
         a.grid(alpha=0.3)
