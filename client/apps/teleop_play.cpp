@@ -3,6 +3,7 @@
 //
 //   teleop_play FILE [--speed 1] [--seek S] [--domain D] [--profile P]
 //                    [--exclude TOPIC]... [--wait 0.5] [--linger 1] [--quiet]
+//                    [--progress | --no-progress]
 //   teleop_play FILE --export-commands STREAM.csv
 //   teleop_play FILE --info
 //   teleop_play FILE --convert OUT

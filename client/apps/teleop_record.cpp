@@ -3,6 +3,7 @@
 //   teleop_record --out session.mcap [--format mcap|sqlite] [--duration S] [--domain D]
 //                 [--profile P] [--queue-mb 64] [--batch-ms 10] [--chunk-mb 1] [--chunk-s 1]
 //                 [--exclude TOPIC]... [--summary-json FILE] [--quiet]
+//                 [--progress | --no-progress]
 //
 // Each sample is stored as the serialized CDR payload its writer sent, with the writer's
 // source timestamp, the recorder's receive timestamp, the writer's GUID and sequence number
