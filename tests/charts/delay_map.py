@@ -82,6 +82,7 @@ def draw_panel(ax, scheme, sweep, env, title, runs, bounds, theory, max_delay):
     if not sel:
         ax.text(0.5, 0.5, "not in this run (--quick)", ha="center", va="center",
                 transform=ax.transAxes)
+        ax.set_yticks([])
         return
     for verdict, (marker, color) in STYLE.items():
         pts = [(float(r["delay_ms"]), float(r[ykey])) for r in sel if r["verdict"] == verdict]
