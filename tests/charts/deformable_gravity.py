@@ -31,10 +31,11 @@ def main():
     ax[2].set(xlabel="t [s]", ylabel="plane contact force [N]", title="plane contact forces")
     for a in ax:
         a.grid(True, alpha=0.3)
-        a.legend(fontsize=8)
+    for a in (ax[0], ax[2]):
+        a.legend(fontsize=10)
     fig.suptitle("Sphere dropped 0.15 m between walls onto the floor, g = 9.81 m/s^2")
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    fig.savefig(out, dpi=100)
 
 
 if __name__ == "__main__":
