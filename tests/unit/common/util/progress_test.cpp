@@ -10,6 +10,8 @@
 #include <thread>
 #include <vector>
 
+#include "tests/support/alloc_counter.hpp"
+
 namespace {
 
 using teleop::Progress;
@@ -151,6 +153,25 @@ TEST(Progress, ShorterLinePadsOverTheLongerOne) {
   ASSERT_NE(second, std::string::npos);
   EXPECT_GE(s.size() - second - 2, second - 1);  // the final line covers the first one
   EXPECT_EQ(s.find('\n'), s.size() - 1);
+}
+
+TEST(Progress, CountingAndDrawingDoNotAllocate) {
+  std::FILE* sink = std::fopen("/dev/null", "w");
+  ASSERT_NE(sink, nullptr);
+  std::fputs("x", sink);  // the stream's buffer is made at its first write
+  double now = 0.0;
+  {
+    Progress p(sink, "loop", 1e6, "steps", 0, [&] { return now; });
+    teleop::test::NoAllocScope scope;
+    for (int i = 0; i < 1000; ++i) {
+      now += 0.01;  // a draw every 25 counts
+      p.add();
+    }
+    p.set(2000);
+    p.finish();
+    EXPECT_EQ(scope.allocations(), 0u);
+  }
+  std::fclose(sink);
 }
 
 TEST(Progress, SilentReporterWritesNothingButCounts) {
