@@ -101,7 +101,7 @@ Progress::Progress(std::FILE* out, const char* label, double total, const char* 
   copy_text(label_, sizeof(label_), label);
   copy_text(unit_, sizeof(unit_), unit);
   t0_ = clock_();
-  next_draw_s_.store(kRedrawPeriodS);
+  next_draw_s_.store(0.0);  // the first call draws: the line shows from the start
 }
 
 Progress::~Progress() { finish(); }

@@ -63,7 +63,8 @@ class Progress {
   /// Writes the final line if finish() was not called.
   ~Progress();
 
-  /// Counts `n` more done (any thread) and redraws if the last draw is 0.25 s old.
+  /// Counts `n` more done (any thread) and redraws if the last draw is 0.25 s old (the first
+  /// call draws at once).
   void add(double n = 1.0);
   /// Sets how far it is (a timed run: seconds so far) and redraws if due.
   void set(double done);
