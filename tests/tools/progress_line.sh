@@ -19,14 +19,18 @@ cr=$'\r'
 run() { "$bench" robot --quick --steps 100 --no-chart "$@"; }
 
 # stderr is a file: quiet
-run --out "$tmp/a" >"$tmp/a.out" 2>"$tmp/a.err" || fail "teleop_bench robot exited $?: $(cat "$tmp/a.err")"
-grep -q "$cr" "$tmp/a.err" && fail "a progress line on stderr although it is a file: $(cat -A "$tmp/a.err")"
+run --out "$tmp/a" >"$tmp/a.out" 2>"$tmp/a.err" ||
+  fail "teleop_bench robot exited $?: $(cat "$tmp/a.err")"
+grep -q "$cr" "$tmp/a.err" &&
+  fail "a progress line on stderr although it is a file: $(cat -A "$tmp/a.err")"
 grep -q "robot:" "$tmp/a.err" && fail "progress text on stderr although it is a file"
 grep -q "$cr" "$tmp/a.out" && fail "a carriage return on stdout"
 
 # --progress: drawn on stderr, the final line counts every case
-run --progress --out "$tmp/b" >"$tmp/b.out" 2>"$tmp/b.err" || fail "teleop_bench robot --progress exited $?"
-grep -q "$cr" "$tmp/b.err" || fail "no progress line on stderr with --progress: $(cat -A "$tmp/b.err")"
+run --progress --out "$tmp/b" >"$tmp/b.out" 2>"$tmp/b.err" ||
+  fail "teleop_bench robot --progress exited $?"
+grep -q "$cr" "$tmp/b.err" ||
+  fail "no progress line on stderr with --progress: $(cat -A "$tmp/b.err")"
 last="$(tr "$cr" '\n' <"$tmp/b.err" | grep -v '^ *$' | tail -n 1)"
 case "$last" in
 "robot: 7/7 cases (100.0 %), "*" cases/s, done in "*) ;;
