@@ -29,6 +29,7 @@
 #include "common/dds/network_flags.hpp"
 #include "common/dds/participant.hpp"
 #include "common/util/files.hpp"
+#include "common/util/progress.hpp"
 
 namespace {
 
@@ -58,6 +59,7 @@ struct Flags {
   std::optional<std::string> tdpa_base;
   bool wave_unmatched = false;
   teleop::dds::NetworkFlags net_flags;
+  bool progress = false, no_progress = false;
 };
 
 /// The haptic loop's scheduling (common/util/realtime.hpp).
@@ -195,6 +197,9 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   app.add_option("--log", o.log_csv, "per-cycle CSV log");
   app.add_option("--summary-json", o.summary_json, "JSON summary at exit");
   app.add_flag("--quiet", o.quiet, "print only warnings and errors");
+  app.add_flag("--progress", f.progress,
+               "the session's time line on stderr even when it is not a terminal");
+  app.add_flag("--no-progress", f.no_progress, "no session time line");
 }
 
 /// Validates the flags and folds the YAML config (if any) and the flags into `o`.
@@ -331,6 +336,7 @@ int main(int argc, char** argv) {
   }
   try {
     apply_flags(app, f, o);
+    teleop::set_progress_mode(teleop::progress_mode_from(f.progress, f.no_progress, o.quiet));
     teleop::master::MasterNode node(o);
     return node.run();
   } catch (const teleop::config::ConfigError& e) {

@@ -3,6 +3,7 @@
 //
 //   teleop_play FILE [--speed 1] [--seek S] [--domain D] [--profile P]
 //                    [--exclude TOPIC]... [--wait 0.5] [--linger 1] [--quiet]
+//                    [--progress | --no-progress]
 //   teleop_play FILE --export-commands STREAM.csv
 //   teleop_play FILE --info
 //   teleop_play FILE --convert OUT
@@ -39,6 +40,7 @@
 #include "common/record/convert.hpp"
 #include "common/record/recording.hpp"
 #include "common/util/files.hpp"
+#include "common/util/progress.hpp"
 #include "common/util/signals.hpp"
 
 int main(int argc, char** argv) {
@@ -70,6 +72,10 @@ int main(int argc, char** argv) {
       ->check(teleop::config::number_in(0.001, 3600.0))
       ->capture_default_str();
   app.add_flag("--quiet", po.quiet, "print only warnings and errors");
+  bool progress = false, no_progress = false;
+  app.add_flag("--progress", progress,
+               "the progress line on stderr even when it is not a terminal");
+  app.add_flag("--no-progress", no_progress, "no progress line");
   std::string export_commands;
   app.add_option("--export-commands", export_commands,
                  "write the recorded master commands to this command stream (CSV) for "
@@ -126,6 +132,8 @@ int main(int argc, char** argv) {
     install_stop_signal_handlers();
     { record::RecordingReader check(po.file); }  // a bad file fails before DDS starts
     teleop::dds::Participant p(opts);
+    set_progress_mode(progress_mode_from(progress, no_progress, po.quiet));
+    po.progress = progress_stream();
     const auto r = record::play(p, po);
     return r.failures == 0 ? 0 : 1;
   } catch (const teleop::config::ConfigError& e) {

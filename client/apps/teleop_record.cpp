@@ -3,6 +3,7 @@
 //   teleop_record --out session.mcap [--format mcap|sqlite] [--duration S] [--domain D]
 //                 [--profile P] [--queue-mb 64] [--batch-ms 10] [--chunk-mb 1] [--chunk-s 1]
 //                 [--exclude TOPIC]... [--summary-json FILE] [--quiet]
+//                 [--progress | --no-progress]
 //
 // Each sample is stored as the serialized CDR payload its writer sent, with the writer's
 // source timestamp, the recorder's receive timestamp, the writer's GUID and sequence number
@@ -24,6 +25,7 @@
 // Exit status (docs/exit_codes.md): 0 done, 1 runtime failure (file, DDS, a full disk), 2 bad
 // command line or output path, 3 nothing recorded (no sample arrived on any topic).
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -38,6 +40,7 @@
 #include "common/util/clock.hpp"
 #include "common/util/exit_codes.hpp"
 #include "common/util/files.hpp"
+#include "common/util/progress.hpp"
 #include "common/util/signals.hpp"
 
 namespace {
@@ -124,7 +127,7 @@ int main(int argc, char** argv) {
   double duration_s = 0.0;
   double queue_mb = 64.0;
   std::string summary_json;
-  bool quiet = false;
+  bool quiet = false, progress = false, no_progress = false;
   std::string format;
   double chunk_mb = 1.0, chunk_s = 1.0;
   app.add_option("--out", ro.out,
@@ -157,6 +160,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--summary-json", summary_json, "write the counts as JSON here at exit");
   app.add_flag("--quiet", quiet, "print only warnings and errors");
+  app.add_flag("--progress", progress,
+               "with --duration: the time line on stderr even when it is not a terminal");
+  app.add_flag("--no-progress", no_progress, "no time line on stderr");
   if (const int status = teleop::config::parse_command_line(app, "teleop_record", argc, argv);
       status >= 0) {
     return status == 2 ? 2 : status;
@@ -178,11 +184,17 @@ int main(int argc, char** argv) {
                   opts.profile.c_str(), ro.out.c_str(), record::format_name(*ro.format));
       std::fflush(stdout);
     }
+    set_progress_mode(progress_mode_from(progress, no_progress, quiet));
+    // the time line: only for a recording of known length
+    Progress line(duration_s > 0.0 ? progress_stream() : nullptr, "teleop_record", duration_s, "s",
+                  1);
     const auto t0 = now_ns();
     while (!stop_requested() && !recorder.failed()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      line.set(std::min(duration_s, seconds_between(t0, now_ns())));
       if (duration_s > 0.0 && seconds_between(t0, now_ns()) >= duration_s) break;
     }
+    line.finish();
     recorder.stop();
     return report(recorder, ro.out, quiet, summary_json);
   } catch (const teleop::config::ConfigError& e) {

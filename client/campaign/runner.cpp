@@ -9,32 +9,13 @@
 #include <vector>
 
 #include "client/campaign/results.hpp"
+#include "common/util/progress.hpp"
 
 namespace teleop::campaign {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::string eta_text(double s) {
-  char buf[32];
-  const long t = static_cast<long>(s + 0.5);
-  if (t >= 3600) {
-    std::snprintf(buf, sizeof(buf), "%ldh%02ldm", t / 3600, (t % 3600) / 60);
-  } else {
-    std::snprintf(buf, sizeof(buf), "%ldm%02lds", t / 60, t % 60);
-  }
-  return buf;
-}
-
-void print_progress(std::FILE* f, std::size_t done, std::size_t todo, double elapsed_s) {
-  const double rate = elapsed_s > 0.0 ? static_cast<double>(done) / elapsed_s : 0.0;
-  const double eta = rate > 0.0 ? static_cast<double>(todo - done) / rate : 0.0;
-  std::fprintf(f, "\r%zu/%zu runs (%5.1f %%), %.1f runs/s, ETA %s   ", done, todo,
-               todo ? 100.0 * static_cast<double>(done) / static_cast<double>(todo) : 100.0, rate,
-               rate > 0.0 ? eta_text(eta).c_str() : "?");
-  std::fflush(f);
-}
 
 }  // namespace
 
@@ -50,6 +31,7 @@ RunReport run_campaign(const Campaign& c, const RunOptions& o) {
   jobs = std::max<std::size_t>(1, std::min(jobs, limit));
 
   std::atomic<std::size_t> next{0}, done{0};
+  Progress progress(o.progress, "", static_cast<double>(limit), "runs", 0);
   std::exception_ptr failure;
   std::mutex failure_mutex;
   std::atomic<bool> failed{false};
@@ -59,6 +41,7 @@ RunReport run_campaign(const Campaign& c, const RunOptions& o) {
         const RunParams& p = c.runs[todo[i]];
         write_run(o.out_dir, p.id, run_one(c, p));
         done.fetch_add(1);
+        progress.add();
       } catch (...) {
         const std::lock_guard<std::mutex> lock(failure_mutex);
         if (!failure) failure = std::current_exception();
@@ -69,19 +52,15 @@ RunReport run_campaign(const Campaign& c, const RunOptions& o) {
   };
   std::vector<std::thread> pool;
   for (std::size_t k = 0; k < jobs; ++k) pool.emplace_back(worker);
-  if (o.progress) {
+  if (progress.active()) {  // the elapsed time and ETA move between runs too
     while (done.load() < limit && !failed.load()) {
-      print_progress(o.progress, done.load(), limit,
-                     std::chrono::duration<double>(Clock::now() - t0).count());
+      progress.poll();
       std::this_thread::sleep_for(std::chrono::milliseconds(250));
     }
   }
   for (std::thread& t : pool) t.join();
   rep.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
-  if (o.progress) {
-    print_progress(o.progress, done.load(), limit, rep.wall_s);
-    std::fputc('\n', o.progress);
-  }
+  progress.finish();
   if (failure) std::rethrow_exception(failure);
   rep.ran = done.load();
   return rep;

@@ -39,6 +39,7 @@
 #include "common/util/exit_codes.hpp"
 #include "common/util/files.hpp"
 #include "common/util/json.hpp"
+#include "common/util/progress.hpp"
 #include "common/util/rate_loop.hpp"
 #include "common/util/signals.hpp"
 #include "common/util/version.hpp"
@@ -50,6 +51,37 @@ namespace teleop::master {
 namespace {
 
 constexpr std::size_t kCsvColumns = 38;
+
+/// The session's time line on stderr (progress_stream(): a terminal, or --progress), drawn by a
+/// thread of its own four times a second: the haptic loop neither prints nor waits for it.
+class SessionStatus {
+ public:
+  explicit SessionStatus(double length_s)
+      : progress_(progress_stream(), "teleop_master session", length_s, "s", 1) {
+    if (!progress_.active()) return;
+    thread_ = std::thread([this] {
+      while (!done_.load()) {
+        progress_.set(progress_.elapsed_s());
+        std::this_thread::sleep_for(std::chrono::milliseconds(250));
+      }
+    });
+  }
+  SessionStatus(const SessionStatus&) = delete;
+  SessionStatus& operator=(const SessionStatus&) = delete;
+  ~SessionStatus() { stop(); }
+  /// The final line (once).
+  void stop() {
+    done_.store(true);
+    if (thread_.joinable()) thread_.join();
+    progress_.set(progress_.elapsed_s());
+    progress_.finish();
+  }
+
+ private:
+  Progress progress_;
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
 /// A log row; the count must match the header exactly (checked at compile time).
 template <class... T>
 std::array<double, kCsvColumns> csv_row(T... v) {
@@ -758,6 +790,7 @@ struct MasterNode::Impl {
         };
     std::uint64_t faults_seen = 0;
     OwnershipWatch owner;
+    SessionStatus status(options.homing_s + session_length);  // homing, then the session
     const double grace_s = 0.5 + 2.0 * (options.forward.delay_s + options.backward.delay_s);
 
     while (!stop_requested()) {
@@ -816,6 +849,7 @@ struct MasterNode::Impl {
       if (log) log_row(cycle, now_s - t0_s, link.last_rtt_ms(), last_loop_delay_ms);
       loop.wait();
     }
+    status.stop();
     const double end_s = static_cast<double>(now_ns()) * 1e-9;
     rep.elapsed_s = end_s - t0_s;
     rep.session_s = cycle.session_start_s() < 0 ? 0.0 : end_s - cycle.session_start_s();

@@ -13,6 +13,7 @@
 #include "client/record/topic_table.hpp"
 #include "common/config/config.hpp"
 #include "common/record/recording.hpp"
+#include "common/util/progress.hpp"
 #include "common/util/signals.hpp"
 
 namespace teleop::record {
@@ -113,6 +114,7 @@ PlayerResult play(dds::Participant& participant, const PlayerOptions& o) {
   }
   // 2. everything from the seek point, paced by the recorded receive times
   if (!all_ids.empty()) rec.scan(seek_ns, 0, all_ids);
+  Progress progress(o.progress, "teleop_play", result.recording_s - o.seek_s, "s", 1);
   const auto t0 = std::chrono::steady_clock::now();
   const auto max_gap_ns = static_cast<std::int64_t>(o.max_gap_s * 1e9);
   std::int64_t prev_ns = seek_ns, skipped_ns = 0;
@@ -135,7 +137,9 @@ PlayerResult play(dds::Participant& participant, const PlayerOptions& o) {
                          std::chrono::duration<double>(offset_s)));
     if (stop_requested()) break;
     write(s);
+    progress.set(static_cast<double>(s.receive_ns - seek_ns) * 1e-9);
   }
+  progress.finish();
   // 3. let reliable readers acknowledge and late observers pick up the latched topics
   sleep_until(std::chrono::steady_clock::now() +
               std::chrono::duration_cast<std::chrono::nanoseconds>(

@@ -6,6 +6,7 @@
 // published first, so an observer sees the world as it was at that moment; their writers are
 // transient local, so observers that join later still get them.
 #include <cstdint>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,7 @@ struct PlayerOptions {
   double max_gap_s = 10.0;           ///< a longer pause between samples is cut to this [s]
   std::vector<std::string> exclude;  ///< topic names not to publish
   bool quiet = false;
+  std::FILE* progress = nullptr;  ///< where the progress line goes (recording time played)
 };
 
 struct PlayerResult {

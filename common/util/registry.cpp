@@ -96,7 +96,9 @@ void command_usage(const CommandEntry& e, std::ostream& os) {
 }
 
 void usage(const std::string& group, const std::string& exe, std::ostream& os) {
-  os << "usage: " << exe << " <name> --out DIR [--quick] [--no-chart] [command options]\n"
+  os << "usage: " << exe
+     << " <name> --out DIR [--quick] [--no-chart] [--progress | --no-progress]"
+        " [command options]\n"
      << "       " << exe << " <name> --help\n"
      << "       " << exe << " list | --help | --version\n\n"
      << "names:\n";
@@ -104,7 +106,8 @@ void usage(const std::string& group, const std::string& exe, std::ostream& os) {
 }
 
 std::vector<std::string> option_names(const CommandEntry& entry) {
-  std::vector<std::string> names = {"--out", "--quick", "--no-chart", "--help"};
+  std::vector<std::string> names = {"--out",      "--quick",       "--no-chart",
+                                    "--progress", "--no-progress", "--help"};
   for (const OptionSpec& o : entry.options) names.push_back(o.name);
   return names;
 }
@@ -136,6 +139,11 @@ CommandArgs parse_command_args(const CommandEntry& entry, const std::vector<std:
     if (key == "--quick" || key == "--no-chart") {
       if (value) throw config::ConfigError("command line: " + key + " takes no value");
       (key == "--quick" ? args.quick : args.no_chart) = true;
+      continue;
+    }
+    if (key == "--progress" || key == "--no-progress") {
+      if (value) throw config::ConfigError("command line: " + key + " takes no value");
+      args.progress = key == "--progress" ? ProgressMode::kOn : ProgressMode::kOff;
       continue;
     }
     const OptionSpec* spec = nullptr;
@@ -208,12 +216,14 @@ int run_registry_main(const std::string& group, const std::string& exe, int argc
   const std::string& name = first;
   const std::vector<std::string> words(argv + 2, argv + argc);
   if (wants_help(words)) {  // help for the command; nothing runs
-    std::cout << "usage: " << exe << " " << name << " --out DIR [--quick] [--no-chart] [options]\n";
+    std::cout << "usage: " << exe << " " << name
+              << " --out DIR [--quick] [--no-chart] [--progress | --no-progress] [options]\n";
     command_usage(*entry, std::cout);
     return 0;
   }
   try {
     const CommandArgs args = parse_command_args(*entry, words);
+    set_progress_mode(args.progress);
     prepare_output_dir("--out", args.out_dir.string());
     const int status = entry->run(args);
     const std::vector<std::string> failed = failed_writes();

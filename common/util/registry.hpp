@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "common/util/progress.hpp"
+
 namespace teleop {
 
 /// One option a command accepts: `--name VALUE`. The shared main refuses, before the command
@@ -38,6 +40,9 @@ struct CommandArgs {
   std::vector<std::string> options;  ///< remaining "--key value" words, command-specific
   bool quick = false;                ///< reduced sizes (used by tests), same code path
   bool no_chart = false;             ///< skip the chart script (CSV only)
+  /// --progress (draw on stderr even when it is not a terminal), --no-progress (never);
+  /// otherwise the progress line shows only on a terminal
+  ProgressMode progress = ProgressMode::kAuto;
 
   /// Value of "--key" in options, or `fallback`.
   std::string option(const std::string& key, const std::string& fallback) const;
@@ -71,10 +76,12 @@ int run_chart_script(const std::string& script, const std::vector<std::string>& 
 
 /// Checks the words after the command name against `entry`'s options (see OptionSpec) and
 /// fills `args`. @throws config::ConfigError naming the word, the value and the allowed range.
-/// `--out` (required, once), `--quick` and `--no-chart` are common to every command.
+/// `--out` (required, once), `--quick`, `--no-chart`, `--progress` and `--no-progress` are
+/// common to every command.
 CommandArgs parse_command_args(const CommandEntry& entry, const std::vector<std::string>& words);
 
-/// Shared main() of the tool executables: `<exe> <name> --out DIR [--quick] [--no-chart] ...`.
+/// Shared main() of the tool executables: `<exe> <name> --out DIR [--quick] [--no-chart] ...`;
+/// sets progress_mode() from --progress / --no-progress before the command runs.
 /// A mistake on the command line exits 2 before the command runs (an unknown name or option
 /// with the closest known one); `<name> --help`, `list`, `--help` and `--version` print and exit
 /// 0 without running anything; --out is made (with its parents) or refused with exit 2.

@@ -84,6 +84,7 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
                           "estar_pa", "rms_hertz_n", "peak_force_n", "faults"});
   const double r_eff = 1.0 / (1.0 / tip_r + 1.0 / 0.25);
 
+  teleop::Progress progress("contact-force-curve", static_cast<double>(speeds.size()), "speeds");
   for (const double speed : speeds) {
     df::DeformableParams params;  // the deform module's defaults: the paper's sphere
     const std::string integrator = args.option("--integrator", "");
@@ -157,7 +158,9 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
         "(E* = %.0f Pa, rms %.3f N); closer to %s\n",
         speed, peak, fit.k_lin, fit.rms_lin, fit.c_hertz, estar, fit.rms_hertz,
         fit.rms_lin <= fit.rms_hertz ? "linear" : "Hertz");
+    progress.add();
   }
+  progress.finish();
   csv.flush();
   fits.flush();
   if (!args.no_chart) {

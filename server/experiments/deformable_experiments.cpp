@@ -82,6 +82,7 @@ int sphere_zero_g(const teleop::CommandArgs& a) {
                 {"model", "t_s", "radius_m", "deformation_m", "force_radial_n", "kinetic_j",
                  "shape_error_m"});
   int failures = 0;
+  teleop::Progress progress("sphere-zero-g", 3.0 * (std::lround(t_end / dt) + 1), "steps");
   for (ModelKind kind :
        {ModelKind::kMassSpring, ModelKind::kNavierLinear, ModelKind::kNavierCorotational}) {
     const DeformableParams p = zero_g_params(kind, level);
@@ -107,6 +108,7 @@ int sphere_zero_g(const teleop::CommandArgs& a) {
                       teleop::format_number(shape_error(m, s))});
       }
       if (k < steps) step(m, s, dt, nullptr);
+      progress.add();
     }
     const double e_end = shape_error(m, s);
     const bool ok = e_end < 0.1 * e_start && s.fault_count == 0;
@@ -115,6 +117,7 @@ int sphere_zero_g(const teleop::CommandArgs& a) {
         "sphere-zero-g %-20s level %d dt %.2g s: shape error %.3g mm -> %.3g mm after %.2g s%s\n",
         to_string(kind), level, dt, 1e3 * e_start, 1e3 * e_end, t_end, ok ? "" : "  NOT RECOVERED");
   }
+  progress.finish();
   csv.flush();
   chart(a, "deformable_zero_g.py", "sphere_zero_g.csv", "sphere_zero_g.png");
   return failures == 0 ? 0 : 1;
@@ -135,6 +138,7 @@ int navier_free_vertex(const teleop::CommandArgs& a) {
     ModelKind kind;
     bool damped;
   };
+  teleop::Progress progress("navier-free-vertex", 3.0 * (std::lround(t_end / dt) + 1), "steps");
   for (const Variant& var :
        {Variant{"linear_damped", ModelKind::kNavierLinear, true},
         Variant{"linear_undamped", ModelKind::kNavierLinear, false},
@@ -163,6 +167,7 @@ int navier_free_vertex(const teleop::CommandArgs& a) {
       csv.row_text({var.name, teleop::format_number(s.sim_time_s), teleop::format_number(disp),
                     teleop::format_number(vel), teleop::format_number(f.col(i).dot(u))});
       if (k < steps) step(m, s, dt, nullptr);
+      progress.add();
     }
     // damped: the vertex spirals into its rest position; undamped: it keeps oscillating
     const bool ok = s.fault_count == 0 && (var.damped ? max_late < 0.2 * push : max_late > 1e-5);
@@ -170,6 +175,7 @@ int navier_free_vertex(const teleop::CommandArgs& a) {
     std::printf("navier-free-vertex %-20s: |displacement| in the second half <= %.3g mm%s\n",
                 var.name, 1e3 * max_late, ok ? "" : "  UNEXPECTED");
   }
+  progress.finish();
   csv.flush();
   chart(a, "deformable_navier_free.py", "navier_free_vertex.csv", "navier_free_vertex.png");
   return failures == 0 ? 0 : 1;
@@ -187,6 +193,7 @@ int navier_held_vertex(const teleop::CommandArgs& a) {
                 {"model", "t_s", "neighbour_radius_m", "neighbour_displacement_m",
                  "neighbour_force_n", "held_force_n"});
   int failures = 0;
+  teleop::Progress progress("navier-held-vertex", 2.0 * (std::lround(t_end / dt) + 1), "steps");
   for (ModelKind kind : {ModelKind::kNavierLinear, ModelKind::kNavierCorotational}) {
     const DeformableParams p = zero_g_params(kind, level);
     const DeformableModel m = make_model(make_mesh_for(p), p);
@@ -222,6 +229,7 @@ int navier_held_vertex(const teleop::CommandArgs& a) {
                       teleop::format_number(-f.col(i).dot(u))});
       }
       if (k < steps) step(m, s, dt, nullptr);
+      progress.add();
     }
     // the neighbour is dragged inward and stays there while the vertex is held
     const bool ok = s.fault_count == 0 && final_disp < -0.05 * push;
@@ -229,6 +237,7 @@ int navier_held_vertex(const teleop::CommandArgs& a) {
     std::printf("navier-held-vertex %-20s: neighbour %d displaced %.3g mm at t = %.2g s%s\n",
                 to_string(kind), j, 1e3 * final_disp, t_end, ok ? "" : "  UNEXPECTED");
   }
+  progress.finish();
   csv.flush();
   chart(a, "deformable_navier_held.py", "navier_held_vertex.csv", "navier_held_vertex.png");
   return failures == 0 ? 0 : 1;
@@ -264,6 +273,7 @@ int sphere_gravity(const teleop::CommandArgs& a) {
   const int steps = static_cast<int>(std::lround(t_end / dt));
   const int every = std::max(1, static_cast<int>(std::lround(2e-3 / dt)));
   int sleeping_steps = 0;
+  teleop::Progress progress("sphere-gravity", steps + 1.0, "steps");
   for (int k = 0; k <= steps; ++k) {
     if (k % every == 0) {
       const Eigen::Vector3d c = centroid(m, s);
@@ -272,7 +282,9 @@ int sphere_gravity(const teleop::CommandArgs& a) {
                s.sleeping ? 1.0 : 0.0});
     }
     if (k < steps && step(m, s, dt, &events) == StepStatus::kSleeping) ++sleeping_steps;
+    progress.add();
   }
+  progress.finish();
   csv.flush();
   const Eigen::Vector3d c = centroid(m, s);
   const double weight = m.total_mass_kg * 9.81;

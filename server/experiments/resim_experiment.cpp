@@ -117,9 +117,16 @@ int run_resim(const teleop::CommandArgs& args) {
        "force_y_n", "force_z_n", "in_contact", "contact_object", "penetration_m", "deformation_m"});
   teleop::CsvWriter events((args.out_dir / "resim_events.csv").string(),
                            {"sim_time_s", "kind", "severity", "value", "message"});
+  // progress in simulated time: the commands' span and the tail
+  const double span_s =
+      stream.empty()
+          ? 0.0
+          : static_cast<double>(stream.back().receive_ns - stream.front().receive_ns) * 1e-9;
+  teleop::Progress progress("resim", span_s + opt.tail_s, "sim s", 1);
   const auto r = teleop::server::resimulate(
       model, stream, opt,
       [&](const teleop::server::ResimStep& s) {
+        progress.set(s.sim_time_s);
         const auto& o = *s.out;
         states.row({static_cast<double>(s.step), s.sim_time_s, static_cast<double>(s.command_seq),
                     s.holding ? 1.0 : 0.0, o.tip_position_m.x(), o.tip_position_m.y(),
@@ -132,6 +139,7 @@ int run_resim(const teleop::CommandArgs& args) {
                          std::to_string(static_cast<int>(e.severity)), format_number(e.value),
                          std::string("\"") + e.message + "\""});
       });
+  progress.finish();
   states.close();
   events.close();
   teleop::CsvWriter summary((args.out_dir / "resim_summary.csv").string(), {"key", "value"});

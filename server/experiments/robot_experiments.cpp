@@ -217,6 +217,7 @@ int run_robot_reach(const teleop::CommandArgs& args) {
   ReachStats stats;
   RobotInput in;
   in.mode = ControlMode::kTrackPose;
+  teleop::Progress progress("robot-reach", static_cast<double>(path.size() - 1), "segments");
   for (std::size_t w = 1; w < path.size(); ++w) {
     const Waypoint& a = path[w - 1];
     const Waypoint& b = path[w];
@@ -240,7 +241,9 @@ int run_robot_reach(const teleop::CommandArgs& args) {
                          std::string("\"") + e.message + "\""});
       }
     }
+    progress.add();
   }
+  progress.finish();
   csv.flush();
   ev_csv.flush();
   write_summary(args, model, stepper, t, stats, sim);

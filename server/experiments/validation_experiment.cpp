@@ -170,7 +170,12 @@ int run_validate(const teleop::CommandArgs& args) {
                   teleop::format_number(step_us)});
   };
   int failures = 0;
-  for (const Case& c : cases) failures += validate_case(c, travels, quick, lamb_s, ccx, row);
+  teleop::Progress progress("validate", static_cast<double>(cases.size()), "bodies");
+  for (const Case& c : cases) {
+    failures += validate_case(c, travels, quick, lamb_s, ccx, row);
+    progress.add();
+  }
+  progress.finish();
   csv.flush();
   if (!args.no_chart) {
     teleop::run_chart_script("validation.py", {(args.out_dir / "validation.csv").string(),

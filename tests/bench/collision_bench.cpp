@@ -75,6 +75,7 @@ int run_collision_bench(const teleop::CommandArgs& args) {
   const std::vector<int> levels =
       args.quick ? std::vector<int>{3, 4} : std::vector<int>{3, 4, 5, 6};
   const double r = 0.05;
+  teleop::Progress progress("collision", static_cast<double>(levels.size()), "levels");
   for (const int level : levels) {
     Scene s;
     const auto mesh = teleop::mesh::make_icosphere(level, 0.25, Eigen::Vector3d::Zero());
@@ -208,7 +209,9 @@ int run_collision_bench(const teleop::CommandArgs& args) {
       emit("fcl_rebuild", t_rebuild, err_rebuild);
       emit("fcl_refit", t_frefit, err_refit);
     }
+    progress.add();
   }
+  progress.finish();
   csv.flush();
   if (!args.no_chart) teleop::run_chart_script("collision_bench.py", {args.out_dir.string()});
   return 0;

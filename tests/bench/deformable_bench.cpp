@@ -238,7 +238,9 @@ int bench_deformable(const teleop::CommandArgs& a) {
        "step_us_median", "step_us_p99", "cost_steps", "lamb_s2_pct", "lamb_t2_pct", "lamb_s0_pct",
        "press_5mm_pct", "error_pct", "mass_scaling_step_s"});
   const auto start = std::chrono::steady_clock::now();
-  for (const Body& b : bodies(a.quick, only)) {
+  const std::vector<Body> all = bodies(a.quick, only);
+  teleop::Progress progress("deformable", static_cast<double>(all.size()), "bodies");
+  for (const Body& b : all) {
     Measured m;
 #ifdef TELEOP_HAVE_BULLET
     m = b.bullet ? measure_bullet(b, set) : measure_ours(b, set, press_ref_n);
@@ -273,7 +275,9 @@ int bench_deformable(const teleop::CommandArgs& a) {
         p99, m.substeps, m.lamb_pct[0], m.lamb_pct[1], m.lamb_pct[2], m.press_pct, err,
         b.mass_scaling_step_s > 0.0 ? " (mass-scaled)" : "");
     std::fflush(stdout);
+    progress.add();
   }
+  progress.finish();
   if (!a.no_chart) {
     teleop::run_chart_script("deformable_bench.py", {(a.out_dir / "deformable.csv").string(),
                                                      (a.out_dir / "deformable.png").string()});

@@ -18,7 +18,8 @@
 // must agree.
 //
 // Writes delay_map.csv, delay_boundary.csv (first delay margin vs gain), delay_theory.csv
-// (exact stable/unstable grid of the linear model), delay_summary.json; chart delay_map.png.
+// (exact stable/unstable grid of the linear model), delay_summary.json; charts delay_map.png,
+// delay_map_tdpa.png, delay_map_passive.png (tests/charts/delay_map.py), transparency.png.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -29,6 +30,7 @@
 
 #include "client/analysis/press_scenario.hpp"
 #include "common/util/csv.hpp"
+#include "common/util/progress.hpp"
 #include "common/util/registry.hpp"
 #include "common/util/stats.hpp"
 #include "common/util/version.hpp"
@@ -97,6 +99,13 @@ int run_delay_bench(const teleop::CommandArgs& args) {
   const std::vector<double> stiffness =
       quick ? std::vector<double>{} : std::vector<double>{500, 1000, 2000, 5000, 10000, 20000};
 
+  std::size_t planned = 0;
+  for (const SweepScheme& scheme : kSchemes) {
+    const std::size_t n_gains =
+        scheme.one_gain ? 1 : (scheme.force_gain ? fp_gains.size() : pp_gains.size());
+    planned += (3 * n_gains + stiffness.size()) * delays_ms.size();
+  }
+  teleop::Progress progress("delay", static_cast<double>(planned));
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<RunRow> rows;
   auto add = [&](const std::string& sweep, const SweepScheme& scheme, Environment env, double k,
@@ -119,6 +128,7 @@ int run_delay_bench(const teleop::CommandArgs& args) {
     row.delay_ms = d_ms;
     row.r = run_with(s, tool_scene);
     rows.push_back(row);
+    progress.add();
   };
   for (const SweepScheme& scheme : kSchemes) {
     const double default_gain = scheme.force_gain ? 1.0 : 400.0;
@@ -138,6 +148,7 @@ int run_delay_bench(const teleop::CommandArgs& args) {
   }
   const double sweep_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  progress.finish();
 
   // the per-run map
   teleop::CsvWriter csv((args.out_dir / "delay_map.csv").string(), {"sweep",

@@ -186,6 +186,7 @@ int bench_growth(const teleop::CommandArgs& a) {
   }
   std::vector<std::vector<std::vector<double>>> samples(series.size(),
                                                         std::vector<std::vector<double>>(7));
+  teleop::Progress progress("growth", static_cast<double>(rounds) * jobs.size(), "jobs");
   for (int r = 0; r < rounds; ++r) {
     for (std::size_t j = 0; j < jobs.size(); ++j) {
       const Job& job = jobs[(j + static_cast<std::size_t>(r) * 3) % jobs.size()];
@@ -201,8 +202,10 @@ int bench_growth(const teleop::CommandArgs& a) {
           d.insert(d.end(), us[k].begin(), us[k].end());
         }
       }
+      progress.add();
     }
   }
+  progress.finish();
   teleop::CsvWriter csv((a.out_dir / "growth.csv").string(),
                         {"series", "kind", "level", "n", "samples", "median_us", "p99_us"});
   teleop::CsvWriter fit_csv((a.out_dir / "growth_fit.csv").string(),

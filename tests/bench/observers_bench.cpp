@@ -383,6 +383,9 @@ int live_bench(const CommandArgs& args, const Binaries& bin, const fs::path& wor
                  "server_overrun_percent", "server_step_us_p50", "server_step_us_p99",
                  "collision_us_p99", "deformable_us_p99", "slave_us_p99", "publish_us_p99",
                  "rtt_ms_p99", "master_overruns", "link_losses", "watchdog_trips", "verdict"});
+  Progress progress("observers live",
+                    static_cast<int>(rounds) * static_cast<double>(variants.size() * counts.size()),
+                    "sessions");
   for (int round = 1; round <= static_cast<int>(rounds); ++round) {
     for (const LoopFlags& loops : variants) {
       for (const int n : counts) {
@@ -408,9 +411,11 @@ int live_bench(const CommandArgs& args, const Binaries& bin, const fs::path& wor
             r.slave_p99_us, r.publish_p99_us, r.rtt_p99, r.master_overruns, r.link_losses,
             r.watchdog_trips, r.verdict.c_str());
         std::fflush(stdout);
+        progress.add();
       }
     }
   }
+  progress.finish();
   return 0;
 }
 
@@ -449,6 +454,10 @@ int observers_bench(const CommandArgs& args) {
                  "master_overruns", "link_losses", "commands_sent", "commands_received", "verdict",
                  "server_watchdog_trips", "server_step_us_p99", "server_overruns",
                  "observers_with_scene", "monitor_state_hz", "view_state_hz"});
+  Progress progress("observers",
+                    static_cast<int>(rounds) * static_cast<double>(counts.size()) +
+                        static_cast<double>(full_counts.size() + nice0_counts.size()),
+                    "sessions");
   auto run = [&](const char* mode, int n, int round) {
     const std::string m = mode;
     const SessionResult r =
@@ -470,12 +479,14 @@ int observers_bench(const CommandArgs& args) {
         r.sent, r.verdict.c_str(), r.watchdog_trips, r.server_step_p99_us, r.server_overruns,
         r.observers_with_scene, n, r.monitor_state_hz, r.view_state_hz);
     std::fflush(stdout);
+    progress.add();
   };
   for (int round = 1; round <= static_cast<int>(rounds); ++round) {
     for (const int n : counts) run("rate_limited", n, round);
   }
   for (const int n : full_counts) run("full_rate", n, 1);
   for (const int n : nice0_counts) run("rate_limited_nice0", n, 1);
+  progress.finish();
   csv.flush();
   if (!args.no_chart) {
     run_chart_script("observers.py", {csv_path, (args.out_dir / "observers.png").string()});

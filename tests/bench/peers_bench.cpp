@@ -259,6 +259,7 @@ int bench_peers(const teleop::CommandArgs& a) {
   std::vector<std::vector<double>> times(configs.size());
   std::vector<Trace> first(configs.size());
   std::vector<int> substeps(configs.size(), 1);
+  teleop::Progress progress("peers", static_cast<double>(rounds) * configs.size(), "runs");
   for (int r = 0; r < rounds; ++r) {
     for (std::size_t j = 0; j < configs.size(); ++j) {
       // rotate the order each round so no engine always runs first or last
@@ -276,8 +277,10 @@ int bench_peers(const teleop::CommandArgs& a) {
       }
       times[i].insert(times[i].end(), tr.step_us.begin(), tr.step_us.end());
       if (r == 0) first[i] = std::move(tr);
+      progress.add();
     }
   }
+  progress.finish();
   teleop::CsvWriter csv((a.out_dir / "peers.csv").string(),
                         {"engine", "level", "nodes", "dt_s", "substeps", "step_us_median",
                          "step_us_p99", "overshoot_mm", "residual_mm", "drift_mm",

@@ -87,6 +87,9 @@ int run_peers_fem(const teleop::CommandArgs& args) {
                         {"engine", "level", "nodes", "tets", "mode", "lamb_hz", "frequency_hz",
                          "error_pct", "step_us_median", "step_us_p99", "rounds"});
   const va::Material foam = va::foam();
+  // levels x modes x engines x rounds
+  teleop::Progress progress(
+      "peers-fem", static_cast<double>(levels.size() * (args.quick ? 2 : 6) * rounds), "runs");
   for (int level : levels) {
     const teleop::mesh::TetMesh tm =
         teleop::mesh::ball_tet_mesh(level, 0.25, Eigen::Vector3d::Zero());
@@ -107,6 +110,7 @@ int run_peers_fem(const teleop::CommandArgs& args) {
                             : run_bullet(level, mode, dt, steps, engine == "bullet-implicit");
           times.insert(times.end(), r.step_us.begin(), r.step_us.end());
           if (round == 0) f = va::dominant_frequency_hz(r.q, dt, lamb);
+          progress.add();
         }
         std::sort(times.begin(), times.end());
         const double median = times[times.size() / 2];
@@ -123,6 +127,7 @@ int run_peers_fem(const teleop::CommandArgs& args) {
       }
     }
   }
+  progress.finish();
   csv.flush();
   if (!args.no_chart) {
     teleop::run_chart_script("peers_fem.py", {(args.out_dir / "peers_fem.csv").string(),

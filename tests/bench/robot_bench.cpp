@@ -69,6 +69,7 @@ int run_robot_bench(const teleop::CommandArgs& args) {
   // the same arm without the Coulomb friction rows (6 fewer constraint rows)
   RobotModel no_coulomb = model;
   for (int i = 0; i < no_coulomb.n; ++i) no_coulomb.links[i].coulomb_nm = 0.0;
+  teleop::Progress progress("robot", 7, "cases");
   for (const std::string scenario : {"free", "contact", "free_no_coulomb"}) {
     const RobotModel& mdl = scenario == "free_no_coulomb" ? no_coulomb : model;
     const std::string motion = scenario == "contact" ? "contact" : "free";
@@ -98,6 +99,7 @@ int run_robot_bench(const teleop::CommandArgs& args) {
       report(scenario, sname, "collision", coll);
       std::printf("  (%s: tip in contact in %d of %d steps, faults %llu)\n", scenario.c_str(),
                   contact_steps, steps, static_cast<unsigned long long>(sim.state().faults));
+      progress.add();
     }
   }
 
@@ -128,7 +130,9 @@ int run_robot_bench(const teleop::CommandArgs& args) {
     }
     report("free", "none", "fk_jacobian", kin);
     report("free", "none", "kinematics_controller", ctl);
+    progress.add();
   }
+  progress.finish();
   csv.flush();
   if (!args.no_chart) {
     teleop::run_chart_script("robot_bench.py", {(args.out_dir / "robot_bench.csv").string(),

@@ -126,8 +126,10 @@ int rtt(const CommandArgs& args) {
   CsvWriter csv(csv_path, {"profile", "payload_bytes", "mode", "samples", "lost", "rtt_us_p50",
                            "rtt_us_p90", "rtt_us_p99", "rtt_us_p999", "rtt_us_max"});
   const std::string security_dir = args.option("--security-dir", "");
-  for (const std::string& profile :
-       split_commas(args.option("--profiles", "loopback,loopback_shm"))) {
+  const std::vector<std::string> profiles =
+      split_commas(args.option("--profiles", "loopback,loopback_shm"));
+  Progress progress("rtt", 4.0 * static_cast<double>(profiles.size()), "cases");
+  for (const std::string& profile : profiles) {
     // the echo side: this executable in another process
     char self[4096];
     const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
@@ -174,6 +176,7 @@ int rtt(const CommandArgs& args) {
         std::printf("%-13s %6zu B %-10s p50 %7.1f us  p99 %7.1f us  p99.9 %7.1f us  lost %llu\n",
                     profile.c_str(), bytes, paced ? "1 kHz" : "max", r.rtt_us.p50, r.rtt_us.p99,
                     r.rtt_us.p999, static_cast<unsigned long long>(r.lost));
+        progress.add();
       }
     }
     MeshFrame stop;
@@ -181,6 +184,7 @@ int rtt(const CommandArgs& args) {
     ping.write(stop);
     echo.wait_for(5.0);
   }
+  progress.finish();
   csv.flush();
   if (!args.no_chart) run_chart_script("rtt.py", {csv_path, (args.out_dir / "rtt.png").string()});
   return 0;

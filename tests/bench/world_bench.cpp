@@ -72,6 +72,7 @@ int world(const CommandArgs& args) {
     x.row(2).maxCoeff(&i);
     top = x.col(i);
   }
+  Progress progress("world", 4.5 * n, "steps");
   auto run = [&](const char* phase, int steps, auto target) {
     std::vector<double> us;
     us.reserve(static_cast<std::size_t>(steps));
@@ -88,6 +89,7 @@ int world(const CommandArgs& args) {
       if (!w.bodies.empty()) sleeping += w.bodies[0].state.sleeping;
       while (events.pop(e)) {
       }
+      progress.add();
     }
     const Summary s = summarize(us);
     csv.row_text({pacing, phase, format_number(dt), std::to_string(steps), format_number(s.p50),
@@ -115,6 +117,7 @@ int world(const CommandArgs& args) {
     const double depth = 0.02 * std::min(1.0, 1.0 * k / (n / 3));
     return Eigen::Vector3d(top + Eigen::Vector3d(0, 0, 0.05 - depth));
   });
+  progress.finish();
   csv.flush();
   if (!args.no_chart) {
     run_chart_script("world_bench.py", {(args.out_dir / "world.csv").string(),

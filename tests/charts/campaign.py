@@ -133,7 +133,8 @@ def stability_map(rows, out):
 
 def transparency(rows, out):
     envs = list(dict.fromkeys(where(r) for r in rows))
-    fig, axes = plt.subplots(2, len(envs), figsize=(5.5 * len(envs), 7.5), squeeze=False)
+    fig, axes = plt.subplots(2, len(envs), figsize=(min(18.0, max(9.0, 5.5 * len(envs))), 9.0),
+                             squeeze=False)
     for j, env in enumerate(envs):
         for scheme in SCHEMES:
             sel = [r for r in rows if r["scheme"] == scheme and where(r) == env
@@ -151,18 +152,20 @@ def transparency(rows, out):
                 pts = [(d, statistics.median(by_delay[d][k])) for d in ds if by_delay[d][k]]
                 if pts:
                     ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", ms=3, label=scheme)
-        axes[0][j].set_title(f"{env}: felt stiffness / environment's (median, stable runs)",
-                             fontsize=9)
+        axes[0][j].set_title(f"{env}: felt stiffness / environment's\n(median, stable runs)",
+                             fontsize=11)
         axes[0][j].axhline(1.0, color="k", lw=0.8, ls=":")
         axes[0][j].set_ylabel("stiffness ratio [-]")
-        axes[1][j].set_title(f"{env}: force felt in free space (median of means)", fontsize=9)
-        axes[1][j].set_ylabel("[N]")
+        axes[1][j].set_title(f"{env}: force felt in free space\n(median of means)", fontsize=11)
+        axes[1][j].set_ylabel("force in free space [N]")
         for ax in (axes[0][j], axes[1][j]):
             ax.set_xlabel("one-way delay [ms]")
             ax.grid(alpha=0.3)
-        axes[0][j].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out, dpi=90, metadata={"Software": None})
+    handles, labels = axes[0][0].get_legend_handles_labels()
+    ncol = max(1, min(len(labels), 3 * len(envs)))
+    fig.legend(handles, labels, loc="lower center", ncol=ncol, frameon=False, fontsize=11)
+    fig.tight_layout(rect=(0, 0.035 * math.ceil(len(labels) / ncol) + 0.01, 1, 1))
+    fig.savefig(out, dpi=100, metadata={"Software": None})
     plt.close(fig)
 
 

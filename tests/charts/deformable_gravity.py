@@ -22,19 +22,20 @@ def main():
     ax[0].plot(t, [1e3 * z for z in cols["centroid_z_m"]], label="centroid z")
     ax[0].plot(t, [1e3 * z for z in cols["lowest_z_m"]], label="lowest node z")
     ax[0].axhline(250, color="gray", ls=":", label="rest radius")
-    ax[0].set(xlabel="t [s]", ylabel="[mm]", title="height")
+    ax[0].set(xlabel="t [s]", ylabel="height z [mm]", title="height")
     ax[1].semilogy(t, [max(k, 1e-12) for k in cols["kinetic_j"]])
     ax[1].set(xlabel="t [s]", ylabel="kinetic energy [J]", title="kinetic energy (0 = asleep)")
     ax[2].plot(t, cols["plane_force_z_n"], label="floor (z)")
     ax[2].plot(t, cols["plane_force_x_n"], label="walls (x)")
     ax[2].plot(t, [10 * s for s in cols["sleeping"]], label="sleeping x10")
-    ax[2].set(xlabel="t [s]", ylabel="[N]", title="plane contact forces")
+    ax[2].set(xlabel="t [s]", ylabel="plane contact force [N]", title="plane contact forces")
     for a in ax:
         a.grid(True, alpha=0.3)
-        a.legend(fontsize=8)
+    for a in (ax[0], ax[2]):
+        a.legend(fontsize=10)
     fig.suptitle("Sphere dropped 0.15 m between walls onto the floor, g = 9.81 m/s^2")
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    fig.savefig(out, dpi=100)
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@
 #include "client/campaign/runner.hpp"
 #include "common/config/flags.hpp"
 #include "common/util/files.hpp"
+#include "common/util/progress.hpp"
 #include "common/util/registry.hpp"
 
 namespace {
@@ -31,6 +32,7 @@ struct Options {
   std::string file, out, shard, partition, time_limit;
   std::size_t jobs = 0, shards = 0, cpus_per_task = 1, max_runs = 0;
   bool no_chart = false, submit = false, dry_run = false;
+  bool progress = false, no_progress = false;
 };
 
 /// Merges DIR into its table and draws the charts; returns the exit status.
@@ -55,7 +57,10 @@ int run(const Options& o) {
   if (!o.shard.empty()) ro.shard = teleop::campaign::parse_shard(o.shard);
   ro.jobs = o.jobs;
   ro.max_runs = o.max_runs;
-  ro.progress = isatty(STDERR_FILENO) ? stderr : nullptr;
+  const teleop::ProgressMode mode = o.progress      ? teleop::ProgressMode::kOn
+                                    : o.no_progress ? teleop::ProgressMode::kOff
+                                                    : teleop::ProgressMode::kAuto;
+  ro.progress = teleop::progress_wanted(mode, isatty(STDERR_FILENO) == 1) ? stderr : nullptr;
   const teleop::campaign::RunReport rep = teleop::campaign::run_campaign(c, ro);
   std::printf("teleop_campaign: %s, shard %zu/%zu: %zu runs, %zu done before, %zu ran in %.2f s\n",
               c.name.c_str(), ro.shard.index, ro.shard.count, rep.shard_runs, rep.skipped, rep.ran,
@@ -145,6 +150,9 @@ void add_flags(CLI::App& app, Options& o, CLI::App*& run_cmd, CLI::App*& slurm_c
                    "stop after this many runs, 1-1e9 (a later call resumes)")
       ->check(integer_in(1, 1e9));
   run_cmd->add_flag("--no-chart", o.no_chart, "write the table only");
+  run_cmd->add_flag("--progress", o.progress,
+                    "draw the progress line even when stderr is not a terminal");
+  run_cmd->add_flag("--no-progress", o.no_progress, "no progress line")->excludes("--progress");
 
   slurm_cmd = app.add_subcommand("slurm", "write (and submit) a Slurm array job of the campaign");
   slurm_cmd->add_option("FILE", o.file, "campaign file (YAML)")->required();

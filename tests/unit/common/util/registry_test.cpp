@@ -111,3 +111,13 @@ TEST(NanAsNa, ReplacesOnlyWholeWords) {
 }
 
 }  // namespace
+
+TEST(Registry, ProgressFlagsSetTheMode) {
+  EXPECT_EQ(teleop::parse_command_args(entry(), {"--out", "o"}).progress,
+            teleop::ProgressMode::kAuto);
+  EXPECT_EQ(teleop::parse_command_args(entry(), {"--out", "o", "--progress"}).progress,
+            teleop::ProgressMode::kOn);
+  EXPECT_EQ(teleop::parse_command_args(entry(), {"--no-progress", "--out", "o"}).progress,
+            teleop::ProgressMode::kOff);
+  EXPECT_THROW(teleop::parse_command_args(entry(), {"--out", "o", "--progress=1"}), ConfigError);
+}
