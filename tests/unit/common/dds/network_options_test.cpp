@@ -16,6 +16,7 @@
 
 #include "common/config/config.hpp"
 #include "common/dds/participant.hpp"
+#include "common/util/data_dir.hpp"
 
 namespace teleop::dds {
 namespace {
@@ -118,7 +119,7 @@ TEST(ProfileLookup, AFileBaseNameIsNotAProfileName) {
 }
 
 TEST(ProfileLookup, AnXmlPathUsesTheProfileNamedLikeTheFileOrItsOnlyOne) {
-  const std::string dir = TELEOP_DEFAULT_PROFILES_DIR;
+  const std::string dir = teleop::data_path("profiles");
   EXPECT_EQ(resolve_profile(dir + "/loopback.xml").name, "loopback");
   EXPECT_EQ(resolve_profile(dir + "/discovery_server.xml").name, "discovery_client");
   const std::string msg = error_of([&] { resolve_profile(dir + "/wan_tcp.xml"); });
