@@ -79,6 +79,26 @@ void add_loop_flags(CLI::App& app, teleop::RealtimeOptions& rt) {
       ->check(integer_in(-1.0, 1e5));
 }
 
+/// The injected channel's flags (both directions).
+void add_channel_flags(CLI::App& app, Flags& f) {
+  using teleop::config::integer_in;
+  app.add_option("--delay", f.delay,
+                 "one-way injected delay, each direction, with its unit (e.g. 50ms)");
+  app.add_option("--jitter", f.jitter, "jitter scale, with its unit (e.g. 5ms)");
+  app.add_option("--jitter-dist", f.jitter_dist, "uniform | normal");
+  app.add_flag("--reorder", f.reorder, "let jittered samples overtake each other");
+  app.add_option("--loss", f.loss, "Bernoulli loss probability (e.g. 1%)");
+  app.add_option("--burst-loss", f.burst_loss, "Gilbert-Elliott P_GB,P_BG (e.g. 0.01,0.2)");
+  app.add_option("--delay-spike", f.delay_spike,
+                 "AT,DURATION,EXTRA: samples sent in [AT, AT+DURATION) after the first get EXTRA "
+                 "more delay, both directions (e.g. 3s,1s,1s)");
+  app.add_option("--loss-window", f.loss_window,
+                 "AT,DURATION,P: samples sent in [AT, AT+DURATION) after the first are lost with "
+                 "probability P, both directions (e.g. 3s,1s,50%)");
+  app.add_option("--seed", f.seed, "random seed of the channels (backward uses seed + 1), 0-2^53")
+      ->check(integer_in(0.0, 9007199254740992.0));
+}
+
 /// Declares every flag of teleop_master.
 void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   using teleop::config::integer_in;
@@ -149,21 +169,7 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
       ->check(number_in(1e-3, 1e3));
   app.add_option("--max-force", f.max_force, "device force saturation [N], 0-1e4 (0 = the spec's)")
       ->check(number_in(0.0, 1e4));
-  app.add_option("--delay", f.delay,
-                 "one-way injected delay, each direction, with its unit (e.g. 50ms)");
-  app.add_option("--jitter", f.jitter, "jitter scale, with its unit (e.g. 5ms)");
-  app.add_option("--jitter-dist", f.jitter_dist, "uniform | normal");
-  app.add_flag("--reorder", f.reorder, "let jittered samples overtake each other");
-  app.add_option("--loss", f.loss, "Bernoulli loss probability (e.g. 1%)");
-  app.add_option("--burst-loss", f.burst_loss, "Gilbert-Elliott P_GB,P_BG (e.g. 0.01,0.2)");
-  app.add_option("--delay-spike", f.delay_spike,
-                 "AT,DURATION,EXTRA: samples sent in [AT, AT+DURATION) after the first get EXTRA "
-                 "more delay, both directions (e.g. 3s,1s,1s)");
-  app.add_option("--loss-window", f.loss_window,
-                 "AT,DURATION,P: samples sent in [AT, AT+DURATION) after the first are lost with "
-                 "probability P, both directions (e.g. 3s,1s,50%)");
-  app.add_option("--seed", f.seed, "random seed of the channels (backward uses seed + 1), 0-2^53")
-      ->check(integer_in(0.0, 9007199254740992.0));
+  add_channel_flags(app, f);
   app.add_option("--homing", o.homing_s, "time to bring the slave to the script start [s], 0-60")
       ->check(number_in(0.0, 60.0))
       ->capture_default_str();
