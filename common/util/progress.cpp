@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdarg>
+#include <cstdio>
 #include <utility>
 
 namespace teleop {
@@ -57,36 +59,44 @@ void format_duration(char* buf, std::size_t n, double s) {
   }
 }
 
+namespace {
+/// Appends printf-style text at buf + len (n in all), truncating; len stays below n.
+__attribute__((format(printf, 4, 5))) void append(char* buf, std::size_t n, std::size_t& len,
+                                                  const char* fmt, ...) {
+  if (len >= n) return;
+  std::va_list args;
+  va_start(args, fmt);
+  const int w = std::vsnprintf(buf + len, n - len, fmt, args);
+  va_end(args);
+  if (w > 0) len = std::min(n - 1, len + static_cast<std::size_t>(w));
+}
+}  // namespace
+
 std::size_t format_progress(char* buf, std::size_t n, const ProgressView& v) {
   if (n == 0) return 0;
   std::size_t len = 0;
-  const auto put = [&](const char* fmt, auto... a) {
-    if (len >= n) return;
-    const int w = std::snprintf(buf + len, n - len, fmt, a...);
-    if (w > 0) len = std::min(n - 1, len + static_cast<std::size_t>(w));
-  };
   const char* sep = *v.unit ? " " : "";
-  if (*v.label) put("%s: ", v.label);
+  if (*v.label) append(buf, n, len, "%s: ", v.label);
   if (v.total > 0.0) {
-    put("%.*f/%.*f%s%s (%.1f %%)", v.decimals, v.done, v.decimals, v.total, sep, v.unit,
-        100.0 * std::min(1.0, v.done / v.total));
+    append(buf, n, len, "%.*f/%.*f%s%s (%.1f %%)", v.decimals, v.done, v.decimals, v.total, sep,
+           v.unit, 100.0 * std::min(1.0, v.done / v.total));
   } else {
-    put("%.*f%s%s", v.decimals, v.done, sep, v.unit);
+    append(buf, n, len, "%.*f%s%s", v.decimals, v.done, sep, v.unit);
   }
   const double rate = v.elapsed_s > 0.0 ? v.done / v.elapsed_s : 0.0;
-  put(", %.*f %s/s", rate < 10.0 ? 2 : 1, rate, *v.unit ? v.unit : "steps");
+  append(buf, n, len, ", %.*f %s/s", rate < 10.0 ? 2 : 1, rate, *v.unit ? v.unit : "steps");
   char d[32];
   if (v.final) {
     format_duration(d, sizeof(d), v.elapsed_s);
-    put(", done in %s", d);
+    append(buf, n, len, ", done in %s", d);
     return len;
   }
   format_duration(d, sizeof(d), v.elapsed_s);
-  put(", %s elapsed", d);
+  append(buf, n, len, ", %s elapsed", d);
   if (v.total > 0.0) {
     const double eta = rate > 0.0 ? std::max(0.0, v.total - v.done) / rate : -1.0;
     format_duration(d, sizeof(d), eta);
-    put(", ETA %s", d);
+    append(buf, n, len, ", ETA %s", d);
   }
   return len;
 }
