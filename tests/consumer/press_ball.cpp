@@ -33,7 +33,7 @@ int main() try {
   std::printf("teleop %s: top node %.1f mm -> %.1f mm, %d floor contacts\n",
               teleop::version_string().c_str(), 1e3 * rest_top_m, 1e3 * state.x(2, top),
               state.contact_count);
-  return state.x(2, top) < rest_top_m ? 0 : 1;  // pressed down: it moved down
+  return state.x(2, top) < rest_top_m ? 0 : 1;    // pressed down: it moved down
 } catch (const teleop::config::ConfigError& e) {  // the scene file: named in the message
   std::fprintf(stderr, "press_ball: %s\n", e.what());
   return 2;
