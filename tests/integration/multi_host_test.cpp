@@ -334,7 +334,12 @@ TEST_F(MultiHost, LauncherStartsAndStopsASessionOnThreeHosts) {
       "multi_host launcher (discovery) commands %.0f/%.0f received, rtt p50 %.3f ms p99 "
       "%.3f ms\n",
       received, sent, json_nested(m, "rtt_ms", "p50"), json_nested(m, "rtt_ms", "p99"));
-  EXPECT_EQ(sent, 3000 + json_value(m, "closing_cycles")) << m;  // and the force's fade-out
+  // every cycle (and the force's fade-out) issued a command: written, or replaced by a newer
+  // one in the network thread's ring when it fell behind on this loaded machine (counted)
+  const double replaced = json_nested(m, "network_threads", "commands_dropped");
+  const double issued = 3000 + json_value(m, "closing_cycles");
+  EXPECT_EQ(sent + replaced, issued) << m;
+  EXPECT_LE(replaced, 0.01 * issued) << m;
   EXPECT_GE(received, 0.99 * sent) << m;
   EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;
   for (int k = 0; k < 2; ++k) {
