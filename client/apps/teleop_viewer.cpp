@@ -98,13 +98,13 @@ struct Options {
   double history_s = 10.0;
   double duration_s = 0.0;
   std::optional<int> msaa;  ///< default: 4, or 0 in a window on a software renderer
-  double force_scale_m_per_n = 0.1;
-  double displacement_scale_m = 0.02;
+  double force_scale_m_per_n = 0.25;
+  double displacement_scale_m = 0.003;
   int nice = 19;  ///< scheduling priority of every viewer thread (0 normal, 19 lowest)
   bool hide_panel = false;
   bool wireframe = false;
-  bool displacement = false;
-  bool full_rate = false;  ///< read the 1 kHz topics instead of the 60 Hz *_view copies
+  bool plain_colours = false;  ///< start without the displacement colours (key C)
+  bool full_rate = false;      ///< read the 1 kHz topics instead of the 60 Hz *_view copies
   // drive
   bool drive = false;                ///< be the master's device and tuning tool
   std::string input_script;          ///< scripted input (needs --drive)
@@ -166,7 +166,7 @@ class ViewerApp {
         data_(options.history_s, t0_ns_),
         frame_ms_(1 << 14) {
     render_options_.wireframe = options.wireframe;
-    render_options_.displacement_colors = options.displacement;
+    render_options_.displacement_colors = !options.plain_colours;
     render_options_.displacement_scale_m = static_cast<float>(options.displacement_scale_m);
     render_options_.force_scale_m_per_n = static_cast<float>(options.force_scale_m_per_n);
     show_panel_ = !options.hide_panel;
@@ -310,6 +310,7 @@ class ViewerApp {
 
       if (!paused_) data_.update(view_);
       renderer_.sync_scene(view_);
+      if (view_.have_scene()) renderer_.upload_deformables(view_, render_options_);
       update_rates(frame_start);
       if (drive_ && !run_script(frame_start)) break;
 
@@ -875,7 +876,7 @@ int main(int argc, char** argv) {
                  "contact force arrow length per newton [m/N], 0.0001-10")
       ->capture_default_str();
   app.add_option("--displacement-scale", o.displacement_scale_m,
-                 "displacement shown fully red with --displacement [m], 0.00001-1")
+                 "deformation drawn fully red [m], 0.00001-1")
       ->capture_default_str();
   app.add_option("--nice", o.nice,
                  "scheduling niceness of the viewer, 0-19: it yields the CPU to the server and "
@@ -898,8 +899,9 @@ int main(int argc, char** argv) {
   app.add_option("--drive-peak-force", o.drive_peak_force_n,
                  "the device's declared peak force [N] (the force bar's full scale), 0.1-1000")
       ->capture_default_str();
-  app.add_flag("--displacement", o.displacement,
-               "start with meshes coloured by displacement from the first frame (key C)");
+  app.add_flag("--plain", o.plain_colours,
+               "start with meshes in their plain colour instead of coloured by deformation "
+               "(key C)");
   if (const int status = teleop::config::parse_command_line(app, "teleop_viewer", argc, argv);
       status >= 0) {
     return status == 2 ? kExitUsage : status;

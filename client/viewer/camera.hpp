@@ -10,10 +10,10 @@
 namespace teleop::viewer {
 
 struct OrbitCamera {
-  Eigen::Vector3f target{0.4f, 0.0f, 0.45f};  ///< point looked at [m]
+  Eigen::Vector3f target{0.5f, 0.0f, 0.36f};  ///< point looked at [m]
   float azimuth_rad = -1.05f;                 ///< -60 deg: in front of the scene, to the right
-  float elevation_rad = 0.35f;                ///< 20 deg above the floor
-  float distance_m = 2.8f;                    ///< eye to target [m]
+  float elevation_rad = 0.6f;                 ///< 34 deg above the floor: the top of the ball shows
+  float distance_m = 2.0f;                    ///< eye to target [m]
   float fov_y_rad = 0.70f;                    ///< vertical field of view (40 deg)
   float near_m = 0.02f;
   float far_m = 50.0f;

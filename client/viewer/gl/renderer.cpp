@@ -364,10 +364,16 @@ void SceneRenderer::upload_deformables(const ViewerView& view, const RenderOptio
     glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, g.normal_scratch.data());
     if (options.displacement_colors) {
       if (i == 0) max_displacement_m_ = 0.0f;
+      Eigen::Vector3f shift = Eigen::Vector3f::Zero();
+      for (std::size_t v = 0; v < m.vertex_count; ++v) {
+        shift += Eigen::Map<const Eigen::Vector3f>(m.positions.data() + 3 * v) -
+                 Eigen::Map<const Eigen::Vector3f>(m.reference.data() + 3 * v);
+      }
+      if (m.vertex_count > 0) shift /= static_cast<float>(m.vertex_count);
       for (std::size_t v = 0; v < m.vertex_count; ++v) {
         const Eigen::Map<const Eigen::Vector3f> p(m.positions.data() + 3 * v),
             p0(m.reference.data() + 3 * v);
-        const float d = (p - p0).norm();
+        const float d = (p - p0 - shift).norm();
         max_displacement_m_ = std::max(max_displacement_m_, d);
         Eigen::Map<Eigen::Vector3f>(g.color_scratch.data() + 3 * v) =
             displacement_color(d, options.displacement_scale_m);
@@ -541,7 +547,19 @@ void SceneRenderer::draw(const ViewerView& view, const OrbitCamera& camera,
     const Eigen::Vector3f tip = vec3(view.slave.tip_position_m());
     if (tip.allFinite()) {
       draw_robot(view, tip);
-      draw_sphere(tip, tip_radius_m_, colors::kTip);
+      // in contact the tip is see-through, so the dent under it shows
+      const Eigen::Vector3f f = vec3(view.slave.contact_force_n());
+      const bool touching = std::isfinite(f.norm()) && f.norm() > 0.02f;
+      if (touching) {
+        glEnable(GL_BLEND);
+        glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+        glDepthMask(GL_FALSE);
+      }
+      draw_sphere(tip, tip_radius_m_, colors::kTip, touching ? 0.45f : 1.0f);
+      if (touching) {
+        glDepthMask(GL_TRUE);
+        glDisable(GL_BLEND);
+      }
       // shadow and drop line on the floor: where the tip is over the floor
       if (have_floor_ && tip.z() > floor_z_) {
         glEnable(GL_BLEND);
@@ -581,8 +599,8 @@ void SceneRenderer::draw(const ViewerView& view, const OrbitCamera& camera,
       const float len = std::min(fn * options.force_scale_m_per_n, 0.6f);
       const Eigen::Vector3f start = tip + d * tip_radius_m_;
       const float head = std::min(0.05f, 0.4f * len);
-      draw_cylinder(start, start + d * (len - head), 0.009f, colors::kForce);
-      draw_cone(start + d * (len - head), start + d * len, 0.024f, colors::kForce);
+      draw_cylinder(start, start + d * (len - head), 0.012f, colors::kForce);
+      draw_cone(start + d * (len - head), start + d * len, 0.03f, colors::kForce);
     }
   }
   glDisable(GL_DEPTH_TEST);

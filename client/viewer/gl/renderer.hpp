@@ -19,10 +19,12 @@
 namespace teleop::viewer {
 
 struct RenderOptions {
-  bool wireframe = false;              ///< deformable meshes as wireframe
-  bool displacement_colors = false;    ///< colour meshes by displacement from the first frame
-  float displacement_scale_m = 0.02f;  ///< displacement shown fully red [m]
-  float force_scale_m_per_n = 0.05f;   ///< force arrow length per newton [m/N]
+  bool wireframe = false;  ///< deformable meshes as wireframe
+  /// colour meshes by deformation: each vertex's displacement from the first frame less the
+  /// body's mean displacement (a settling or sliding body stays blue; a dent shows)
+  bool displacement_colors = true;
+  float displacement_scale_m = 0.003f;  ///< deformation shown fully red [m]
+  float force_scale_m_per_n = 0.25f;    ///< force arrow length per newton [m/N]
   bool show_force = true;
 };
 
@@ -52,12 +54,15 @@ class SceneRenderer {
   /// Draws into the current framebuffer's rectangle (x, y from the bottom-left, w x h pixels).
   void draw(const ViewerView& view, const OrbitCamera& camera, const RenderOptions& options, int x,
             int y, int w, int h);
+  /// Uploads the meshes' newest frames (and colours); draw() does it too, but a caller that
+  /// shows max_displacement_m() in the same frame calls it first.
+  void upload_deformables(const ViewerView& view, const RenderOptions& options);
   /// Deletes the GL objects.
   void release();
 
   const RobotSkeleton& skeleton() const { return skeleton_; }
-  /// Largest vertex displacement from the first frame over all meshes at the last upload [m]
-  /// (computed while displacement colours are on).
+  /// Largest vertex deformation (displacement from the first frame less the body's mean
+  /// displacement) over all meshes at the last upload [m] (computed while the colours are on).
   float max_displacement_m() const { return max_displacement_m_; }
 
  private:
@@ -81,7 +86,6 @@ class SceneRenderer {
   };
 
   GpuMesh upload(const PrimitiveMesh& mesh);
-  void upload_deformables(const ViewerView& view, const RenderOptions& options);
   void draw_primitive(const GpuMesh& mesh, const Eigen::Matrix4f& model,
                       const Eigen::Vector3f& color, float alpha = 1.0f);
   void draw_sphere(const Eigen::Vector3f& centre, float radius, const Eigen::Vector3f& color,

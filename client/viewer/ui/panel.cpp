@@ -246,7 +246,15 @@ void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& lay
 
   ImGui::Separator();
   ImGui::Text("events (%llu)", static_cast<unsigned long long>(view.counters.events));
-  const float help_h = 2.0f * ImGui::GetTextLineHeightWithSpacing() + 6.0f;
+  // the key help wraps to the panel's width, so every key shows however narrow the panel is
+  char help[160];
+  std::snprintf(help, sizeof help,
+                "drag: orbit  right-drag: pan  wheel: zoom  R view  W wire%s  C colour%s  "
+                "F force  H panel  P pause  S save  Q quit",
+                info.wireframe ? "*" : "", info.displacement_colors ? "*" : "");
+  const float wrap_w = ImGui::GetContentRegionAvail().x;
+  const float help_h =
+      ImGui::CalcTextSize(help, nullptr, false, wrap_w).y + ImGui::GetStyle().ItemSpacing.y + 6.0f;
   ImGui::BeginChild("events", ImVec2(0.0f, -help_h), false);
   for (int i = 0; i < view.event_count; ++i) {
     const EventEntry& e = view.events[static_cast<std::size_t>(i)];
@@ -259,9 +267,9 @@ void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& lay
   }
   ImGui::EndChild();
   ImGui::Separator();
-  ImGui::TextDisabled("drag: orbit  right-drag: pan  wheel: zoom  R: reset view");
-  ImGui::TextDisabled("W wire%s  C colour%s  F force  H panel  P pause  S save  Q quit",
-                      info.wireframe ? "*" : "", info.displacement_colors ? "*" : "");
+  ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
+  ImGui::TextWrapped("%s", help);
+  ImGui::PopStyleColor();
   ImGui::End();
 }
 
@@ -312,7 +320,7 @@ void draw_overlay(const ViewerView& view, const PanelInfo& info) {
     ImGui::TextDisabled("experiment: none described yet (no master on teleop/experiment)");
   }
   if (info.displacement_colors) {
-    ImGui::Text("colours: displacement from the first frame, max %.1f mm",
+    ImGui::Text("colours: deformation (displacement less the mean shift), max %.1f mm",
                 info.max_displacement_m * 1e3);
   }
   if (info.paused) ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.35f, 1.0f), "PAUSED (P to resume)");
