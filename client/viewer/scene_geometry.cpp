@@ -1,6 +1,7 @@
 #include "client/viewer/scene_geometry.hpp"
 
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -240,6 +241,31 @@ Eigen::Vector3f displacement_color(float d_m, float scale_m) {
       high(0.71f, 0.02f, 0.15f);
   if (s < 0.5f) return low + (mid - low) * (2.0f * s);
   return mid + (high - mid) * (2.0f * s - 1.0f);
+}
+
+RigidFit best_rigid_fit(const float* from, const float* to, std::size_t count) {
+  RigidFit fit;
+  if (count == 0) return fit;
+  Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < count; ++i) {
+    ca += Eigen::Map<const Eigen::Vector3f>(from + 3 * i).cast<double>();
+    cb += Eigen::Map<const Eigen::Vector3f>(to + 3 * i).cast<double>();
+  }
+  ca /= static_cast<double>(count);
+  cb /= static_cast<double>(count);
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();  // cross-covariance of the centred points
+  for (std::size_t i = 0; i < count; ++i) {
+    h += (Eigen::Map<const Eigen::Vector3f>(from + 3 * i).cast<double>() - ca) *
+         (Eigen::Map<const Eigen::Vector3f>(to + 3 * i).cast<double>() - cb).transpose();
+  }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+  const Eigen::Matrix3d r = svd.matrixV() * d * svd.matrixU().transpose();
+  fit.rotation = r.cast<float>();
+  fit.from_centroid = ca.cast<float>();
+  fit.to_centroid = cb.cast<float>();
+  return fit;
 }
 
 }  // namespace teleop::viewer

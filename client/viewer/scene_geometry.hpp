@@ -56,4 +56,19 @@ void vertex_normals(const float* positions, std::size_t vertex_count,
 /// Colour of a displacement d [m] on a blue-white-red scale saturating at scale_m.
 Eigen::Vector3f displacement_color(float d_m, float scale_m);
 
+/// A rigid motion p -> rotation (p - from_centroid) + to_centroid.
+struct RigidFit {
+  Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();
+  Eigen::Vector3f from_centroid = Eigen::Vector3f::Zero();
+  Eigen::Vector3f to_centroid = Eigen::Vector3f::Zero();
+  Eigen::Vector3f apply(const Eigen::Vector3f& p) const {
+    return rotation * (p - from_centroid) + to_centroid;
+  }
+};
+
+/// The rigid motion that best maps the points `from` onto `to` in least squares (the Kabsch
+/// solution, a proper rotation); what is left, |to - fit(from)|, is the body's deformation.
+/// 3 floats per point. Allocation-free.
+RigidFit best_rigid_fit(const float* from, const float* to, std::size_t count);
+
 }  // namespace teleop::viewer

@@ -364,16 +364,11 @@ void SceneRenderer::upload_deformables(const ViewerView& view, const RenderOptio
     glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, g.normal_scratch.data());
     if (options.displacement_colors) {
       if (i == 0) max_displacement_m_ = 0.0f;
-      Eigen::Vector3f shift = Eigen::Vector3f::Zero();
-      for (std::size_t v = 0; v < m.vertex_count; ++v) {
-        shift += Eigen::Map<const Eigen::Vector3f>(m.positions.data() + 3 * v) -
-                 Eigen::Map<const Eigen::Vector3f>(m.reference.data() + 3 * v);
-      }
-      if (m.vertex_count > 0) shift /= static_cast<float>(m.vertex_count);
+      const RigidFit fit = best_rigid_fit(m.reference.data(), m.positions.data(), m.vertex_count);
       for (std::size_t v = 0; v < m.vertex_count; ++v) {
         const Eigen::Map<const Eigen::Vector3f> p(m.positions.data() + 3 * v),
             p0(m.reference.data() + 3 * v);
-        const float d = (p - p0 - shift).norm();
+        const float d = (p - fit.apply(p0)).norm();
         max_displacement_m_ = std::max(max_displacement_m_, d);
         Eigen::Map<Eigen::Vector3f>(g.color_scratch.data() + 3 * v) =
             displacement_color(d, options.displacement_scale_m);

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <vector>
+
 #include <Eigen/Geometry>
 
 namespace teleop::viewer {
@@ -87,6 +89,40 @@ TEST(DisplacementColor, BlueAtRestRedAtTheScale) {
   EXPECT_GT(displacement_color(0.0f, 0.02f).z(), 0.7f);
   EXPECT_GT(displacement_color(0.05f, 0.02f).x(), 0.7f);
   EXPECT_LT(displacement_color(0.05f, 0.02f).z(), 0.2f);
+}
+
+// A ball of points rolled by 20 degrees and moved 3 cm leaves no deformation once the best rigid
+// motion is taken out; a 4 mm dent at one point is all that is left.
+TEST(RigidFit, TakesOutARollAndAShiftAndLeavesTheDent) {
+  std::vector<float> rest, moved;
+  const Eigen::Matrix3f roll =
+      Eigen::AngleAxisf(0.35f, Eigen::Vector3f(1.0f, 2.0f, 0.5f).normalized()).toRotationMatrix();
+  const Eigen::Vector3f centre(0.6f, 0.0f, 0.25f), shift(0.03f, -0.01f, -0.004f);
+  for (int i = 0; i < 200; ++i) {  // points on a sphere of 0.25 m (a Fibonacci spiral)
+    const float z = 1.0f - 2.0f * (static_cast<float>(i) + 0.5f) / 200.0f;
+    const float r = std::sqrt(1.0f - z * z), a = 2.39996323f * static_cast<float>(i);
+    const Eigen::Vector3f p = centre + 0.25f * Eigen::Vector3f(r * std::cos(a), r * std::sin(a), z);
+    Eigen::Vector3f q = roll * (p - centre) + centre + shift;
+    if (i == 0) q += 0.004f * (roll * Eigen::Vector3f::UnitZ());  // pushed in along its normal
+    rest.insert(rest.end(), {p.x(), p.y(), p.z()});
+    moved.insert(moved.end(), {q.x(), q.y(), q.z()});
+  }
+  const RigidFit fit = best_rigid_fit(rest.data(), moved.data(), 200);
+  float dent = 0.0f, elsewhere = 0.0f, plain_largest = 0.0f;
+  for (std::size_t i = 0; i < 200; ++i) {
+    const Eigen::Map<const Eigen::Vector3f> p(rest.data() + 3 * i), q(moved.data() + 3 * i);
+    const float d = (q - fit.apply(p)).norm();
+    if (i == 0) {
+      dent = d;
+    } else {
+      elsewhere = std::max(elsewhere, d);
+    }
+    plain_largest = std::max(plain_largest, (q - p).norm());
+  }
+  EXPECT_GT(plain_largest, 0.05f);  // the roll and shift alone move points by centimetres
+  EXPECT_NEAR(dent, 0.004f, 0.0005f);
+  EXPECT_LT(elsewhere, 0.0003f);
+  EXPECT_NEAR(fit.rotation.determinant(), 1.0f, 1e-4f);
 }
 
 }  // namespace
