@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Remakes the pictures and data of docs/results/ with the commands the docs name, one recipe
 # per group of files, each run in a folder of its own and only its declared files copied in.
-#   deploy/make_docs.sh                 every recipe (about 50 minutes on 2 cores)
-#   deploy/make_docs.sh --quick         the recipes under a minute each (about 5 minutes)
+#   deploy/make_docs.sh                 every recipe (the benchmarks take minutes each)
+#   deploy/make_docs.sh --quick         the nine recipes under a minute each
 #   deploy/make_docs.sh --only a,b      the named recipes
 #   deploy/make_docs.sh --list          recipes, their cost and their files
 #   deploy/make_docs.sh --check [ROOT]  every file in docs/results has a recipe (or is archived)
