@@ -40,6 +40,21 @@ def load_summary(csv_path):
         return None
 
 
+def delay_text(summary):
+    """The injected delay and loss each way, from the master's summary, for the title."""
+    if not summary:
+        return ""
+    try:
+        gains = summary["tuning"]["in_force"]
+        fwd, bwd = summary["delay"]["forward"], summary["delay"]["backward"]
+        return ("\none-way delay %g / %g ms (forward / backward; measured p99 %.1f / %.1f ms), "
+                "loss %.1f / %.1f %%" % (gains["forward_delay_ms"], gains["backward_delay_ms"],
+                                         fwd["delay_p99_ms"], bwd["delay_p99_ms"],
+                                         100.0 * fwd["loss_fraction"], 100.0 * bwd["loss_fraction"]))
+    except (KeyError, TypeError):
+        return ""
+
+
 def main(path, out_dir, title):
     c = load(path)
     summary = load_summary(path)
@@ -66,7 +81,7 @@ def main(path, out_dir, title):
     ax[3].legend(loc="upper right", fontsize=8)
     for a in ax:
         a.grid(alpha=0.3)
-    fig.suptitle(title)
+    fig.suptitle(title + delay_text(summary))
     fig.tight_layout()
     fig.savefig(os.path.join(out_dir, "session.png"), dpi=100)
 
