@@ -1,5 +1,5 @@
 #pragma once
-// Off-line, deterministic re-simulation of a session from its command stream (issue 15): the
+// Off-line, deterministic re-simulation of a session from its command stream: the
 // server's own cycle (validation at the edge, watchdog, passivity port, world step) driven by
 // the recorded commands on a simulated clock instead of the network and the wall clock.
 //

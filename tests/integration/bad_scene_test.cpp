@@ -1,4 +1,4 @@
-// Issue 12 from outside: the real teleop_server refuses a scene that cannot run with exit status
+// From outside: the real teleop_server refuses a scene that cannot run with exit status
 // 2 and a message naming the scene file, the field and the value (before DDS starts); a scene
 // whose deformable body sub-steps runs and says so; a malformed MasterCommand payload from a
 // hostile participant is dropped and the server keeps running (it used to end in

@@ -1,4 +1,4 @@
-// teleop_bridge (issue 26 item 1): a live session served over the Foxglove WebSocket protocol.
+// teleop_bridge: a live session served over the Foxglove WebSocket protocol.
 // A client sees serverInfo (read-only: no clientPublish) and one advertised channel per topic
 // with its IDL as an omgidl schema, receives the latched scene at once and messageData whose
 // payloads are CDR as DDS sent it, and gets status messages (never a crash) for bad JSON and

@@ -1,4 +1,4 @@
-// The fault suite (issue 12 part 6), network half: a master pressing the default scene's sphere
+// The fault suite, network half: a master pressing the default scene's sphere
 // goes through a 1 s delay spike, a 50 % loss burst and a flood of NaN commands from a third
 // participant. Each run asserts that the device force stayed within the device's peak with a
 // bounded change per cycle (from the master's per-cycle log), that the counts add up (nothing

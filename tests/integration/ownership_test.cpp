@@ -1,4 +1,4 @@
-// One owner at a time (issue 12 parts 1 and 2), with real processes over loopback DDS: a second
+// One owner at a time, with real processes over loopback DDS: a second
 // master is refused (renders nothing, says why, exits 4); a waiting master gets the slave when
 // the owner releases it, or when the owner is killed and its ownership watchdog expires, and
 // re-homes before it renders anything; a server killed and restarted mid-contact makes the master

@@ -141,7 +141,7 @@ std::string resim_hash(const std::string& out) {
   return at == std::string::npos ? std::string() : out.substr(at + 5, 16);
 }
 
-// Issue 15 part 2: a recorded session re-runs off-line bit-identically from its command stream,
+// A recorded session re-runs off-line bit-identically from its command stream,
 // and the master's own log drives a new session through --device replay unchanged.
 TEST(RecordPlay, RecordedSessionReSimulatesBitIdenticallyAndItsLogReplays) {
   const std::string d = std::to_string(domains::kResimSession);
@@ -231,7 +231,7 @@ double total_samples(const std::string& json) {
   return at == std::string::npos ? -1.0 : json_value(json.substr(at), "samples");
 }
 
-// Issue 26 item 5: the default format is MCAP. One live session, two recorders: one finishes
+// The default format is MCAP. One live session, two recorders: one finishes
 // normally (its file read through the summary, played back, converted, re-simulated from a
 // window found through the chunk index), the other is killed with -9 mid-session (its file
 // recovered: every complete chunk, each sample identical to the finished recording's).

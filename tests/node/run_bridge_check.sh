@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# ctest node.ws_protocol_reads_bridge (issue 26 item 6): a short live session (teleop_server +
+# ctest node.ws_protocol_reads_bridge: a short live session (teleop_server +
 # teleop_master, loopback, this test's domain) served by teleop_bridge on a port the system
 # picks, read by @foxglove/ws-protocol's client with every message decoded from its omgidl
 # schema (bridge_check.mjs).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# ctest node.mcap_core_reads_recording (issue 26 item 6): records a short live session to MCAP
+# ctest node.mcap_core_reads_recording: records a short live session to MCAP
 # with teleop_record (teleop_server + teleop_master, loopback, this test's domain), then reads
 # the file with @mcap/core and decodes every message with its IDL schema (mcap_check.mjs).
 #

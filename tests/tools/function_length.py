@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Lists C++ function bodies longer than a limit (issue 10: no function in server/ or client/
+"""Lists C++ function bodies longer than a limit (no function in server/ or client/
 outside tests is longer than about 120 lines).
 
     function_length.py [--limit N] [--list] DIR...

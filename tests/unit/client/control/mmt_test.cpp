@@ -81,7 +81,7 @@ Feel hold(const std::string& scheme, Environment env, double k_env, double delay
   return f;
 }
 
-// The targets of issue 13 part 3, on the sphere (k = 2000 N/m) and a stiff wall (2e4 N/m).
+// The model-mediated targets, on the sphere (k = 2000 N/m) and a stiff wall (2e4 N/m).
 TEST(ModelMediated, FeelsTheSphereWithin20PercentAt137MsWhereWavesAndTdpaAreFarSofter) {
   const Feel mmt = hold("model-mediated", Environment::kSphere, 2000.0, 0.137);
   EXPECT_NE(mmt.verdict, Verdict::kUnstable);

@@ -142,7 +142,7 @@ TEST(ReplayDevice, InterpolatesPositionAndOrientation) {
   EXPECT_NEAR(dev.read().position_m.x(), 0.1, 1e-12);
 }
 
-// A teleop_master --log file is a replay file as it is (issue 15): the header names t_s and the
+// A teleop_master --log file is a replay file as it is: the header names t_s and the
 // device's own pose dev_x .. dev_qz among the other columns.
 TEST(ReplayDevice, AMasterLogIsReadByItsHeader) {
   const std::string log =

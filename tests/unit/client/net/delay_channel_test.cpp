@@ -312,7 +312,7 @@ TEST(DelayConfig, ParsesYamlAndRejectsBadFields) {
 
 }  // namespace
 
-// Scheduled faults for the fault suite (issue 12): a delay spike and a loss window, timed from
+// Scheduled faults for the fault suite: a delay spike and a loss window, timed from
 // the channel's first sample.
 TEST(DelayChannelFaults, DelaySpikeDelaysOnlyTheWindowAndKeepsOrder) {
   DelayConfig cfg;

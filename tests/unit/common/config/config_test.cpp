@@ -93,7 +93,7 @@ TEST(Config, DurationsAndProbabilities) {
 
 namespace {
 
-// What yaml-cpp lets pass is refused for every configuration file (issue 12): duplicate keys at
+// What yaml-cpp lets pass is refused for every configuration file: duplicate keys at
 // any level, null values, keys that are not names, several documents, self-referencing aliases.
 TEST(ConfigChecks, DuplicateKeysAreRefusedAtAnyLevel) {
   std::string msg = error_of([] { Node::parse("a: 1\nb: 2\na: 3\n", "c.yaml"); });

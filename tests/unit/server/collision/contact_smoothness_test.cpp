@@ -1,4 +1,4 @@
-// Issue 13 part 5: while the tip loads the default sphere slowly and steadily, the force is
+// While the tip loads the default sphere slowly and steadily, the force is
 // monotone and changes little from step to step (no drop as the node penalty takes over from the
 // proxy spring), at several tip positions over the icosphere's facets and at several speeds. The
 // sphere is the contact-force experiment's: the paper's default body, settled on the floor under

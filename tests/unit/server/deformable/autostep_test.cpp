@@ -1,4 +1,4 @@
-// The automatic step (issue 14, part 1) and the simd kernel (part 3): the highest natural
+// The automatic step and the simd kernel: the highest natural
 // frequency against dense eigenvalues, power iteration and the Gershgorin bound; sub-stepping of
 // stiff bodies under a point load, a held node and a tip press with no fault; the default
 // scene's path untouched; the simd kernel against the general passes.

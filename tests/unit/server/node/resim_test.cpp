@@ -1,4 +1,4 @@
-// Off-line re-simulation from a command stream (issue 15 part 2): bit-identical from run to run,
+// Off-line re-simulation from a command stream: bit-identical from run to run,
 // sensitive to its input, and the node's edge validation applies (a rejected command never
 // reaches the physics).
 #include "server/node/resim.hpp"

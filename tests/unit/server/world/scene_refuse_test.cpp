@@ -1,4 +1,4 @@
-// A scene that cannot run is refused at load (issue 12, part 4): every bad case below throws a
+// A scene that cannot run is refused at load: every bad case below throws a
 // ConfigError whose message names the scene file, the field and the value (and says why), and
 // the shipped scenes still load. Table-driven: each case is a scene file written to a temporary
 // folder (with the mesh and include files it refers to) and loaded with load_world_model().
