@@ -1,5 +1,7 @@
 #include "client/monitor/monitor_state.hpp"
 
+#include "common/dds/event_kinds.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -64,33 +66,6 @@ std::string Snapshot::status() const {
   return live;
 }
 
-const char* event_kind(std::uint8_t k) {
-  switch (k) {
-    case EVENT_CONTACT_BEGIN:
-      return "contact-begin";
-    case EVENT_CONTACT_END:
-      return "contact-end";
-    case EVENT_WATCHDOG:
-      return "watchdog";
-    case EVENT_FAULT:
-      return "FAULT";
-    case EVENT_MODE_CHANGE:
-      return "mode";
-    case EVENT_COMMAND_REJECTED:
-      return "rejected";
-    case EVENT_LIMIT:
-      return "limit";
-    case EVENT_SAFETY:
-      return "safety";
-    case EVENT_OWNERSHIP:
-      return "ownership";
-    case EVENT_TUNING:
-      return "tuning";
-    default:
-      return "info";
-  }
-}
-
 std::string json_string(const std::string& s) {
   std::string o = "\"";
   for (const char c : s) {
@@ -125,8 +100,8 @@ std::string scene_line(const SceneDescription& d) {
 }
 
 std::string event_line(const EventView& e) {
-  return fmt("event %-7s %-13s %s (%.3g)", e.event.source().c_str(), event_kind(e.event.kind()),
-             e.event.message().c_str(), e.event.value());
+  return fmt("event %-7s %-13s %s (%.3g)", e.event.source().c_str(),
+             dds::event_kind_name(e.event.kind()), e.event.message().c_str(), e.event.value());
 }
 
 std::string experiment_line(const Snapshot& s) {
@@ -322,7 +297,7 @@ std::string render_json(const Snapshot& s) {
 std::string event_json(const EventView& e) {
   return "{\"type\": \"event\", \"t\": " + num(e.at_s) +
          ", \"source\": " + json_string(e.event.source().to_string()) +
-         ", \"kind\": " + json_string(event_kind(e.event.kind())) +
+         ", \"kind\": " + json_string(dds::event_kind_name(e.event.kind())) +
          ", \"severity\": " + std::to_string(e.event.severity()) +
          ", \"message\": " + json_string(e.event.message().to_string()) +
          ", \"value\": " + num(e.event.value()) + "}";

@@ -60,8 +60,6 @@ struct Snapshot {
   std::string status() const;
 };
 
-/// Kind of an event as a short word.
-const char* event_kind(std::uint8_t kind);
 /// A JSON string literal (quotes and escapes).
 std::string json_string(const std::string& s);
 

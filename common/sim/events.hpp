@@ -1,7 +1,8 @@
 #pragma once
 // Allocation-free event queue for the physics loop. Simulation code pushes events (contact
 // begin/end, limits, faults); the server node drains them outside the step and publishes them
-// on teleop/events. Kinds match the EVENT_* constants of idl/Teleop.idl.
+// on teleop/events. The kinds are checked against the EVENT_* constants of idl/Teleop.idl in
+// common/dds/event_kinds.hpp.
 #include <array>
 #include <cstdint>
 #include <cstdio>

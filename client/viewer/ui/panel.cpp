@@ -1,5 +1,6 @@
 #include "client/viewer/ui/panel.hpp"
 
+#include "common/dds/event_kinds.hpp"
 #include "common/dds/experiment_text.hpp"
 
 #include <imgui.h>
@@ -28,33 +29,6 @@ struct PlotLine {
   ImU32 color;
   const char* label;
 };
-
-const char* event_kind(std::uint8_t k) {
-  switch (k) {
-    case EVENT_CONTACT_BEGIN:
-      return "contact-begin";
-    case EVENT_CONTACT_END:
-      return "contact-end";
-    case EVENT_WATCHDOG:
-      return "watchdog";
-    case EVENT_FAULT:
-      return "FAULT";
-    case EVENT_MODE_CHANGE:
-      return "mode";
-    case EVENT_COMMAND_REJECTED:
-      return "rejected";
-    case EVENT_LIMIT:
-      return "limit";
-    case EVENT_SAFETY:
-      return "safety";
-    case EVENT_OWNERSHIP:
-      return "ownership";
-    case EVENT_TUNING:
-      return "tuning";
-    default:
-      return "info";
-  }
-}
 
 /// Title row with the newest value of each line, then a plot of the last history_s seconds.
 void plot(const char* title, const char* unit, const PlotLine* lines, int line_count,
@@ -262,7 +236,8 @@ void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& lay
                          : e.severity == 1 ? ImVec4(1.0f, 0.85f, 0.35f, 1.0f)
                                            : ImVec4(0.8f, 0.82f, 0.86f, 1.0f);
     ImGui::PushStyleColor(ImGuiCol_Text, color);
-    ImGui::TextWrapped("%6.1f s %s %s: %s", e.t_s, e.source, event_kind(e.kind), e.message);
+    ImGui::TextWrapped("%6.1f s %s %s: %s", e.t_s, e.source, dds::event_kind_name(e.kind),
+                       e.message);
     ImGui::PopStyleColor();
   }
   ImGui::EndChild();
