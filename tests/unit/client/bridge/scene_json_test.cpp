@@ -115,9 +115,9 @@ TEST(SceneJson, SceneUpdateHoldsTheBodyPlanesRobotTipAndForce) {
   const double x = q["x"].asDouble(), y = q["y"].asDouble(), z = q["z"].asDouble(),
                w = q["w"].asDouble();
   EXPECT_NEAR(2 * (x * z - w * y), 1.0, 1e-6) << "the rotated x axis' z component";
-  EXPECT_NEAR(robot["arrows"][0]["shaft_length"].asDouble() +
-                  robot["arrows"][0]["head_length"].asDouble(),
-              0.04, 1e-9);
+  EXPECT_NEAR(
+      robot["arrows"][0]["shaft_length"].asDouble() + robot["arrows"][0]["head_length"].asDouble(),
+      0.04, 1e-9);
   for (const char* k : {"cubes", "cylinders", "triangles", "texts", "models"}) {
     EXPECT_TRUE(robot[k].isArray()) << k;
   }
@@ -171,8 +171,8 @@ TEST(SceneJson, EventTextIsEscaped) {
 TEST(SceneJson, SchemasAreJsonWithTheirTitles) {
   EXPECT_EQ(parse(kSceneUpdateSchema)["title"].asString(), "foxglove.SceneUpdate");
   EXPECT_TRUE(parse(kSceneUpdateSchema)["properties"]["entities"]["items"]["properties"]
-                  ["triangles"]["items"]["properties"]
-                      .isMember("indices"));
+                                       ["triangles"]["items"]["properties"]
+                                           .isMember("indices"));
   EXPECT_EQ(parse(kFrameTransformsSchema)["title"].asString(), "foxglove.FrameTransforms");
   EXPECT_EQ(parse(kPlotSchema)["title"].asString(), "teleop.bridge.Plot");
   EXPECT_EQ(parse(kEventSchema)["title"].asString(), "teleop.bridge.Event");
