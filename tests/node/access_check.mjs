@@ -17,6 +17,10 @@ if (!base || !token) {
   console.error("usage: node access_check.mjs https://127.0.0.1:PORT TOKEN");
   process.exit(2);
 }
+if (typeof WebSocket !== "function") {
+  console.error("FAIL this Node.js has no WebSocket: run it with --experimental-websocket (Node >= 20.10)");
+  process.exit(1);
+}
 const failures = [];
 const fail = (what) => {
   console.error(`FAIL ${what}`);

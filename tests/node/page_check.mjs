@@ -24,6 +24,10 @@ if (!chromium || !pageUrl || !shotPath || !secondsText) {
   console.error("usage: node page_check.mjs CHROMIUM URL SCREENSHOT.png SECONDS");
   process.exit(2);
 }
+if (typeof WebSocket !== "function") {
+  console.error("FAIL this Node.js has no WebSocket: run it with --experimental-websocket (Node >= 20.10)");
+  process.exit(1);
+}
 const failures = [];
 const fail = (what) => {
   console.error(`FAIL ${what}`);
