@@ -128,7 +128,9 @@ struct Bridge::Impl {
   SceneJson scene;
   std::string json_scratch;
   std::uint64_t last_scene_ns = 0;
-  std::atomic<std::uint64_t> rejected{0};  // samples that did not decode or were not valid
+  std::atomic<std::uint64_t> rejected{0};
+  std::atomic<bool> derived_now{false};  // a client subscribed to a derived channel  // samples
+                                         // that did not decode or were not valid
   std::map<Derived, Topic*> derived;
 
   Impl(dds::Participant& p, const BridgeOptions& o) : participant(p), options(o) {}
@@ -140,6 +142,7 @@ struct Bridge::Impl {
   void add_derived();
   void feed(Topic& t);
   void publish_derived(std::uint64_t ns);
+  bool subscribed(Derived which) const;  // mutex held
   void push_json(Derived which, const std::string& json, std::uint64_t ns);
   bool on_accept();
   void on_open(ClientId id, const std::string& remote);
@@ -186,9 +189,9 @@ void Bridge::Impl::add_derived() {
     bool bulk, latched;
   };
   const Spec specs[] = {
-      {Derived::kScene, "bridge/scene", "foxglove.SceneUpdate", kSceneUpdateSchema, true, true},
+      {Derived::kScene, "bridge/scene", "foxglove.SceneUpdate", kSceneUpdateSchema, true, false},
       {Derived::kTransforms, "bridge/transforms", "foxglove.FrameTransforms",
-       kFrameTransformsSchema, true, true},
+       kFrameTransformsSchema, true, false},
       {Derived::kPlot, "bridge/plot", "teleop.bridge.Plot", kPlotSchema, false, false},
       {Derived::kEvents, "bridge/events", "teleop.bridge.Event", kEventSchema, false, true},
   };
@@ -252,12 +255,35 @@ void Bridge::Impl::feed(Topic& t) {
   if (!ok) rejected.fetch_add(1);
 }
 
+bool Bridge::Impl::subscribed(Derived which) const {
+  const std::uint32_t id = derived.at(which)->channel.id;
+  for (const auto& [cid, c] : clients) {
+    for (const auto& s : c->subs) {
+      if (s.channel_id == id) return true;
+    }
+  }
+  return false;
+}
+
 void Bridge::Impl::publish_derived(std::uint64_t ns) {
-  scene.scene_update(json_scratch, ns);
-  push_json(Derived::kScene, json_scratch, ns);
-  scene.frame_transforms(json_scratch, ns);
-  push_json(Derived::kTransforms, json_scratch, ns);
-  if (scene.plot(json_scratch, ns)) push_json(Derived::kPlot, json_scratch, ns);
+  // built only for channels someone reads: the scene is the bridge's largest cost; a client
+  // that subscribes later makes the next take (10 ms) build it at once (derived_now)
+  bool want_scene = false, want_tf = false, want_plot = false;
+  {
+    std::lock_guard<std::mutex> l(mutex);
+    want_scene = subscribed(Derived::kScene);
+    want_tf = subscribed(Derived::kTransforms);
+    want_plot = subscribed(Derived::kPlot);
+  }
+  if (want_scene) {
+    scene.scene_update(json_scratch, ns);
+    push_json(Derived::kScene, json_scratch, ns);
+  }
+  if (want_tf) {
+    scene.frame_transforms(json_scratch, ns);
+    push_json(Derived::kTransforms, json_scratch, ns);
+  }
+  if (want_plot && scene.plot(json_scratch, ns)) push_json(Derived::kPlot, json_scratch, ns);
 }
 
 void Bridge::Impl::push_json(Derived which, const std::string& json, std::uint64_t ns) {
@@ -267,7 +293,7 @@ void Bridge::Impl::push_json(Derived which, const std::string& json, std::uint64
   std::lock_guard<std::mutex> l(mutex);
   ++t.samples;
   if (t.latched) {
-    // the scene and the transforms: the newest only; the events: the last kEventsKept
+    // the events: the last kEventsKept
     if (t.kept.empty() || (t.event_log && t.kept.size() < kEventsKept)) {
       t.kept.emplace_back();
     } else if (t.event_log) {
@@ -366,7 +392,8 @@ void Bridge::Impl::read_loop() {
     }
     const auto now = now_wall_ns();
     if (scene.ready() &&
-        now - last_scene_ns >= static_cast<std::uint64_t>(scene.period_s() * 1e9)) {
+        (derived_now.exchange(false) ||
+         now - last_scene_ns >= static_cast<std::uint64_t>(scene.period_s() * 1e9))) {
       last_scene_ns = now;
       publish_derived(now);
       any = true;
@@ -556,6 +583,8 @@ void Bridge::Impl::subscribe(Client& c, const std::vector<Subscription>& subs) {
     c.subs.push_back(s);
     // a latched topic: the samples kept go to the late subscriber at once
     const Topic& t = *topics[s.channel_id - 1];
+    // the scene and transforms are not kept: the next take (10 ms) builds them fresh for it
+    if (t.derived != Derived::kNone) derived_now.store(true);
     std::uint8_t head[kMessageDataHeader];
     for (const auto& k : t.kept) {
       message_data_header(head, s.id, k.receive_ns);
