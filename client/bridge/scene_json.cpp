@@ -349,6 +349,9 @@ void SceneJson::write_robot_and_tip(std::string& o) const {
       if (i) o += ',';
       vec3(o, t.x(), t.y(), t.z());
     }
+    // the tool: from the last frame to the tip's centre
+    o += ',';
+    vec3(o, tip.x(), tip.y(), tip.z());
     o += "],";
     colour(o, kRobotColour);
     o += ",\"colors\":[],\"indices\":[]}";

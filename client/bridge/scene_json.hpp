@@ -4,7 +4,8 @@
 //   foxglove.SceneUpdate      the deformable bodies' triangles (topology + newest mesh frame),
 //                             the planes (thin cubes), spheres and boxes, the robot's links
 //                             (a line strip through its joint frames, posed from the newest
-//                             joint positions), the tip sphere and the contact-force arrow;
+//                             joint positions, on to the tip), the tip sphere and the
+//                             contact-force arrow;
 //   foxglove.FrameTransforms  world -> tip and world -> each robot frame;
 // and two small JSON channels for the bridge's own page (plots and the event list):
 //   teleop.bridge.Plot        contact force, tip position, round trip, in contact;

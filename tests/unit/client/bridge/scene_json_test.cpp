@@ -108,7 +108,9 @@ TEST(SceneJson, SceneUpdateHoldsTheBodyPlanesRobotTipAndForce) {
   ASSERT_EQ(robot["spheres"].size(), 1u) << "the tip";
   EXPECT_NEAR(robot["spheres"][0]["size"]["x"].asDouble(), 0.02, 1e-12);
   ASSERT_EQ(robot["lines"].size(), 1u) << "the robot's links";
-  EXPECT_EQ(robot["lines"][0]["points"].size(), 2u);
+  ASSERT_EQ(robot["lines"][0]["points"].size(), 3u) << "frames 0 and 1, then the tip";
+  EXPECT_NEAR(robot["lines"][0]["points"][1]["z"].asDouble(), 0.3, 1e-12);
+  EXPECT_NEAR(robot["lines"][0]["points"][2]["z"].asDouble(), 0.2, 1e-12);
   ASSERT_EQ(robot["arrows"].size(), 1u) << "the contact force";
   // the arrow points along +x of its pose: here the force is +z, so x maps to z
   const auto& q = robot["arrows"][0]["pose"]["orientation"];
