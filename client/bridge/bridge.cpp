@@ -128,9 +128,8 @@ struct Bridge::Impl {
   SceneJson scene;
   std::string json_scratch;
   std::uint64_t last_scene_ns = 0;
-  std::atomic<std::uint64_t> rejected{0};
-  std::atomic<bool> derived_now{false};  // a client subscribed to a derived channel  // samples
-                                         // that did not decode or were not valid
+  std::atomic<std::uint64_t> rejected{0};  // samples that did not decode or were not valid
+  std::atomic<bool> derived_now{false};    // a client subscribed to a derived channel
   std::map<Derived, Topic*> derived;
 
   Impl(dds::Participant& p, const BridgeOptions& o) : participant(p), options(o) {}
