@@ -35,7 +35,9 @@ if [ "${TELEOP_SETUP_TESTS:-0}" = "1" ]; then
     googletest libgtest-dev libgmock-dev libbenchmark-dev
     libsqlite3-dev libzstd-dev  # recordings (teleop::recording: the tools)
     tmux        # the monitor's screen-mode test
-    libwebsocketpp-dev libasio-dev libjsoncpp-dev  # teleop_bridge (Foxglove WebSocket protocol)
+    libwebsocketpp-dev libasio-dev libjsoncpp-dev  # teleop_bridge (Foxglove WebSocket protocol;
+                                                   # libssl-dev above: its TLS)
+    chromium  # the bridge page's test: headless Chromium opens it (tests/node/page_check.mjs)
     pybind11-dev python3-dev python3-pytest  # the Python module teleop (client/python), its test
     clang-format
     clang libclang-rt-dev  # libFuzzer + sanitizers of the fuzz targets (tests/fuzz, deploy/fuzz.sh)

@@ -1,24 +1,36 @@
 // teleop_bridge: serves a session's teleop/* topics over the Foxglove WebSocket protocol, so
 // Foxglove, Lichtblick or any foxglove.websocket.v1 client can watch it.
 //
-//   teleop_bridge [--domain D] [--profile P] [--port 8765] [--full-rate] [--queue-kb 4096]
-//                 [--max-clients 32] [--duration S] [--stats-s 10] [--quiet]
+//   teleop_bridge [--domain D] [--profile P] [--listen 127.0.0.1:8765 | --port 8765]
+//                 [--tls-cert PEM --tls-key PEM] [--token-file FILE] [--insecure-listen]
+//                 [--full-rate] [--queue-kb 4096] [--max-clients 32] [--duration S]
+//                 [--stats-s 10] [--quiet]
 //
 // It joins the DDS domain like an observer (subscribes only; by default to the rate-limited
 // copies of the 1 kHz topics, --full-rate adds the 1 kHz topics themselves), listens on
-// 127.0.0.1 only, advertises each topic as a channel with encoding cdr and its IDL as an
-// omgidl schema, and forwards each sample's serialized CDR payload unchanged. Latched topics
-// (scene, mesh topology, tuning status, events) reach a late subscriber at once. Each client has
+// 127.0.0.1 unless --listen names another address, advertises each topic as a channel with
+// encoding cdr and its IDL as an omgidl schema, and forwards each sample's serialized CDR
+// payload unchanged. It also publishes JSON channels for 3-D panels (bridge/scene:
+// foxglove.SceneUpdate, bridge/transforms: foxglove.FrameTransforms) and for its own page
+// (bridge/plot, bridge/events), and serves that page to a browser at http(s)://ADDR:PORT/.
+// Latched topics (scene, mesh topology, tuning status, events, bridge/scene) reach a late
+// subscriber at once. A non-loopback --listen needs TLS (--tls-cert, --tls-key) and an access
+// token (--token-file: clients send it as ?token=... or "Authorization: Bearer ..."; a request
+// without it gets 401, counted) unless --insecure-listen says otherwise. Each client has
 // a send queue bounded by --queue-kb: a slow client loses mesh frames first, each drop counted,
 // reported to it in a status message, on the periodic stderr line and in the exit summary.
 // Clients can only subscribe and unsubscribe; anything else is answered with a status message.
 //
 // Exit status: 0 done, 2 bad command line, 1 runtime failure (DDS, the port in use).
 #include <CLI/CLI.hpp>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
+#include <memory>
 #include <optional>
+#include <stdexcept>
 #include <thread>
 
 #include "client/bridge/bridge.hpp"
@@ -30,6 +42,74 @@
 namespace {
 
 using namespace teleop;
+
+/// Address and port of --listen ("ADDR:PORT", "[V6]:PORT"). @throws config::ConfigError.
+void parse_listen(const std::string& text, bridge::BridgeOptions& bo) {
+  const auto colon = text.rfind(':');
+  const auto bad = [&](const std::string& why) {
+    return config::ConfigError("--listen '" + text + "': " + why +
+                               " (expected ADDR:PORT, e.g. 0.0.0.0:8765, PORT 0-65535)");
+  };
+  if (colon == std::string::npos || colon == 0) throw bad("no ':PORT'");
+  std::string addr = text.substr(0, colon);
+  if (addr.size() > 2 && addr.front() == '[' && addr.back() == ']') {
+    addr = addr.substr(1, addr.size() - 2);
+  }
+  const std::string port = text.substr(colon + 1);
+  if (port.empty() || port.size() > 5 ||
+      port.find_first_not_of("0123456789") != std::string::npos || std::stoi(port) > 65535) {
+    throw bad("port '" + port + "' is not a number in 0-65535");
+  }
+  bo.address = addr;
+  bo.port = std::stoi(port);
+}
+
+bool is_loopback(const std::string& addr) {
+  return addr.rfind("127.", 0) == 0 || addr == "::1" || addr == "localhost";
+}
+
+/// The access token of --token-file: its first line, 16-4096 printable characters.
+std::string read_token(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw config::ConfigError("--token-file '" + path + "': cannot read it");
+  std::string token;
+  std::getline(f, token);
+  while (!token.empty() && std::isspace(static_cast<unsigned char>(token.back()))) token.pop_back();
+  bool printable = true;
+  for (const char c : token) printable = printable && c > 0x20 && c < 0x7f && c != '&' && c != '#';
+  if (token.size() < 16 || token.size() > 4096 || !printable) {
+    throw config::ConfigError("--token-file '" + path + "': the token (first line) has " +
+                              std::to_string(token.size()) +
+                              " characters; allowed: 16-4096 printable ASCII characters, no "
+                              "spaces, '&' or '#' (e.g. openssl rand -hex 24 > FILE)");
+  }
+  return token;
+}
+
+/// Checks the access flags together: a non-loopback address needs TLS and a token.
+void check_access(bridge::BridgeOptions& bo, const std::string& token_file, bool insecure) {
+  auto& a = bo.access;
+  if (a.tls_cert_file.empty() != a.tls_key_file.empty()) {
+    throw config::ConfigError("--tls-cert and --tls-key go together (the certificate and its key)");
+  }
+  if (!token_file.empty()) a.token = read_token(token_file);
+  if (is_loopback(bo.address)) return;
+  if ((a.tls_cert_file.empty() || a.token.empty()) && !insecure) {
+    throw config::ConfigError(
+        "--listen " + bo.address +
+        " is not a loopback address: remote viewers need --tls-cert, --tls-key and --token-file "
+        "(or --insecure-listen to serve anyone on the network without them)");
+  }
+  if (insecure && (a.tls_cert_file.empty() || a.token.empty())) {
+    std::fprintf(stderr,
+                 "teleop_bridge: WARNING: --insecure-listen: serving %s without %s: anyone who "
+                 "can reach this address can watch the session\n",
+                 bo.address.c_str(),
+                 a.tls_cert_file.empty() && a.token.empty() ? "TLS or an access token"
+                 : a.tls_cert_file.empty()                  ? "TLS"
+                                                            : "an access token");
+  }
+}
 
 /// Serves until SIGINT/SIGTERM or --duration; prints the counts every --stats-s.
 int serve(bridge::Bridge& b, double duration_s, double stats_s, bool quiet) {
@@ -59,15 +139,30 @@ int main(int argc, char** argv) {
   std::optional<std::string> profile;
   bridge::BridgeOptions bo;
   double duration_s = 0.0, stats_s = 10.0, queue_kb = 4096.0;
-  bool quiet = false;
+  bool quiet = false, insecure = false;
+  std::string listen, token_file;
   app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
       ->check(config::integer_in(0.0, 232.0));
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
-  app.add_option("--port", bo.port,
-                 "TCP port on 127.0.0.1, 0-65535 (0: the system picks one and it is printed)")
-      ->check(config::integer_in(0.0, 65535.0))
-      ->capture_default_str();
+  auto* port_opt = app.add_option("--port", bo.port,
+                                  "TCP port on 127.0.0.1, 0-65535 (0: the system picks one and "
+                                  "it is printed)")
+                       ->check(config::integer_in(0.0, 65535.0))
+                       ->capture_default_str();
+  app.add_option("--listen", listen,
+                 "ADDR:PORT to listen on (default 127.0.0.1:8765); a non-loopback address needs "
+                 "--tls-cert, --tls-key and --token-file")
+      ->excludes(port_opt);
+  app.add_option("--tls-cert", bo.access.tls_cert_file, "TLS certificate (chain), PEM")
+      ->check(config::non_empty());
+  app.add_option("--tls-key", bo.access.tls_key_file, "TLS private key of --tls-cert, PEM")
+      ->check(config::non_empty());
+  app.add_option("--token-file", token_file,
+                 "file whose first line is the access token every client must send")
+      ->check(config::non_empty());
+  app.add_flag("--insecure-listen", insecure,
+               "allow a non-loopback --listen without TLS or a token (anyone may watch)");
   app.add_flag("--full-rate", bo.full_rate,
                "also serve the 1 kHz topics (master_command, slave_state, master_state, "
                "device_*); by default their rate-limited _view/_monitor copies");
@@ -92,19 +187,32 @@ int main(int argc, char** argv) {
     config::check_flag("--stats-s", stats_s, 0.0, 3600.0);
     config::check_flag("--queue-kb", queue_kb, 64.0, 1048576.0);
     bo.queue_bytes = static_cast<std::size_t>(queue_kb * 1024.0);
+    if (!listen.empty()) parse_listen(listen, bo);
+    check_access(bo, token_file, insecure);
     const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_bridge");
     teleop::dds::profile_file(opts.profile);
     install_stop_signal_handlers();
     teleop::dds::Participant p(opts);
-    bridge::Bridge b(p, bo);
+    std::unique_ptr<bridge::Bridge> b;
+    try {
+      b = std::make_unique<bridge::Bridge>(p, bo);
+    } catch (const std::invalid_argument& e) {
+      std::cerr << "teleop_bridge: --tls-cert/--tls-key: " << e.what() << "\n";
+      return 2;
+    }
     if (!quiet) {
+      const bool tls = !bo.access.tls_cert_file.empty();
+      const std::string host =
+          bo.address.find(':') != std::string::npos ? "[" + bo.address + "]" : bo.address;
       std::printf(
-          "teleop_bridge: serving %zu topics of domain %d (profile %s) on "
-          "ws://127.0.0.1:%d (foxglove.websocket.v1)\n",
-          b.topics().size(), opts.domain, opts.profile.c_str(), b.port());
+          "teleop_bridge: serving %zu channels of domain %d (profile %s) on "
+          "%s://%s:%d (foxglove.websocket.v1), the page at %s://%s:%d/%s; read-only\n",
+          b->topics().size(), opts.domain, opts.profile.c_str(), tls ? "wss" : "ws", host.c_str(),
+          b->port(), tls ? "https" : "http", host.c_str(), b->port(),
+          bo.access.token.empty() ? "" : "?token=(the token)");
       std::fflush(stdout);
     }
-    return serve(b, duration_s, stats_s, quiet);
+    return serve(*b, duration_s, stats_s, quiet);
   } catch (const config::ConfigError& e) {
     std::cerr << "teleop_bridge: " << e.what() << "\n";
     return 2;

@@ -12,18 +12,28 @@
 #include <sstream>
 
 #include "client/bridge/client_queue.hpp"
+#include "client/bridge/scene_json.hpp"
+#include "client/bridge/web_page.hpp"
 #include "client/bridge/ws_protocol.hpp"
 #include "client/bridge/ws_server.hpp"
 #include "client/record/raw_reader.hpp"
 #include "client/record/raw_type.hpp"
 #include "client/record/topic_table.hpp"
+#include "common/dds/checked_type.hpp"
 #include "idl/idl_text.hpp"
+#include "teleop/idl/TeleopPubSubTypes.h"
 
 namespace teleop::bridge {
 
 namespace fdds = eprosima::fastdds::dds;
 
 namespace {
+std::uint64_t now_wall_ns() {
+  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::system_clock::now().time_since_epoch())
+                                        .count());
+}
+
 /// Bytes a client's socket may hold beyond its queue before the bridge stops handing it
 /// frames (websocketpp's own buffer): the queue, not the socket, absorbs a slow client.
 constexpr std::size_t kSocketWatermark = 256u << 10;
@@ -43,6 +53,34 @@ bool is_bulk(const std::string& topic) {
   return topic == dds::topics::kMeshFrame || topic == dds::topics::kMeshFrameMonitor;
 }
 
+/// The channels the bridge makes itself (JSON, scene_json.hpp), after the topics' channels.
+enum class Derived { kNone, kScene, kTransforms, kPlot, kEvents };
+/// What a topic's samples feed into the derived channels.
+enum class Feeds { kNothing, kScene, kTopology, kMesh, kSlave, kMaster, kEvents };
+
+Feeds feeds_of(const std::string& topic) {
+  namespace t = dds::topics;
+  if (topic == t::kScene) return Feeds::kScene;
+  if (topic == t::kMeshTopology) return Feeds::kTopology;
+  if (topic == t::kMeshFrame) return Feeds::kMesh;
+  if (topic == t::kSlaveStateView) return Feeds::kSlave;
+  if (topic == t::kMasterStateView) return Feeds::kMaster;
+  if (topic == t::kEvents) return Feeds::kEvents;
+  return Feeds::kNothing;
+}
+
+/// Decodes a raw sample (encapsulation header included) as PubSub's type.
+template <class PubSub>
+bool decode(std::vector<std::uint8_t>& bytes, typename PubSub::type& out) {
+  eprosima::fastrtps::rtps::SerializedPayload_t p;
+  p.data = bytes.data();
+  p.length = static_cast<std::uint32_t>(bytes.size());
+  p.max_size = p.length;
+  const bool ok = dds::deserialize_checked<PubSub>(p, out);
+  p.data = nullptr;  // not owned
+  return ok;
+}
+
 struct Latched {
   eprosima::fastrtps::rtps::InstanceHandle_t key;
   std::uint64_t receive_ns = 0;
@@ -57,6 +95,8 @@ struct Bridge::Impl {
     fdds::DataReader* reader = nullptr;
     record::RawSample scratch;
     bool bulk = false, latched = false, event_log = false;
+    Derived derived = Derived::kNone;
+    Feeds feeds = Feeds::kNothing;
     std::size_t bulk_index = 0;
     std::vector<Latched> kept;  // latched samples, oldest first
     std::uint64_t samples = 0;
@@ -80,10 +120,17 @@ struct Bridge::Impl {
   mutable std::mutex mutex;  // clients, topics' kept samples and counts
   std::map<ClientId, std::unique_ptr<Client>> clients;
   std::vector<ClientCounts> departed;
-  std::uint64_t samples = 0, clients_total = 0, clients_refused = 0;
+  std::uint64_t samples = 0, clients_total = 0, clients_refused = 0, unauthorized = 0, pages = 0;
   int next_client_id = 1;
   std::string advertise;
   int tick = 0;
+  // the derived channels' state: DDS thread only
+  SceneJson scene;
+  std::string json_scratch;
+  std::uint64_t last_scene_ns = 0;
+  std::atomic<std::uint64_t> rejected{0};  // samples that did not decode or were not valid
+  std::atomic<bool> derived_now{false};    // a client subscribed to a derived channel
+  std::map<Derived, Topic*> derived;
 
   Impl(dds::Participant& p, const BridgeOptions& o) : participant(p), options(o) {}
   void make_topics();
@@ -91,6 +138,11 @@ struct Bridge::Impl {
   void read_loop();
   void on_sample(Topic& t, const fdds::SampleInfo& info);
   void keep_latched(Topic& t, const fdds::SampleInfo& info, std::uint64_t ns);
+  void add_derived();
+  void feed(Topic& t);
+  void publish_derived(std::uint64_t ns);
+  bool subscribed(Derived which) const;  // mutex held
+  void push_json(Derived which, const std::string& json, std::uint64_t ns);
   bool on_accept();
   void on_open(ClientId id, const std::string& remote);
   void on_close(ClientId id);
@@ -117,12 +169,146 @@ void Bridge::Impl::make_topics() {
     if (t->bulk) t->bulk_index = bulk_channels++;
     t->latched = record::is_latched(e.qos);
     t->event_log = e.qos == dds::TopicQos::kEventLog;
+    t->feeds = feeds_of(e.name);
     t->reader = record::create_raw_reader(participant, e, 16);
     topics.push_back(std::move(t));
   }
+  add_derived();
   std::vector<Channel> channels;
   for (const auto& t : topics) channels.push_back(t->channel);
   advertise = advertise_json(channels);
+}
+
+void Bridge::Impl::add_derived() {
+  struct Spec {
+    Derived which;
+    const char* topic;
+    const char* schema_name;
+    const char* schema;
+    bool bulk, latched;
+  };
+  const Spec specs[] = {
+      {Derived::kScene, "bridge/scene", "foxglove.SceneUpdate", kSceneUpdateSchema, true, false},
+      {Derived::kTransforms, "bridge/transforms", "foxglove.FrameTransforms",
+       kFrameTransformsSchema, true, false},
+      {Derived::kPlot, "bridge/plot", "teleop.bridge.Plot", kPlotSchema, false, false},
+      {Derived::kEvents, "bridge/events", "teleop.bridge.Event", kEventSchema, false, true},
+  };
+  for (const auto& sp : specs) {
+    auto t = std::make_unique<Topic>();
+    t->channel.id = static_cast<std::uint32_t>(topics.size() + 1);
+    t->channel.topic = sp.topic;
+    t->channel.schema_name = sp.schema_name;
+    t->channel.schema = sp.schema;
+    t->channel.encoding = "json";
+    t->channel.schema_encoding = "jsonschema";
+    t->derived = sp.which;
+    t->bulk = sp.bulk;
+    if (t->bulk) t->bulk_index = bulk_channels++;
+    t->latched = sp.latched;
+    t->event_log = sp.which == Derived::kEvents;
+    derived[sp.which] = t.get();
+    topics.push_back(std::move(t));
+  }
+}
+
+void Bridge::Impl::feed(Topic& t) {
+  bool ok = true;
+  auto& b = t.scratch.bytes;
+  switch (t.feeds) {
+    case Feeds::kNothing:
+      return;
+    case Feeds::kScene: {
+      SceneDescription v;
+      ok = decode<SceneDescriptionPubSubType>(b, v);
+      if (ok) scene.set_scene(v);
+      break;
+    }
+    case Feeds::kTopology: {
+      MeshTopology v;
+      ok = decode<MeshTopologyPubSubType>(b, v) && scene.set_topology(v);
+      break;
+    }
+    case Feeds::kMesh: {
+      MeshFrame v;
+      ok = decode<MeshFramePubSubType>(b, v) && scene.set_frame(v);
+      break;
+    }
+    case Feeds::kSlave: {
+      SlaveState v;
+      ok = decode<SlaveStatePubSubType>(b, v) && scene.set_slave(v);
+      break;
+    }
+    case Feeds::kMaster: {
+      MasterState v;
+      ok = decode<MasterStatePubSubType>(b, v) && scene.set_master(v);
+      break;
+    }
+    case Feeds::kEvents: {
+      Event v;
+      ok = decode<EventPubSubType>(b, v);
+      if (ok) push_json(Derived::kEvents, event_json(v), now_wall_ns());
+      break;
+    }
+  }
+  if (!ok) rejected.fetch_add(1);
+}
+
+bool Bridge::Impl::subscribed(Derived which) const {
+  const std::uint32_t id = derived.at(which)->channel.id;
+  for (const auto& [cid, c] : clients) {
+    for (const auto& s : c->subs) {
+      if (s.channel_id == id) return true;
+    }
+  }
+  return false;
+}
+
+void Bridge::Impl::publish_derived(std::uint64_t ns) {
+  // built only for channels someone reads: the scene is the bridge's largest cost; a client
+  // that subscribes later makes the next take (10 ms) build it at once (derived_now)
+  bool want_scene = false, want_tf = false, want_plot = false;
+  {
+    std::lock_guard<std::mutex> l(mutex);
+    want_scene = subscribed(Derived::kScene);
+    want_tf = subscribed(Derived::kTransforms);
+    want_plot = subscribed(Derived::kPlot);
+  }
+  if (want_scene) {
+    scene.scene_update(json_scratch, ns);
+    push_json(Derived::kScene, json_scratch, ns);
+  }
+  if (want_tf) {
+    scene.frame_transforms(json_scratch, ns);
+    push_json(Derived::kTransforms, json_scratch, ns);
+  }
+  if (want_plot && scene.plot(json_scratch, ns)) push_json(Derived::kPlot, json_scratch, ns);
+}
+
+void Bridge::Impl::push_json(Derived which, const std::string& json, std::uint64_t ns) {
+  Topic& t = *derived.at(which);
+  const std::span<const std::uint8_t> body(reinterpret_cast<const std::uint8_t*>(json.data()),
+                                           json.size());
+  std::lock_guard<std::mutex> l(mutex);
+  ++t.samples;
+  if (t.latched) {
+    // the events: the last kEventsKept
+    if (t.kept.empty() || (t.event_log && t.kept.size() < kEventsKept)) {
+      t.kept.emplace_back();
+    } else if (t.event_log) {
+      std::rotate(t.kept.begin(), t.kept.begin() + 1, t.kept.end());
+    }
+    t.kept.back().receive_ns = ns;
+    t.kept.back().bytes.assign(body.begin(), body.end());
+  }
+  std::uint8_t head[kMessageDataHeader];
+  for (auto& [id, c] : clients) {
+    for (const auto& s : c->subs) {
+      if (s.channel_id != t.channel.id) continue;
+      message_data_header(head, s.id, ns);
+      c->queue->push(t.bulk ? FrameClass::kBulk : FrameClass::kKept, t.bulk_index, head, body);
+    }
+  }
 }
 
 void Bridge::Impl::start_server(int& port_out) {
@@ -132,8 +318,25 @@ void Bridge::Impl::start_server(int& port_out) {
   h.close = [this](ClientId id) { on_close(id); };
   h.message = [this](ClientId id, bool text, const std::string& p) { on_message(id, text, p); };
   h.tick = [this] { on_timer(); };
+  h.unauthorized = [this](const std::string&) {
+    std::lock_guard<std::mutex> l(mutex);
+    ++unauthorized;
+  };
+  h.http = [this](const std::string& path) {
+    HttpReply r;
+    {
+      std::lock_guard<std::mutex> l(mutex);
+      ++pages;
+    }
+    if (path == "/" || path == "/index.html") {
+      r.status = 200;
+      r.content_type = "text/html; charset=utf-8";
+      r.body = kBridgePage;
+    }
+    return r;
+  };
   ws = std::make_unique<WsServer>(options.address, options.port, kSubprotocol, kMaxClientMessage,
-                                  20, std::move(h));
+                                  20, options.access, std::move(h));
   port_out = ws->port();
   ws->start();
 }
@@ -167,7 +370,9 @@ std::vector<std::string> Bridge::topics() const {
 
 void Bridge::Impl::read_loop() {
   fdds::WaitSet waitset;
-  for (auto& t : topics) waitset.attach_condition(t->reader->get_statuscondition());
+  for (auto& t : topics) {
+    if (t->reader) waitset.attach_condition(t->reader->get_statuscondition());
+  }
   waitset.attach_condition(guard);
   fdds::ConditionSeq active;
   fdds::SampleInfo info;
@@ -176,17 +381,29 @@ void Bridge::Impl::read_loop() {
     waitset.wait(active, timeout);
     bool any = false;
     for (auto& t : topics) {
+      if (!t->reader) continue;
       while (t->reader->take_next_sample(&t->scratch, &info) == ReturnCode_t::RETCODE_OK) {
         if (!info.valid_data || t->scratch.bytes.size() < 4) continue;
         on_sample(*t, info);
+        feed(*t);
         any = true;
       }
+    }
+    const auto now = now_wall_ns();
+    if (scene.ready() &&
+        (derived_now.exchange(false) ||
+         now - last_scene_ns >= static_cast<std::uint64_t>(scene.period_s() * 1e9))) {
+      last_scene_ns = now;
+      publish_derived(now);
+      any = true;
     }
     if (any) request_flush();
     // take in batches: a wake-up per sample would cost the session's processes CPU
     std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(options.batch_ms));
   }
-  for (auto& t : topics) waitset.detach_condition(t->reader->get_statuscondition());
+  for (auto& t : topics) {
+    if (t->reader) waitset.detach_condition(t->reader->get_statuscondition());
+  }
   waitset.detach_condition(guard);
 }
 
@@ -365,6 +582,8 @@ void Bridge::Impl::subscribe(Client& c, const std::vector<Subscription>& subs) {
     c.subs.push_back(s);
     // a latched topic: the samples kept go to the late subscriber at once
     const Topic& t = *topics[s.channel_id - 1];
+    // the scene and transforms are not kept: the next take (10 ms) builds them fresh for it
+    if (t.derived != Derived::kNone) derived_now.store(true);
     std::uint8_t head[kMessageDataHeader];
     for (const auto& k : t.kept) {
       message_data_header(head, s.id, k.receive_ns);
@@ -380,6 +599,9 @@ BridgeCounts Bridge::counts() const {
   out.samples = impl_->samples;
   out.clients_total = impl_->clients_total;
   out.clients_refused = impl_->clients_refused;
+  out.rejected = impl_->rejected.load();
+  out.unauthorized = impl_->unauthorized;
+  out.pages = impl_->pages;
   for (const auto& [id, c] : impl_->clients) {
     ClientCounts cc = c->counts;
     const auto& q = c->queue->counts();
@@ -410,7 +632,8 @@ std::string counts_line(const BridgeCounts& c) {
   int connected = 0;
   for (const auto& k : c.clients) connected += k.connected ? 1 : 0;
   o << "clients " << connected << " (" << c.clients_total << " in all, " << c.clients_refused
-    << " refused), samples " << c.samples;
+    << " refused, " << c.unauthorized << " without the token), pages " << c.pages << ", samples "
+    << c.samples << " (" << c.rejected << " not valid for the scene)";
   for (const auto& k : c.clients) {
     o << "; client " << k.id << " " << k.remote << (k.connected ? "" : " (gone)") << ": sent "
       << k.sent << ", dropped " << k.dropped_bulk << " mesh + " << k.dropped_kept

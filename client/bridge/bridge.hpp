@@ -6,7 +6,9 @@
 // samples, sent at once to a client that subscribes late. Each client has a bounded send queue
 // (client_queue.hpp): a slow client loses mesh frames first, then its oldest kept frames, each
 // drop counted and reported to it in a status message; the bridge's memory does not grow with it.
-// Read-only: clients can subscribe and unsubscribe, nothing else.
+// Read-only: clients can subscribe and unsubscribe, nothing else. It derives JSON channels for
+// 3-D panels (foxglove.SceneUpdate, foxglove.FrameTransforms: scene_json.hpp) and serves its own
+// page (web/index.html) to plain HTTP GETs of / on the same port.
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -14,6 +16,7 @@
 #include <thread>
 #include <vector>
 
+#include "client/bridge/ws_server.hpp"
 #include "common/dds/participant.hpp"
 
 namespace teleop::bridge {
@@ -25,6 +28,7 @@ struct BridgeOptions {
   std::size_t queue_bytes = 4u << 20;  ///< per-client send queue bound [bytes]
   int max_clients = 32;
   double batch_ms = 10.0;  ///< the DDS thread takes samples this often [ms]
+  WsAccess access;         ///< TLS files and the access token (empty: plain, no token)
 };
 
 /// Counts of one connected (or, in the summary, departed) client.
@@ -40,6 +44,10 @@ struct ClientCounts {
 struct BridgeCounts {
   std::uint64_t samples = 0;  ///< DDS samples received
   std::uint64_t clients_total = 0, clients_refused = 0;
+  std::uint64_t rejected = 0;
+  std::uint64_t unauthorized = 0;  ///< requests refused for a missing or wrong access token
+  std::uint64_t pages = 0;  ///< HTTP requests answered (the page)  ///< samples that did not decode
+                            ///< or were not valid for the scene
   std::vector<ClientCounts> clients;  ///< connected ones, then the departed
 };
 

@@ -43,10 +43,10 @@ std::string advertise_json(const std::vector<Channel>& channels) {
     Json::Value ch(Json::objectValue);
     ch["id"] = c.id;
     ch["topic"] = c.topic;
-    ch["encoding"] = "cdr";
+    ch["encoding"] = c.encoding;
     ch["schemaName"] = c.schema_name;
     ch["schema"] = c.schema;
-    ch["schemaEncoding"] = "omgidl";
+    ch["schemaEncoding"] = c.schema_encoding;
     list.append(ch);
   }
   v["channels"] = list;

@@ -16,9 +16,11 @@ inline constexpr std::size_t kMessageDataHeader = 13;
 
 struct Channel {
   std::uint32_t id = 0;
-  std::string topic;        ///< e.g. "teleop/slave_state"
-  std::string schema_name;  ///< the type's full name, e.g. "teleop::SlaveState"
-  std::string schema;       ///< the IDL text that defines it
+  std::string topic;                       ///< e.g. "teleop/slave_state"
+  std::string schema_name;                 ///< the type's full name, e.g. "teleop::SlaveState"
+  std::string schema;                      ///< the IDL text that defines it (or the JSON schema)
+  std::string encoding = "cdr";            ///< "cdr" or "json"
+  std::string schema_encoding = "omgidl";  ///< "omgidl" or "jsonschema"
 };
 
 enum class StatusLevel { kInfo = 0, kWarning = 1, kError = 2 };

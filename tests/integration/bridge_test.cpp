@@ -78,6 +78,14 @@ std::map<std::uint32_t, std::string> handshake(WsClient& ws) {
   for (const auto& ch : a["channels"]) {
     const std::string topic = ch["topic"].asString();
     const std::string type = ch["schemaName"].asString();
+    if (topic.rfind("bridge/", 0) == 0) {
+      // the bridge's own channels: JSON with a JSON schema (foxglove.SceneUpdate, ...)
+      EXPECT_EQ(ch["encoding"].asString(), "json") << topic;
+      EXPECT_EQ(ch["schemaEncoding"].asString(), "jsonschema") << topic;
+      EXPECT_EQ(parse(ch["schema"].asString())["title"].asString(), type) << topic;
+      channels[ch["id"].asUInt()] = topic;
+      continue;
+    }
     EXPECT_EQ(ch["encoding"].asString(), "cdr") << topic;
     EXPECT_EQ(ch["schemaEncoding"].asString(), "omgidl") << topic;
     EXPECT_EQ(type.rfind("teleop::", 0), 0u) << topic << " " << type;
@@ -151,6 +159,11 @@ TEST(Bridge, ServesEveryTopicAsCdrWithOmgidlSchemas) {
     const std::string& topic = channels.at(sub - 100);
     const std::uint64_t ns = le(&f->payload[5], 8);
     EXPECT_GT(ns, 1'600'000'000'000'000'000ull) << topic;  // a wall-clock time, after 2020
+    if (topic.rfind("bridge/", 0) == 0) {
+      EXPECT_EQ(f->payload[13], '{') << topic << ": a JSON object";
+      ++got[topic];
+      continue;
+    }
     // the CDR encapsulation header: 0x00 0x00 (big endian) or 0x00 0x01 (little endian), options
     EXPECT_EQ(f->payload[13], 0) << topic;
     EXPECT_LE(f->payload[14], 1) << topic;
@@ -165,6 +178,9 @@ TEST(Bridge, ServesEveryTopicAsCdrWithOmgidlSchemas) {
   EXPECT_GE(got["teleop/mesh_frame"], 10);
   EXPECT_GE(got["teleop/slave_state_view"], 10);
   EXPECT_GE(got["teleop/master_state_view"], 10);
+  EXPECT_GE(got["bridge/scene"], 10) << "the 3-D scene at the visual rate";
+  EXPECT_GE(got["bridge/transforms"], 10);
+  EXPECT_GE(got["bridge/plot"], 10);
   ASSERT_EQ(statuses.size(), 3u) << "a status for each bad message";
   EXPECT_NE(statuses[0].find("\"level\":2"), std::string::npos) << statuses[0];
   EXPECT_NE(statuses[0].find("not valid JSON"), std::string::npos) << statuses[0];

@@ -6,8 +6,12 @@
 //   node [--experimental-websocket] tests/node/bridge_check.mjs ws://127.0.0.1:PORT SECONDS
 //
 // Checks, each a failure with a message naming the topic:
-//  - serverInfo offers no clientPublish; every channel is `cdr` with an `omgidl` schema that
-//    parses and gives a reader for its schemaName;
+//  - serverInfo offers no clientPublish; every teleop/* channel is `cdr` with an `omgidl` schema
+//    that parses and gives a reader for its schemaName; every bridge/* channel is `json` with a
+//    `jsonschema` schema that parses;
+//  - bridge/scene (foxglove.SceneUpdate) arrives, its entities hold only finite numbers, and its
+//    triangles are as many as teleop/mesh_topology's (decoded from CDR) for the bodies shown;
+//    bridge/transforms names the tip frame;
 //  - every message decodes; the state topics' `seq` and receive times advance; every decoded
 //    force is finite;
 //  - the scene (latched) arrives, as do states and mesh frames.
@@ -51,6 +55,20 @@ client.on("serverInfo", (info) => {
 client.on("status", (s) => console.log(`status (level ${s.level}): ${s.message}`));
 client.on("advertise", (list) => {
   for (const ch of list) {
+    if (ch.topic.startsWith("bridge/")) {
+      if (ch.encoding !== "json") fail(`${ch.topic}: encoding ${ch.encoding}`);
+      if (ch.schemaEncoding !== "jsonschema") fail(`${ch.topic}: schemaEncoding ${ch.schemaEncoding}`);
+      try {
+        const schema = JSON.parse(ch.schema);
+        if (schema.title !== ch.schemaName) fail(`${ch.topic}: schema title ${schema.title}`);
+      } catch (e) {
+        fail(`${ch.topic}: the JSON schema does not parse: ${e.message}`);
+      }
+      const state = { topic: ch.topic, json: true, count: 0, last: undefined };
+      channels.set(ch.id, state);
+      bySub.set(client.subscribe(ch.id), state);
+      continue;
+    }
     if (ch.encoding !== "cdr") fail(`${ch.topic}: encoding ${ch.encoding}`);
     if (ch.schemaEncoding !== "omgidl") fail(`${ch.topic}: schemaEncoding ${ch.schemaEncoding}`);
     let reader;
@@ -70,6 +88,16 @@ client.on("message", ({ subscriptionId, timestamp, data }) => {
   const c = bySub.get(subscriptionId);
   if (!c) return fail(`a message for unknown subscription ${subscriptionId}`);
   let decoded;
+  if (c.json) {
+    try {
+      c.last = JSON.parse(new TextDecoder().decode(data));
+      c.count++;
+    } catch (e) {
+      if (decodeFailures++ < 5) fail(`${c.topic}: a message is not JSON: ${e.message}`);
+    }
+    return;
+  }
+  if (c.topic === "teleop/mesh_topology") c.keep = true;
   try {
     decoded = c.reader.readMessage(new Uint8Array(data.buffer, data.byteOffset, data.byteLength));
   } catch (e) {
@@ -77,6 +105,7 @@ client.on("message", ({ subscriptionId, timestamp, data }) => {
     return;
   }
   c.count++;
+  if (c.keep) (c.decoded ??= new Map()).set(decoded.object_id, decoded);
   checkFiniteForces(decoded, c.topic, fail);
   if (ordered.has(c.topic)) {
     const seq = BigInt(decoded.seq);
@@ -85,6 +114,40 @@ client.on("message", ({ subscriptionId, timestamp, data }) => {
     c.time = timestamp;
   }
 });
+
+// The newest foxglove.SceneUpdate against the topology decoded from CDR.
+function checkScene(list) {
+  const scene = list.find((c) => c.topic === "bridge/scene");
+  const topology = list.find((c) => c.topic === "teleop/mesh_topology");
+  const transforms = list.find((c) => c.topic === "bridge/transforms");
+  if (!scene?.last) return fail("bridge/scene: no foxglove.SceneUpdate arrived");
+  const entities = scene.last.entities ?? [];
+  const ids = entities.map((e) => e.id);
+  for (const id of ["environment", "deformable", "robot"]) {
+    if (!ids.includes(id)) fail(`bridge/scene: no entity '${id}' (${ids.join(", ")})`);
+  }
+  const numbers = [];
+  const walk = (v) => {
+    if (typeof v === "number") numbers.push(v);
+    else if (v && typeof v === "object") Object.values(v).forEach(walk);
+  };
+  walk(entities);
+  if (!numbers.every(Number.isFinite)) fail("bridge/scene: a number is not finite");
+  const tris = entities.flatMap((e) => e.triangles ?? []);
+  const drawn = tris.reduce((n, t) => n + t.indices.length / 3, 0);
+  const expected = [...(topology?.decoded?.values() ?? [])].reduce((n, t) => n + t.triangle_indices.length / 3, 0);
+  if (tris.length === 0 || drawn !== expected) {
+    fail(`bridge/scene: ${drawn} triangles in ${tris.length} lists, teleop/mesh_topology has ${expected}`);
+  }
+  for (const t of tris) {
+    if (t.indices.some((i) => !Number.isInteger(i) || i < 0 || i >= t.points.length)) fail("bridge/scene: an index out of range");
+  }
+  const robot = entities.find((e) => e.id === "robot");
+  if (!(robot?.spheres?.length >= 1)) fail("bridge/scene: no tip sphere");
+  const names = (transforms?.last?.transforms ?? []).map((t) => t.child_frame_id);
+  if (!names.includes("tip")) fail(`bridge/transforms: no 'tip' frame (${names.join(", ")})`);
+  console.log(`  bridge/scene: ${entities.length} entities, ${drawn} triangles (topology ${expected}), ${numbers.length} numbers finite`);
+}
 
 await new Promise((resolve) => setTimeout(resolve, Number(secondsText) * 1000));
 client.close();
@@ -96,12 +159,14 @@ for (const c of channels.values()) {
 }
 const count = (topic) => [...channels.values()].find((c) => c.topic === topic)?.count ?? 0;
 if (count("teleop/scene") < 1) fail("teleop/scene: the latched scene did not arrive");
-for (const topic of ["teleop/slave_state_view", "teleop/master_state_view", "teleop/mesh_frame"]) {
+for (const topic of ["teleop/slave_state_view", "teleop/master_state_view", "teleop/mesh_frame",
+  "bridge/scene", "bridge/transforms", "bridge/plot"]) {
   if (count(topic) < 20) fail(`${topic}: ${count(topic)} messages (at least 20 expected)`);
 }
+checkScene([...channels.values()]);
 if (failures.length > 0) {
   console.error(`${failures.length} failures`);
   process.exit(1);
 }
-console.log(`OK: ${channels.size} channels, every message decoded with its omgidl schema`);
+console.log(`OK: ${channels.size} channels, every message decoded with its omgidl or JSON schema`);
 process.exit(0);

@@ -79,5 +79,9 @@ inline constexpr int kPythonRecording = 180;   // tests/python/test_teleop.py: a
 // 170: smoke.bench-observers-live (tests/CMakeLists.txt: teleop_bench observers --live)
 // 171: tests/bench/bridge_load.sh
 // 173: tests/bench/tcp_link_cut.sh (in network namespaces of its own)
+inline constexpr int kNodeBridgePage = 200;    // tests/node/run_page_check.sh: the page in Chromium
+inline constexpr int kNodeBridgeAccess = 201;  // tests/node/run_access_check.sh: TLS and the token
+// 202: tests/bench/bridge_clients.sh (1, 10, 50 clients against no bridge)
+// 203-209: reserved for bridge tests
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
