@@ -2,7 +2,7 @@
 # Remakes the pictures and data of docs/results/ with the commands the docs name, one recipe
 # per group of files, each run in a folder of its own and only its declared files copied in.
 #   deploy/make_docs.sh                 every recipe (the benchmarks take minutes each)
-#   deploy/make_docs.sh --quick         the nine recipes under a minute each
+#   deploy/make_docs.sh --quick         the ten recipes under a minute each
 #   deploy/make_docs.sh --only a,b      the named recipes
 #   deploy/make_docs.sh --list          recipes, their cost and their files
 #   deploy/make_docs.sh --check [ROOT]  every file in docs/results has a recipe (or is archived)
@@ -22,6 +22,7 @@ recipes=(
   "session|quick|experiment3_master.json experiment3_server.json experiment3_session.png experiment3_force_deformation.png"
   "viewer|quick|viewer.png"
   "viewer-drive|quick|viewer_drive.png"
+  "bridge-page|quick|bridge_page.png"
   "sphere-zero-g|quick|sphere_zero_g.png"
   "navier-free-vertex|quick|navier_free_vertex.png"
   "navier-held-vertex|quick|navier_held_vertex.png"
@@ -149,6 +150,9 @@ run_recipe() {  # run_recipe NAME DIR: writes the recipe's files into DIR
         --duration 40 --fps 20
       kill "$master_pid" "$server_pid" 2>/dev/null || true
       wait "$master_pid" "$server_pid" 2>/dev/null || true ;;
+    bridge-page)
+      need client/teleop_bridge
+      bash "$root/tests/node/run_page_check.sh" "$build" 203 "$dir/bridge_page.png" ;;
     sphere-zero-g | navier-free-vertex | navier-held-vertex | sphere-gravity | robot-reach | \
       contact-force-curve)
       need server/teleop_experiment

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# ctest node.bridge_page_in_chromium (issue 26 item 3): a short live session (teleop_server +
+# ctest node.bridge_page_in_chromium: a short live session (teleop_server +
 # teleop_master, loopback, this test's domain) served by teleop_bridge; its page (/) opened in
 # headless Chromium (Debian's chromium) driven over the DevTools protocol by page_check.mjs, which
 # waits for live frames, takes a screenshot and checks that the scene and a moving force trace

@@ -82,6 +82,6 @@ inline constexpr int kPythonRecording = 180;   // tests/python/test_teleop.py: a
 inline constexpr int kNodeBridgePage = 200;    // tests/node/run_page_check.sh: the page in Chromium
 inline constexpr int kNodeBridgeAccess = 201;  // tests/node/run_access_check.sh: TLS and the token
 // 202: tests/bench/bridge_clients.sh (1, 10, 50 clients against no bridge)
-// 203-209: reserved for bridge tests
+// 203: deploy/make_docs.sh (the bridge page's picture); 204-209: reserved for bridge tests
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
