@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# ctest node.bridge_access (issue 26 item 4): teleop_bridge's access rules.
+# ctest node.bridge_access: teleop_bridge's access rules.
 #  1. flags refused with exit 2 and a message naming them: a non-loopback --listen without TLS
 #     and a token, a short token file, --tls-cert without --tls-key, unreadable TLS files;
 #  2. a bridge with TLS (a self-signed certificate made by openssl in this test's temp folder)
