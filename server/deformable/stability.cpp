@@ -89,6 +89,30 @@ double gershgorin_omega_bound(const DeformableModel& m) {
   return std::sqrt(lambda);
 }
 
+/// Block Gershgorin bound on the top of M^-1 C for the surface models, C = beta_e K_e + beta_r K_r
+/// + alpha M (the same rows as gershgorin_omega_bound, each spring kind weighted by its damping
+/// factor) [1/s]. Symplectic Euler on a mode damped at rate c (per unit mass) is stable only for
+/// h c <= 2, whatever its stiffness: the top mode's damping ratio misses a heavily damped mode of
+/// lower frequency (the radial springs' with a large radial_damping_s).
+double gershgorin_damping_bound(const DeformableModel& m) {
+  const DeformableParams& p = m.params;
+  const int n = m.node_count;
+  Eigen::VectorXd row = Eigen::VectorXd::Zero(n);
+  for (int e = 0; e < m.edges.cols(); ++e) {
+    const double norm = p.stiffness_damping_s * (m.edge_k_iso(e) + m.edge_k_dir(e));
+    row(m.edges(0, e)) += norm;
+    row(m.edges(1, e)) += norm;
+  }
+  double rate = 0.0, centre_row = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double cr = m.has_centre ? p.radial_damping_s * m.radial_k(i) : 0.0;
+    rate = std::max(rate, 2.0 * (row(i) + cr) / m.mass_kg(i));
+    centre_row += cr;
+  }
+  if (m.has_centre) rate = std::max(rate, 2.0 * centre_row / m.centre_mass_kg);
+  return rate + p.mass_damping_per_s;
+}
+
 namespace {
 
 // The integrator's stability limit [s] for the top mode (angular frequency wmax [rad/s], damping
@@ -220,6 +244,17 @@ StabilityEstimate estimate_stability(const DeformableModel& m) {
 
   // the largest stable step of the integrator for that mode, times the safety factor
   out.limit_step_s = integrator_step_limit(m, out.omega_max_rad_per_s, out.damping_ratio);
+  // a node on a plane adds its contact spring k_i = m_i w_c^2 (w_c = contact_frequency_rad_per_s,
+  // its damping is an implicit impulse): symplectic Euler is stable for h sqrt(w_max^2 + w_c^2)
+  // <= 2 (the top of M^-1 (K + K_c) is at most w_max^2 + w_c^2)
+  if (!fem && prm.integrator == IntegratorKind::kSymplecticEuler) {
+    if (m.plane_count > 0) {
+      const double wc = prm.contact_frequency_rad_per_s;
+      out.limit_step_s = std::min(out.limit_step_s, 2.0 / std::sqrt(wmax * wmax + wc * wc));
+    }
+    const double c = gershgorin_damping_bound(m);
+    if (c > 0.0) out.limit_step_s = std::min(out.limit_step_s, 2.0 / c);
+  }
   out.stable_step_s = kStableStepSafety * out.limit_step_s;
   return out;
 }

@@ -315,19 +315,32 @@ fi
 
 echo "--- a stall of the master's own loop (SIGSTOP for 1 s) is reported"
 cases=$((cases + 1))
-"$master" --domain "$domain" --duration 5 --summary-json "$tmp/stall.json" >"$tmp/stall.log" 2>&1 &
+"$master" --domain "$domain" --duration 5 --summary-json "$tmp/stall.json" --log "$tmp/stall.csv" \
+  >"$tmp/stall.log" 2>&1 &
 stall_pid=$!
 sleep 3
 kill -STOP "$stall_pid"
 sleep 1
 kill -CONT "$stall_pid"
 wait "$stall_pid"
+# the largest change of the rendered force between two logged cycles (the stall and the
+# session's end included) and the last row's force, against the device's rate bound per cycle
+bound=$(python3 -c 'import json,sys; j=json.load(open(sys.argv[1]))
+print(j["safety"]["max_force_rate_n_per_s"] / j["rate_hz"])' "$tmp/stall.json" 2>/dev/null)
+steps=$(awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "fm_x") c = i; next }
+  c { x = $c; y = $(c + 1); z = $(c + 2)
+      if (NR > 2) { d = sqrt((x - px)^2 + (y - py)^2 + (z - pz)^2); if (d > m) m = d }
+      px = x; py = y; pz = z }
+  END { if (c) printf "%.6f %.6f", m, sqrt(px^2 + py^2 + pz^2) }' "$tmp/stall.csv" 2>/dev/null)
 if grep -qE '"stalls": \{"count": [1-9]' "$tmp/stall.json" 2>/dev/null &&
-  grep -qF "haptic loop stalled for" "$tmp/stall.log"; then
-  echo "ok      stall counted: $(grep -o '"stalls": {[^}]*}' "$tmp/stall.json")"
+  grep -qF "haptic loop stalled for" "$tmp/stall.log" && [ -n "$bound" ] && [ -n "$steps" ] &&
+  awk -v b="$bound" -v s="$steps" 'BEGIN { split(s, v, " "); exit !(v[1] <= b + 1e-9 && v[2] == 0) }'; then
+  echo "ok      stall counted: $(grep -o '"stalls": {[^}]*}' "$tmp/stall.json"); largest force change" \
+    "$(echo "$steps" | cut -d' ' -f1) N per cycle (bound $bound N), last force 0"
 else
   failures=$((failures + 1))
-  echo "FAILED  a 1 s SIGSTOP of the master is not reported"
+  echo "FAILED  a 1 s SIGSTOP of the master is not reported, or the force stepped" \
+    "(largest change and last force: '$steps' N, bound '$bound' N per cycle)"
   grep -E "stall|safety" "$tmp/stall.log" "$tmp/stall.json" | head -5 | sed 's/^/        /'
 fi
 
