@@ -299,8 +299,6 @@ std::string physics_rate_problem(const WorldModel& s, double rate_hz) {
       "raise the rate to at least " + num(std::ceil(min_physics_rate_hz(s))) + " Hz";
   const std::string asks = "(dt " + ms(dt) + ") is too coarse for ";
   if (s.has_robot()) {
-    const std::string joint = joint_drive_problem(*s.robot, dt);
-    if (!joint.empty()) return asks + joint + ": " + at_least;
     const double g = s.robot->ik.gain_per_s;
     if (dt * g > 2.0 * kRateSafety) {
       return asks + "the robot: its resolved-rate IK (robot.ik.gain_per_s " + num(g) +
@@ -309,6 +307,8 @@ std::string physics_rate_problem(const WorldModel& s, double rate_hz) {
              num(dt * g) + ", allowed " + num(2.0 * kRateSafety) + "): " + at_least +
              " or lower robot.ik.gain_per_s";
     }
+    const std::string joint = joint_drive_problem(*s.robot, dt);
+    if (!joint.empty()) return asks + joint + ": " + at_least;
   } else {
     std::string why;
     const double h = tool_limit_step_s(s, &why);

@@ -137,7 +137,7 @@ TEST_F(SceneDir, EveryBadSceneIsRefusedNamingFileFieldAndValue) {
       // rates the scene cannot run at
       {"robot_rate_10",
        "kind: robot\nphysics: {rate_hz: 10}\nrobot: {include: " + kRobotFile + "}\n",
-       {"'physics.rate_hz'", "'10'", "robot.ik.gain_per_s", "at least 22 Hz"}},
+       {"'physics.rate_hz'", "'10'", "robot.ik.gain_per_s", "at least 29 Hz"}},
       {"tool_rate_10", "physics: {rate_hz: 10}\n", {"'physics.rate_hz'", "'10'", "tool slave"}},
       {"tool_too_stiff",
        "tool: {kp_n_per_m: 1000000, mass_kg: 0.01}\n",
