@@ -337,8 +337,6 @@ teleop::mesh::TetMesh make_tet_mesh_for(const DeformableParams& params);
 StabilityEstimate estimate_stability(const DeformableModel& model);
 /// Block Gershgorin upper bound of sqrt(lambda_max(M^-1 K)) at rest [rad/s].
 double gershgorin_omega_bound(const DeformableModel& model);
-/// Upper bound on the top of M^-1 C (the damping rates) of the surface models [1/s].
-double gershgorin_damping_bound(const DeformableModel& model);
 /// Recomputes the automatic-step fields of `model` (call after changing its stiffnesses,
 /// masses or damping in place; make_model already does).
 void update_stable_step(DeformableModel& model);

@@ -187,5 +187,39 @@ TEST_F(SceneCorners, EveryStiffnessAndGainAtEitherEndIsRefusedAtLoadOrRunsWithou
   EXPECT_GT(ran, 0);
 }
 
+/// The controller's gain (position-position: K_pm = K_ps, which the slave's tracking law takes as
+/// its stiffness) at both ends of the campaign's range, on both shipped kinds of scene.
+TEST_F(SceneCorners, TheControllerGainAtEitherEndRunsWithoutFaults) {
+  const auto campaign = [](const std::string& scene, const std::string& gain) {
+    return "name: gain\nmodel: world\nduration_s: 3\nhoming_s: 1\nsweeps:\n  - name: s\n"
+           "    scheme: position-position\n    scene: " +
+           scene + "\n    gain: " + gain + "\n";
+  };
+  const std::string tool = kScenes + "tool_only.yaml";
+  double lo = 0.0, hi = 0.0;
+  {
+    const std::string msg =
+        test::config_error_of([&] { parse_campaign(campaign(tool, "-1e300"), "gain.yaml"); });
+    static const std::regex re(R"(allowed range \[([^,\]]+), ([^\]]+)\])");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(msg, m, re)) << msg;
+    lo = std::stod(m[1].str());
+    hi = std::stod(m[2].str());
+  }
+  for (const std::string& scene : {tool, kScenes + "default.yaml"}) {
+    for (const double g : {lo, hi}) {
+      std::ostringstream gain;
+      gain << g;
+      const Campaign c = parse_campaign(campaign(scene, gain.str()), "gain.yaml");
+      const std::string row = run_one(c, c.runs.at(0));
+      std::printf("[ ran      ] %s gain %s: faults %s, verdict %s\n", scene.c_str(),
+                  gain.str().c_str(), cell(c, row, "world_faults").c_str(),
+                  cell(c, row, "verdict").c_str());
+      EXPECT_EQ(cell(c, row, "world_faults"), "0") << scene << " gain " << g << ": " << row;
+      EXPECT_NE(cell(c, row, "verdict"), "error") << scene << " gain " << g << ": " << row;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace teleop::campaign

@@ -265,7 +265,7 @@ TEST(SceneRefuse, ShippedScenesLoadAsBefore) {
   ASSERT_EQ(d.bodies.size(), 1u);
   EXPECT_EQ(d.bodies[0].body.substeps_for(1e-3), 1);  // the default sphere does not sub-step
   EXPECT_TRUE(physics_rate_notes(d, 1000.0).empty());
-  EXPECT_LT(min_physics_rate_hz(d), 100.0);
+  EXPECT_LT(min_physics_rate_hz(d), 400.0);  // 319 Hz: the node penalty of the tip on the sphere
   const WorldModel t = load_world_model(dir + "tool_only.yaml");
   EXPECT_FALSE(t.has_robot());
   EXPECT_EQ(t.planes.size(), 5u);
