@@ -93,6 +93,29 @@ make("gap", [(t0, len(payload), payload), (t0 + 10**18, len(payload), payload)])
 make("negative", [(-5, len(payload), payload), (t0, len(payload), payload)])
 make("raw_huge", [(t0, 2**40, payload)])
 make("raw_negative", [(t0, -1, payload)])
+# a recording with the per-sample CRC column whose second payload has one bit flipped
+import zlib
+db = sqlite3.connect(f"{tmp}/flipped.db")
+db.executescript("""
+  CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);
+  CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT UNIQUE NOT NULL,
+                      type_name TEXT NOT NULL, qos TEXT NOT NULL);
+  CREATE TABLE samples(topic_id INTEGER NOT NULL, receive_ns INTEGER NOT NULL,
+                       source_ns INTEGER NOT NULL, writer_guid BLOB, writer_seq INTEGER,
+                       codec INTEGER NOT NULL, raw_size INTEGER NOT NULL, data BLOB NOT NULL,
+                       crc32 INTEGER);
+  INSERT INTO meta VALUES('format', 'teleop-recording-1');
+  INSERT INTO topics VALUES(1, 'teleop/master_command', 'teleop::MasterCommand', 'stream');
+""")
+for i in range(3):
+    data = bytearray(payload)
+    if i == 1:
+        data[10] ^= 0x04
+    db.execute("INSERT INTO samples VALUES(1, ?, ?, ?, 1, 0, ?, ?, ?)",
+               (t0 + i * 1_000_000, t0, b"\x01" * 16, len(payload), bytes(data),
+                zlib.crc32(payload)))
+db.commit()
+db.close()
 header = "receive_ns,source_ns,writer,payload\n"
 row = lambda t: f"{t},{t},{'01' * 16},{payload.hex()}\n"
 open(f"{tmp}/gap.csv", "w").write(header + row(t0) + row(t0 + 1000 * 10**9))
@@ -179,6 +202,9 @@ check 2 "receive times must be >= 0" 30 -- "$play" "$tmp/gap.db" --wait 0 --ling
 check 2 "receive times must be >= 0" 30 -- "$play" "$tmp/negative.db" --wait 0 --linger 0
 check 2 "raw_size': 1099511627776" 30 -- "$play" "$tmp/raw_huge.db" --export-commands "$out/x.csv"
 check 2 "raw_size': -1" 30 -- "$play" "$tmp/raw_negative.db" --export-commands "$out/x.csv"
+check 2 "samples.crc32' of the sample at receive_ns 1700000000001000000" 30 -- \
+  "$play" "$tmp/flipped.db" --export-commands "$out/x.csv"
+check 2 "samples.crc32" 30 -- "$play" "$tmp/flipped.db" --info
 check 2 "FIFO" 20 -- "$experiment" resim --out "$out/r" --commands "$tmp/fifo"
 check 2 "character device" 20 -- "$experiment" resim --out "$out/r" --commands /dev/zero
 check 2 "gaps longer than --max-gap 60 s are refused" 60 -- \
