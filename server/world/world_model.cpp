@@ -142,6 +142,7 @@ double tool_limit_step_s(const WorldModel& s, std::string* why) {
   }
   return h;
 }
+
 /// The tip's node penalty on body `b` (surface models; the fem body keeps the tip out within its
 /// own sub-steps): each node inside the tip sphere gets a spring k_i = k w_i and a damper
 /// c_i = c w_i (w_i = A_i / node_reference_area_m2) from the contact pass, once per physics step,
@@ -176,6 +177,7 @@ double node_penalty_step_s(const DeformableBodyModel& b, std::string* why, bool*
   }
   return h;
 }
+
 /// The tip's proxy spring on body `b` (surface models): its reaction k x + c x' goes to the body's
 /// nodes once per physics step, held over the sub-steps, (1 - patch_blend) to the anchor
 /// triangle's corners (barycentric, a third each at its centroid) and patch_blend spread over
