@@ -120,6 +120,7 @@ header = "receive_ns,source_ns,writer,payload\n"
 row = lambda t: f"{t},{t},{'01' * 16},{payload.hex()}\n"
 open(f"{tmp}/gap.csv", "w").write(header + row(t0) + row(t0 + 1000 * 10**9))
 open(f"{tmp}/long_line.csv", "w").write(header + "1," * 200000 + "\n")
+open(f"{tmp}/big_replay.csv", "w").write("0,0,0,0\n0.1,0,1e308,0\n")
 EOF
 
 echo "--- flags: empty, negative zero, negative, partial, wrong vectors, unknown, repeated"
@@ -205,6 +206,9 @@ check 2 "raw_size': -1" 30 -- "$play" "$tmp/raw_negative.db" --export-commands "
 check 2 "samples.crc32' of the sample at receive_ns 1700000000001000000" 30 -- \
   "$play" "$tmp/flipped.db" --export-commands "$out/x.csv"
 check 2 "samples.crc32" 30 -- "$play" "$tmp/flipped.db" --info
+# a replay trajectory with a finite but absurd position: refused before any wait for a server
+check 2 "row 2, column 'y': 1e308 is outside the allowed range [-10, 10] m" 20 -- \
+  "$master" --device replay --replay "$tmp/big_replay.csv" --duration 1
 check 2 "FIFO" 20 -- "$experiment" resim --out "$out/r" --commands "$tmp/fifo"
 check 2 "character device" 20 -- "$experiment" resim --out "$out/r" --commands /dev/zero
 check 2 "gaps longer than --max-gap 60 s are refused" 60 -- \
