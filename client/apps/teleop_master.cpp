@@ -23,6 +23,7 @@
 #include <thread>
 
 #include "client/device/device_factory.hpp"
+#include "client/device/replay_device.hpp"
 #include "client/node/master_node.hpp"
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
@@ -246,6 +247,8 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   if (o.device == "replay" && o.replay_file.empty()) {
     throw teleop::config::ConfigError("command line: --device replay needs --replay FILE.csv");
   }
+  // the trajectory is checked now, before any wait for a server (it is read again at the start)
+  if (o.device == "replay") teleop::master::load_replay_csv(o.replay_file);
   // YAML first, flags on top
   if (!f.config_file.empty()) {
     const auto root = teleop::config::Node::load_file(f.config_file);

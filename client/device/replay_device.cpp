@@ -36,6 +36,30 @@ bool parse_double(const std::string& text, double& out) {
   return end == t.c_str() + t.size() && std::isfinite(out);
 }
 
+/// The allowed magnitude of column k (time, x, y, z, qw, qx, qy, qz) and its unit.
+double column_bound(int k) {
+  return k == 0 ? kReplayMaxTimeS : k < 4 ? kReplayMaxPositionM : kReplayMaxQuaternion;
+}
+const char* column_unit(int k) { return k == 0 ? " s" : k < 4 ? " m" : ""; }
+
+/// Parses field `text` of column k into v; a bad number or one out of range fails naming the
+/// file, row, column, value and range.
+void parse_column(const std::string& file, std::size_t line_no, std::size_t col, int k,
+                  const std::string& text, double& v) {
+  if (!parse_double(text, v)) {
+    fail_at(file, line_no, col,
+            std::string("column '") + kColumnNames[k] + "': '" + trim(text) +
+                "' is not a finite number");
+  }
+  const double bound = column_bound(k);
+  if (std::fabs(v) > bound) {
+    fail_at(file, line_no, col,
+            "row " + std::to_string(line_no) + ", column '" + kColumnNames[k] + "': " + trim(text) +
+                " is outside the allowed range " + config::range_text(-bound, bound) +
+                column_unit(k));
+  }
+}
+
 }  // namespace
 
 namespace {
@@ -120,11 +144,7 @@ std::vector<ReplaySample> parse_replay_csv(const std::string& text, const std::s
       for (int k = 0; k < 8; ++k) {
         if (map.index[k] < 0) continue;
         const auto i = static_cast<std::size_t>(map.index[k]);
-        if (!parse_double(fields[i], v[k])) {
-          fail_at(file, line_no, cols[i],
-                  std::string("column '") + kColumnNames[k] + "': '" + trim(fields[i]) +
-                      "' is not a finite number");
-        }
+        parse_column(file, line_no, cols[i], k, fields[i], v[k]);
       }
     } else {
       if (fields.size() != 4 && fields.size() != 8) {
@@ -134,11 +154,7 @@ std::vector<ReplaySample> parse_replay_csv(const std::string& text, const std::s
                     std::to_string(fields.size()));
       }
       for (std::size_t i = 0; i < fields.size(); ++i) {
-        if (!parse_double(fields[i], v[i])) {
-          fail_at(file, line_no, cols[i],
-                  std::string("column '") + kColumnNames[i] + "': '" + trim(fields[i]) +
-                      "' is not a finite number");
-        }
+        parse_column(file, line_no, cols[i], static_cast<int>(i), fields[i], v[i]);
       }
     }
     ReplaySample s;

@@ -19,8 +19,17 @@ struct ReplaySample {
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< unit quaternion
 };
 
+/// Largest |coordinate| of a replayed position [m] (device frame; a haptic device's workspace is
+/// well under a metre).
+constexpr double kReplayMaxPositionM = 10.0;
+/// Largest |component| of a replayed quaternion before it is normalised [-].
+constexpr double kReplayMaxQuaternion = 1e3;
+/// Largest |time_s| of a replay row [s] (about 11.6 days).
+constexpr double kReplayMaxTimeS = 1e6;
+
 /// Parses replay CSV text. `file` is used in messages. @throws config::ConfigError naming
-/// file, line and column of the first bad field.
+/// file, line and column of the first bad field (not a finite number, or outside
+/// +-kReplayMaxTimeS, +-kReplayMaxPositionM, +-kReplayMaxQuaternion).
 std::vector<ReplaySample> parse_replay_csv(const std::string& text, const std::string& file);
 /// Reads and parses a replay CSV file. @throws config::ConfigError.
 std::vector<ReplaySample> load_replay_csv(const std::string& path);

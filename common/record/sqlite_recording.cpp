@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "common/config/config.hpp"
+#include "common/record/crc32.hpp"
 
 namespace teleop::record {
 
@@ -45,13 +46,13 @@ SqliteWriter::SqliteWriter(const std::string& path) {
   exec(
       "CREATE TABLE samples(topic_id INTEGER NOT NULL, receive_ns INTEGER NOT NULL, "
       "source_ns INTEGER NOT NULL, writer_guid BLOB, writer_seq INTEGER, codec INTEGER NOT NULL, "
-      "raw_size INTEGER NOT NULL, data BLOB NOT NULL)");
+      "raw_size INTEGER NOT NULL, data BLOB NOT NULL, crc32 INTEGER)");
   exec("CREATE INDEX samples_by_time ON samples(receive_ns)");
   set_meta("format", kFormat);
   check(db_,
         sqlite3_prepare_v2(db_,
                            "INSERT INTO samples(topic_id, receive_ns, source_ns, writer_guid, "
-                           "writer_seq, codec, raw_size, data) VALUES(?,?,?,?,?,?,?,?)",
+                           "writer_seq, codec, raw_size, data, crc32) VALUES(?,?,?,?,?,?,?,?,?)",
                            -1, &insert_, nullptr),
         "prepare insert");
 }
@@ -130,6 +131,7 @@ void SqliteWriter::append(const std::vector<RecordedSample>& samples) {
     sqlite3_bind_int(insert_, 6, codec);
     sqlite3_bind_int64(insert_, 7, static_cast<sqlite3_int64>(s.payload.size()));
     sqlite3_bind_blob(insert_, 8, data, static_cast<int>(size), SQLITE_STATIC);
+    sqlite3_bind_int64(insert_, 9, crc32(s.payload.data(), s.payload.size()));
     const int rc = sqlite3_step(insert_);
     sqlite3_reset(insert_);
     if (rc != SQLITE_DONE) {
@@ -160,6 +162,12 @@ SqliteReader::SqliteReader(const std::string& path) : path_(path) {
     throw RecordingError("'" + path + "' is not a teleop recording (" + kFormat + ")");
   }
   sqlite3_stmt* st = nullptr;
+  // files written without the per-sample CRC column are read unchecked (health() says so)
+  if (sqlite3_prepare_v2(db_, "SELECT crc32 FROM samples LIMIT 0", -1, &st, nullptr) == SQLITE_OK) {
+    has_crc_ = true;
+  }
+  sqlite3_finalize(st);
+  st = nullptr;
   check(db_,
         sqlite3_prepare_v2(db_, "SELECT id, name, type_name, qos FROM topics ORDER BY id", -1, &st,
                            nullptr),
@@ -230,8 +238,8 @@ void SqliteReader::scan(std::int64_t from_ns, std::int64_t to_ns,
   sqlite3_finalize(scan_);
   scan_ = nullptr;
   std::string sql =
-      "SELECT topic_id, receive_ns, source_ns, writer_guid, writer_seq, codec, raw_size, data "
-      "FROM samples WHERE receive_ns >= ?1";
+      std::string("SELECT topic_id, receive_ns, source_ns, writer_guid, writer_seq, codec, ") +
+      "raw_size, data, " + (has_crc_ ? "crc32" : "NULL") + " FROM samples WHERE receive_ns >= ?1";
   if (to_ns > 0) sql += " AND receive_ns < ?2";
   if (!topic_ids.empty()) {
     sql += " AND topic_id IN (";
@@ -287,13 +295,29 @@ bool SqliteReader::next(RecordedSample& out) {
   } else {
     throw RecordingError("unknown codec " + std::to_string(codec) + " in the recording");
   }
+  check_crc(out);
   return true;
 }
 
 RecordingHealth SqliteReader::health() const {
   RecordingHealth h;
-  h.how = "SQLite";
+  h.how = has_crc_ ? "SQLite, a CRC-32 per sample"
+                   : "SQLite without per-sample CRCs (payloads read unchecked)";
   return h;
+}
+
+void SqliteReader::check_crc(const RecordedSample& s) const {
+  if (!has_crc_ || sqlite3_column_type(scan_, 8) == SQLITE_NULL) return;
+  const std::int64_t want = sqlite3_column_int64(scan_, 8);
+  const std::uint32_t got = crc32(s.payload.data(), s.payload.size());
+  if (want == static_cast<std::int64_t>(got)) return;
+  char text[96];
+  std::snprintf(text, sizeof text, "%08llx recorded, %08x computed over its %zu payload bytes",
+                static_cast<unsigned long long>(want), got, s.payload.size());
+  throw config::ConfigError(path_ + ": field 'samples.crc32' of the sample at receive_ns " +
+                            std::to_string(s.receive_ns) + " (topic id " +
+                            std::to_string(s.topic_id) + "): " + text +
+                            ": the payload is damaged; it must equal the CRC-32 of the payload");
 }
 
 std::string SqliteReader::verify_file() {

@@ -6,7 +6,8 @@
 //   CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT UNIQUE, type_name TEXT, qos TEXT)
 //   CREATE TABLE samples(topic_id INTEGER, receive_ns INTEGER, source_ns INTEGER,
 //                        writer_guid BLOB, writer_seq INTEGER, codec INTEGER,
-//                        raw_size INTEGER, data BLOB)          -- codec 0 raw, 1 zstd
+//                        raw_size INTEGER, data BLOB,          -- codec 0 raw, 1 zstd
+//                        crc32 INTEGER)   -- CRC-32 of the payload (uncompressed), checked on read
 //   CREATE INDEX samples_by_time ON samples(receive_ns)
 //
 // Timestamps are nanoseconds since the Unix epoch (Fast DDS stamps samples with the system
@@ -67,9 +68,13 @@ class SqliteReader : public ReaderBackend {
   bool next(RecordedSample& out) override;
 
  private:
+  /// The current scan row's CRC against `s`'s payload. @throws config::ConfigError on a mismatch.
+  void check_crc(const RecordedSample& s) const;
+
   std::string path_;
   sqlite3* db_ = nullptr;
   sqlite3_stmt* scan_ = nullptr;
+  bool has_crc_ = false;  ///< the samples table has the crc32 column
   std::vector<TopicRecord> topics_;
   std::int64_t first_ns_ = 0, last_ns_ = 0;
 };

@@ -189,9 +189,11 @@ DeformableParams load_deformable_params(const teleop::config::Node& node);
 teleop::mesh::TriMesh make_mesh_for(const DeformableParams& params);
 
 /// Safety factor of the automatic step: the stable step is this times the limit of the
-/// integrator for the highest mode (symplectic Euler: h w = 2 (sqrt(1 + zeta^2) - zeta)). It covers
-/// what the rest-shape estimate leaves out: the stiffening of stretched springs, plane contact and
-/// the tip's node penalty (docs/deformable.md, "Automatic step").
+/// integrator for the highest mode (symplectic Euler: h w = 2 (sqrt(1 + zeta^2) - zeta)), the
+/// nodes' plane contact and the top damping rate. It covers what the rest-shape estimate leaves
+/// out: the stiffening of stretched springs (the tip's contact forces are held over the sub-steps
+/// and checked against the physics step by the world's rate check; docs/deformable.md,
+/// "Automatic step").
 constexpr double kStableStepSafety = 0.95;
 /// Lanczos iterations of the w_max estimate (capped at the number of degrees of freedom).
 constexpr int kStabilityLanczosIterations = 80;

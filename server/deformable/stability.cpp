@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "server/deformable/deformable.hpp"
 #include "server/deformable/fem.hpp"
@@ -116,6 +117,52 @@ double integrator_step_limit(const DeformableModel& m, double wmax, double zeta)
       return inf;  // unconditionally stable: never sub-steps
   }
   return 0.0;  // not reached: every integrator is handled above
+}
+
+/// Top eigenvalue of the symmetric operator `apply` (y = A q) on `dofs` unknowns by Lanczos
+/// (a Ritz value: a lower bound that converges to it in tens of products).
+template <class Apply>
+double lanczos_top(int dofs, int iterations, Apply&& apply) {
+  Eigen::VectorXd q(dofs), q_prev = Eigen::VectorXd::Zero(dofs), w(dofs);
+  for (int k = 0; k < dofs; ++k) q(k) = hashed_unit(static_cast<std::uint64_t>(k));
+  q.normalize();
+  std::vector<double> alpha, beta;
+  for (int k = 0; k < iterations; ++k) {
+    apply(q, w);
+    alpha.push_back(q.dot(w));
+    w -= alpha.back() * q;
+    if (k > 0) w -= beta.back() * q_prev;
+    beta.push_back(w.norm());
+    if (!(beta.back() > 1e-12 * std::abs(alpha.back()))) break;
+    q_prev = q;
+    q = w / beta.back();
+  }
+  const auto used = static_cast<Eigen::Index>(alpha.size());
+  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(used, used);
+  for (Eigen::Index k = 0; k < used; ++k) {
+    t(k, k) = alpha[static_cast<std::size_t>(k)];
+    if (k + 1 < used) t(k, k + 1) = t(k + 1, k) = beta[static_cast<std::size_t>(k)];
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(t, Eigen::EigenvaluesOnly);
+  return used > 0 ? std::max(es.eigenvalues()(used - 1), 0.0) : 0.0;
+}
+
+/// Symplectic Euler's limits besides the top mode's [s]: a node on a plane adds its contact
+/// spring k_i = m_i w_c^2 (w_c = contact_frequency_rad_per_s; its damping is an implicit
+/// impulse), stable for h sqrt(w_max^2 + w_c^2) <= 2 (the top of M^-1 (K + K_c) is at most
+/// w_max^2 + w_c^2); and a heavily damped mode below the top frequency (the radial springs' with
+/// a large radial_damping_s) needs h c <= 2 for the top c of M^-1 C, C = beta_e K_e + beta_r K_r
+/// + alpha M (`apply_damping`: y = M^-1/2 (beta_e K_e + beta_r K_r) M^-1/2 q).
+template <class Apply>
+double contact_and_damping_limit_s(const DeformableModel& m, double wmax, int dofs, int iterations,
+                                   Apply&& apply_damping) {
+  double h = std::numeric_limits<double>::infinity();
+  if (m.plane_count > 0) {
+    const double wc = m.params.contact_frequency_rad_per_s;
+    h = 2.0 / std::sqrt(wmax * wmax + wc * wc);
+  }
+  const double c = m.params.mass_damping_per_s + lanczos_top(dofs, iterations, apply_damping);
+  return c > 0.0 ? std::min(h, 2.0 / c) : h;
 }
 
 }  // namespace
@@ -220,6 +267,15 @@ StabilityEstimate estimate_stability(const DeformableModel& m) {
 
   // the largest stable step of the integrator for that mode, times the safety factor
   out.limit_step_s = integrator_step_limit(m, out.omega_max_rad_per_s, out.damping_ratio);
+  if (!fem && prm.integrator == IntegratorKind::kSymplecticEuler) {
+    out.limit_step_s =
+        std::min(out.limit_step_s,
+                 contact_and_damping_limit_s(
+                     m, wmax, dofs, iterations, [&](const Eigen::VectorXd& q, Eigen::VectorXd& y) {
+                       apply(q, ye, yr);
+                       y = prm.stiffness_damping_s * ye + prm.radial_damping_s * yr;
+                     }));
+  }
   out.stable_step_s = kStableStepSafety * out.limit_step_s;
   return out;
 }

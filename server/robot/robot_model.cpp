@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <sstream>
 
 #include "common/mesh/tri_mesh.hpp"
 #include "common/util/data_dir.hpp"
@@ -188,6 +189,28 @@ void combine_masses(double m1_kg, const Eigen::Vector3d& c1_m, const Eigen::Matr
   i_kgm2 = i1_kgm2 + shift(m1_kg, c1_m - c_m) + i2_kgm2 + shift(m2_kg, c2_m - c_m);
 }
 
+/// Each joint's friction compensation at its speed limit must leave torque for the PD: the
+/// feed-forward f (b qd_max + Fc) is clamped to the torque limit and the PD row gets only what
+/// is left, so a joint whose compensation reaches the limit is driven open loop.
+void check_friction_compensation(const config::Node& links, const RobotModel& m) {
+  const double fc = m.ik.friction_compensation;
+  for (int i = 0; i < m.n; ++i) {
+    const LinkModel& l = m.links[i];
+    const double tau = fc * (l.viscous_nms_per_rad * l.qd_max_radps + l.coulomb_nm);
+    if (tau < kMaxFrictionShare * l.torque_limit_nm) continue;
+    const config::Node j = links.at(static_cast<std::size_t>(i)).at("joint");
+    const bool viscous = l.viscous_nms_per_rad * l.qd_max_radps >= l.coulomb_nm;
+    std::ostringstream os;
+    os << "value " << (viscous ? l.viscous_nms_per_rad : l.coulomb_nm)
+       << ": the friction compensation at the joint's speed limit, ik.friction_compensation " << fc
+       << " x (viscous_nms_per_rad " << l.viscous_nms_per_rad << " x max_speed_radps "
+       << l.qd_max_radps << " + coulomb_nm " << l.coulomb_nm << ") = " << tau
+       << " N m, must stay below " << kMaxFrictionShare << " of torque_limit_nm "
+       << l.torque_limit_nm << " (the PD gets only the torque the feed-forward leaves)";
+    j.fail(viscous ? "viscous_nms_per_rad" : "coulomb_nm", os.str());
+  }
+}
+
 RobotModel load_robot_model(const config::Node& rn) {
   if (!rn.is_map()) {
     throw config::ConfigError(rn.file() + ": field '" + rn.path() + "' must be a mapping");
@@ -236,7 +259,7 @@ RobotModel load_robot_model(const config::Node& rn) {
                            "max_tip_angular_speed_radps", "friction_compensation",
                            "friction_velocity_radps"});
     IkParams& p = m.ik;
-    p.gain_per_s = k.number_or("gain_per_s", p.gain_per_s, 0.0, 1000.0);
+    p.gain_per_s = k.number_or("gain_per_s", p.gain_per_s, kMinIkGainPerS, 1000.0);
     p.orientation_weight_m = k.number_or("orientation_weight_m", p.orientation_weight_m, 0.0, 10.0);
     p.damping_max_m = k.number_or("damping_max_m", p.damping_max_m, 0.0, 10.0);
     p.singular_threshold_m =
@@ -269,6 +292,7 @@ RobotModel load_robot_model(const config::Node& rn) {
     for (int i = 0; i < m.n; ++i)
       m.q_home(i) = std::clamp(0.0, m.links[i].q_min_rad, m.links[i].q_max_rad);
   }
+  check_friction_compensation(links, m);
   return m;
 }
 

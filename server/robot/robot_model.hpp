@@ -58,6 +58,14 @@ struct LinkModel {
   double kd_nms_per_rad = 10.0;      ///< joint PD damping [N m s/rad]
 };
 
+/// Largest share of a joint's torque limit its friction compensation may take at the joint's
+/// speed limit (load_robot_model refuses more).
+constexpr double kMaxFrictionShare = 0.5;
+
+/// Smallest IK gain a scene may give [1/s]: at 0 the task error is never fed back and the robot
+/// does not follow its commands (an inert slave); at 1 /s it follows with a 1 s time constant.
+constexpr double kMinIkGainPerS = 1.0;
+
 /// Parameters of the damped-least-squares inverse kinematics that turns a commanded tip pose
 /// into a joint reference (resolved-rate with variable damping near singularities).
 struct IkParams {

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 namespace teleop::sim {
@@ -91,13 +92,29 @@ double tool_limit_step_s(const WorldModel& s, std::string* why) {
     const double w = std::sqrt(t.kp_n_per_m / t.mass_kg);
     const double zeta = c / (2.0 * std::sqrt(t.kp_n_per_m * t.mass_kg));
     h = 2.0 * (std::sqrt(1.0 + zeta * zeta) - zeta) / w;
-    *why = "its PD (tool.kp_n_per_m " + num(t.kp_n_per_m) + ", damping " + num(c) +
+    *why = "its PD (tool.kp_n_per_m " + num(t.kp_n_per_m) +
+           ", damping tool.kd_ns_per_m + tool.linear_damping_ns_per_m " + num(c) +
            " N s/m, tool.mass_kg " + num(t.mass_kg) + ": w " + num(w) + " rad/s, zeta " +
            num(zeta) + ") is stable for h w <= 2 (sqrt(1 + zeta^2) - zeta)";
   } else if (c > 0.0) {
     h = 2.0 * t.mass_kg / c;
-    *why = "its damping (" + num(c) + " N s/m on tool.mass_kg " + num(t.mass_kg) +
-           ") is stable for h c / m <= 2";
+    *why = "its damping (tool.kd_ns_per_m + tool.linear_damping_ns_per_m " + num(c) +
+           " N s/m on tool.mass_kg " + num(t.mass_kg) + ") is stable for h c / m <= 2";
+  }
+  if (t.kp_rot_nm_per_rad > 0.0 || t.kd_rot_nms_per_rad > 0.0) {
+    // the rotational PD on the tool's inertia, the same law
+    const double inertia = t.inertia_kgm2();
+    const double kr = t.kp_rot_nm_per_rad, cr = t.kd_rot_nms_per_rad;
+    const double wr = std::sqrt(kr / inertia);
+    const double zr = kr > 0.0 ? cr / (2.0 * std::sqrt(kr * inertia)) : 0.0;
+    const double hr = kr > 0.0 ? 2.0 * (std::sqrt(1.0 + zr * zr) - zr) / wr : 2.0 * inertia / cr;
+    if (hr < h) {
+      h = hr;
+      *why = "its rotational PD (tool.kp_rot_nm_per_rad " + num(kr) + ", tool.kd_rot_nms_per_rad " +
+             num(cr) + " on the inertia 0.4 m r^2 = " + num(inertia) +
+             " kg m^2 of tool.mass_kg and tool.radius_m: w " + num(wr) + " rad/s, zeta " + num(zr) +
+             ") is stable for h w <= 2 (sqrt(1 + zeta^2) - zeta)";
+    }
   }
   double kc = 0.0;
   std::string contact;
@@ -125,12 +142,139 @@ double tool_limit_step_s(const WorldModel& s, std::string* why) {
   }
   return h;
 }
+
+/// The tip's node penalty on body `b` (surface models; the fem body keeps the tip out within its
+/// own sub-steps): each node inside the tip sphere gets a spring k_i = k w_i and a damper
+/// c_i = c w_i (w_i = A_i / node_reference_area_m2) from the contact pass, once per physics step,
+/// held over the body's sub-steps. On node mass m_i that is an explicit step of h: stable for
+/// h w_i <= 2 (w_i^2 = k_i / m_i) and h c_i / m_i <= 2. Returns the shortest step both allow [s]
+/// (infinity without a node penalty); `why` names the node, its mass and the limiting term.
+double node_penalty_step_s(const DeformableBodyModel& b, std::string* why, bool* spring = nullptr) {
+  const collision::TipContactParams& c = b.contact;
+  const deformable::DeformableModel& m = b.body;
+  double h = std::numeric_limits<double>::infinity();
+  if (m.params.model == deformable::ModelKind::kFem || !(c.node_stiffness_n_per_m > 0.0)) return h;
+  for (int i = 0; i < m.node_count; ++i) {
+    const double w = c.node_reference_area_m2 > 0.0 && i < m.area_m2.size()
+                         ? m.area_m2(i) / c.node_reference_area_m2
+                         : 1.0;
+    const double mass = m.mass_kg(i);
+    const double k = c.node_stiffness_n_per_m * w, d = c.node_damping_ns_per_m * w;
+    if (!(mass > 0.0)) continue;
+    const double hk = k > 0.0 ? 2.0 / std::sqrt(k / mass) : h;
+    const double hd = d > 0.0 ? 2.0 * mass / d : h;
+    if (std::min(hk, hd) < h) {
+      h = std::min(hk, hd);
+      if (spring) *spring = hk <= hd;
+      *why =
+          "node " + std::to_string(i) + " (mass " + num(mass) + " kg, area " +
+          num(w * c.node_reference_area_m2) + " m^2) gets " +
+          (hk <= hd ? "the spring contact.node_stiffness_n_per_m " + num(c.node_stiffness_n_per_m) +
+                          " x " + num(w) + " = " + num(k) + " N/m, stable for h sqrt(k / m) <= 2"
+                    : "the damper contact.node_damping_ns_per_m " + num(c.node_damping_ns_per_m) +
+                          " x " + num(w) + " = " + num(d) + " N s/m, stable for h c / m <= 2");
+    }
+  }
+  return h;
+}
+
+/// The tip's proxy spring on body `b` (surface models): its reaction k x + c x' goes to the body's
+/// nodes once per physics step, held over the sub-steps, (1 - patch_blend) to the anchor
+/// triangle's corners (barycentric, a third each at its centroid) and patch_blend spread over
+/// the nodes within patch_radius_m (n_p of them, n_p = pi r_p^2 / mean node area); the
+/// indentation x moves with a corner by its barycentric weight (a third). So a node carries at
+/// most k s and c s, s = ((1 - blend) / 3 + blend / n_p) / 3, and on the lightest node mass m the
+/// step is stable for h sqrt(k s / m) <= 2 and h c s / m <= 2. Returns the shortest step both
+/// allow [s] (infinity for a fem body, which keeps the tip out in its own sub-steps).
+double proxy_reaction_step_s(const DeformableBodyModel& b, std::string* why, bool* spring) {
+  const collision::TipContactParams& c = b.contact;
+  const deformable::DeformableModel& m = b.body;
+  double h = std::numeric_limits<double>::infinity();
+  if (m.params.model == deformable::ModelKind::kFem || m.node_count == 0) return h;
+  const double mean_area = m.area_m2.sum() / m.node_count;
+  const double patch_nodes = std::max(
+      1.0, std::numbers::pi * c.patch_radius_m * c.patch_radius_m / std::max(mean_area, 1e-300));
+  const double share = ((1.0 - c.patch_blend) / 3.0 + c.patch_blend / patch_nodes) / 3.0;
+  const double mass = m.mass_kg.minCoeff();
+  const double k = c.stiffness_n_per_m * share, d = c.damping_ns_per_m * share;
+  const double hk = k > 0.0 ? 2.0 / std::sqrt(k / mass) : h;
+  const double hd = d > 0.0 ? 2.0 * mass / d : h;
+  h = std::min(hk, hd);
+  *spring = hk <= hd;
+  *why = "the reaction of the tip's proxy spring reaches a node (the lightest, " + num(mass) +
+         " kg) with the share s = ((1 - patch_blend " + num(c.patch_blend) + ") / 3 + " +
+         num(c.patch_blend) + " / " + num(patch_nodes) + " nodes within patch_radius_m " +
+         num(c.patch_radius_m) + ") / 3 = " + num(share) +
+         (*spring ? " of contact.stiffness_n_per_m " + num(c.stiffness_n_per_m) +
+                        " N/m, stable for h sqrt(k s / m) <= 2"
+                  : " of contact.damping_ns_per_m " + num(c.damping_ns_per_m) +
+                        " N s/m, stable for h c s / m <= 2");
+  return h;
+}
+
+/// Why the tip's contact on body i is unstable at step dt ("" when it is not): the node penalty
+/// (node_penalty_step_s) and the proxy's reaction (proxy_reaction_step_s).
+std::string tip_contact_problem(const WorldModel& s, std::size_t i, double dt) {
+  std::string why;
+  bool spring = true;
+  const double hn = node_penalty_step_s(s.bodies[i], &why, &spring);
+  std::string why_p;
+  bool spring_p = true;
+  const double hp = proxy_reaction_step_s(s.bodies[i], &why_p, &spring_p);
+  const bool proxy = hp < hn;
+  const double h = std::min(hn, hp);
+  if (!(dt > kRateSafety * h)) return "";
+  const collision::TipContactParams& c = s.bodies[i].contact;
+  const double r = kRateSafety * h / dt;  // an allowed stiffness scales as r^2, a damping as r
+  const bool k_limits = proxy ? spring_p : spring;
+  const std::string field = "deformables[" + std::to_string(i) + "].contact." +
+                            (proxy ? "" : "node_") +
+                            (k_limits ? "stiffness_n_per_m" : "damping_ns_per_m");
+  const double value = proxy ? (k_limits ? c.stiffness_n_per_m : c.damping_ns_per_m)
+                             : (k_limits ? c.node_stiffness_n_per_m : c.node_damping_ns_per_m);
+  return body_name(s, i) + "'s contact with the tip: " + (proxy ? why_p : why) +
+         " at the physics step h (the contact force is applied once per step and held over the "
+         "body's sub-steps, so sub-steps do not help): h <= " +
+         ms(kRateSafety * h) + " with the safety factor " + num(kRateSafety) + ": lower " + field +
+         " to at most " + num(k_limits ? value * r * r : value * r) + " at this rate, or ";
+}
+
+/// Largest kp / kd of a robot joint [1/s]: its motor row tracks the velocity qd_ref + (kp / kd)
+/// (q_ref - q), which corrects the position error as e <- (1 - h kp / kd) e per step.
+double joint_correction_rate_per_s(const robot::RobotModel& r, int* which) {
+  double rate = 0.0;
+  for (int i = 0; i < r.n; ++i) {
+    const robot::LinkModel& l = r.links[i];
+    const double k = l.kd_nms_per_rad > 0.0 ? l.kp_nm_per_rad / l.kd_nms_per_rad : 0.0;
+    if (k > rate) {
+      rate = k;
+      *which = i;
+    }
+  }
+  return rate;
+}
+
+std::string joint_drive_problem(const robot::RobotModel& r, double dt) {
+  int i = 0;
+  const double k = joint_correction_rate_per_s(r, &i);
+  if (!(dt * k > 2.0 * kRateSafety)) return "";
+  const robot::LinkModel& l = r.links[i];
+  return "the robot's joint " + std::to_string(i + 1) + " (robot.links[" + std::to_string(i) +
+         "].joint): its drive tracks the velocity qd_ref + (kp / kd) (q_ref - q), which corrects "
+         "the error as e <- (1 - h kp / kd) e and diverges for h kp / kd > 2 (kp_nm_per_rad " +
+         num(l.kp_nm_per_rad) + ", kd_nms_per_rad " + num(l.kd_nms_per_rad) +
+         ": h kp / kd = " + num(dt * k) + ", allowed " + num(2.0 * kRateSafety) +
+         "): lower kp_nm_per_rad or raise kd_nms_per_rad";
+}
 }  // namespace
 
 double min_physics_rate_hz(const WorldModel& s) {
   double rate = 0.0;
   if (s.has_robot()) {
-    rate = std::max(rate, s.robot->ik.gain_per_s / (2.0 * kRateSafety));
+    int joint = 0;
+    rate = std::max(
+        rate, std::max(s.robot->ik.gain_per_s, joint_correction_rate_per_s(*s.robot, &joint)) /
+                  (2.0 * kRateSafety));
   } else {
     std::string why;
     const double h = tool_limit_step_s(s, &why);
@@ -141,6 +285,11 @@ double min_physics_rate_hz(const WorldModel& s) {
     if (std::isfinite(h) && h > 0.0) {
       rate = std::max(rate, 1.0 / (h * static_cast<double>(b.body.params.max_substeps)));
     }
+    std::string why;
+    bool spring = true;
+    const double hn =
+        std::min(node_penalty_step_s(b, &why), proxy_reaction_step_s(b, &why, &spring));
+    if (std::isfinite(hn) && hn > 0.0) rate = std::max(rate, 1.0 / (kRateSafety * hn));
   }
   return rate;
 }
@@ -160,6 +309,8 @@ std::string physics_rate_problem(const WorldModel& s, double rate_hz) {
              num(dt * g) + ", allowed " + num(2.0 * kRateSafety) + "): " + at_least +
              " or lower robot.ik.gain_per_s";
     }
+    const std::string joint = joint_drive_problem(*s.robot, dt);
+    if (!joint.empty()) return asks + joint + ": " + at_least;
   } else {
     std::string why;
     const double h = tool_limit_step_s(s, &why);
@@ -170,6 +321,10 @@ std::string physics_rate_problem(const WorldModel& s, double rate_hz) {
     }
   }
   for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    const std::string contact = tip_contact_problem(s, i, dt);
+    if (!contact.empty()) return asks + contact + at_least;
+  }
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
     const deformable::DeformableModel& m = s.bodies[i].body;
     const int need = m.substeps_needed(dt);
     if (need > m.params.max_substeps) {
@@ -178,8 +333,12 @@ std::string physics_rate_problem(const WorldModel& s, double rate_hz) {
              num(m.omega_max_rad_per_s) + " rad/s, zeta " + num(m.damping_ratio_top) +
              "), the scene asks " + ms(dt) + ": that needs " + std::to_string(need) +
              " sub-steps, more than its max_substeps " + std::to_string(m.params.max_substeps) +
-             ": lower dt (" + at_least + "), raise damping, use implicit_euler or raise " +
-             "max_substeps";
+             " (the stable step comes from the body's stiffness, body.youngs_modulus_pa, " +
+             "edge_stiffness_n_per_m, radial_stiffness_n_per_m3, its node-plane contact, " +
+             "body.contact_frequency_rad_per_s " + num(m.params.contact_frequency_rad_per_s) +
+             " rad/s, and its damping rates, body.stiffness_damping_s, radial_damping_s, " +
+             "mass_damping_per_s): lower dt (" + at_least + "), lower the stiffness or the " +
+             "damping, use implicit_euler or raise max_substeps";
     }
   }
   return "";

@@ -93,10 +93,34 @@ make("gap", [(t0, len(payload), payload), (t0 + 10**18, len(payload), payload)])
 make("negative", [(-5, len(payload), payload), (t0, len(payload), payload)])
 make("raw_huge", [(t0, 2**40, payload)])
 make("raw_negative", [(t0, -1, payload)])
+# a recording with the per-sample CRC column whose second payload has one bit flipped
+import zlib
+db = sqlite3.connect(f"{tmp}/flipped.db")
+db.executescript("""
+  CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);
+  CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT UNIQUE NOT NULL,
+                      type_name TEXT NOT NULL, qos TEXT NOT NULL);
+  CREATE TABLE samples(topic_id INTEGER NOT NULL, receive_ns INTEGER NOT NULL,
+                       source_ns INTEGER NOT NULL, writer_guid BLOB, writer_seq INTEGER,
+                       codec INTEGER NOT NULL, raw_size INTEGER NOT NULL, data BLOB NOT NULL,
+                       crc32 INTEGER);
+  INSERT INTO meta VALUES('format', 'teleop-recording-1');
+  INSERT INTO topics VALUES(1, 'teleop/master_command', 'teleop::MasterCommand', 'stream');
+""")
+for i in range(3):
+    data = bytearray(payload)
+    if i == 1:
+        data[10] ^= 0x04
+    db.execute("INSERT INTO samples VALUES(1, ?, ?, ?, 1, 0, ?, ?, ?)",
+               (t0 + i * 1_000_000, t0, b"\x01" * 16, len(payload), bytes(data),
+                zlib.crc32(payload)))
+db.commit()
+db.close()
 header = "receive_ns,source_ns,writer,payload\n"
 row = lambda t: f"{t},{t},{'01' * 16},{payload.hex()}\n"
 open(f"{tmp}/gap.csv", "w").write(header + row(t0) + row(t0 + 1000 * 10**9))
 open(f"{tmp}/long_line.csv", "w").write(header + "1," * 200000 + "\n")
+open(f"{tmp}/big_replay.csv", "w").write("0,0,0,0\n0.1,0,1e308,0\n")
 EOF
 
 echo "--- flags: empty, negative zero, negative, partial, wrong vectors, unknown, repeated"
@@ -179,6 +203,12 @@ check 2 "receive times must be >= 0" 30 -- "$play" "$tmp/gap.db" --wait 0 --ling
 check 2 "receive times must be >= 0" 30 -- "$play" "$tmp/negative.db" --wait 0 --linger 0
 check 2 "raw_size': 1099511627776" 30 -- "$play" "$tmp/raw_huge.db" --export-commands "$out/x.csv"
 check 2 "raw_size': -1" 30 -- "$play" "$tmp/raw_negative.db" --export-commands "$out/x.csv"
+check 2 "samples.crc32' of the sample at receive_ns 1700000000001000000" 30 -- \
+  "$play" "$tmp/flipped.db" --export-commands "$out/x.csv"
+check 2 "samples.crc32" 30 -- "$play" "$tmp/flipped.db" --info
+# a replay trajectory with a finite but absurd position: refused before any wait for a server
+check 2 "row 2, column 'y': 1e308 is outside the allowed range [-10, 10] m" 20 -- \
+  "$master" --device replay --replay "$tmp/big_replay.csv" --duration 1
 check 2 "FIFO" 20 -- "$experiment" resim --out "$out/r" --commands "$tmp/fifo"
 check 2 "character device" 20 -- "$experiment" resim --out "$out/r" --commands /dev/zero
 check 2 "gaps longer than --max-gap 60 s are refused" 60 -- \
@@ -315,19 +345,32 @@ fi
 
 echo "--- a stall of the master's own loop (SIGSTOP for 1 s) is reported"
 cases=$((cases + 1))
-"$master" --domain "$domain" --duration 5 --summary-json "$tmp/stall.json" >"$tmp/stall.log" 2>&1 &
+"$master" --domain "$domain" --duration 5 --summary-json "$tmp/stall.json" --log "$tmp/stall.csv" \
+  >"$tmp/stall.log" 2>&1 &
 stall_pid=$!
 sleep 3
 kill -STOP "$stall_pid"
 sleep 1
 kill -CONT "$stall_pid"
 wait "$stall_pid"
+# the largest change of the rendered force between two logged cycles (the stall and the
+# session's end included) and the last row's force, against the device's rate bound per cycle
+bound=$(python3 -c 'import json,sys; j=json.load(open(sys.argv[1]))
+print(j["safety"]["max_force_rate_n_per_s"] / j["rate_hz"])' "$tmp/stall.json" 2>/dev/null)
+steps=$(awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "fm_x") c = i; next }
+  c { x = $c; y = $(c + 1); z = $(c + 2)
+      if (NR > 2) { d = sqrt((x - px)^2 + (y - py)^2 + (z - pz)^2); if (d > m) m = d }
+      px = x; py = y; pz = z }
+  END { if (c) printf "%.6f %.6f", m, sqrt(px^2 + py^2 + pz^2) }' "$tmp/stall.csv" 2>/dev/null)
 if grep -qE '"stalls": \{"count": [1-9]' "$tmp/stall.json" 2>/dev/null &&
-  grep -qF "haptic loop stalled for" "$tmp/stall.log"; then
-  echo "ok      stall counted: $(grep -o '"stalls": {[^}]*}' "$tmp/stall.json")"
+  grep -qF "haptic loop stalled for" "$tmp/stall.log" && [ -n "$bound" ] && [ -n "$steps" ] &&
+  awk -v b="$bound" -v s="$steps" 'BEGIN { split(s, v, " "); exit !(v[1] <= b + 1e-9 && v[2] == 0) }'; then
+  echo "ok      stall counted: $(grep -o '"stalls": {[^}]*}' "$tmp/stall.json"); largest force change" \
+    "$(echo "$steps" | cut -d' ' -f1) N per cycle (bound $bound N), last force 0"
 else
   failures=$((failures + 1))
-  echo "FAILED  a 1 s SIGSTOP of the master is not reported"
+  echo "FAILED  a 1 s SIGSTOP of the master is not reported, or the force stepped" \
+    "(largest change and last force: '$steps' N, bound '$bound' N per cycle)"
   grep -E "stall|safety" "$tmp/stall.log" "$tmp/stall.json" | head -5 | sed 's/^/        /'
 fi
 

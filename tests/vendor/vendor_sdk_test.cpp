@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 #include "client/control/bilateral_controller.hpp"
@@ -77,6 +78,51 @@ TEST(VendorSdkDevice, TheServoCallbackExchangesPositionAndSaturatedForce) {
   EXPECT_FALSE(enabled);
   EXPECT_EQ(f[0], 0.0);
   EXPECT_FALSE(dev.read().valid);
+}
+
+TEST(VendorSdkDevice, WhenTheHapticLoopStopsWritingTheServoFadesTheForceAtTheRateBound) {
+  fake_hd::reset();
+  VendorSdkDevice dev("");
+  dev.activate();
+  const double step_n = dev.spec().max_force_rate_n_per_s * kServoPeriodS;
+  dev.write(Eigen::Vector3d(3.0, 0.0, 0.0), Eigen::Vector3d::Zero());
+  // the force rises at the bound: sampled with the tick count, never faster than it
+  double prev = 0.0;
+  std::uint64_t prev_tick = fake_hd::ticks();
+  double f[3];
+  bool enabled = false;
+  for (int i = 0; i < 20; ++i) {
+    wait_ticks(1);
+    const std::uint64_t t = fake_hd::ticks();
+    fake_hd::last_force(f, enabled);
+    // one tick of slack: the counter and the force are read apart
+    EXPECT_LE(std::abs(f[0] - prev), step_n * static_cast<double>(t - prev_tick + 1) + 1e-12);
+    prev = f[0];
+    prev_tick = t;
+  }
+  EXPECT_GT(prev, 0.0);
+  // the loop stops writing (a stall): the servo holds while the command is fresh, then fades out
+  dev.write(Eigen::Vector3d(3.0, 0.0, 0.0), Eigen::Vector3d::Zero());
+  const std::uint64_t written = fake_hd::ticks();
+  wait_ticks(static_cast<std::uint64_t>(kServoStaleTicks) / 5);
+  fake_hd::last_force(f, enabled);
+  // (checked only when this thread was not held up past the staleness limit meanwhile)
+  if (fake_hd::ticks() - written + 1 < static_cast<std::uint64_t>(kServoStaleTicks)) {
+    EXPECT_DOUBLE_EQ(f[0], 3.0);
+  }
+  wait_ticks(static_cast<std::uint64_t>(kServoStaleTicks) + 20);
+  fake_hd::last_force(f, enabled);
+  EXPECT_TRUE(enabled);
+  EXPECT_EQ(f[0], 0.0);
+  // a new force from the loop is rendered again
+  dev.write(Eigen::Vector3d(0.5, 0.0, 0.0), Eigen::Vector3d::Zero());
+  const std::uint64_t again = fake_hd::ticks();
+  wait_ticks(5);
+  fake_hd::last_force(f, enabled);
+  if (fake_hd::ticks() - again + 1 < static_cast<std::uint64_t>(kServoStaleTicks)) {
+    EXPECT_DOUBLE_EQ(f[0], 0.5);
+  }
+  dev.deactivate();
 }
 
 TEST(VendorSdkDevice, ADeviceFaultMakesTheReadingInvalid) {

@@ -108,9 +108,18 @@ bool VendorSdkDevice::servo_tick() {
   r.orientation_wxyz[3] = q.z();
   r.buttons = static_cast<std::uint32_t>(buttons);
   vendor::ServoCommand c;
-  exchange_.command.load(c);
+  const std::uint32_t stored = exchange_.command.load(c);
+  servo_stale_ticks_ = stored != servo_seen_ ? 0 : servo_stale_ticks_ + 1;
+  servo_seen_ = stored;
   Eigen::Vector3d f(c.force_n[0], c.force_n[1], c.force_n[2]);
-  f = c.enable ? saturate_norm(f, spec_.max_force_n) : Eigen::Vector3d::Zero();
+  // a stalled haptic loop: fade out; otherwise the newest force within the spec
+  f = servo_stale_ticks_ < kServoStaleTicks ? saturate_norm(f, spec_.max_force_n)
+                                            : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d delta = f - servo_force_n_;
+  const double step = spec_.max_force_rate_n_per_s * kServoPeriodS;
+  if (step > 0.0 && delta.norm() > step) f = servo_force_n_ + delta * (step / delta.norm());
+  if (!c.enable) f.setZero();  // switched off (deactivate): at once, the output is disabled too
+  servo_force_n_ = f;
   const HDdouble out[3] = {f.x(), f.y(), f.z()};
   hdSetDoublev(HD_CURRENT_FORCE, out);
   hdEndFrame(static_cast<HHD>(handle_));

@@ -16,10 +16,14 @@
 //   servo tick   (SDK thread, 1 kHz) begin frame; read position [mm -> m], velocity, transform,
 //                buttons; publish them to the ServoExchange; take the newest force, saturate it
 //                to the spec, write it (hdSetDoublev(HD_CURRENT_FORCE)); end frame; an SDK error
-//                zeroes the force and flags a fault.
+//                zeroes the force and flags a fault. The force it writes changes by at most the
+//                spec's rate bound per tick, and when the haptic loop has written nothing for
+//                kServoStaleTicks ticks (its loop stalled: the servo thread runs on) it fades to
+//                zero at that bound instead of holding the last force.
 //   read()/write() (haptic loop) exchange with the servo tick through seqlocks: no locks, no
 //                allocation, no SDK call on the master's thread.
 //   deactivate() zero the force, unschedule the callback, stop the scheduler.
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -27,6 +31,12 @@
 #include "client/device/vendor/servo_exchange.hpp"
 
 namespace teleop::master {
+
+/// Servo ticks (1 kHz) without a new force from the haptic loop after which the servo thread
+/// fades the force out.
+constexpr int kServoStaleTicks = 50;
+/// The SDK scheduler's period [s].
+constexpr double kServoPeriodS = 1e-3;
 
 class VendorSdkDevice final : public HapticDevice {
  public:
@@ -53,6 +63,10 @@ class VendorSdkDevice final : public HapticDevice {
   unsigned long handle_ = 0;    // HHD
   unsigned long callback_ = 0;  // HDSchedulerHandle
   double time_s_ = 0.0;
+  // the servo thread's own (no other thread touches them)
+  std::uint32_t servo_seen_ = 0;                             // commands stored when it last looked
+  int servo_stale_ticks_ = 0;                                // ticks since a new command
+  Eigen::Vector3d servo_force_n_ = Eigen::Vector3d::Zero();  // what it wrote last [N]
 };
 
 /// Factory used by device_factory.cpp.

@@ -183,6 +183,27 @@ TEST(ReplayDevice, BadCsvNamesFileLineAndColumn) {
   EXPECT_NE(msg.find("/nonexistent/replay.csv"), std::string::npos) << msg;
 }
 
+TEST(ReplayDevice, ValuesOutsideTheirBoundAreRefusedNamingRowColumnValueAndRange) {
+  // a finite but absurd position (1e308 m) is refused, not played
+  std::string msg = error_of([] { parse_replay_csv("0,0,0,0\n0.1,0,1e308,0\n", "big.csv"); });
+  EXPECT_NE(msg.find("big.csv:2:7"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("row 2, column 'y': 1e308"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("[-10, 10] m"), std::string::npos) << msg;
+  // named columns, a master log's dev_z
+  msg = error_of([] { parse_replay_csv("t_s,dev_x,dev_y,dev_z\n0,0,0,-11\n", "log.csv"); });
+  EXPECT_NE(msg.find("log.csv:2:7"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("column 'z': -11"), std::string::npos) << msg;
+  // time and quaternion components
+  msg = error_of([] { parse_replay_csv("2e6,0,0,0\n", "t.csv"); });
+  EXPECT_NE(msg.find("column 'time_s': 2e6 is outside the allowed range [-1e+06, 1e+06] s"),
+            std::string::npos)
+      << msg;
+  msg = error_of([] { parse_replay_csv("0,0,0,0,1e200,0,0,0\n", "q.csv"); });
+  EXPECT_NE(msg.find("column 'qw': 1e200"), std::string::npos) << msg;
+  // the bound itself is allowed
+  EXPECT_EQ(parse_replay_csv("0,10,-10,0\n", "edge.csv").size(), 1u);
+}
+
 TEST(ExternalDevice, StaleSampleInvalidatesReadingAndZeroesCommand) {
   ExternalDevice dev(DeviceSpec{}, 0.01);
   dev.activate();

@@ -5,6 +5,8 @@
 
 #include <cstdio>
 #include <fstream>
+#include <iterator>
+#include <string>
 
 #include "common/config/config.hpp"
 #include "common/record/recording.hpp"
@@ -99,6 +101,62 @@ TEST(Recording, FormatByNameAndByFirstBytes) {
   RecordingReader r(path);
   EXPECT_EQ(r.format(), RecordingFormat::kMcap);
   EXPECT_EQ(r.topics().at(0).qos, "event_log");
+  std::remove(path.c_str());
+}
+
+/// The file offset of the first occurrence of `needle` in the file at `path`; npos if none.
+std::size_t find_in_file(const std::string& path, const std::string& needle) {
+  std::ifstream f(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  return bytes.find(needle);
+}
+
+TEST(Recording, AFlippedPayloadByteInASqliteRecordingIsRefusedNamingTheSample) {
+  const std::string path = tmp("flip.db");
+  const std::string marker = "payload-marker-0123456789";  // stored raw (under 512 bytes)
+  {
+    RecordingWriter w(path);
+    const int a = w.add_topic("teleop/slave_state", "teleop::SlaveState", "stream");
+    std::vector<RecordedSample> in(3);
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      in[i].topic_id = a;
+      in[i].receive_ns = 1'000'000'000LL + static_cast<std::int64_t>(i) * 1'000'000LL;
+      const std::string text = i == 1 ? marker : "other-sample-" + std::to_string(i);
+      in[i].payload.assign(text.begin(), text.end());
+    }
+    w.append(in);
+  }
+  {
+    RecordingReader r(path);
+    EXPECT_EQ(r.health().how, "SQLite, a CRC-32 per sample");
+    r.scan(0);
+    RecordedSample s;
+    int n = 0;
+    while (r.next(s)) ++n;
+    EXPECT_EQ(n, 3);
+  }
+  // flip one bit of the marker inside the file (the database stays well-formed)
+  const std::size_t at = find_in_file(path, marker);
+  ASSERT_NE(at, std::string::npos);
+  {
+    std::fstream f(path, std::ios::binary | std::ios::in | std::ios::out);
+    f.seekp(static_cast<std::streamoff>(at + 3));
+    f.put(static_cast<char>(marker[3] ^ 0x01));
+  }
+  RecordingReader r(path);
+  EXPECT_EQ(r.verify_file(), "ok");  // SQLite's own check does not see a payload byte
+  r.scan(0);
+  RecordedSample s;
+  ASSERT_TRUE(r.next(s));  // the first sample is intact
+  try {
+    r.next(s);
+    FAIL() << "the damaged sample was read without an error";
+  } catch (const config::ConfigError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(path), std::string::npos) << msg;
+    EXPECT_NE(msg.find("samples.crc32"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("receive_ns 1001000000"), std::string::npos) << msg;
+  }
   std::remove(path.c_str());
 }
 
