@@ -40,12 +40,14 @@ TEST(HandDrive, ADragMovesTheTargetByWhatThePointerMovedInThePlaneFacingTheCamer
   c.ray(at, 900.0f, 720.0f, o, d);
   drive.grab(hand, c.forward().cast<double>(), o.cast<double>(), d.cast<double>());
   ASSERT_TRUE(drive.dragging());
-  // 20 px up on screen: up in the world (the camera looks slightly down), 20 px worth of metres
+  // 20 px up on screen: the screen's up in the plane facing the camera (its world z is the cosine
+  // of the camera's elevation), 20 px worth of metres
   c.ray(at - Eigen::Vector2f(0.0f, 20.0f), 900.0f, 720.0f, o, d);
   drive.drag(o.cast<double>(), d.cast<double>());
   const double metres = 20.0 / static_cast<double>(c.pixels_per_metre(c.target, 720.0f));
   EXPECT_NEAR(drive.target_m().norm(), metres / 2.0, 1e-3 * metres);
-  EXPECT_GT(drive.target_m().z(), 0.9 * drive.target_m().norm());
+  EXPECT_NEAR(drive.target_m().z(), std::cos(c.elevation_rad) * drive.target_m().norm(),
+              1e-3 * drive.target_m().norm());
   EXPECT_NEAR(drive.target_m().dot(c.forward().cast<double>()), 0.0, 1e-6);  // in the plane
   drive.release();
   c.ray(at, 900.0f, 720.0f, o, d);
