@@ -24,6 +24,7 @@
 #include "client/bridge/bridge.hpp"
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
+#include "common/dds/network_flags.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/signals.hpp"
 
@@ -64,6 +65,8 @@ int main(int argc, char** argv) {
       ->check(config::integer_in(0.0, 232.0));
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
+  teleop::dds::NetworkFlags net_flags;
+  teleop::dds::add_network_flags(app, net_flags, "observer");
   app.add_option("--port", bo.port,
                  "TCP port on 127.0.0.1, 0-65535 (0: the system picks one and it is printed)")
       ->check(config::integer_in(0.0, 65535.0))
@@ -92,7 +95,7 @@ int main(int argc, char** argv) {
     config::check_flag("--stats-s", stats_s, 0.0, 3600.0);
     config::check_flag("--queue-kb", queue_kb, 64.0, 1048576.0);
     bo.queue_bytes = static_cast<std::size_t>(queue_kb * 1024.0);
-    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_bridge");
+    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_bridge", net_flags);
     teleop::dds::profile_file(opts.profile);
     install_stop_signal_handlers();
     teleop::dds::Participant p(opts);

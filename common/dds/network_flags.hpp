@@ -11,16 +11,26 @@
 //   --security-dir DIR         DDS Security files (secure profiles; deploy/make_security.sh)
 //   --identity NAME            whose certificate, key and permissions in DIR (default: the
 //                              executable's role: server, master or observer)
+//   --insecure                 accept a profile that reaches beyond 127.0.0.1 without DDS
+//                              Security (refused without it)
 //
 // Environment, used when the flag is absent: TELEOP_PEERS, TELEOP_LISTEN_PORT,
 // TELEOP_PUBLIC_ADDRESS, TELEOP_DISCOVERY_SERVERS (lists separated by commas),
-// TELEOP_SECURITY_DIR, TELEOP_IDENTITY.
+// TELEOP_SECURITY_DIR, TELEOP_IDENTITY, TELEOP_INSECURE=1.
 #include <CLI/CLI.hpp>
 
 #include "common/config/flags.hpp"
 #include "common/dds/participant.hpp"
 
 namespace teleop::dds {
+
+/// --insecure: accept a profile that reaches beyond 127.0.0.1 without DDS Security.
+inline void add_insecure_flag(CLI::App& app, NetworkFlags& f) {
+  app.add_flag("--insecure", f.insecure,
+               "accept a profile that reaches beyond 127.0.0.1 without DDS Security (lan, "
+               "lan_unicast, wan_tcp_*, discovery_client): any host could command the slave "
+               "(default: $TELEOP_INSECURE=1)");
+}
 
 /// Adds the flags to `app`; `role` is the default --identity of the secure profiles.
 inline void add_network_flags(CLI::App& app, NetworkFlags& f,
@@ -48,6 +58,7 @@ inline void add_network_flags(CLI::App& app, NetworkFlags& f,
                  "DDS Security files of the secure profiles, made by deploy/make_security.sh "
                  "(default: $TELEOP_SECURITY_DIR)")
       ->type_name("DIR");
+  add_insecure_flag(app, f);
   app.add_option("--identity", f.identity,
                  "identity in --security-dir whose certificate, key and permissions to use "
                  "(default: $TELEOP_IDENTITY, else " +
