@@ -49,9 +49,9 @@ done
 master_ns_is_server=0
 case "$profile" in
   wan_tcp)
-    server_net=(--profile wan_tcp_server --listen 5100 --public-address 10.78.0.1)
-    master_net=(--profile wan_tcp_client --peer 10.78.0.1:5100) ;;
-  lan) server_net=(--profile lan); master_net=(--profile lan) ;;
+    server_net=(--profile wan_tcp_server --listen 5100 --public-address 10.78.0.1 --insecure)
+    master_net=(--profile wan_tcp_client --peer 10.78.0.1:5100 --insecure) ;;
+  lan) server_net=(--profile lan --insecure); master_net=(--profile lan --insecure) ;;
   loopback) server_net=(--profile loopback); master_net=(--profile loopback); master_ns_is_server=1 ;;
   *) echo "tcp_link_cut.sh: --profile '$profile' is not one of wan_tcp, lan, loopback" >&2; exit 2 ;;
 esac
