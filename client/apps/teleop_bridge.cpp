@@ -95,7 +95,8 @@ int main(int argc, char** argv) {
     config::check_flag("--stats-s", stats_s, 0.0, 3600.0);
     config::check_flag("--queue-kb", queue_kb, 64.0, 1048576.0);
     bo.queue_bytes = static_cast<std::size_t>(queue_kb * 1024.0);
-    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_bridge", net_flags);
+    const auto opts =
+        teleop::dds::resolve_participant_options(profile, domain, "teleop_bridge", net_flags);
     teleop::dds::profile_file(opts.profile);
     install_stop_signal_handlers();
     teleop::dds::Participant p(opts);

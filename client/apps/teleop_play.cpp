@@ -130,7 +130,8 @@ int main(int argc, char** argv) {
         std::cout << "teleop_play: " << n << " commands -> " << export_commands << "\n";
       return 0;
     }
-    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_play", net_flags);
+    const auto opts =
+        teleop::dds::resolve_participant_options(profile, domain, "teleop_play", net_flags);
     teleop::dds::profile_file(opts.profile);
     install_stop_signal_handlers();
     { record::RecordingReader check(po.file); }  // a bad file fails before DDS starts

@@ -176,7 +176,8 @@ int main(int argc, char** argv) {
     check_options(ro, format, queue_mb, chunk_mb, chunk_s);
     prepare_output_file("--out", ro.out);
     if (!summary_json.empty()) prepare_output_file("--summary-json", summary_json);
-    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_record", net_flags);
+    const auto opts =
+        teleop::dds::resolve_participant_options(profile, domain, "teleop_record", net_flags);
     teleop::dds::profile_file(opts.profile);
     install_stop_signal_handlers();
     teleop::dds::Participant p(opts);

@@ -1,9 +1,9 @@
 #include "common/dds/log_summary.hpp"
 
-#include <fastdds/dds/log/Log.hpp>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <fastdds/dds/log/Log.hpp>
 #include <map>
 #include <memory>
 #include <mutex>

@@ -10,8 +10,8 @@
 #include <fastdds/rtps/attributes/PropertyPolicy.h>
 #include <fastdds/rtps/attributes/ServerAttributes.h>
 #include <fastdds/rtps/transport/TCPv4TransportDescriptor.h>
-#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 #include <algorithm>
 #include <cctype>
@@ -287,14 +287,17 @@ bool is_secure(const DomainParticipantQos& qos) {
 namespace {
 
 /// Every UDPv4 transport of `qos` expands each initial peer without a port to the ports of
-/// participant ids 0 .. kWholeDomainPeers - 1 (copies: the XML's descriptors stay intact).
-void widen_initial_peers(DomainParticipantQos& qos) {
+/// participant ids 0 .. kWholeDomainPeers - 1, fewer where the last ids' ports of `domain` would
+/// pass 65535 (copies: the XML's descriptors stay intact).
+void widen_initial_peers(DomainParticipantQos& qos, int domain) {
   using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
+  const int user_port_of_id0 = 7411 + 250 * domain;  // the highest port of participant id 0
+  const int ids = std::min(kWholeDomainPeers, (65535 - user_port_of_id0) / 2 + 1);
   for (auto& t : qos.transport().user_transports) {
     auto old = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(t);
-    if (!old || old->maxInitialPeersRange >= static_cast<uint32_t>(kWholeDomainPeers)) continue;
+    if (!old || old->maxInitialPeersRange >= static_cast<uint32_t>(ids)) continue;
     auto d = std::make_shared<UDPv4TransportDescriptor>(*old);
-    d->maxInitialPeersRange = static_cast<uint32_t>(kWholeDomainPeers);
+    d->maxInitialPeersRange = static_cast<uint32_t>(ids);
     t = d;
   }
 }
@@ -443,7 +446,7 @@ DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileK
                                   ": the addresses of the other hosts");
       }
       for (const auto& p : net.peers) builtin.initialPeersList.push_back(udp_locator(p));
-      if (options.announce_to_whole_domain) widen_initial_peers(qos);
+      if (options.announce_to_whole_domain) widen_initial_peers(qos, options.domain);
       break;
     case ProfileKind::kTcp: {
       bool listening = false;

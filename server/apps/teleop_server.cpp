@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
     const teleop::sim::WorldModel scene = teleop::sim::load_world_model(scene_file);
     teleop::server::ServerOptions o;
     o.dds = teleop::dds::resolve_participant_options(profile, domain, "teleop_server", net_flags);
-    o.dds.announce_to_whole_domain = true;  // observers with any participant id find it
+    o.dds.announce_to_whole_domain = true;     // observers with any participant id find it
     teleop::dds::profile_file(o.dds.profile);  // fail early with the list of profiles
     o.rate_hz = teleop::config::check_flag("--rate", rate_hz.value_or(scene.physics_rate_hz), 10.0,
                                            20000.0);

@@ -38,10 +38,9 @@ bool has(const std::string& s, const std::string& part) {
 }
 
 TEST(Launcher, DryRunLanUnicastGivesEveryProcessTheOtherHosts) {
-  const auto l =
-      launch({"--dry-run", "--profile", "lan_unicast", "--server", "10.0.0.1", "--master",
-              "op@10.0.0.2", "--observer", "10.0.0.3", "--domain", "9", "--insecure", "--",
-              "--duration", "30"});
+  const auto l = launch({"--dry-run", "--profile", "lan_unicast", "--server", "10.0.0.1",
+                         "--master", "op@10.0.0.2", "--observer", "10.0.0.3", "--domain", "9",
+                         "--insecure", "--", "--duration", "30"});
   ASSERT_EQ(l.size(), 5u);  // server, observer, master, then the two stops
   // the program runs in the background with its own pid recorded, not a subshell's
   EXPECT_TRUE(has(l[0], "cd /opt/teleop || exit 1; nohup build/server/teleop_server")) << l[0];
@@ -63,10 +62,9 @@ TEST(Launcher, DryRunLanUnicastGivesEveryProcessTheOtherHosts) {
 }
 
 TEST(Launcher, DryRunWanTcpAndLan) {
-  auto l =
-      launch({"--dry-run", "--profile", "wan_tcp", "--server", "10.0.0.1", "--master", "10.0.0.2",
-              "--observer", "10.0.0.3", "--tcp-port", "6000", "--public-address", "203.0.113.5",
-              "--insecure"});
+  auto l = launch({"--dry-run", "--profile", "wan_tcp", "--server", "10.0.0.1", "--master",
+                   "10.0.0.2", "--observer", "10.0.0.3", "--tcp-port", "6000", "--public-address",
+                   "203.0.113.5", "--insecure"});
   ASSERT_GE(l.size(), 3u);
   EXPECT_TRUE(has(l[0], "--profile wan_tcp_server --listen 6000 --public-address 203.0.113.5"))
       << l[0];

@@ -134,10 +134,10 @@ class MultiHost : public ::testing::Test {
                                       "--insecure"};  // plain profiles in namespaces of its own
     sargs.insert(sargs.end(), r.server.begin(), r.server.end());
     auto server = on(1, kServerBinary, sargs, name + "_server");
-    std::vector<std::string> margs = {"--domain",      d,      "--profile",      r.profile_client,
-                                      "--samples",     "3000", "--homing",       "0.5",
-                                      "--wait-server", "20",   "--summary-json", master_json,
-                                      "--quiet",       "--insecure"};
+    std::vector<std::string> margs = {
+        "--domain",       d,           "--profile", r.profile_client, "--samples",
+        "3000",           "--homing",  "0.5",       "--wait-server",  "20",
+        "--summary-json", master_json, "--quiet",   "--insecure"};
     margs.insert(margs.end(), r.master.begin(), r.master.end());
     margs.insert(margs.end(), delay_flags.begin(), delay_flags.end());
     auto master = on(2, kMasterBinary, margs, name + "_master");

@@ -80,8 +80,8 @@ inline constexpr int kPythonRecording = 180;   // tests/python/test_teleop.py: a
 // 171: tests/bench/bridge_load.sh
 // 173: tests/bench/tcp_link_cut.sh (in network namespaces of its own)
 inline constexpr int kManyObservers = 190;  // many_observers_test: 100 observers find a server
-inline constexpr int kOversizedUnit = 191;   // log_summary_test: oversized samples counted
-inline constexpr int kObserverLimit = 192;   // observer_limit_test: the server counts observers
+inline constexpr int kOversizedUnit = 191;  // log_summary_test: oversized samples counted
+inline constexpr int kObserverLimit = 192;  // observer_limit_test: the server counts observers
 // 193-199: reserved for network tests
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains

@@ -20,10 +20,12 @@ namespace teleop::dds {
 namespace {
 
 TEST(LogSummary, KindsIgnoreNumbers) {
-  const std::string a = "Change payload size of '5000' bytes is larger than the history payload "
-                        "size of '331' bytes and cannot be resized.";
-  const std::string b = "Change payload size of '70' bytes is larger than the history payload "
-                        "size of '12' bytes and cannot be resized.";
+  const std::string a =
+      "Change payload size of '5000' bytes is larger than the history payload "
+      "size of '331' bytes and cannot be resized.";
+  const std::string b =
+      "Change payload size of '70' bytes is larger than the history payload "
+      "size of '12' bytes and cannot be resized.";
   EXPECT_EQ(log_kind("RTPS_READER_HISTORY", a), log_kind("RTPS_READER_HISTORY", b));
   EXPECT_NE(log_kind("RTPS_READER_HISTORY", a), log_kind("OTHER", a));
   EXPECT_NE(log_kind("X", "no peer"), log_kind("X", "no peers"));
@@ -52,9 +54,7 @@ class BlobType : public eprosima::fastdds::dds::TopicDataType {
     payload->length = static_cast<std::uint32_t>(b.size());
     return true;
   }
-  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t*, void*) override {
-    return false;
-  }
+  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t*, void*) override { return false; }
   std::function<std::uint32_t()> getSerializedSizeProvider(void* data) override {
     return [data] { return static_cast<std::uint32_t>(static_cast<Blob*>(data)->bytes.size()); };
   }
@@ -71,7 +71,8 @@ TEST(LogSummary, OversizedSamplesAreCounted) {
       p, "test/oversized", TopicQos::kStream,
       [&](const MasterCommand&, const eprosima::fastdds::dds::SampleInfo&) { ++received; });
   Participant hostile(ParticipantOptions{"loopback", domain, "hostile"});
-  auto* topic = hostile.topic("test/oversized", eprosima::fastdds::dds::TypeSupport(new BlobType()));
+  auto* topic =
+      hostile.topic("test/oversized", eprosima::fastdds::dds::TypeSupport(new BlobType()));
   auto* writer = hostile.publisher()->create_datawriter(
       topic, writer_qos(hostile.publisher(), TopicQos::kStream));
   ASSERT_NE(writer, nullptr);

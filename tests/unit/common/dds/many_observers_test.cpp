@@ -61,18 +61,21 @@ TEST(ManyObservers, HundredObserversStartedFirstAllFindTheServer) {
 TEST(ManyObservers, OnlyTheWideningOptionReachesBeyondTheProfileRange) {
   // the profile's range stays 32 for observers (cheap discovery); the server's is the domain's
   using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
-  auto range = [](bool wide) {
-    ParticipantOptions o{"loopback", 5, "t"};
+  auto range = [](bool wide, int domain = 5) {
+    ParticipantOptions o{"loopback", domain, "t"};
     o.announce_to_whole_domain = wide;
     std::uint32_t r = 0;
     for (const auto& t : participant_qos(o).transport().user_transports) {
-      if (auto u = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(t)) r = u->maxInitialPeersRange;
+      if (auto u = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(t))
+        r = u->maxInitialPeersRange;
     }
     return r;
   };
   EXPECT_EQ(range(false), 32u);
   EXPECT_EQ(range(true), static_cast<std::uint32_t>(kWholeDomainPeers));
   EXPECT_EQ(range(false), 32u);  // the XML's descriptor was not changed in place
+  // domain 232: ids up to 59 only (7411 + 250 * 232 + 2 * 59 = 65529; id 60 would pass 65535)
+  EXPECT_EQ(range(true, 232), 60u);
 }
 
 }  // namespace
