@@ -303,7 +303,6 @@ struct ServerNode::Impl {
                     n, options.max_observers);
       events.push(sim::EventKind::kInfo, sim::Severity::kWarning, cycle.output().sim_time_s,
                   static_cast<double>(n), msg);
-      if (!options.quiet) std::fprintf(stderr, "teleop_server: warning: %s\n", msg);
     }
     over_observer_limit = n > options.max_observers;
     return n;

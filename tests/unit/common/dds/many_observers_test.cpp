@@ -4,6 +4,8 @@
 // of 32 ids. Every observer must receive the server's rate-limited state copy.
 #include <gtest/gtest.h>
 
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+
 #include <atomic>
 #include <chrono>
 #include <memory>
@@ -65,7 +67,8 @@ TEST(ManyObservers, OnlyTheWideningOptionReachesBeyondTheProfileRange) {
     ParticipantOptions o{"loopback", domain, "t"};
     o.announce_to_whole_domain = wide;
     std::uint32_t r = 0;
-    for (const auto& t : participant_qos(o).transport().user_transports) {
+    const auto qos = participant_qos(o);
+    for (const auto& t : qos.transport().user_transports) {
       if (auto u = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(t))
         r = u->maxInitialPeersRange;
     }
