@@ -52,12 +52,14 @@ TEST(ObserverLimit, TheServerCountsObserversAndWarnsPastItsLimit) {
         most_observers = std::max<long>(most_observers, s.observers());
         limit = s.max_observers();
       });
-  dds::Reader<EventPubSubType> events(
-      p, dds::topics::kEvents, dds::TopicQos::kEventLog, [&](const Event& e, const Info&) {
-        if (e.message().find("above --max-observers") == std::string::npos) return;
-        std::lock_guard<std::mutex> lock(m);
-        warnings.push_back(e.message());
-      });
+  dds::Reader<EventPubSubType> events(p, dds::topics::kEvents, dds::TopicQos::kEventLog,
+                                      [&](const Event& e, const Info&) {
+                                        const std::string text = e.message().to_string();
+                                        if (text.find("above --max-observers") == std::string::npos)
+                                          return;
+                                        std::lock_guard<std::mutex> lock(m);
+                                        warnings.push_back(text);
+                                      });
   const auto t0 = now_ns();
   auto done = [&] {
     std::lock_guard<std::mutex> lock(m);
