@@ -82,6 +82,7 @@ inline constexpr int kPythonRecording = 180;   // tests/python/test_teleop.py: a
 inline constexpr int kManyObservers = 190;  // many_observers_test: 100 observers find a server
 inline constexpr int kOversizedUnit = 191;  // log_summary_test: oversized samples counted
 inline constexpr int kObserverLimit = 192;  // observer_limit_test: the server counts observers
-// 194-199: reserved for network tests (196: the observers runs of docs/results.md)
+inline constexpr int kSecureShortLived = 194;  // security_test: make_security.sh --hours 2
+// 195-199: reserved for network tests (196: the observers runs of docs/results.md)
 // 60-99: reserved for more integration tests; 100+: benchmarks
 }  // namespace teleop::test::domains
