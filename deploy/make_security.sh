@@ -10,6 +10,10 @@
 #                          observer or bench (teleop_bench rtt's bench/* topics only).
 #                          Default: server:server master:master operator:operator observer:observer
 #   --days N               validity of certificates and permissions (default 365)
+#   --hours N              short-lived identities instead: each identity's certificate and
+#                          permissions valid for N hours, 1-8760, from 5 minutes before now (the
+#                          CAs keep --days). Every host's clock must be within those 5 minutes
+#                          (NTP/chrony, docs/networking.md "Time"); renew before they expire
 #   --org NAME             O= of every subject (default teleop-test)
 #   --domains MIN-MAX      domain ids governance and permissions cover (default 0-232)
 #   --no-other             do not make DIR/other (a foreign CA with identity "nobody")
@@ -42,13 +46,14 @@
 # 2-core test machine).
 set -euo pipefail
 
-usage() { sed -n '2,39p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,43p' "$0" | sed 's/^# \{0,1\}//'; }
 die() {
   echo "make_security.sh: $*" >&2
   exit 2
 }
 
 days=365
+hours=""
 org="teleop-test"
 domains="0-232"
 other=1
@@ -58,6 +63,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --identity) [ $# -ge 2 ] || die "--identity needs NAME:ROLE"; identities+=("$2"); shift 2 ;;
     --days) [ $# -ge 2 ] || die "--days needs a number"; days="$2"; shift 2 ;;
+    --hours) [ $# -ge 2 ] || die "--hours needs a number"; hours="$2"; shift 2 ;;
     --org) [ $# -ge 2 ] || die "--org needs a name"; org="$2"; shift 2 ;;
     --domains) [ $# -ge 2 ] || die "--domains needs MIN-MAX"; domains="$2"; shift 2 ;;
     --no-other) other=0; shift ;;
@@ -70,6 +76,8 @@ done
 command -v openssl >/dev/null 2>&1 || die "openssl not found (Debian package openssl; deploy/setup.sh installs it)"
 [[ "$days" =~ ^[0-9]+$ ]] && [ "$days" -ge 1 ] && [ "$days" -le 36500 ] ||
   die "--days '$days' is not an integer in [1, 36500]"
+[ -z "$hours" ] || { [[ "$hours" =~ ^[0-9]+$ ]] && [ "$hours" -ge 1 ] && [ "$hours" -le 8760 ]; } ||
+  die "--hours '$hours' is not an integer in [1, 8760]"
 [[ "$org" =~ ^[A-Za-z0-9\ ._-]+$ ]] || die "--org '$org': use letters, digits, space . _ - only"
 [[ "$domains" =~ ^([0-9]+)-([0-9]+)$ ]] || die "--domains '$domains' is not MIN-MAX"
 dmin="${BASH_REMATCH[1]}"
@@ -95,6 +103,15 @@ ossl() {
     exit 1
   fi
 }
+
+# validity of the identities (certificates and permissions), as date(1) expressions
+if [ -n "$hours" ]; then
+  valid_from="$(date -u -d "now - 5 minutes" '+%Y-%m-%d %H:%M:%S UTC')"
+  valid_until="$(date -u -d "now + $hours hours" '+%Y-%m-%d %H:%M:%S UTC')"
+else
+  valid_from="$(date -u -d "now - 1 day" '+%Y-%m-%d %H:%M:%S UTC')"
+  valid_until="$(date -u -d "now + $days days" '+%Y-%m-%d %H:%M:%S UTC')"
+fi
 
 # utc time in the form of the permissions document (xs:dateTime)
 iso() { date -u -d "$1" +%Y-%m-%dT%H:%M:%S; }
@@ -170,8 +187,8 @@ permissions_xml() {
     <grant name="teleop_${name}">
       <subject_name>$subject</subject_name>
       <validity>
-        <not_before>$(iso "now - 1 day")</not_before>
-        <not_after>$(iso "now + $days days")</not_after>
+        <not_before>$(iso "$valid_from")</not_before>
+        <not_after>$(iso "$valid_until")</not_after>
       </validity>
       <allow_rule>
         <domains>
@@ -205,6 +222,36 @@ sign_smime() {
     -inkey "$4/permissions_ca.key.pem"
 }
 
+# sign_short_lived CSR CERT EXT D KD: CSR signed by the identity CA of D (key in KD), valid
+# from $valid_from to $valid_until (openssl ca: x509 -req counts whole days only)
+sign_short_lived() {
+  local csr="$1" cert="$2" ext="$3" d="$4" kd="$5" work
+  work="$(mktemp -d)"
+  [ -f "$kd/identity_ca.srl" ] || openssl rand -hex 16 >"$kd/identity_ca.srl"
+  : >"$work/index.txt"
+  cat >"$work/ca.cnf" <<EOF
+[ ca ]
+default_ca = teleop
+[ teleop ]
+database = $work/index.txt
+new_certs_dir = $work
+serial = $kd/identity_ca.srl
+default_md = sha256
+policy = any
+unique_subject = no
+[ any ]
+countryName = optional
+organizationName = optional
+organizationalUnitName = optional
+commonName = supplied
+EOF
+  ossl ca -batch -config "$work/ca.cnf" -cert "$d/identity_ca.cert.pem" \
+    -keyfile "$kd/identity_ca.key.pem" -in "$csr" -out "$cert" -notext -extfile "$ext" \
+    -startdate "$(date -u -d "$valid_from" +%Y%m%d%H%M%SZ)" \
+    -enddate "$(date -u -d "$valid_until" +%Y%m%d%H%M%SZ)"
+  rm -rf "$work"
+}
+
 # make_identity D KD NAME ROLE
 make_identity() {
   local d="$1" kd="$2" name="$3" role="$4" subject
@@ -215,9 +262,13 @@ make_identity() {
     -subj "/C=XX/O=$org/OU=$role/CN=$name"
   local ext="$id/identity.ext"
   printf 'basicConstraints=critical,CA:FALSE\nkeyUsage=critical,digitalSignature,keyAgreement\n' >"$ext"
-  ossl x509 -req -sha256 -days "$days" -in "$id/identity.csr.pem" -CA "$d/identity_ca.cert.pem" \
-    -CAkey "$kd/identity_ca.key.pem" -CAcreateserial -CAserial "$kd/identity_ca.srl" \
-    -extfile "$ext" -out "$id/identity.cert.pem"
+  if [ -n "$hours" ]; then
+    sign_short_lived "$id/identity.csr.pem" "$id/identity.cert.pem" "$ext" "$d" "$kd"
+  else
+    ossl x509 -req -sha256 -days "$days" -in "$id/identity.csr.pem" -CA "$d/identity_ca.cert.pem" \
+      -CAkey "$kd/identity_ca.key.pem" -CAcreateserial -CAserial "$kd/identity_ca.srl" \
+      -extfile "$ext" -out "$id/identity.cert.pem"
+  fi
   rm -f "$id/identity.csr.pem" "$ext"
   # the subject exactly as the certificate holds it (RFC 2253), as Fast DDS compares it
   subject="$(openssl x509 -in "$id/identity.cert.pem" -noout -subject -nameopt RFC2253)"

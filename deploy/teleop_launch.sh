@@ -8,7 +8,8 @@
 #       [--discovery [USER@]ADDR] [--backup-discovery [USER@]ADDR]
 #       [--domain 7] [--remote-dir /opt/teleop] [--scene deploy/scenes/default.yaml]
 #       [--tcp-port 5100] [--public-address ADDR] [--discovery-port 11811]
-#       [--build-dir build] [--ssh "ssh"] [--security-dir DIR] [--dry-run] [-- MASTER_FLAGS...]
+#       [--build-dir build] [--ssh "ssh"] [--security-dir DIR | --insecure] [--dry-run]
+#       [-- MASTER_FLAGS...]
 #
 # ADDR is the host's IPv4 address as the other hosts reach it (also the ssh destination).
 # Every host needs the checkout built in --remote-dir (deploy/build.sh) and ssh access by key.
@@ -24,7 +25,9 @@
 # --security-dir DIR (a folder on every host, made by deploy/make_security.sh; each host needs
 # only its own identity's folder) runs the secure variant of the profile (secure_lan,
 # secure_lan_unicast, secure_wan_tcp_*); each program uses the identity of its role (server,
-# master, observer). There is no secure discovery profile.
+# master, observer). There is no secure discovery profile. Without --security-dir the plain
+# profiles let any host on the network command the slave: the launcher refuses to run them
+# unless --insecure is given, and passes --insecure to every program then.
 # Exit status 2 for a bad argument (the message names the flag and the value).
 set -euo pipefail
 
@@ -39,6 +42,7 @@ master_extra=()
 build_dir="build"
 ssh_cmd="${TELEOP_LAUNCH_SSH:-ssh}"
 security_dir=""
+insecure=0
 
 die() { echo "teleop_launch: $*" >&2; exit 2; }
 need_value() { [ "$#" -ge 2 ] || die "$1 needs a value"; }
@@ -59,9 +63,10 @@ while [ "$#" -gt 0 ]; do
     --build-dir) need_value "$@"; build_dir="$2"; shift 2 ;;
     --ssh) need_value "$@"; ssh_cmd="$2"; shift 2 ;;
     --security-dir) need_value "$@"; security_dir="$2"; shift 2 ;;
+    --insecure) insecure=1; shift ;;
     --dry-run) dry_run=1; shift ;;
     --) shift; master_extra=("$@"); break ;;
-    -h|--help) sed -n '2,28p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,32p' "$0"; exit 0 ;;
     *) die "unknown argument '$1' (see --help)" ;;
   esac
 done
@@ -108,6 +113,12 @@ fi
 if [ "$profile" != discovery ] && { [ -n "$discovery" ] || [ -n "$backup_discovery" ]; }; then
   die "--discovery/--backup-discovery need --profile discovery"
 fi
+if [ -n "$security_dir" ] && [ "$insecure" = 1 ]; then
+  die "--insecure and --security-dir '$security_dir' exclude each other"
+fi
+if [ -z "$security_dir" ] && [ "$insecure" = 0 ]; then
+  die "--profile $profile without --security-dir DIR has no DDS Security: any host on the network could command the slave; give --security-dir DIR (deploy/make_security.sh) or accept it with --insecure"
+fi
 if [ -n "$security_dir" ]; then
   [ "$profile" != discovery ] ||
     die "--security-dir '$security_dir' does not apply to --profile discovery (no secure discovery profile; use lan, lan_unicast or wan_tcp)"
@@ -131,6 +142,8 @@ net_flags() {  # role address; the secure variant with --security-dir
   flags="$(plain_net_flags "$@")"
   if [ -n "$security_dir" ]; then
     flags="${flags/--profile /--profile secure_} --security-dir $security_dir"
+  else
+    flags="$flags --insecure"
   fi
   echo "$flags"
 }

@@ -36,6 +36,7 @@
 #include "client/bridge/bridge.hpp"
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
+#include "common/dds/network_flags.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/signals.hpp"
 
@@ -145,6 +146,8 @@ int main(int argc, char** argv) {
       ->check(config::integer_in(0.0, 232.0));
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
+  teleop::dds::NetworkFlags net_flags;
+  teleop::dds::add_network_flags(app, net_flags, "observer", "--dds-listen");
   auto* port_opt = app.add_option("--port", bo.port,
                                   "TCP port on 127.0.0.1, 0-65535 (0: the system picks one and "
                                   "it is printed)")
@@ -189,7 +192,8 @@ int main(int argc, char** argv) {
     bo.queue_bytes = static_cast<std::size_t>(queue_kb * 1024.0);
     if (!listen.empty()) parse_listen(listen, bo);
     check_access(bo, token_file, insecure);
-    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_bridge");
+    const auto opts =
+        teleop::dds::resolve_participant_options(profile, domain, "teleop_bridge", net_flags);
     teleop::dds::profile_file(opts.profile);
     install_stop_signal_handlers();
     teleop::dds::Participant p(opts);

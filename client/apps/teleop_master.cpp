@@ -215,6 +215,7 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   using teleop::config::check_flag;
   o.dds =
       teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_master", f.net_flags);
+  o.dds.announce_to_whole_domain = true;  // observers with any participant id find it
   teleop::dds::profile_file(o.dds.profile);
   check_flag("--duration", o.duration_s, 0.0, 1e6);
   check_flag("--rate", o.rate_hz, 10.0, 20000.0);

@@ -399,6 +399,7 @@ int run_monitor(Flags& f) {
   Snapshot snap;
   snap.domain = opts.domain;
   snap.profile = opts.profile;
+  snap.insecure = opts.insecure;
   snap.full_rate = f.full_rate;
   TopicTable table(f.stale_s);
   const tdds::ObserverTopics topics =

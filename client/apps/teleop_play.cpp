@@ -36,6 +36,7 @@
 #include "client/record/topic_table.hpp"
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
+#include "common/dds/network_flags.hpp"
 #include "common/record/commands.hpp"
 #include "common/record/convert.hpp"
 #include "common/record/recording.hpp"
@@ -58,6 +59,8 @@ int main(int argc, char** argv) {
       ->check(teleop::config::integer_in(0.0, 232.0));
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
+  teleop::dds::NetworkFlags net_flags;
+  teleop::dds::add_network_flags(app, net_flags, "observer");
   app.add_option("--exclude", po.exclude, "topic not to publish (repeatable)");
   app.add_option("--wait", po.wait_s, "pause before the first sample, for discovery [s], 0-60")
       ->check(teleop::config::number_in(0.0, 60.0))
@@ -127,7 +130,8 @@ int main(int argc, char** argv) {
         std::cout << "teleop_play: " << n << " commands -> " << export_commands << "\n";
       return 0;
     }
-    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_play");
+    const auto opts =
+        teleop::dds::resolve_participant_options(profile, domain, "teleop_play", net_flags);
     teleop::dds::profile_file(opts.profile);
     install_stop_signal_handlers();
     { record::RecordingReader check(po.file); }  // a bad file fails before DDS starts

@@ -36,6 +36,7 @@
 #include "client/record/topic_table.hpp"
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
+#include "common/dds/network_flags.hpp"
 #include "common/record/recording.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/exit_codes.hpp"
@@ -150,6 +151,8 @@ int main(int argc, char** argv) {
       ->check(teleop::config::integer_in(0.0, 232.0));
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
+  teleop::dds::NetworkFlags net_flags;
+  teleop::dds::add_network_flags(app, net_flags, "observer");
   app.add_option("--queue-mb", queue_mb, "bound of the in-memory queue [MiB], 1-4096")
       ->check(teleop::config::number_in(1.0, 4096.0))
       ->capture_default_str();
@@ -173,7 +176,8 @@ int main(int argc, char** argv) {
     check_options(ro, format, queue_mb, chunk_mb, chunk_s);
     prepare_output_file("--out", ro.out);
     if (!summary_json.empty()) prepare_output_file("--summary-json", summary_json);
-    const auto opts = teleop::dds::resolve_participant_options(profile, domain, "teleop_record");
+    const auto opts =
+        teleop::dds::resolve_participant_options(profile, domain, "teleop_record", net_flags);
     teleop::dds::profile_file(opts.profile);
     install_stop_signal_handlers();
     teleop::dds::Participant p(opts);

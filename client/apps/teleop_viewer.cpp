@@ -171,7 +171,8 @@ class ViewerApp {
     render_options_.force_scale_m_per_n = static_cast<float>(options.force_scale_m_per_n);
     show_panel_ = !options.hide_panel;
     panel_info_.domain = dds_options.domain;
-    panel_info_.profile = dds_options.profile;
+    panel_info_.profile =
+        dds_options.profile + (dds_options.insecure ? " INSECURE (no DDS Security)" : "");
     panel_info_.history_s = options.history_s;
     frame_scratch_.reserve(frame_ms_.capacity());
   }

@@ -180,8 +180,8 @@ std::string server_text(const Snapshot& s, const TopicView* t) {
 
 std::vector<std::string> render_screen(const Snapshot& s, int rows, int cols) {
   std::vector<std::string> out;
-  out.push_back(fmt("teleop_monitor  domain %d  profile %s  up %.1f s   (q: quit)", s.domain,
-                    s.profile.c_str(), s.t_s));
+  out.push_back(fmt("teleop_monitor  domain %d  profile %s%s  up %.1f s   (q: quit)", s.domain,
+                    s.profile.c_str(), s.insecure ? " INSECURE (no DDS Security)" : "", s.t_s));
   out.push_back("status  " + s.status());
   out.push_back(s.full_rate ? "topics  full rate (--full-rate): every sample"
                             : "topics  10 Hz monitor copies (*_monitor); master_command counted "
@@ -247,6 +247,7 @@ std::string render_json(const Snapshot& s) {
   std::string o = "{\"type\": \"status\", \"t\": " + num(s.t_s) +
                   ", \"domain\": " + std::to_string(s.domain) +
                   ", \"profile\": " + json_string(s.profile) +
+                  ", \"insecure\": " + (s.insecure ? "true" : "false") +
                   ", \"full_rate\": " + (s.full_rate ? "true" : "false") +
                   ", \"waiting\": " + (s.waiting() ? "true" : "false") +
                   ", \"status\": " + json_string(s.status()) + ", \"topics\": {";

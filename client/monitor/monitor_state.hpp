@@ -34,6 +34,7 @@ struct Snapshot {
   double t_s = 0.0;  ///< since the monitor started [s]
   int domain = 0;
   std::string profile;
+  bool insecure = false;  ///< the profile reaches beyond 127.0.0.1 without DDS Security
   /// Reading the full-rate topics (--full-rate) instead of the 10 Hz `_monitor` copies; then
   /// master_command is the master's own topic, else the server's count of commands received.
   bool full_rate = false;

@@ -941,6 +941,7 @@ struct MasterNode::Impl {
         << "  \"stalls\": {\"count\": " << rep.stalls
         << ", \"longest_s\": " << json_number(rep.longest_stall_s) << "},\n"
         << "  \"wait_server_s\": " << json_number(rep.wait_s) << ",\n"
+        << "  \"insecure\": " << (options.dds.insecure ? "true" : "false") << ",\n"
         << "  \"verdict\": \"" << verdict.name << "\",\n"
         << "  \"verdict_reason\": \"" << json_escape(verdict.reason) << "\",\n"
         << "  \"metrics\": " << metrics.summary_json() << ",\n"

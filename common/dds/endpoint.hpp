@@ -130,14 +130,17 @@ class Reader {
     while (!stopping_.load()) {
       waitset.wait(active, timeout);  // timeout or trigger: both fine
       if (stopping_.load()) break;
-      for (;;) {
-        // a malformed sample (CheckedType) is dropped and counted, never handed on
+      // bounded, in case a sample that fails to deserialize were not consumed by the take
+      for (int i = 0; i < kMaxTakesPerWake; ++i) {
+        // a malformed sample (CheckedType) is dropped and counted, never handed on; Fast DDS
+        // may report it as a failed take, so it is counted before the return code is looked at
         const std::uint64_t malformed_before = malformed_samples();
-        if (reader_->take_next_sample(&sample, &info) != ReturnCode_t::RETCODE_OK) break;
+        const ReturnCode_t rc = reader_->take_next_sample(&sample, &info);
         if (malformed_samples() != malformed_before) {
           malformed_.fetch_add(1);
           continue;
         }
+        if (rc != ReturnCode_t::RETCODE_OK) break;
         if (!info.valid_data) continue;
         received_.fetch_add(1);
         callback_(sample, info);
@@ -147,6 +150,7 @@ class Reader {
     waitset.detach_condition(guard_);
   }
 
+  static constexpr int kMaxTakesPerWake = 100000;
   Participant& participant_;
   Callback callback_;
   eprosima::fastdds::dds::DataReader* reader_ = nullptr;

@@ -11,10 +11,12 @@
 //   --security-dir DIR         DDS Security files (secure profiles; deploy/make_security.sh)
 //   --identity NAME            whose certificate, key and permissions in DIR (default: the
 //                              executable's role: server, master or observer)
+//   --insecure                 accept a profile that reaches beyond 127.0.0.1 without DDS
+//                              Security (refused without it)
 //
 // Environment, used when the flag is absent: TELEOP_PEERS, TELEOP_LISTEN_PORT,
 // TELEOP_PUBLIC_ADDRESS, TELEOP_DISCOVERY_SERVERS (lists separated by commas),
-// TELEOP_SECURITY_DIR, TELEOP_IDENTITY.
+// TELEOP_SECURITY_DIR, TELEOP_IDENTITY, TELEOP_INSECURE=1.
 #include <CLI/CLI.hpp>
 
 #include "common/config/flags.hpp"
@@ -22,16 +24,26 @@
 
 namespace teleop::dds {
 
-/// Adds the flags to `app`; `role` is the default --identity of the secure profiles.
-inline void add_network_flags(CLI::App& app, NetworkFlags& f,
-                              const std::string& role = "observer") {
+/// --insecure: accept a profile that reaches beyond 127.0.0.1 without DDS Security.
+inline void add_insecure_flag(CLI::App& app, NetworkFlags& f) {
+  app.add_flag("--insecure", f.insecure,
+               "accept a profile that reaches beyond 127.0.0.1 without DDS Security (lan, "
+               "lan_unicast, wan_tcp_*, discovery_client): any host could command the slave "
+               "(default: $TELEOP_INSECURE=1)");
+}
+
+/// Adds the flags to `app`; `role` is the default --identity of the secure profiles;
+/// `listen_flag` names the TCP listening port's flag (teleop_bridge, whose --listen is its
+/// WebSocket address, calls it --dds-listen).
+inline void add_network_flags(CLI::App& app, NetworkFlags& f, const std::string& role = "observer",
+                              const std::string& listen_flag = "--listen") {
   f.default_identity = role;
   app.add_option("--peer", f.peers,
                  "unicast peer ADDR[:PORT], repeatable (lan/lan_unicast: UDP; wan_tcp_client: "
                  "the server, port default 5100) (default: $TELEOP_PEERS)")
       ->type_name("ADDR[:PORT]")
       ->allow_extra_args(false);
-  app.add_option("--listen", f.listen,
+  app.add_option(listen_flag, f.listen,
                  "TCP listening port of the wan_tcp profiles (default: $TELEOP_LISTEN_PORT, "
                  "wan_tcp_server 5100)")
       ->type_name("PORT");
@@ -48,6 +60,7 @@ inline void add_network_flags(CLI::App& app, NetworkFlags& f,
                  "DDS Security files of the secure profiles, made by deploy/make_security.sh "
                  "(default: $TELEOP_SECURITY_DIR)")
       ->type_name("DIR");
+  add_insecure_flag(app, f);
   app.add_option("--identity", f.identity,
                  "identity in --security-dir whose certificate, key and permissions to use "
                  "(default: $TELEOP_IDENTITY, else " +

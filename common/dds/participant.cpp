@@ -11,9 +11,11 @@
 #include <fastdds/rtps/attributes/ServerAttributes.h>
 #include <fastdds/rtps/transport/TCPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <filesystem>
 #include <fstream>
@@ -23,6 +25,7 @@
 #include <sstream>
 
 #include "common/config/config.hpp"
+#include "common/dds/log_summary.hpp"
 #include "common/dds/security_check.hpp"
 #include "common/util/data_dir.hpp"
 
@@ -281,6 +284,71 @@ bool is_secure(const DomainParticipantQos& qos) {
   return auth != nullptr && !auth->empty();
 }
 
+namespace {
+
+/// Every UDPv4 transport of `qos` expands each initial peer without a port to the ports of
+/// participant ids 0 .. kWholeDomainPeers - 1, fewer where the last ids' ports of `domain` would
+/// pass 65535 (copies: the XML's descriptors stay intact).
+void widen_initial_peers(DomainParticipantQos& qos, int domain) {
+  using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
+  const int user_port_of_id0 = 7411 + 250 * domain;  // the highest port of participant id 0
+  const int ids = std::min(kWholeDomainPeers, (65535 - user_port_of_id0) / 2 + 1);
+  for (auto& t : qos.transport().user_transports) {
+    auto old = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(t);
+    if (!old || old->maxInitialPeersRange >= static_cast<uint32_t>(ids)) continue;
+    auto d = std::make_shared<UDPv4TransportDescriptor>(*old);
+    d->maxInitialPeersRange = static_cast<uint32_t>(ids);
+    t = d;
+  }
+}
+
+}  // namespace
+
+bool reaches_beyond_loopback(const DomainParticipantQos& qos) {
+  using eprosima::fastdds::rtps::SharedMemTransportDescriptor;
+  using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
+  if (qos.transport().use_builtin_transports) return true;
+  for (const auto& t : qos.transport().user_transports) {
+    if (std::dynamic_pointer_cast<SharedMemTransportDescriptor>(t)) continue;
+    auto u = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(t);
+    if (!u) return true;  // TCP, or a transport this check does not know
+    if (u->interfaceWhiteList.size() != 1 || u->interfaceWhiteList[0] != "127.0.0.1") return true;
+  }
+  return false;
+}
+
+namespace {
+
+/// True when environment variable `name` is 1, true or yes.
+bool env_flag(const char* name) {
+  const char* v = std::getenv(name);
+  if (!v) return false;
+  const std::string s = v;
+  return s == "1" || s == "true" || s == "yes";
+}
+
+/// A profile that reaches beyond 127.0.0.1 without DDS Security needs --insecure: refused
+/// without it (naming the secure profiles), announced on stderr with it.
+void check_open_profile(ParticipantOptions& o, const DomainParticipantQos& qos, bool accepted) {
+  if (is_secure(qos) || !reaches_beyond_loopback(qos)) return;
+  const std::string profile = resolve_profile(o.profile).name;
+  if (!accepted) {
+    throw config::ConfigError(
+        "profile '" + profile +
+        "' reaches beyond 127.0.0.1 without DDS Security: any host on the network could read "
+        "every topic and command the slave. Use a secure profile (" +
+        secure_profile_names() +
+        ") with --security-dir DIR, or accept it with --insecure (or TELEOP_INSECURE=1)");
+  }
+  o.insecure = true;
+  std::fprintf(stderr,
+               "%s: warning: INSECURE: profile '%s' without DDS Security (--insecure): any host "
+               "on the network can read every topic and command the slave\n",
+               o.name.c_str(), profile.c_str());
+}
+
+}  // namespace
+
 DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileKind* kind_out) {
   using namespace eprosima::fastrtps::rtps;
   using eprosima::fastdds::rtps::TCPv4TransportDescriptor;
@@ -378,6 +446,7 @@ DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileK
                                   ": the addresses of the other hosts");
       }
       for (const auto& p : net.peers) builtin.initialPeersList.push_back(udp_locator(p));
+      if (options.announce_to_whole_domain) widen_initial_peers(qos, options.domain);
       break;
     case ProfileKind::kTcp: {
       bool listening = false;
@@ -520,11 +589,13 @@ ParticipantOptions resolve_participant_options(const std::optional<std::string>&
   } else {
     sec.identity = net.default_identity;
   }
-  participant_qos(o);  // fail early: unknown profile, options that do not fit it
+  // fail early: unknown profile, options that do not fit it
+  check_open_profile(o, participant_qos(o), net.insecure || env_flag("TELEOP_INSECURE"));
   return o;
 }
 
 Participant::Participant(const ParticipantOptions& options) : options_(options) {
+  install_log_summary();  // Fast DDS's repeated error lines: once, then a count
   auto* factory = DomainParticipantFactory::get_instance();
   const DomainParticipantQos qos = participant_qos(options);
   participant_ = factory->create_participant(static_cast<DomainId_t>(options.domain), qos);
@@ -568,6 +639,7 @@ Participant::~Participant() {
     participant_->delete_contained_entities();
     DomainParticipantFactory::get_instance()->delete_participant(participant_);
   }
+  flush_log_summary();
 }
 
 Topic* Participant::topic(const std::string& topic_name, TypeSupport type) {

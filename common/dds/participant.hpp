@@ -79,6 +79,7 @@ struct NetworkFlags {
   std::vector<std::string> discovery_servers;
   std::optional<std::string> security_dir;    ///< --security-dir DIR
   std::optional<std::string> identity;        ///< --identity NAME
+  bool insecure = false;                      ///< --insecure (or TELEOP_INSECURE=1)
   std::string default_identity = "observer";  ///< the executable's role when --identity is absent
 };
 
@@ -88,7 +89,20 @@ struct ParticipantOptions {
   int domain = 0;                    ///< DDS domain id [0, 232]
   std::string name = "teleop";       ///< participant name shown in tools
   NetworkOptions network = {};       ///< addresses for the multi-machine profiles
+  /// UDP profiles: announce this participant to every participant id of the domain on each
+  /// initial peer (kWholeDomainPeers), not only to the profile's maxInitialPeersRange. The server
+  /// and the master set it, so that observers with any participant id find them; observers
+  /// keep the profile's range and reach the server through its announcements.
+  bool announce_to_whole_domain = false;
+  /// The profile reaches beyond 127.0.0.1 without DDS Security, accepted with --insecure:
+  /// programs say so at start and in their status.
+  bool insecure = false;
 };
+
+/// Participant ids of one domain on one host whose ports stay within the domain's block:
+/// metatraffic unicast port 7400 + 250 domain + 10 + 2 id, user unicast + 1, below the next
+/// domain's 7400 + 250 (domain + 1).
+inline constexpr int kWholeDomainPeers = 120;
 
 /// Resolves options: explicit flag > environment (TELEOP_PROFILE, TELEOP_DOMAIN, TELEOP_PEERS,
 /// TELEOP_LISTEN_PORT, TELEOP_PUBLIC_ADDRESS, TELEOP_DISCOVERY_SERVERS, TELEOP_SECURITY_DIR,
@@ -127,6 +141,10 @@ enum class ProfileKind {
   kTcp,              ///< TCPv4 (wan_tcp_*): --listen, --public-address, --peer ADDR[:5100]
   kDiscoveryClient,  ///< discovery client: --discovery-server ADDR[:11811], one per server id
 };
+
+/// True when a participant QoS can send beyond this host: a TCP transport, a UDP transport not
+/// restricted to 127.0.0.1, or Fast DDS's built-in transports.
+bool reaches_beyond_loopback(const eprosima::fastdds::dds::DomainParticipantQos& qos);
 
 /// True when a participant QoS turns DDS Security on (the profile sets dds.sec.auth.plugin).
 bool is_secure(const eprosima::fastdds::dds::DomainParticipantQos& qos);

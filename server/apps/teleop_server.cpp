@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   std::optional<double> owner_timeout_s;
   double duration_s = 0.0;
   double stats_period_s = 1.0;
+  int max_observers = 32;
   std::optional<int> domain;
   std::optional<std::string> profile;
   std::string summary_json;
@@ -52,6 +53,10 @@ int main(int argc, char** argv) {
       ->check(teleop::config::number_in(0.0, 1e7));
   app.add_option("--stats-period", stats_period_s, "ServerStats period [s], 0.1-10")
       ->check(teleop::config::number_in(0.1, 10.0));
+  app.add_option("--max-observers", max_observers,
+                 "warn (an event) when more observers than this read the state, 0-10000")
+      ->check(teleop::config::integer_in(0.0, 10000.0))
+      ->capture_default_str();
   app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
       ->check(teleop::config::integer_in(0.0, 232.0));
   app.add_option("--profile", profile,
@@ -80,6 +85,7 @@ int main(int argc, char** argv) {
     const teleop::sim::WorldModel scene = teleop::sim::load_world_model(scene_file);
     teleop::server::ServerOptions o;
     o.dds = teleop::dds::resolve_participant_options(profile, domain, "teleop_server", net_flags);
+    o.dds.announce_to_whole_domain = true;     // observers with any participant id find it
     teleop::dds::profile_file(o.dds.profile);  // fail early with the list of profiles
     o.rate_hz = teleop::config::check_flag("--rate", rate_hz.value_or(scene.physics_rate_hz), 10.0,
                                            20000.0);
@@ -103,6 +109,8 @@ int main(int argc, char** argv) {
         o.command_timeout_s, 60.0);
     o.duration_s = teleop::config::check_flag("--duration", duration_s, 0.0, 1e7);
     o.stats_period_s = teleop::config::check_flag("--stats-period", stats_period_s, 0.1, 10.0);
+    o.max_observers = static_cast<int>(
+        teleop::config::check_flag("--max-observers", max_observers, 0.0, 10000.0));
     o.summary_json = summary_json;
     if (!summary_json.empty()) teleop::prepare_output_file("--summary-json", summary_json);
     o.realtime.priority =

@@ -1,5 +1,6 @@
 #include "server/node/server_node.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <fstream>
@@ -11,6 +12,7 @@
 #include "common/dds/async_writer.hpp"
 #include "common/dds/endpoint.hpp"
 #include "common/dds/guid_text.hpp"
+#include "common/dds/log_summary.hpp"
 #include "common/dds/rate_limited_publisher.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
@@ -102,6 +104,8 @@ struct ServerNode::Impl {
   std::int64_t last_reject_event_ns = 0;
   std::int64_t last_stats_ns = 0;
   std::uint64_t last_stats_steps = 0;
+  bool over_observer_limit = false;
+  int observers_max_seen = 0;
 
   Impl(const ServerOptions& o, const sim::WorldModel& m)
       : options(o),
@@ -284,6 +288,26 @@ struct ServerNode::Impl {
     }
   }
 
+  /// Readers of SlaveState at any rate (1 kHz and the observers' copies) less the masters (the
+  /// command writers); warns once each time the count rises past options.max_observers.
+  int count_observers(int command_writers) {
+    const int readers = std::max(0, state_writer.matched_cached()) +
+                        std::max(0, state_views.matched(0)) + std::max(0, state_views.matched(1));
+    const int n = std::max(0, readers - std::max(0, command_writers));
+    observers_max_seen = std::max(observers_max_seen, n);
+    if (n > options.max_observers && !over_observer_limit) {
+      char msg[128];
+      std::snprintf(msg, sizeof(msg),
+                    "%d observers read the state, above --max-observers %d: the loop's p99 may "
+                    "grow",
+                    n, options.max_observers);
+      events.push(sim::EventKind::kInfo, sim::Severity::kWarning, cycle.output().sim_time_s,
+                  static_cast<double>(n), msg);
+    }
+    over_observer_limit = n > options.max_observers;
+    return n;
+  }
+
   void maybe_publish_stats(std::int64_t t_ns, const RateLoop& loop) {
     if (t_ns - last_stats_ns < static_cast<std::int64_t>(options.stats_period_s * 1e9)) return;
     const double window_s = seconds_between(last_stats_ns, t_ns);
@@ -312,6 +336,10 @@ struct ServerNode::Impl {
     st.commands_refused_owner(counters.refused_owner.load());
     st.owner_session(owner.active ? owner.session : 0);
     st.ownership_changes(ownership_changes);
+    st.commands_malformed(command_reader->malformed());
+    st.samples_oversized(dds::oversized_samples());
+    st.observers(count_observers(st.matched_command_writers()));
+    st.max_observers(options.max_observers);
     stats_publisher.offer(st, /*wake=*/true);  // written by the publisher's thread
     last_stats_ns = t_ns;
     last_stats_steps = cycle.steps();
@@ -413,6 +441,8 @@ struct ServerNode::Impl {
     f << "{\n"
       << "  \"version\": \"" << version_string() << "\",\n"
       << "  \"scene\": \"" << model.name << "\",\n"
+      << "  \"profile\": \"" << options.dds.profile << "\",\n"
+      << "  \"insecure\": " << (options.dds.insecure ? "true" : "false") << ",\n"
       << "  \"elapsed_s\": " << json_number(elapsed_s) << ",\n"
       << "  \"steps\": " << cycle.steps() << ",\n"
       << "  \"rate_hz\": " << json_number(options.rate_hz) << ",\n"
@@ -435,6 +465,10 @@ struct ServerNode::Impl {
       << "  \"commands_rejected_passivity\": " << counters.rejected_passivity.load() << ",\n"
       << "  \"commands_refused_owner\": " << counters.refused_owner.load() << ",\n"
       << "  \"ownership_changes\": " << ownership_changes << ",\n"
+      << "  \"commands_malformed\": " << command_reader->malformed() << ",\n"
+      << "  \"samples_oversized\": " << dds::oversized_samples() << ",\n"
+      << "  \"observers_max\": " << observers_max_seen << ",\n"
+      << "  \"max_observers\": " << options.max_observers << ",\n"
       << "  \"watchdog_trips\": " << cycle.watchdog_trips() << ",\n"
       << "  \"network_threads\": {\"states_dropped\": " << state_writer.dropped()
       << ", \"events_dropped\": " << event_writer.dropped()

@@ -20,6 +20,8 @@ struct ServerOptions {
   double owner_timeout_s = 0.5;     ///< ownership watchdog: owner silent this long loses it [s]
   double duration_s = 0.0;          ///< stop after this long; 0 = until SIGINT/SIGTERM [s]
   double stats_period_s = 1.0;      ///< ServerStats period [s]
+  int max_observers = 32;           ///< above this many observers, a warning event (and again
+                                    ///< after the count fell back and rose past it once more)
   std::string summary_json;         ///< write a JSON summary here at exit (optional)
   RealtimeOptions realtime;         ///< scheduling of the physics loop (common/util/realtime)
   bool quiet = false;

@@ -20,6 +20,10 @@
 // p99 and overruns; the 1-minute load average at the start; how many observers got the scene
 // and their median slave_state rate.
 //
+// After the sweep: the cost of one observer (the slopes of the master's round-trip p99 and the
+// server's step p99 over the count) and the smallest count at which the round-trip p99 is twice
+// the 0-observer one, printed and written to DIR/observers_scaling.csv.
+//
 // Writes DIR/observers.csv and DIR/observers.png (tests/charts/observers.py).
 #include <signal.h>
 #include <stdlib.h>
@@ -33,6 +37,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -419,6 +424,63 @@ int live_bench(const CommandArgs& args, const Binaries& bin, const fs::path& wor
   return 0;
 }
 
+/// Least-squares slope of y over x (NAN with fewer than two distinct x).
+double slope(const std::vector<double>& x, const std::vector<double>& y) {
+  if (x.size() < 2) return NAN;
+  double mx = 0, my = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) mx += x[i], my += y[i];
+  mx /= static_cast<double>(x.size());
+  my /= static_cast<double>(y.size());
+  double sxy = 0, sxx = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    sxy += (x[i] - mx) * (y[i] - my);
+    sxx += (x[i] - mx) * (x[i] - mx);
+  }
+  return sxx > 0 ? sxy / sxx : NAN;
+}
+
+/// The cost of one observer: per observer count, the medians over the rounds of the master's
+/// round-trip p99 and the server's step p99; the least-squares slopes of both over the count;
+/// and the smallest count whose round-trip p99 is at least twice the 0-observer one (the limit
+/// where the loop's p99 doubles). Printed and written to `csv_path`.
+void report_scaling(const std::map<int, std::vector<SessionResult>>& by_count,
+                    const std::string& csv_path) {
+  CsvWriter csv(csv_path, {"observers", "sessions", "rtt_ms_p99_median",
+                           "server_step_us_p99_median", "server_overruns_median", "ratio_to_0"});
+  std::vector<double> xs, rtts, steps;
+  double base = NAN;
+  int doubled_at = -1;
+  for (const auto& [n, rows] : by_count) {
+    std::vector<double> rtt, step, over;
+    for (const SessionResult& r : rows) {
+      rtt.push_back(r.rtt_p99);
+      step.push_back(r.server_step_p99_us);
+      over.push_back(r.server_overruns);
+    }
+    const double m_rtt = median(rtt), m_step = median(step);
+    if (n == 0) base = m_rtt;
+    const double ratio = m_rtt / base;
+    if (doubled_at < 0 && n > 0 && ratio >= 2.0) doubled_at = n;
+    if (std::isfinite(m_rtt) && std::isfinite(m_step)) {
+      xs.push_back(n);
+      rtts.push_back(m_rtt);
+      steps.push_back(m_step);
+    }
+    csv.row_text({std::to_string(n), std::to_string(rows.size()), format_number(m_rtt),
+                  format_number(m_step), format_number(median(over)), format_number(ratio)});
+  }
+  csv.flush();
+  const int largest = by_count.empty() ? 0 : by_count.rbegin()->first;
+  std::printf(
+      "observers: cost per observer (least squares over the counts, medians over the rounds): "
+      "round trip p99 %+.4f ms, server step p99 %+.2f us; the round trip p99 doubles (against "
+      "%.3f ms with none) at %s\n",
+      slope(xs, rtts), slope(xs, steps), base,
+      doubled_at > 0 ? (std::to_string(doubled_at) + " observers").c_str()
+                     : ("no count up to " + std::to_string(largest)).c_str());
+  std::fflush(stdout);
+}
+
 int observers_bench(const CommandArgs& args) {
   const std::vector<int> counts =
       parse_counts("--counts", args.option("--counts", args.quick ? "0,2" : "0,8,16,32"));
@@ -458,11 +520,13 @@ int observers_bench(const CommandArgs& args) {
                     static_cast<int>(rounds) * static_cast<double>(counts.size()) +
                         static_cast<double>(full_counts.size() + nice0_counts.size()),
                     "sessions");
+  std::map<int, std::vector<SessionResult>> by_count;  // the rate-limited rows
   auto run = [&](const char* mode, int n, int round) {
     const std::string m = mode;
     const SessionResult r =
         run_session(bin, n, m == "full_rate", m == "rate_limited_nice0" ? 0 : 19,
                     static_cast<int>(domain), duration_s, work);
+    if (m == "rate_limited") by_count[n].push_back(r);
     csv.row_text({mode, std::to_string(n), std::to_string(round), format_number(r.load1),
                   format_number(r.rtt_p50), format_number(r.rtt_p99), format_number(r.rtt_p999),
                   format_number(r.master_overruns), format_number(r.link_losses),
@@ -488,6 +552,7 @@ int observers_bench(const CommandArgs& args) {
   for (const int n : nice0_counts) run("rate_limited_nice0", n, 1);
   progress.finish();
   csv.flush();
+  report_scaling(by_count, (args.out_dir / "observers_scaling.csv").string());
   if (!args.no_chart) {
     run_chart_script("observers.py", {csv_path, (args.out_dir / "observers.png").string()});
   }

@@ -12,7 +12,8 @@
 #   detect_ms   cut start -> first cycle with link_ok 0 (cut runs)
 #
 #   tests/bench/tcp_link_cut.sh [--build DIR] [--runs N] [--cut SECONDS] [--duration SECONDS]
-#                               [--master-flags "FLAGS"] [--profile wan_tcp|lan|loopback]
+#                               [--master-flags "FLAGS"]
+#                               [--profile wan_tcp|lan|secure_wan_tcp|secure_lan|loopback]
 #
 #   --build DIR      folder holding server/teleop_server and client/teleop_master, or both
 #                    executables directly (default: build)
@@ -21,8 +22,10 @@
 #   --duration S     master session length after homing (default 8)
 #   --master-flags F more teleop_master flags, e.g. "--realtime 20" (default none)
 #   --profile P      wan_tcp (default: wan_tcp_server / wan_tcp_client), lan (UDP, multicast),
-#                    or loopback (both programs in the server's namespace: no cut runs; the
-#                    loop's own share of missed cycles on this machine, for comparison)
+#                    secure_wan_tcp, secure_lan (the same with DDS Security: files made by
+#                    deploy/make_security.sh into a temporary folder), or loopback (both
+#                    programs in the server's namespace: no cut runs; the loop's own share of
+#                    missed cycles on this machine, for comparison)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 build="$root/build"
@@ -39,7 +42,7 @@ while [ $# -gt 0 ]; do
     --duration) duration="$2"; shift 2 ;;
     --master-flags) master_flags="$2"; shift 2 ;;
     --profile) profile="$2"; shift 2 ;;
-    -h | --help) sed -n '2,25p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h | --help) sed -n '2,29p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "tcp_link_cut.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -49,11 +52,23 @@ done
 master_ns_is_server=0
 case "$profile" in
   wan_tcp)
-    server_net=(--profile wan_tcp_server --listen 5100 --public-address 10.78.0.1)
-    master_net=(--profile wan_tcp_client --peer 10.78.0.1:5100) ;;
-  lan) server_net=(--profile lan); master_net=(--profile lan) ;;
+    server_net=(--profile wan_tcp_server --listen 5100 --public-address 10.78.0.1 --insecure)
+    master_net=(--profile wan_tcp_client --peer 10.78.0.1:5100 --insecure) ;;
+  lan) server_net=(--profile lan --insecure); master_net=(--profile lan --insecure) ;;
+  secure_wan_tcp | secure_lan)
+    sec_dir="$(mktemp -d)"
+    "$root/deploy/make_security.sh" --no-other --identity server:server --identity master:master \
+      "$sec_dir" >/dev/null
+    if [ "$profile" = secure_lan ]; then
+      server_net=(--profile secure_lan --security-dir "$sec_dir")
+      master_net=(--profile secure_lan --security-dir "$sec_dir")
+    else
+      server_net=(--profile secure_wan_tcp_server --listen 5100 --public-address 10.78.0.1
+        --security-dir "$sec_dir")
+      master_net=(--profile secure_wan_tcp_client --peer 10.78.0.1:5100 --security-dir "$sec_dir")
+    fi ;;
   loopback) server_net=(--profile loopback); master_net=(--profile loopback); master_ns_is_server=1 ;;
-  *) echo "tcp_link_cut.sh: --profile '$profile' is not one of wan_tcp, lan, loopback" >&2; exit 2 ;;
+  *) echo "tcp_link_cut.sh: --profile '$profile' is not one of wan_tcp, lan, secure_wan_tcp, secure_lan, loopback" >&2; exit 2 ;;
 esac
 server_bin="$build/server/teleop_server"; master_bin="$build/client/teleop_master"
 [ -x "$server_bin" ] || server_bin="$build/teleop_server"
@@ -71,6 +86,7 @@ cleanup() {
     ip netns del "$ns" 2>/dev/null || true
   done
   rm -rf "$work"
+  [ -z "${sec_dir:-}" ] || rm -rf "$sec_dir"
 }
 trap cleanup EXIT
 ip netns add "$sw"; ip -n "$sw" link set lo up

@@ -1,7 +1,7 @@
 // From outside: the real teleop_server refuses a scene that cannot run with exit status
 // 2 and a message naming the scene file, the field and the value (before DDS starts); a scene
-// whose deformable body sub-steps runs and says so; a malformed MasterCommand payload from a
-// hostile participant is dropped and the server keeps running (it used to end in
+// whose deformable body sub-steps runs and says so; a malformed or oversized MasterCommand payload
+// from a hostile participant is dropped and the server keeps running (it used to end in
 // std::terminate: tests/fuzz/fuzz_command.cpp, common/dds/checked_type.hpp).
 #include <gtest/gtest.h>
 
@@ -203,6 +203,11 @@ TEST(BadScene, MalformedCommandPayloadIsDroppedAndTheServerRuns) {
     }
     send(bad);
   }
+  for (int i = 0; i < 5; ++i) {  // larger than a MasterCommand can be: dropped by Fast DDS
+    std::vector<std::uint8_t> big(3000, 0);
+    big[1] = 1;  // CDR little endian
+    send(big);
+  }
   for (int i = 0; i < 30; ++i) {
     c.seq(++seq);
     send(serialized(c));
@@ -214,6 +219,11 @@ TEST(BadScene, MalformedCommandPayloadIsDroppedAndTheServerRuns) {
   ASSERT_EQ(server.wait_for(20.0), 0) << server.err();
   const std::string s = Process::slurp(json);
   EXPECT_EQ(json_value(s, "commands_accepted"), 30) << s;
+  // each kind counted: the 20 that did not decode, the 5 too large (best effort: most arrive)
+  EXPECT_GE(json_value(s, "commands_malformed"), 15) << s;
+  EXPECT_LE(json_value(s, "commands_malformed"), 20) << s;
+  EXPECT_GE(json_value(s, "samples_oversized"), 1) << s;
+  EXPECT_LE(json_value(s, "samples_oversized"), 5) << s;
   participant.publisher()->delete_datawriter(writer);
 }
 

@@ -38,9 +38,9 @@ bool has(const std::string& s, const std::string& part) {
 }
 
 TEST(Launcher, DryRunLanUnicastGivesEveryProcessTheOtherHosts) {
-  const auto l =
-      launch({"--dry-run", "--profile", "lan_unicast", "--server", "10.0.0.1", "--master",
-              "op@10.0.0.2", "--observer", "10.0.0.3", "--domain", "9", "--", "--duration", "30"});
+  const auto l = launch({"--dry-run", "--profile", "lan_unicast", "--server", "10.0.0.1",
+                         "--master", "op@10.0.0.2", "--observer", "10.0.0.3", "--domain", "9",
+                         "--insecure", "--", "--duration", "30"});
   ASSERT_EQ(l.size(), 5u);  // server, observer, master, then the two stops
   // the program runs in the background with its own pid recorded, not a subshell's
   EXPECT_TRUE(has(l[0], "cd /opt/teleop || exit 1; nohup build/server/teleop_server")) << l[0];
@@ -62,18 +62,26 @@ TEST(Launcher, DryRunLanUnicastGivesEveryProcessTheOtherHosts) {
 }
 
 TEST(Launcher, DryRunWanTcpAndLan) {
-  auto l =
-      launch({"--dry-run", "--profile", "wan_tcp", "--server", "10.0.0.1", "--master", "10.0.0.2",
-              "--observer", "10.0.0.3", "--tcp-port", "6000", "--public-address", "203.0.113.5"});
+  auto l = launch({"--dry-run", "--profile", "wan_tcp", "--server", "10.0.0.1", "--master",
+                   "10.0.0.2", "--observer", "10.0.0.3", "--tcp-port", "6000", "--public-address",
+                   "203.0.113.5", "--insecure"});
   ASSERT_GE(l.size(), 3u);
   EXPECT_TRUE(has(l[0], "--profile wan_tcp_server --listen 6000 --public-address 203.0.113.5"))
       << l[0];
   EXPECT_TRUE(has(l[1], "--profile wan_tcp_client --peer 203.0.113.5:6000")) << l[1];
   EXPECT_TRUE(has(l[2], "--profile wan_tcp_client --peer 203.0.113.5:6000")) << l[2];
-  l = launch({"--dry-run", "--profile", "lan", "--server", "10.0.0.1", "--master", "10.0.0.2"});
+  l = launch({"--dry-run", "--profile", "lan", "--server", "10.0.0.1", "--master", "10.0.0.2",
+              "--insecure"});
   ASSERT_EQ(l.size(), 3u);
-  EXPECT_TRUE(has(l[0], "--profile lan")) << l[0];
+  EXPECT_TRUE(has(l[0], "--profile lan --insecure")) << l[0];
+  EXPECT_TRUE(has(l[1], "--profile lan --insecure")) << l[1];
   EXPECT_FALSE(has(l[0], "--peer")) << l[0];
+  // no DDS Security and no --insecure: refused, naming both ways out
+  std::string err;
+  launch({"--dry-run", "--profile", "lan", "--server", "10.0.0.1", "--master", "10.0.0.2"}, 2,
+         &err);
+  EXPECT_TRUE(has(err, "--security-dir DIR")) << err;
+  EXPECT_TRUE(has(err, "--insecure")) << err;
 }
 
 TEST(Launcher, DryRunWithSecurityDirUsesTheSecureProfiles) {
@@ -104,7 +112,7 @@ TEST(Launcher, DryRunWithSecurityDirUsesTheSecureProfiles) {
 TEST(Launcher, DryRunDiscoveryStartsTheServersFirst) {
   const auto l =
       launch({"--dry-run", "--profile", "discovery", "--server", "10.0.0.1", "--master", "10.0.0.2",
-              "--backup-discovery", "10.0.0.3", "--discovery-port", "12000"});
+              "--backup-discovery", "10.0.0.3", "--discovery-port", "12000", "--insecure"});
   ASSERT_GE(l.size(), 4u);
   EXPECT_TRUE(has(l[0], "deploy/teleop_discovery.sh --id 0 --address 10.0.0.1 --port 12000"))
       << l[0];
@@ -121,14 +129,15 @@ TEST(Launcher, DryRunDiscoveryStartsTheServersFirst) {
 
 TEST(Launcher, BadArgumentsExitWith2NamingTheFlag) {
   std::string err;
-  launch({"--dry-run", "--profile", "lan", "--server", "10.0.0.1", "--master", "10.0.0.x"}, 2,
-         &err);
+  launch({"--dry-run", "--profile", "lan", "--server", "10.0.0.1", "--master", "10.0.0.x",
+          "--insecure"},
+         2, &err);
   EXPECT_TRUE(has(err, "--master '10.0.0.x'")) << err;
   launch({"--dry-run", "--profile", "wan", "--server", "10.0.0.1", "--master", "10.0.0.2"}, 2,
          &err);
   EXPECT_TRUE(has(err, "--profile 'wan'")) << err;
   launch({"--dry-run", "--profile", "wan_tcp", "--server", "10.0.0.1", "--master", "10.0.0.2",
-          "--tcp-port", "0"},
+          "--tcp-port", "0", "--insecure"},
          2, &err);
   EXPECT_TRUE(has(err, "--tcp-port '0'")) << err;
 }

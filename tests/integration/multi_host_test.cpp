@@ -130,13 +130,14 @@ class MultiHost : public ::testing::Test {
                                       "--scene",
                                       scene_file("tool_only.yaml"),
                                       "--summary-json",
-                                      server_json};
+                                      server_json,
+                                      "--insecure"};  // plain profiles in namespaces of its own
     sargs.insert(sargs.end(), r.server.begin(), r.server.end());
     auto server = on(1, kServerBinary, sargs, name + "_server");
-    std::vector<std::string> margs = {"--domain",      d,      "--profile",      r.profile_client,
-                                      "--samples",     "3000", "--homing",       "0.5",
-                                      "--wait-server", "20",   "--summary-json", master_json,
-                                      "--quiet"};
+    std::vector<std::string> margs = {
+        "--domain",       d,           "--profile", r.profile_client, "--samples",
+        "3000",           "--homing",  "0.5",       "--wait-server",  "20",
+        "--summary-json", master_json, "--quiet",   "--insecure"};
     margs.insert(margs.end(), r.master.begin(), r.master.end());
     margs.insert(margs.end(), delay_flags.begin(), delay_flags.end());
     auto master = on(2, kMasterBinary, margs, name + "_master");
@@ -146,7 +147,8 @@ class MultiHost : public ::testing::Test {
       // instant on one host have been seen (once in CI) to leave one of them never matched
       std::this_thread::sleep_for(std::chrono::milliseconds(1000));
       std::vector<std::string> oargs = {"--domain",   d,    "--profile", r.profile_client,
-                                        "--duration", "14", "--period",  "0.5"};
+                                        "--duration", "14", "--period",  "0.5",
+                                        "--insecure"};
       oargs.insert(oargs.end(), r.observer.begin(), r.observer.end());
       observers.push_back(on(3, kMonitorBinary, oargs, name + "_obs" + std::to_string(k)));
     }
@@ -294,6 +296,7 @@ TEST_F(MultiHost, LauncherStartsAndStopsASessionOnThreeHosts) {
   setenv("TELEOP_IP", lab_->ip().c_str(), 1);
   Process launch("/bin/bash",
                  {std::string(TELEOP_SOURCE_DIR) + "/deploy/teleop_launch.sh",
+                  "--insecure",
                   "--profile",
                   "discovery",
                   "--server",

@@ -4,6 +4,7 @@
 // once per test process by deploy/make_security.sh into a temporary folder (nothing secret is
 // committed) and removed at the end.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <atomic>
 #include <cstdlib>
@@ -368,6 +369,47 @@ TEST_F(Security, IdentityOfAnotherCaIsRefusedAtStart) {
                       "/master/identity.cert.pem"),
             std::string::npos)
       << err2;
+}
+
+// make_security.sh --hours N: certificates and permissions valid from 5 minutes before they are
+// made to N hours after, which a secure server accepts; a bad N is refused with exit status 2.
+TEST(SecurityScript, ShortLivedIdentitiesLastTheHoursAsked) {
+  if (std::system("command -v openssl > /dev/null 2>&1") != 0) GTEST_SKIP() << "no openssl";
+  const std::string dir = temp_path("sec", "short");
+  fs::remove_all(dir);
+  const std::string log = dir + ".log";
+  ASSERT_EQ(std::system(("bash '" + kMakeSecurity + "' --hours 2 --no-other --identity " +
+                         "server:server '" + dir + "' > '" + log + "' 2>&1")
+                            .c_str()),
+            0)
+      << Process::slurp(log);
+  // the certificate's validity in seconds: 2 h plus the 5 minutes before
+  const std::string cert = dir + "/server/identity.cert.pem";
+  const std::string span = dir + ".span";
+  const std::string cmd = "bash -c 'a=$(openssl x509 -in " + cert +
+                          " -noout -startdate | cut -d= -f2); b=$(openssl x509 -in " + cert +
+                          " -noout -enddate | cut -d= -f2); echo $(( $(date -d \"$b\" +%s) - "
+                          "$(date -d \"$a\" +%s) ))' > " +
+                          span;
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_EQ(std::atoi(Process::slurp(span).c_str()), 2 * 3600 + 300) << Process::slurp(span);
+  const std::string permissions = Process::slurp(dir + "/server/permissions.xml");
+  EXPECT_NE(permissions.find("<not_after>"), std::string::npos) << permissions;
+  // a secure server accepts the files (DDS Security checks both validity periods at start)
+  Process server(kServerBinary,
+                 {"--profile", "secure", "--security-dir", dir, "--domain",
+                  std::to_string(domains::kSecureShortLived), "--duration", "0.5", "--scene",
+                  scene_file("tool_only.yaml"), "--quiet"},
+                 "sec_short");
+  EXPECT_EQ(server.wait_for(30.0), 0) << server.err();
+  const int bad = std::system(
+      ("bash '" + kMakeSecurity + "' --hours 0 '" + dir + "' > '" + log + "' 2>&1").c_str());
+  EXPECT_EQ(WEXITSTATUS(bad), 2);
+  EXPECT_NE(Process::slurp(log).find("--hours '0' is not an integer in [1, 8760]"),
+            std::string::npos);
+  fs::remove_all(dir);
+  fs::remove(log);
+  fs::remove(span);
 }
 
 }  // namespace

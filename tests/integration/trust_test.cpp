@@ -246,13 +246,13 @@ TEST(Trust, TcpLinkCutKeepsTheHapticLoopsPeriod) {
   auto server =
       on(1, kServerBinary,
          {"--domain", d, "--profile", "wan_tcp_server", "--listen", "5100", "--public-address", h1,
-          "--duration", "60", "--quiet", "--scene", scene_file("default.yaml")},
+          "--duration", "60", "--quiet", "--scene", scene_file("default.yaml"), "--insecure"},
          "tcp_server");
-  auto master =
-      on(2, kMasterBinary,
-         {"--domain", d, "--profile", "wan_tcp_client", "--peer", h1 + ":5100", "--duration", "6",
-          "--homing", "0.5", "--wait-server", "20", "--log", log, "--summary-json", mj, "--quiet"},
-         "tcp_master");
+  auto master = on(2, kMasterBinary,
+                   {"--domain", d, "--profile", "wan_tcp_client", "--peer", h1 + ":5100",
+                    "--duration", "6", "--homing", "0.5", "--wait-server", "20", "--log", log,
+                    "--summary-json", mj, "--quiet", "--insecure"},
+                   "tcp_master");
   // the cut: 2 s into the session, the master's port leaves the bridge for 1 s (its packets
   // vanish silently, as on a broken path)
   double cut_at_s = -1.0;

@@ -94,6 +94,16 @@ TEST(MonitorExperiment, DirectionsThatDifferAndASilentDeviceAreShown) {
   EXPECT_NE(line.find("silent 2 times, 3.50 s"), std::string::npos);
 }
 
+TEST(MonitorStatus, AnInsecureProfileIsShownOnScreenAndInJson) {
+  Snapshot s = live_session();
+  EXPECT_NE(render_json(s).find("\"insecure\": false"), std::string::npos);
+  EXPECT_EQ(render_screen(s, 40, 0)[0].find("INSECURE"), std::string::npos);
+  s.insecure = true;
+  EXPECT_NE(render_json(s).find("\"insecure\": true"), std::string::npos);
+  EXPECT_NE(render_screen(s, 40, 0)[0].find("INSECURE (no DDS Security)"), std::string::npos)
+      << render_screen(s, 40, 0)[0];
+}
+
 TEST(MonitorExperiment, ScreenAndJsonCarryItAndSayWhenThereIsNone) {
   Snapshot s = live_session();
   const std::vector<std::string> before = render_screen(s, 40, 0);

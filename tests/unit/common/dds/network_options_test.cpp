@@ -26,29 +26,38 @@ using eprosima::fastrtps::rtps::IPLocator;
 void clear_env() {
   for (const char* v : {"TELEOP_PROFILE", "TELEOP_DOMAIN", "TELEOP_PEERS", "TELEOP_LISTEN_PORT",
                         "TELEOP_PUBLIC_ADDRESS", "TELEOP_DISCOVERY_SERVERS", "TELEOP_SECURITY_DIR",
-                        "TELEOP_IDENTITY"}) {
+                        "TELEOP_IDENTITY", "TELEOP_INSECURE"}) {
     unsetenv(v);
   }
 }
 
+NetworkFlags insecure() {
+  NetworkFlags f;
+  f.insecure = true;
+  return f;
+}
 NetworkFlags peers(std::vector<std::string> v) {
   NetworkFlags f;
+  f.insecure = true;  // these profiles reach beyond 127.0.0.1 without DDS Security
   f.peers = std::move(v);
   return f;
 }
 NetworkFlags listen(const std::string& port, const std::string& public_address = "") {
   NetworkFlags f;
+  f.insecure = true;  // these profiles reach beyond 127.0.0.1 without DDS Security
   f.listen = port;
   if (!public_address.empty()) f.public_address = public_address;
   return f;
 }
 NetworkFlags public_address(const std::string& a) {
   NetworkFlags f;
+  f.insecure = true;  // these profiles reach beyond 127.0.0.1 without DDS Security
   f.public_address = a;
   return f;
 }
 NetworkFlags servers(std::vector<std::string> v) {
   NetworkFlags f;
+  f.insecure = true;  // these profiles reach beyond 127.0.0.1 without DDS Security
   f.discovery_servers = std::move(v);
   return f;
 }
@@ -276,10 +285,39 @@ TEST(NetworkFlags, OptionsThatDoNotFitTheProfileAreRefused) {
             std::string::npos);
 }
 
+TEST(NetworkFlags, OpenProfilesNeedInsecure) {
+  clear_env();
+  // refused without --insecure, naming the profile and the secure alternatives
+  for (const std::string profile : {"lan", "wan_tcp_server"}) {
+    const std::string m = error_of([&] { resolve_participant_options(profile, 5, "t"); });
+    EXPECT_NE(m.find("profile '" + profile + "' reaches beyond 127.0.0.1 without DDS Security"),
+              std::string::npos)
+        << m;
+    EXPECT_NE(m.find("secure_lan"), std::string::npos) << m;
+    EXPECT_NE(m.find("--insecure"), std::string::npos) << m;
+  }
+  // accepted with the flag or TELEOP_INSECURE=1, and marked
+  EXPECT_TRUE(resolve_participant_options("lan", 5, "t", insecure()).insecure);
+  setenv("TELEOP_INSECURE", "1", 1);
+  EXPECT_TRUE(resolve_participant_options("lan", 5, "t").insecure);
+  clear_env();
+  // loopback profiles need nothing and are not marked, with or without the flag
+  EXPECT_FALSE(resolve_participant_options("loopback", 5, "t").insecure);
+  EXPECT_FALSE(resolve_participant_options("loopback", 5, "t", insecure()).insecure);
+  EXPECT_FALSE(resolve_participant_options("loopback_shm", 5, "t").insecure);
+  auto qos = [](const std::string& profile) {
+    ParticipantOptions o;
+    o.profile = profile;
+    return participant_qos(o);
+  };
+  EXPECT_FALSE(reaches_beyond_loopback(qos("loopback")));
+  EXPECT_TRUE(reaches_beyond_loopback(qos("lan")));
+}
+
 TEST(NetworkFlags, FlagsWinOverTheEnvironment) {
   clear_env();
   setenv("TELEOP_PEERS", "10.0.0.7", 1);
-  auto o = resolve_participant_options("lan", 5, "t");
+  auto o = resolve_participant_options("lan", 5, "t", insecure());
   ASSERT_EQ(o.network.peers.size(), 1u);
   EXPECT_EQ(o.network.peers[0].address, "10.0.0.7");
   o = resolve_participant_options("lan", 5, "t", peers({"10.0.0.8", "10.0.0.9"}));

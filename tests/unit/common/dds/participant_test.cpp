@@ -23,6 +23,7 @@ TEST(DdsOptions, FlagsWinOverEnvironmentWhichWinsOverDefaults) {
   EXPECT_EQ(o.domain, 0);
   setenv("TELEOP_DOMAIN", "17", 1);
   setenv("TELEOP_PROFILE", "lan", 1);
+  setenv("TELEOP_INSECURE", "1", 1);  // lan has no DDS Security
   o = resolve_participant_options(std::nullopt, std::nullopt, "x");
   EXPECT_EQ(o.domain, 17);
   EXPECT_EQ(o.profile, "lan");
@@ -33,6 +34,7 @@ TEST(DdsOptions, FlagsWinOverEnvironmentWhichWinsOverDefaults) {
   EXPECT_THROW(resolve_participant_options(std::nullopt, std::nullopt, "x"), config::ConfigError);
   unsetenv("TELEOP_PROFILE");
   unsetenv("TELEOP_DOMAIN");
+  unsetenv("TELEOP_INSECURE");
   EXPECT_THROW(resolve_participant_options(std::nullopt, 233, "x"), config::ConfigError);
   EXPECT_THROW(resolve_participant_options(std::nullopt, -1, "x"), config::ConfigError);
 }
