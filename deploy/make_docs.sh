@@ -41,6 +41,7 @@ recipes=(
   "peers-fem|bench|peers_fem.csv peers_fem.png"
   "live|bench|live.csv"
   "observers|bench|observers.csv observers.png"
+  "observers-per-host|bench|observers_per_host.csv observers_per_host_scaling.csv"
   "validate|bench|validation.csv validation.png"
   "deformable|bench|deformable.csv deformable.png"
 )
@@ -186,6 +187,12 @@ run_recipe() {  # run_recipe NAME DIR: writes the recipe's files into DIR
       need tests/bench/teleop_bench
       "$bench" observers --out "$dir" --rounds 4 --full-rate-counts 8,16,32 --nice0-counts 32 \
         --no-progress ;;
+    observers-per-host)
+      need tests/bench/teleop_bench
+      "$bench" observers --out "$dir" --quick --counts 0,8,16,32,64 --rounds 3 --duration 5 \
+        --domain 196 --no-chart
+      mv "$dir/observers.csv" "$dir/observers_per_host.csv"
+      mv "$dir/observers_scaling.csv" "$dir/observers_per_host_scaling.csv" ;;
     deformable) need tests/bench/teleop_bench; "$bench" deformable --out "$dir" --no-progress ;;
     *) die "no recipe '$name'" ;;
   esac
