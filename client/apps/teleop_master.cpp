@@ -211,6 +211,30 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
 
 /// Validates the flags and folds the YAML config (if any) and the flags into `o`.
 /// @throws teleop::config::ConfigError naming the flag or file, the value and the range.
+/// --config FILE: the controller and the injected delays from YAML (flags then go on top; an
+/// explicit --scheme wins over the file's).
+void apply_config_file(const CLI::App& app, const Flags& f, teleop::master::MasterOptions& o) {
+  if (f.config_file.empty()) return;
+  const auto root = teleop::config::Node::load_file(f.config_file);
+  root.reject_unknown_keys({"controller", "delay", "forward_delay", "backward_delay"});
+  const std::string scheme = o.controller.scheme;
+  if (root.has("controller")) {
+    o.controller = teleop::master::controller_params_from_yaml(root.at("controller"));
+  }
+  if (app.count("--scheme")) o.controller.scheme = scheme;
+  if (root.has("delay")) {
+    o.forward = teleop::master::delay_config_from_yaml(root.at("delay"));
+    o.backward = o.forward;
+    o.backward.seed = o.forward.seed + 1;
+  }
+  if (root.has("forward_delay")) {
+    o.forward = teleop::master::delay_config_from_yaml(root.at("forward_delay"));
+  }
+  if (root.has("backward_delay")) {
+    o.backward = teleop::master::delay_config_from_yaml(root.at("backward_delay"));
+  }
+}
+
 void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOptions& o) {
   using teleop::config::check_flag;
   o.dds =
@@ -250,27 +274,7 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   }
   // the trajectory is checked now, before any wait for a server (it is read again at the start)
   if (o.device == "replay") teleop::master::load_replay_csv(o.replay_file);
-  // YAML first, flags on top
-  if (!f.config_file.empty()) {
-    const auto root = teleop::config::Node::load_file(f.config_file);
-    root.reject_unknown_keys({"controller", "delay", "forward_delay", "backward_delay"});
-    const std::string scheme = o.controller.scheme;
-    if (root.has("controller")) {
-      o.controller = teleop::master::controller_params_from_yaml(root.at("controller"));
-    }
-    if (app.count("--scheme")) o.controller.scheme = scheme;
-    if (root.has("delay")) {
-      o.forward = teleop::master::delay_config_from_yaml(root.at("delay"));
-      o.backward = o.forward;
-      o.backward.seed = o.forward.seed + 1;
-    }
-    if (root.has("forward_delay")) {
-      o.forward = teleop::master::delay_config_from_yaml(root.at("forward_delay"));
-    }
-    if (root.has("backward_delay")) {
-      o.backward = teleop::master::delay_config_from_yaml(root.at("backward_delay"));
-    }
-  }
+  apply_config_file(app, f, o);  // YAML first, flags on top
   if (f.kps) o.controller.slave_stiffness_n_per_m = *f.kps;
   if (f.kpm) o.controller.master_stiffness_n_per_m = *f.kpm;
   if (f.bm) o.controller.master_damping_ns_per_m = *f.bm;

@@ -131,6 +131,13 @@ Eigen::Vector3f vec3(const std::array<double, 3>& a) {
                          static_cast<float>(a[2]));
 }
 
+/// The tip touches something: a finite contact force above 0.02 N.
+bool tip_touching(const ViewerView& view) {
+  if (!view.have_slave) return false;
+  const float f = vec3(view.slave.contact_force_n()).norm();
+  return std::isfinite(f) && f > 0.02f;
+}
+
 /// Model matrix of a unit primitive along z stretched from a to b with radius r.
 Eigen::Matrix4f along(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float r) {
   const Eigen::Vector3f d = b - a;
@@ -351,6 +358,8 @@ void SceneRenderer::upload_deformables(const ViewerView& view, const RenderOptio
       g.frame_version = 0;
       g.normal_scratch.resize(floats);
       g.color_scratch.resize(floats);
+      g.reference.resize(floats);
+      g.have_reference = false;
     }
     const bool recolor =
         options.displacement_colors != g.colored || options.displacement_scale_m != g.color_scale_m;
@@ -364,10 +373,16 @@ void SceneRenderer::upload_deformables(const ViewerView& view, const RenderOptio
     glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, g.normal_scratch.data());
     if (options.displacement_colors) {
       if (i == 0) max_displacement_m_ = 0.0f;
-      const RigidFit fit = best_rigid_fit(m.reference.data(), m.positions.data(), m.vertex_count);
+      // the reference follows the body while the tip touches nothing, so what is coloured is
+      // the deformation since the contact began (a settling body stays blue)
+      if (!g.have_reference || !tip_touching(view)) {
+        std::copy(m.positions.data(), m.positions.data() + floats, g.reference.data());
+        g.have_reference = true;
+      }
+      const RigidFit fit = best_rigid_fit(g.reference.data(), m.positions.data(), m.vertex_count);
       for (std::size_t v = 0; v < m.vertex_count; ++v) {
         const Eigen::Map<const Eigen::Vector3f> p(m.positions.data() + 3 * v),
-            p0(m.reference.data() + 3 * v);
+            p0(g.reference.data() + 3 * v);
         const float d = (p - fit.apply(p0)).norm();
         max_displacement_m_ = std::max(max_displacement_m_, d);
         Eigen::Map<Eigen::Vector3f>(g.color_scratch.data() + 3 * v) =
@@ -543,8 +558,7 @@ void SceneRenderer::draw(const ViewerView& view, const OrbitCamera& camera,
     if (tip.allFinite()) {
       draw_robot(view, tip);
       // in contact the tip is see-through, so the dent under it shows
-      const Eigen::Vector3f f = vec3(view.slave.contact_force_n());
-      const bool touching = std::isfinite(f.norm()) && f.norm() > 0.02f;
+      const bool touching = tip_touching(view);
       if (touching) {
         glEnable(GL_BLEND);
         glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);

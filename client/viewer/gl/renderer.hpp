@@ -20,8 +20,9 @@ namespace teleop::viewer {
 
 struct RenderOptions {
   bool wireframe = false;  ///< deformable meshes as wireframe
-  /// colour meshes by deformation: each vertex's displacement from the first frame less the
-  /// body's mean displacement (a settling or sliding body stays blue; a dent shows)
+  /// colour meshes by deformation: each vertex's displacement since the tip's contact began,
+  /// less the body's best rigid motion (a settling, sliding or rolling body stays blue; a dent
+  /// shows)
   bool displacement_colors = true;
   float displacement_scale_m = 0.003f;  ///< deformation shown fully red [m]
   float force_scale_m_per_n = 0.25f;    ///< force arrow length per newton [m/N]
@@ -61,8 +62,8 @@ class SceneRenderer {
   void release();
 
   const RobotSkeleton& skeleton() const { return skeleton_; }
-  /// Largest vertex deformation (displacement from the first frame less the body's mean
-  /// displacement) over all meshes at the last upload [m] (computed while the colours are on).
+  /// Largest vertex deformation (displacement since the contact began less the body's best
+  /// rigid motion) over all meshes at the last upload [m] (computed while the colours are on).
   float max_displacement_m() const { return max_displacement_m_; }
 
  private:
@@ -79,6 +80,8 @@ class SceneRenderer {
     bool colored = false;
     float color_scale_m = 0.0f;
     std::vector<float> normal_scratch, color_scratch;
+    std::vector<float> reference;  ///< the body before the current contact (colours)
+    bool have_reference = false;
   };
   struct Line {
     Eigen::Vector3f a, b;

@@ -295,7 +295,7 @@ void draw_overlay(const ViewerView& view, const PanelInfo& info) {
     ImGui::TextDisabled("experiment: none described yet (no master on teleop/experiment)");
   }
   if (info.displacement_colors) {
-    ImGui::Text("colours: deformation (less the best rigid motion), max %.1f mm",
+    ImGui::Text("colours: deformation since the contact began, max %.1f mm",
                 info.max_displacement_m * 1e3);
   }
   if (info.paused) ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.35f, 1.0f), "PAUSED (P to resume)");
