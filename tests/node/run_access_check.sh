@@ -23,20 +23,10 @@ for tool in node openssl; do
     exit 77
   fi
 done
-node_flags=()
-if ! node -e 'process.exit(typeof WebSocket === "function" ? 0 : 1)' 2>/dev/null; then
-  node_flags=(--experimental-websocket)
-fi
-export TELEOP_PROFILE=loopback
-unset TELEOP_DOMAIN
-tmp="$(mktemp -d)"
-pids=()
-cleanup() {
-  for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done
-  wait 2>/dev/null
-  rm -rf "$tmp"
-}
-trap cleanup EXIT
+# shellcheck source=session_lib.sh
+. "$here/session_lib.sh"
+node_websocket_flags
+session_tmp
 failed=0
 
 # refused: status 2 and every word in $2.. in the message

@@ -24,36 +24,11 @@ if [ -z "$chromium" ]; then
   echo "skipped: chromium is not installed (TELEOP_SETUP_TESTS=1 deploy/setup.sh installs it)"
   exit 77
 fi
-node_flags=()
-if ! node -e 'process.exit(typeof WebSocket === "function" ? 0 : 1)' 2>/dev/null; then
-  node_flags=(--experimental-websocket)
-fi
-export TELEOP_PROFILE=loopback
-unset TELEOP_DOMAIN
-tmp="$(mktemp -d)"
-pids=()
-cleanup() {
-  for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done
-  wait 2>/dev/null
-  rm -rf "$tmp"
-}
-trap cleanup EXIT
-"$build/server/teleop_server" --domain "$domain" --duration 60 --quiet >"$tmp/server.log" 2>&1 &
-pids+=("$!")
-"$build/client/teleop_bridge" --domain "$domain" --port 0 --stats-s 0 >"$tmp/bridge.log" 2>&1 &
-bridge=$!
-pids+=("$bridge")
-port=""
-for _ in $(seq 100); do
-  port="$(grep -o 'ws://127.0.0.1:[0-9]*' "$tmp/bridge.log" | head -1 | cut -d: -f3)"
-  [ -n "$port" ] && break
-  sleep 0.1
-done
-if [ -z "$port" ]; then
-  echo "FAILED: teleop_bridge did not start"
-  cat "$tmp/bridge.log"
-  exit 1
-fi
+# shellcheck source=session_lib.sh
+. "$here/session_lib.sh"
+node_websocket_flags
+session_tmp
+start_server_and_bridge "$build" "$domain"
 timeout 60 "$build/client/teleop_master" --domain "$domain" --duration 14 --homing 0.5 \
   --quiet >"$tmp/master.log" 2>&1 &
 pids+=("$!")

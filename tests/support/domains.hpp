@@ -83,9 +83,9 @@ inline constexpr int kNodeBridgePage = 200;    // tests/node/run_page_check.sh: 
 inline constexpr int kNodeBridgeAccess = 201;  // tests/node/run_access_check.sh: TLS and the token
 // 202: tests/bench/bridge_clients.sh (1, 10, 50 clients against no bridge)
 // 203: deploy/make_docs.sh (the bridge page's picture); 204-209: reserved for bridge tests
-inline constexpr int kManyObservers = 190;  // many_observers_test: 100 observers find a server
-inline constexpr int kOversizedUnit = 191;  // log_summary_test: oversized samples counted
-inline constexpr int kObserverLimit = 192;  // observer_limit_test: the server counts observers
+inline constexpr int kManyObservers = 190;     // many_observers_test: 100 observers find a server
+inline constexpr int kOversizedUnit = 191;     // log_summary_test: oversized samples counted
+inline constexpr int kObserverLimit = 192;     // observer_limit_test: the server counts observers
 inline constexpr int kSecureShortLived = 194;  // security_test: make_security.sh --hours 2
 // 195-199: reserved for network tests (196: the observers runs of docs/results.md)
 // 60-99: reserved for more integration tests; 100+: benchmarks
