@@ -12,20 +12,14 @@
 //    message saying the bridge is read-only;
 //  - wss without the token, and plain ws to the TLS port: never opened.
 // Exit status 0 when all hold, 1 otherwise.
+import { failureList, requireWebSocket } from "./check_lib.mjs";
 const [base, token] = process.argv.slice(2);
 if (!base || !token) {
   console.error("usage: node access_check.mjs https://127.0.0.1:PORT TOKEN");
   process.exit(2);
 }
-if (typeof WebSocket !== "function") {
-  console.error("FAIL this Node.js has no WebSocket: run it with --experimental-websocket (Node >= 20.10)");
-  process.exit(1);
-}
-const failures = [];
-const fail = (what) => {
-  console.error(`FAIL ${what}`);
-  failures.push(what);
-};
+requireWebSocket();
+const { failures, fail } = failureList();
 const wssBase = base.replace(/^https:/, "wss:");
 
 async function page(suffix, headers, expected) {

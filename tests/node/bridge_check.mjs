@@ -18,6 +18,7 @@
 // Exit status 0 when all hold, 1 otherwise.
 import { createRequire } from "node:module";
 import { checkFiniteForces } from "./decoded_checks.mjs";
+import { failureList, requireWebSocket } from "./check_lib.mjs";
 
 const require = createRequire(import.meta.url);
 const { FoxgloveClient } = require("@foxglove/ws-protocol");
@@ -29,15 +30,8 @@ if (!url || !secondsText) {
   console.error("usage: node bridge_check.mjs ws://127.0.0.1:PORT SECONDS");
   process.exit(2);
 }
-if (typeof WebSocket !== "function") {
-  console.error("FAIL this Node.js has no WebSocket: run it with --experimental-websocket (Node >= 20.10)");
-  process.exit(1);
-}
-const failures = [];
-const fail = (what) => {
-  if (failures.length < 50) console.error(`FAIL ${what}`);
-  failures.push(what);
-};
+requireWebSocket();
+const { failures, fail } = failureList(50);
 
 const client = new FoxgloveClient({ ws: new WebSocket(url, [FoxgloveClient.SUPPORTED_SUBPROTOCOL]) });
 const channels = new Map(); // channel id -> {topic, reader}

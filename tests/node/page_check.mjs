@@ -18,21 +18,15 @@ import { mkdtempSync, readFileSync, writeFileSync, existsSync, rmSync } from "no
 import { tmpdir } from "node:os";
 import { join } from "node:path";
 import { inflateSync } from "node:zlib";
+import { failureList, requireWebSocket } from "./check_lib.mjs";
 
 const [chromium, pageUrl, shotPath, secondsText] = process.argv.slice(2);
 if (!chromium || !pageUrl || !shotPath || !secondsText) {
   console.error("usage: node page_check.mjs CHROMIUM URL SCREENSHOT.png SECONDS");
   process.exit(2);
 }
-if (typeof WebSocket !== "function") {
-  console.error("FAIL this Node.js has no WebSocket: run it with --experimental-websocket (Node >= 20.10)");
-  process.exit(1);
-}
-const failures = [];
-const fail = (what) => {
-  console.error(`FAIL ${what}`);
-  failures.push(what);
-};
+requireWebSocket();
+const { failures, fail } = failureList();
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
 // ---- a small PNG reader (8-bit RGB/RGBA, not interlaced: what Chromium writes) ----
