@@ -9,7 +9,7 @@
 #       [--domain 7] [--remote-dir /opt/teleop] [--scene deploy/scenes/default.yaml]
 #       [--tcp-port 5100] [--public-address ADDR] [--discovery-port 11811]
 #       [--build-dir build] [--ssh "ssh"] [--security-dir DIR | --insecure] [--dry-run]
-#       [-- MASTER_FLAGS...]
+#       [--session NAME] [--run-dir /tmp/teleop_launch] [-- MASTER_FLAGS...]
 #
 # ADDR is the host's IPv4 address as the other hosts reach it (also the ssh destination).
 # Every host needs the checkout built in --remote-dir (deploy/build.sh) and ssh access by key.
@@ -18,6 +18,10 @@
 # (the multi-host test passes a wrapper that runs CMD in a network namespace instead).
 # --dry-run prints every command (one per line) instead of running it. The exit status is the
 # master's.
+# Each background program's log and pid file are RUN_DIR/SESSION/NAME.log and .pid on its host
+# (NAME: server, observer0..., discovery0/1); SESSION defaults to d<DOMAIN>-<UTC time>-<pid of
+# this launcher>, so two sessions (on one domain or not) never share a file, and a launcher stops
+# only what it started. A --session whose program is still running on a host is refused there.
 # Profiles (docs/networking.md): lan (multicast), lan_unicast (every process gets the other
 # hosts as --peer), wan_tcp (server wan_tcp_server --listen PORT; the others wan_tcp_client
 # --peer SERVER:PORT), discovery (discovery server on --discovery, default the server host;
@@ -43,6 +47,8 @@ build_dir="build"
 ssh_cmd="${TELEOP_LAUNCH_SSH:-ssh}"
 security_dir=""
 insecure=0
+session=""
+run_dir="/tmp/teleop_launch"
 
 die() { echo "teleop_launch: $*" >&2; exit 2; }
 need_value() { [ "$#" -ge 2 ] || die "$1 needs a value"; }
@@ -64,9 +70,11 @@ while [ "$#" -gt 0 ]; do
     --ssh) need_value "$@"; ssh_cmd="$2"; shift 2 ;;
     --security-dir) need_value "$@"; security_dir="$2"; shift 2 ;;
     --insecure) insecure=1; shift ;;
+    --session) need_value "$@"; session="$2"; shift 2 ;;
+    --run-dir) need_value "$@"; run_dir="$2"; shift 2 ;;
     --dry-run) dry_run=1; shift ;;
     --) shift; master_extra=("$@"); break ;;
-    -h|--help) sed -n '2,32p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,/^set -euo pipefail/{/^set/!p}' "$0"; exit 0 ;;
     *) die "unknown argument '$1' (see --help)" ;;
   esac
 done
@@ -96,6 +104,13 @@ esac
 [ -n "$master" ] || die "--master is required"
 if ! { [[ "$domain" =~ ^[0-9]{1,3}$ ]] && [ "$domain" -le 232 ]; }; then
   die "--domain '$domain' is not an integer in [0, 232]"
+fi
+[ -n "$session" ] || session="d$domain-$(date -u +%Y%m%dT%H%M%SZ)-$$"
+if ! [[ "$session" =~ ^[A-Za-z0-9._-]{1,64}$ ]] || [[ "$session" == .* ]]; then
+  die "--session '$session' is not a name of 1-64 letters, digits, '.', '_' or '-' (not starting with '.')"
+fi
+if ! [[ "$run_dir" =~ ^/[A-Za-z0-9._/-]*$ ]]; then
+  die "--run-dir '$run_dir' is not an absolute path of letters, digits, '.', '_', '-' and '/'"
 fi
 check_port --tcp-port "$tcp_port"
 check_port --discovery-port "$discovery_port"
@@ -174,10 +189,12 @@ run() {  # print (dry run) or execute
 }
 start_bg() {  # host name command...
   local host="$1" name="$2"; shift 2
-  local pidfile="/tmp/teleop_launch_${name}_$domain.pid" log="/tmp/teleop_launch_${name}_$domain.log"
+  local dir="$run_dir/$session"
+  local pidfile="$dir/$name.pid" log="$dir/$name.log"
   # `cd || exit; nohup ... &` (not `cd && nohup ... &`, which would background a subshell and
-  # record its pid instead of the program's)
-  run "$ssh_cmd ${ssh_opts[*]} $host 'cd $remote_dir || exit 1; nohup $* > $log 2>&1 < /dev/null & echo \$! > $pidfile'"
+  # record its pid instead of the program's); a live pid in the file is another launcher's
+  local busy="echo \"teleop_launch: $host: $pidfile: session $session is running there\" >&2; exit 1"
+  run "$ssh_cmd ${ssh_opts[*]} $host 'cd $remote_dir || exit 1; mkdir -p $dir || exit 1; if [ -s $pidfile ] && kill -0 \$(cat $pidfile) 2>/dev/null; then $busy; fi; nohup $* > $log 2>&1 < /dev/null & echo \$! > $pidfile'"
   started+=("$host $pidfile")
 }
 stop_all() {  # in reverse order: observers, server, then discovery servers
@@ -189,6 +206,7 @@ stop_all() {  # in reverse order: observers, server, then discovery servers
   done
 }
 [ "$dry_run" = 1 ] || trap stop_all EXIT INT TERM
+echo "teleop_launch: session $session: logs and pid files in $run_dir/$session/ on each host" >&2
 
 if [ "$profile" = discovery ]; then
   start_bg "$discovery" discovery0 "deploy/teleop_discovery.sh --id 0 --address $discovery_addr --port $discovery_port"

@@ -40,11 +40,16 @@ bool has(const std::string& s, const std::string& part) {
 TEST(Launcher, DryRunLanUnicastGivesEveryProcessTheOtherHosts) {
   const auto l = launch({"--dry-run", "--profile", "lan_unicast", "--server", "10.0.0.1",
                          "--master", "op@10.0.0.2", "--observer", "10.0.0.3", "--domain", "9",
-                         "--insecure", "--", "--duration", "30"});
+                         "--session", "s9", "--insecure", "--", "--duration", "30"});
   ASSERT_EQ(l.size(), 5u);  // server, observer, master, then the two stops
-  // the program runs in the background with its own pid recorded, not a subshell's
-  EXPECT_TRUE(has(l[0], "cd /opt/teleop || exit 1; nohup build/server/teleop_server")) << l[0];
-  EXPECT_TRUE(has(l[0], "& echo $! > /tmp/teleop_launch_server_9.pid")) << l[0];
+  // the program runs in the background with its own pid recorded, not a subshell's, in the
+  // session's own folder; a live pid already there (another launcher's) is refused
+  EXPECT_TRUE(has(l[0], "cd /opt/teleop || exit 1; mkdir -p /tmp/teleop_launch/s9 || exit 1;"))
+      << l[0];
+  EXPECT_TRUE(has(l[0], "kill -0 $(cat /tmp/teleop_launch/s9/server.pid)")) << l[0];
+  EXPECT_TRUE(has(l[0], "nohup build/server/teleop_server")) << l[0];
+  EXPECT_TRUE(has(l[0], "> /tmp/teleop_launch/s9/server.log 2>&1")) << l[0];
+  EXPECT_TRUE(has(l[0], "& echo $! > /tmp/teleop_launch/s9/server.pid")) << l[0];
   EXPECT_TRUE(has(l[0], "ssh ") && has(l[0], " 10.0.0.1 ")) << l[0];
   EXPECT_TRUE(has(l[0], "build/server/teleop_server --domain 9")) << l[0];
   EXPECT_TRUE(has(l[0], "--profile lan_unicast --peer 10.0.0.2 --peer 10.0.0.3")) << l[0];
@@ -59,6 +64,37 @@ TEST(Launcher, DryRunLanUnicastGivesEveryProcessTheOtherHosts) {
   // stopped in reverse order: the observer, then the server
   EXPECT_TRUE(has(l[3], "kill") && has(l[3], " 10.0.0.3 ")) << l[3];
   EXPECT_TRUE(has(l[4], "kill") && has(l[4], " 10.0.0.1 ")) << l[4];
+}
+
+TEST(Launcher, TwoSessionsOnOneDomainShareNoFile) {
+  const std::vector<std::string> a = {"--dry-run", "--profile", "lan",      "--server",
+                                      "10.0.0.1",  "--master",  "10.0.0.2", "--domain",
+                                      "9",         "--insecure"};
+  std::string err1, err2;
+  const auto l1 = launch(a, 0, &err1), l2 = launch(a, 0, &err2);
+  ASSERT_EQ(l1.size(), 3u);
+  ASSERT_EQ(l2.size(), 3u);
+  // each launcher names its session (d<domain>-<time>-<pid>) and where its files are
+  EXPECT_TRUE(has(err1, "teleop_launch: session d9-")) << err1;
+  EXPECT_NE(err1, err2);
+  const auto folder = [](const std::string& line) {
+    const auto at = line.find("/tmp/teleop_launch/d9-");
+    return at == std::string::npos ? std::string()
+                                   : line.substr(at, line.find_first_of("/ ", at + 19) - at);
+  };
+  EXPECT_FALSE(folder(l1[0]).empty()) << l1[0];
+  EXPECT_NE(folder(l1[0]), folder(l2[0])) << l1[0] << "\n" << l2[0];
+  // the stop kills the pid of its own session's file only
+  EXPECT_TRUE(has(l1[2], folder(l1[0]) + "/server.pid")) << l1[2];
+  std::string err;
+  auto bad = a;
+  bad.insert(bad.end(), {"--session", "../x"});
+  launch(bad, 2, &err);
+  EXPECT_TRUE(has(err, "--session '../x' is not a name")) << err;
+  bad = a;
+  bad.insert(bad.end(), {"--run-dir", "relative/dir"});
+  launch(bad, 2, &err);
+  EXPECT_TRUE(has(err, "--run-dir 'relative/dir' is not an absolute path")) << err;
 }
 
 TEST(Launcher, DryRunWanTcpAndLan) {

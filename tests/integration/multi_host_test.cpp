@@ -146,8 +146,8 @@ class MultiHost : public ::testing::Test {
       // one after the other, a second apart: two clients of a TCP profile started in the same
       // instant on one host have been seen (once in CI) to leave one of them never matched
       std::this_thread::sleep_for(std::chrono::milliseconds(1000));
-      std::vector<std::string> oargs = {"--domain",   d,    "--profile", r.profile_client,
-                                        "--duration", "14", "--period",  "0.5",
+      std::vector<std::string> oargs = {"--domain",   d,   "--profile", r.profile_client,
+                                        "--duration", "9", "--period",  "0.5",
                                         "--insecure"};
       oargs.insert(oargs.end(), r.observer.begin(), r.observer.end());
       observers.push_back(on(3, kMonitorBinary, oargs, name + "_obs" + std::to_string(k)));
@@ -287,9 +287,9 @@ TEST_F(MultiHost, LauncherStartsAndStopsASessionOnThreeHosts) {
   const std::string d = std::to_string(domains::kMultiHostLauncher);
   const std::string master_json = temp_path("mh", "launch_master.json");
   std::remove(master_json.c_str());
-  const std::string log_prefix = "/tmp/teleop_launch_observer";
-  for (int k = 0; k < 2; ++k)
-    std::remove((log_prefix + std::to_string(k) + "_" + d + ".log").c_str());
+  const std::string run_dir = temp_path("mh", "launch_run");
+  std::filesystem::remove_all(run_dir);
+  const std::string log_prefix = run_dir + "/mh" + d + "/observer";
   const std::string map =
       kH1 + "=" + lab_->host(1) + "," + kH2 + "=" + lab_->host(2) + "," + kH3 + "=" + lab_->host(3);
   setenv("TELEOP_NETNS_MAP", map.c_str(), 1);
@@ -319,6 +319,10 @@ TEST_F(MultiHost, LauncherStartsAndStopsASessionOnThreeHosts) {
                   scene_file("tool_only.yaml"),
                   "--ssh",
                   std::string(TELEOP_SOURCE_DIR) + "/tests/support/netns_ssh.sh",
+                  "--session",
+                  "mh" + d,
+                  "--run-dir",
+                  run_dir,
                   "--",
                   "--samples",
                   "3000",
@@ -346,7 +350,7 @@ TEST_F(MultiHost, LauncherStartsAndStopsASessionOnThreeHosts) {
   EXPECT_GE(received, 0.99 * sent) << m;
   EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;
   for (int k = 0; k < 2; ++k) {
-    const std::string out = Process::slurp(log_prefix + std::to_string(k) + "_" + d + ".log");
+    const std::string out = Process::slurp(log_prefix + std::to_string(k) + ".log");
     EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos) << out;
   }
   // the launcher stopped what it started: nothing is left running on hosts 1 and 3
