@@ -1,40 +1,12 @@
 #pragma once
-// Bilateral control schemes of the master side, chosen by name.
-//
-// position-position (paper Fig. 10): the master feels a spring to the (delayed) slave
-//   position and a damper:      F_m = K_pm (x_s' - x_m) - B_m v_m,   x_s' = slave pos. in
-//   master frame; the slave is commanded x_c = map(x_m) and tracks it with its own K_ps.
-// force-position (paper Fig. 11): the master sends x_m; the slave returns its contact force
-//   f_e (environment on tip); the master renders   F_m = K_f beta R^T f_e - s B_m v_m, the
-//   damping share s ramped (contact_damping_ramp_s) to 1 while the slave is in contact and to
-//   0 in free space: nothing there for the damper to stabilise, so free motion is not dragged.
-//   (The paper writes F_m = -K_f f_e with f_e the force the slave exerts on the environment;
-//   ours is the reaction, hence the sign.)
+// Bilateral control schemes of the master side, chosen by name: the base class and its
+// parameters here; each scheme's law in client/control/schemes/ (one file each), the table of
+// names in client/control/schemes/registry.cpp.
 //
 // Lifecycle: configure(params, spec) validates and clamps gains against the DeviceSpec
 // (CHAI3D style: K <= max stiffness, B <= max damping); activate(reading) latches the start;
 // update() is real-time safe (no allocation) and returns the device force (saturated to the
 // spec's peak force) and the command for the slave.
-//
-// wave-variables (Niemeyer & Slotine; Anderson & Spong 1989): the master port of a wave
-//   channel of impedance b (common/control/wave_variables.hpp). The device renders
-//   -beta R^T F_m - B_m v_m with F_m = b xdot_m - sqrt(2b) v_m in the slave frame; the
-//   command carries the forward wave u, its integral and its energy; the slave decodes them
-//   with its contact force (common/control/slave_port.hpp) and returns the backward wave.
-// tdpa (Hannaford & Ryu 2002; Ryu, Artigas & Preusche 2010): position-position or
-//   force-position (tdpa_base) with the master's passivity observer and controller
-//   (common/control/time_domain_passivity.hpp): the force is modified by the adaptive damping
-//   that keeps the master port's output energy within the slave port's input energy
-//   received; the command carries the master port's input energy for the slave's PC.
-//
-// model-mediated (docs/control.md): the slave sends, with each state, a local model of what its
-//   tip touches (common/control/contact_model.hpp: a half-space with a stiffness and damping
-//   estimated online); the master renders F_m = beta R^T F_model(x_m, v_m) - B_m v_m from its
-//   own position at its own rate, and commands the slave x_c = map(x_m) as position-position
-//   does. Model updates are blended in (time constant mmt_blend_s); a blend step that would
-//   raise the model's stored energy at the master's position by more than an energy budget
-//   (refilled at mmt_energy_rate_w up to mmt_energy_burst_j) moves the surface out instead, so
-//   late or changing models cannot push the operator with more than that energy.
 //
 // Extension: a scheme overrides compute() (and on_configure(), on_activate(), finish() if it
 // keeps state); the base pre-fills the command with the mapped pose and saturates the force
@@ -46,8 +18,6 @@
 #include "client/device/haptic_device.hpp"
 #include "common/config/config.hpp"
 #include "common/control/bilateral_types.hpp"
-#include "common/control/time_domain_passivity.hpp"
-#include "common/control/wave_variables.hpp"
 
 namespace teleop::master {
 
@@ -146,6 +116,9 @@ class BilateralController {
   std::uint32_t session_id() const { return session_; }
   /// K_f of the environment force the scheme renders (1 unless force reflection is scaled).
   virtual double environment_force_gain() const { return 1.0; }
+  /// Impedance b of the scheme's wave channel after derivation and clamping [N s/m]; 0 for the
+  /// schemes without one.
+  virtual double wave_impedance_ns_per_m() const { return 0.0; }
 
   /// Passivity bookkeeping of the master side (zero for the schemes without).
   struct PassivityStatus {
@@ -182,118 +155,10 @@ class BilateralController {
   std::uint32_t next_session_ = 0;
 };
 
-/// Fig. 10: position-position.
-class PositionPositionController final : public BilateralController {
- public:
-  const char* name() const override { return "position-position"; }
-  SchemeId scheme() const override { return SchemeId::kPositionPosition; }
-
- protected:
-  void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
-               ControlOutput& out) override;
-};
-
-/// Fig. 11: force-position.
-class ForcePositionController final : public BilateralController {
- public:
-  const char* name() const override { return "force-position"; }
-  SchemeId scheme() const override { return SchemeId::kForcePosition; }
-  double environment_force_gain() const override { return params_.force_gain; }
-
- protected:
-  void on_activate(const DeviceReading& master) override;
-  void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
-               ControlOutput& out) override;
-
- private:
-  double damping_share_ = 0.0;  // B_m's share now: 1 in contact, 0 in free space, ramped
-};
-
-/// Model-mediated teleoperation, master side (see the file comment).
-class ModelMediatedController final : public BilateralController {
- public:
-  const char* name() const override { return "model-mediated"; }
-  SchemeId scheme() const override { return SchemeId::kModelMediated; }
-  /// The model rendered now (slave frame), and the energy bookkeeping of model updates.
-  struct ModelStatus {
-    mmt::LocalModel rendered;
-    double injected_j = 0.0;            ///< energy model updates added at the master [J]
-    double budget_j = 0.0;              ///< what they may add now [J]
-    std::uint64_t limited_updates = 0;  ///< blend steps held to the budget
-    std::uint64_t models_received = 0;  ///< cycles with a valid model from the slave
-    double damping_share = 0.0;         ///< of B_m, ramped to 1 while the model pushes
-  };
-  const ModelStatus& model_status() const { return status_; }
-
- protected:
-  void on_activate(const DeviceReading& master) override;
-  void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
-               ControlOutput& out) override;
-
- private:
-  /// The rendered model one blend step toward `target` at master position x, within the budget.
-  void blend_toward(const mmt::LocalModel& target, const Eigen::Vector3d& x, double dt_s);
-
-  ModelStatus status_;
-};
-
-/// Wave variables, master side (see the file comment).
-class WaveVariablesController final : public BilateralController {
- public:
-  const char* name() const override { return "wave-variables"; }
-  SchemeId scheme() const override { return SchemeId::kWaveVariables; }
-  /// Effective wave impedance b after derivation and clamping [N s/m].
-  double wave_impedance_ns_per_m() const { return b_; }
-  /// The master port (waves, integrals, energies).
-  const passivity::WaveMasterPort& port() const { return port_; }
-  PassivityStatus passivity_status() const override;
-
- protected:
-  void on_configure() override;
-  void on_activate(const DeviceReading& master) override;
-  void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
-               ControlOutput& out) override;
-
- private:
-  double b_ = 0.0;
-  passivity::WaveMasterPort port_;
-  Eigen::Vector3d v_energy_rx_ = Eigen::Vector3d::Zero();
-};
-
-/// Time-domain passivity on top of position-position or force-position (see the file comment).
-class TimeDomainPassivityController final : public BilateralController {
- public:
-  const char* name() const override { return "tdpa"; }
-  SchemeId scheme() const override { return SchemeId::kTimeDomainPassivity; }
-  double environment_force_gain() const override {
-    return force_position_ ? params_.force_gain : 1.0;
-  }
-  PassivityStatus passivity_status() const override;
-  /// The master's observer/controller (master-frame energies).
-  const passivity::ImpedancePassivityController& pc() const { return pc_; }
-  /// Slave port energies received, converted to the master frame [J].
-  double remote_in_j() const { return remote_in_j_; }
-  double remote_out_j() const { return remote_out_j_; }
-
- protected:
-  void on_configure() override;
-  void on_activate(const DeviceReading& master) override;
-  void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,
-               ControlOutput& out) override;
-  void finish(const DeviceReading& master, const SlaveSample& slave, double dt_s,
-              ControlOutput& out) override;
-
- private:
-  bool force_position_ = false;
-  passivity::ImpedancePassivityController pc_;
-  Eigen::Vector3d wanted_n_ = Eigen::Vector3d::Zero();
-  double remote_in_j_ = 0.0;
-  double remote_out_j_ = 0.0;
-};
-
-/// Creates a controller by scheme name. @throws ConfigError naming the allowed names.
+/// Creates a controller by scheme name (client/control/schemes/registry.cpp).
+/// @throws ConfigError naming the allowed names.
 std::unique_ptr<BilateralController> make_controller(const std::string& scheme);
-/// The scheme names make_controller() accepts.
-std::vector<std::string> controller_names();
+/// The scheme names make_controller() accepts, in the registry's order.
+const std::vector<std::string>& controller_names();
 
 }  // namespace teleop::master

@@ -43,8 +43,7 @@ void ExperimentPublisher::begin(const MasterCycle& cycle, std::uint32_t master_s
   d.master_name(name.substr(0, 48));
   d.scheme(c.controller.scheme.substr(0, 32));
   d.mode(static_cast<std::uint8_t>(cycle.controller().scheme()));
-  const auto* wave = dynamic_cast<const WaveVariablesController*>(&cycle.controller());
-  d.wave_impedance_ns_per_m(wave ? wave->wave_impedance_ns_per_m() : 0.0);
+  d.wave_impedance_ns_per_m(cycle.controller().wave_impedance_ns_per_m());
   d.rate_hz(rate_hz);
   d.forward_jitter_ms(c.forward.jitter_s * 1e3);
   d.backward_jitter_ms(c.backward.jitter_s * 1e3);

@@ -25,11 +25,12 @@
 
 namespace teleop::passivity {
 
-/// Scheme ids, equal to the SCHEME_* constants of idl/Teleop.idl.
-inline constexpr std::uint8_t kSchemePositionPosition = 0;
-inline constexpr std::uint8_t kSchemeForcePosition = 1;
-inline constexpr std::uint8_t kSchemeWaveVariables = 2;
-inline constexpr std::uint8_t kSchemeTimeDomainPassivity = 3;
+/// The wire's scheme bytes of the schemes with a slave side (SchemeId, common/control/
+/// bilateral_types.hpp, checked against idl/Teleop.idl in client/control/schemes/registry.cpp).
+inline constexpr std::uint8_t kSchemeWaveVariables =
+    static_cast<std::uint8_t>(SchemeId::kWaveVariables);
+inline constexpr std::uint8_t kSchemeTimeDomainPassivity =
+    static_cast<std::uint8_t>(SchemeId::kTimeDomainPassivity);
 
 /// Allowed range of the wave impedance b [N s/m] on the wire (the master clamps tighter).
 inline constexpr double kMinWaveImpedance = 0.01;

@@ -7,6 +7,7 @@
 
 #include "client/analysis/press_scenario.hpp"
 #include "client/control/bilateral_controller.hpp"
+#include "client/control/schemes/model_mediated.hpp"
 #include "client/sim/loopback_session.hpp"
 #include "tests/support/master_helpers.hpp"
 #include "tests/support/press_world.hpp"

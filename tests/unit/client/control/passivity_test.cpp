@@ -9,6 +9,8 @@
 #include "client/analysis/press_scenario.hpp"
 #include "client/analysis/stability_analysis.hpp"
 #include "client/control/bilateral_controller.hpp"
+#include "client/control/schemes/tdpa.hpp"
+#include "client/control/schemes/wave_variables.hpp"
 #include "client/device/simulated_device.hpp"
 #include "client/sim/loopback_session.hpp"
 #include "common/control/slave_port.hpp"

@@ -1,0 +1,69 @@
+#include "client/control/schemes/wave_variables.hpp"
+
+#include <algorithm>
+#include <sstream>
+
+#include "common/control/slave_port.hpp"
+
+namespace teleop::master {
+
+namespace {
+std::string number_text(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+}  // namespace
+
+void WaveVariablesController::on_configure() {
+  const WorkspaceMap& w = params_.workspace;
+  const double derived = params_.slave_stiffness_n_per_m * params_.wave_time_constant_s;
+  const double wanted =
+      params_.wave_impedance_ns_per_m > 0.0 ? params_.wave_impedance_ns_per_m : derived;
+  // the device renders the damping alpha beta b in free motion: keep it within the spec
+  const double b_max = spec_.max_damping_ns_per_m / (w.position_scale * w.force_scale);
+  b_ = std::min(wanted, b_max);
+  if (!(b_ >= passivity::kMinWaveImpedance)) {
+    throw config::ConfigError(
+        "controller: wave impedance b = " + number_text(b_) +
+        " N s/m (from wave_impedance_ns_per_m = " + number_text(params_.wave_impedance_ns_per_m) +
+        ", slave_stiffness_n_per_m = " + number_text(params_.slave_stiffness_n_per_m) +
+        ") is out of the allowed range " + config::range_text(passivity::kMinWaveImpedance, b_max));
+  }
+  port_.configure(
+      b_, passivity::wave_limit(b_, passivity::kWaveLimitSpeedMps, passivity::kWaveLimitForceN),
+      params_.wave_filter_hz);
+}
+
+void WaveVariablesController::on_activate(const DeviceReading& master) {
+  port_.reset(params_.workspace.to_slave_position(master.position_m));
+  v_energy_rx_.setZero();
+}
+
+void WaveVariablesController::compute(const DeviceReading& master, const SlaveSample& slave,
+                                      double dt_s, ControlOutput& out) {
+  const WorkspaceMap& w = params_.workspace;
+  SlaveCommand& c = out.command;
+  // the channel works in the slave frame: x and xdot of the master mapped there
+  const Eigen::Vector3d xdot = w.to_slave_velocity(master.linear_velocity_mps);
+  const bool have = slave.valid && slave.passivity_session == session_;
+  if (have) v_energy_rx_ = slave.wave_v_energy_j;
+  port_.update(c.position_m, xdot, slave.wave_v_integral, slave.wave_v_energy_j, have, dt_s);
+  // the operator pushes F_m into the channel; the device renders -F_m (+ local damping)
+  out.force_n = -w.to_master_force(port_.force_n()) - b_m_ * master.linear_velocity_mps;
+  c.passivity_session = session_;
+  c.wave_impedance_ns_per_m = b_;
+  c.wave_matched = params_.wave_matched;
+  c.wave_u = port_.u();
+  c.wave_u_integral = port_.sent().integral;
+  c.wave_u_energy_j = port_.sent().energy_j;
+}
+
+BilateralController::PassivityStatus WaveVariablesController::passivity_status() const {
+  PassivityStatus s;
+  // backward energy received but not (yet) used: what the receiver holds back, >= 0
+  s.observer_j = (v_energy_rx_ - port_.received().used_energy_j()).sum();
+  return s;
+}
+
+}  // namespace teleop::master
