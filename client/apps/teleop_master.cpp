@@ -78,6 +78,9 @@ void add_loop_flags(CLI::App& app, teleop::RealtimeOptions& rt) {
   app.add_option("--dma-latency-us", rt.dma_latency_us,
                  "hold /dev/cpu_dma_latency at this value while running [us] (-1 = no)")
       ->check(integer_in(-1.0, 1e5));
+  app.add_flag("--lock-memory", rt.lock_memory,
+               "lock every page of the process in memory (mlockall, present and future) and "
+               "pre-fault the loop's stack");
 }
 
 /// The injected channel's flags (both directions).

@@ -73,6 +73,13 @@ int main(int argc, char** argv) {
                  "busy-wait this long before each step's deadline [us], 0 to the period (0 = "
                  "sleep to it)")
       ->check(teleop::config::integer_in(0.0, 1e5));
+  app.add_option("--prewarm-us", realtime.prewarm_us,
+                 "read the next step's data into the caches during this long before each "
+                 "deadline [us], 0 to the period (0 = no)")
+      ->check(teleop::config::integer_in(0.0, 1e5));
+  app.add_flag("--lock-memory", realtime.lock_memory,
+               "lock every page of the process in memory (mlockall, present and future) and "
+               "pre-fault the loop's stack");
   app.add_option("--dma-latency-us", realtime.dma_latency_us,
                  "hold /dev/cpu_dma_latency at this value while running [us] (-1 = no)")
       ->check(teleop::config::integer_in(-1.0, 1e5));
@@ -119,6 +126,9 @@ int main(int argc, char** argv) {
         "--cpu", realtime.cpu, -1.0, static_cast<double>(std::thread::hardware_concurrency()) - 1));
     o.realtime.spin_us = static_cast<int>(teleop::config::check_flag(
         "--spin-us", realtime.spin_us, 0.0, std::ceil(1e6 / o.rate_hz) - 1.0));
+    o.realtime.prewarm_us = static_cast<int>(teleop::config::check_flag(
+        "--prewarm-us", realtime.prewarm_us, 0.0, std::ceil(1e6 / o.rate_hz) - 1.0));
+    o.realtime.lock_memory = realtime.lock_memory;
     o.realtime.dma_latency_us = static_cast<int>(
         teleop::config::check_flag("--dma-latency-us", realtime.dma_latency_us, -1.0, 1e5));
     o.quiet = quiet;
