@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "common/config/config.hpp"
+#include "common/util/clock.hpp"
 
 namespace teleop::master {
 
@@ -78,7 +79,7 @@ bool EvdevDevice::upload(const evdev::ConstantForce& e) {
   if (ioctl(fd_, EVIOCSFF, &effect) < 0) return false;
   effect_id_ = effect.id;
   current_ = e;
-  refreshed_s_ = time_s_;
+  refreshed_ns_ = now_ns();
   ++uploads_;
   return true;
 }
@@ -176,7 +177,8 @@ void EvdevDevice::write(const Eigen::Vector3d& force_n, const Eigen::Vector3d&) 
   const evdev::ConstantForce e = evdev::force_to_effect(f, full_scale_n_);
   // a changed effect, or one about to expire: re-upload and restart it (an effect that ended
   // because the master stalled plays again only when restarted)
-  if (e != current_ || time_s_ - refreshed_s_ >= evdev::kEffectRefreshMs * 1e-3) {
+  // (the wall clock: the device's time does not advance while the master homes)
+  if (e != current_ || now_ns() - refreshed_ns_ >= evdev::kEffectRefreshMs * 1000000LL) {
     if (upload(e)) play();
   }
 }

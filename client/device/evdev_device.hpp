@@ -13,6 +13,7 @@
 // and fades at the device's force-rate bound (evdev_mapping.hpp), so a stalled master's force
 // ends by itself.
 // Neither allocates.
+#include <cstdint>
 #include <string>
 
 #include "client/device/evdev_mapping.hpp"
@@ -85,7 +86,7 @@ class EvdevDevice final : public HapticDevice {
   evdev::ConstantForce current_;
   unsigned long uploads_ = 0;
   double time_s_ = 0.0;
-  double refreshed_s_ = 0.0;  ///< time_s_ of the last upload
+  std::int64_t refreshed_ns_ = 0;  ///< steady clock at the last upload [ns]
   Eigen::Vector3d x_prev_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d v_ = Eigen::Vector3d::Zero();
   bool have_prev_ = false;
