@@ -4,6 +4,7 @@
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -77,6 +78,13 @@ std::string make_thread_realtime(const RealtimeOptions& o) {
                   " (needs root or CAP_IPC_LOCK, or a large enough `ulimit -l`); ";
     }
     prefault_stack();
+  }
+  if (o.nice != 0 && o.priority == 0) {
+    // Linux: the nice value of one thread (its kernel task id)
+    if (setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), o.nice) != 0) {
+      problems += "nice " + std::to_string(o.nice) + ": " + std::strerror(errno) +
+                  " (a negative value needs root or CAP_SYS_NICE); ";
+    }
   }
   if (o.priority > 0) {
     // the pages touched so far (the loop's preallocated state) stay in memory: no page fault

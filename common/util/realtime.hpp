@@ -18,6 +18,9 @@ struct RealtimeOptions {
   /// lock the process's pages, present and future, in memory and pre-fault the loop's stack
   /// (implied by priority > 0, which locks the present pages)
   bool lock_memory = false;
+  /// with priority 0: the loop thread's nice value, -20 to 19 (0 = unchanged; a normal thread
+  /// whose weight is up to 86 times a nice-0 thread's)
+  int nice = 0;
 };
 
 /// Holds /dev/cpu_dma_latency at a value for its lifetime (the kernel then keeps the cores out
@@ -44,7 +47,7 @@ class DmaLatencyHold {
 
 /// True when make_thread_realtime has something to do for `o` (priority, pinning or locking).
 inline bool wants_thread_setup(const RealtimeOptions& o) {
-  return o.priority > 0 || o.cpu >= 0 || o.lock_memory;
+  return o.priority > 0 || o.cpu >= 0 || o.lock_memory || o.nice != 0;
 }
 
 /// Applies `o` to the calling thread. Returns "" on success, else what failed and why (the

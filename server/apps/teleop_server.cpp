@@ -77,6 +77,9 @@ int main(int argc, char** argv) {
                  "read the next step's data into the caches during this long before each "
                  "deadline [us], 0 to the period (0 = no)")
       ->check(teleop::config::integer_in(0.0, 1e5));
+  app.add_option("--nice", realtime.nice,
+                 "the physics loop's nice value as a normal thread, -20 to 19 (0 = unchanged)")
+      ->check(teleop::config::integer_in(-20.0, 19.0));
   app.add_flag("--lock-memory", realtime.lock_memory,
                "lock every page of the process in memory (mlockall, present and future) and "
                "pre-fault the loop's stack");
@@ -129,6 +132,8 @@ int main(int argc, char** argv) {
     o.realtime.prewarm_us = static_cast<int>(teleop::config::check_flag(
         "--prewarm-us", realtime.prewarm_us, 0.0, std::ceil(1e6 / o.rate_hz) - 1.0));
     o.realtime.lock_memory = realtime.lock_memory;
+    o.realtime.nice =
+        static_cast<int>(teleop::config::check_flag("--nice", realtime.nice, -20.0, 19.0));
     o.realtime.dma_latency_us = static_cast<int>(
         teleop::config::check_flag("--dma-latency-us", realtime.dma_latency_us, -1.0, 1e5));
     o.quiet = quiet;

@@ -463,6 +463,7 @@ struct ServerNode::Impl {
       << "  \"spin_us\": " << options.realtime.spin_us << ",\n"
       << "  \"prewarm_us\": " << options.realtime.prewarm_us << ",\n"
       << "  \"lock_memory\": " << (options.realtime.lock_memory ? "true" : "false") << ",\n"
+      << "  \"nice\": " << options.realtime.nice << ",\n"
       << "  \"dma_latency_us\": " << options.realtime.dma_latency_us << ",\n"
       << "  \"loop_jitter_us\": {\"p50\": " << json_number(late.p50)
       << ", \"p99\": " << json_number(late.p99) << "},\n"

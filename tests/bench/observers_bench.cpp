@@ -314,8 +314,8 @@ std::vector<int> parse_counts(const std::string& flag, const std::string& text) 
 /// One --variants item: remedies joined by '+': normal, fifoP (SCHED_FIFO priority P), spinN
 /// (busy-wait N us before each deadline), dmaN (hold /dev/cpu_dma_latency at N us), prewarmN
 /// (the server reads the next step's data into the caches in the last N us before each
-/// deadline), mlock (both lock their memory), pin (the server's loop on the last CPU, the
-/// master's on the one before).
+/// deadline), mlock (both lock their memory), niceN (both loops at nice N, e.g. nice-20), pin (the
+/// server's loop on the last CPU, the master's on the one before).
 LoopFlags parse_variant(const std::string& text) {
   LoopFlags f;
   f.name = text;
@@ -348,12 +348,16 @@ LoopFlags parse_variant(const std::string& text) {
       both("--dma-latency-us", number_after(item, 3));
     } else if (item.rfind("prewarm", 0) == 0) {
       f.server.insert(f.server.end(), {"--prewarm-us", number_after(item, 7)});
+    } else if (item.rfind("nice", 0) == 0) {
+      const bool negative = item.size() > 4 && item[4] == '-';
+      both("--nice", (negative ? "-" : "") + number_after(item, negative ? 5 : 4));
     } else if (item == "mlock") {
       f.server.push_back("--lock-memory");
       f.master.push_back("--lock-memory");
     } else {
-      throw config::ConfigError("--variants '" + text + "': '" + item +
-                                "' is not one of normal, fifoP, spinN, dmaN, prewarmN, mlock, pin");
+      throw config::ConfigError(
+          "--variants '" + text + "': '" + item +
+          "' is not one of normal, fifoP, spinN, dmaN, prewarmN, mlock, niceN, pin");
     }
   }
   return f;
@@ -578,7 +582,7 @@ TELEOP_REGISTER_COMMAND(
     text_option("--realtime", "priorities P,P,... (live)"),
     text_option("--scene", "the server's scene (live; default: default.yaml)"),
     text_option("--variants",
-                "loop remedies V,V,... (live): normal, fifoP, spinN, dmaN, prewarmN, mlock, "
+                "loop remedies V,V,... (live): normal, fifoP, spinN, dmaN, prewarmN, mlock, niceN, "
                 "pin, joined by +"),
     integer_option("--rounds", 1, 100, "rounds"),
     number_option("--duration", 1, 600, "session length [s]"),

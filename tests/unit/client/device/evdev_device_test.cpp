@@ -305,6 +305,7 @@ TEST(EvdevDevice, ReadsAxesAndUploadsConstantForceOnAVirtualUinputDevice) {
   EXPECT_EQ(ups.back().type, FF_CONSTANT);
   EXPECT_EQ(ups.back().direction, 0xC000);
   EXPECT_EQ(ups.back().u.constant.level, std::lround(0.5 * 0x7fff));
+  EXPECT_GT(ups.back().replay.length, 0);  // finite: ends by itself without refreshes
   EXPECT_GE(js.plays(), 1);
   dev.deactivate();
   EXPECT_EQ(js.uploads().back().u.constant.level, 0);  // zero force when deactivated
