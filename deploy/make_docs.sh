@@ -40,6 +40,8 @@ recipes=(
   "peers|bench|peers.csv peers.png peers_trace.csv"
   "peers-fem|bench|peers_fem.csv peers_fem.png"
   "live|bench|live.csv"
+  "live-fifo|bench|live_fifo.csv"
+  "live-nice|bench|live_nice.csv"
   "observers|bench|observers.csv observers.png"
   "observers-per-host|bench|observers_per_host.csv observers_per_host_scaling.csv"
   "validate|bench|validation.csv validation.png"
@@ -181,8 +183,20 @@ run_recipe() {  # run_recipe NAME DIR: writes the recipe's files into DIR
     peers) need tests/bench/teleop_bench; "$bench" peers --out "$dir" --rounds 5 --no-progress ;;
     live)
       need tests/bench/teleop_bench
-      "$bench" observers --live 1 --out "$dir" --counts 0,8 --realtime 0,20 --rounds 3 \
+      "$bench" observers --live 1 --out "$dir" --counts 0,8 --rounds 3 --duration 6 \
+        --domain 215 --variants normal,spin250,prewarm250+spin250,dma0,pin,fifo20,mlock \
         --no-progress ;;
+    live-fifo)
+      need tests/bench/teleop_bench
+      "$bench" observers --live 1 --out "$dir" --counts 0,8 --rounds 3 --duration 6 \
+        --domain 216 --no-progress --variants \
+        prewarm250,fifo20,fifo20+spin250,fifo20+prewarm250+spin250,fifo20+dma0,fifo20+pin,fifo20+mlock
+      mv "$dir/live.csv" "$dir/live_fifo.csv" ;;
+    live-nice)
+      need tests/bench/teleop_bench
+      "$bench" observers --live 1 --out "$dir" --counts 0,8 --rounds 3 --duration 6 \
+        --domain 217 --variants normal,nice-20,fifo20 --no-progress
+      mv "$dir/live.csv" "$dir/live_nice.csv" ;;
     observers)
       need tests/bench/teleop_bench
       "$bench" observers --out "$dir" --rounds 4 --full-rate-counts 8,16,32 --nice0-counts 32 \

@@ -78,6 +78,12 @@ void add_loop_flags(CLI::App& app, teleop::RealtimeOptions& rt) {
   app.add_option("--dma-latency-us", rt.dma_latency_us,
                  "hold /dev/cpu_dma_latency at this value while running [us] (-1 = no)")
       ->check(integer_in(-1.0, 1e5));
+  app.add_option("--nice", rt.nice,
+                 "the haptic loop's nice value as a normal thread, -20 to 19 (0 = unchanged)")
+      ->check(integer_in(-20.0, 19.0));
+  app.add_flag("--lock-memory", rt.lock_memory,
+               "lock every page of the process in memory (mlockall, present and future) and "
+               "pre-fault the loop's stack");
 }
 
 /// The injected channel's flags (both directions).
@@ -250,6 +256,7 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   check_flag("--cpu", o.realtime.cpu, -1.0,
              static_cast<double>(std::thread::hardware_concurrency()) - 1.0);
   check_flag("--dma-latency-us", o.realtime.dma_latency_us, -1.0, 1e5);
+  check_flag("--nice", o.realtime.nice, -20.0, 19.0);
   if (o.reconnect_s != 0.0) check_flag("--reconnect", o.reconnect_s, 0.5, 3600.0);
   if (o.name.size() > 48) {
     throw teleop::config::ConfigError("command line: --name '" + o.name + "' has " +

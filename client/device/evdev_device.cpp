@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "common/config/config.hpp"
+#include "common/util/clock.hpp"
 
 namespace teleop::master {
 
@@ -73,18 +74,22 @@ void EvdevDevice::configure() {
 }
 
 bool EvdevDevice::upload(const evdev::ConstantForce& e) {
-  ff_effect effect{};
-  effect.type = FF_CONSTANT;
-  effect.id = static_cast<std::int16_t>(effect_id_);
-  effect.direction = e.direction;
-  effect.u.constant.level = e.level;
-  effect.replay.length = 0;  // infinite
-  effect.replay.delay = 0;
+  ff_effect effect =
+      evdev::make_effect(e, effect_id_, full_scale_n_, params_.spec.max_force_rate_n_per_s);
   if (ioctl(fd_, EVIOCSFF, &effect) < 0) return false;
   effect_id_ = effect.id;
   current_ = e;
+  refreshed_ns_ = now_ns();
   ++uploads_;
   return true;
+}
+
+bool EvdevDevice::play() {
+  input_event play{};
+  play.type = EV_FF;
+  play.code = static_cast<std::uint16_t>(effect_id_);
+  play.value = 1;
+  return ::write(fd_, &play, sizeof(play)) == static_cast<ssize_t>(sizeof(play));
 }
 
 void EvdevDevice::activate() {
@@ -97,11 +102,7 @@ void EvdevDevice::activate() {
           "--device evdev:" + params_.path +
           ": the constant-force effect upload failed: " + std::strerror(errno));
     }
-    input_event play{};
-    play.type = EV_FF;
-    play.code = static_cast<std::uint16_t>(effect_id_);
-    play.value = 1;
-    if (::write(fd_, &play, sizeof(play)) != static_cast<ssize_t>(sizeof(play))) {
+    if (!play()) {
       throw config::ConfigError("--device evdev:" + params_.path +
                                 ": cannot start the effect: " + std::strerror(errno));
     }
@@ -174,7 +175,12 @@ void EvdevDevice::write(const Eigen::Vector3d& force_n, const Eigen::Vector3d&) 
   if (state_ != DeviceLifecycle::kActive || !has_ff_) return;
   const Eigen::Vector3d f = saturate_norm(force_n, params_.spec.max_force_n);
   const evdev::ConstantForce e = evdev::force_to_effect(f, full_scale_n_);
-  if (e != current_) upload(e);
+  // a changed effect, or one about to expire: re-upload and restart it (an effect that ended
+  // because the master stalled plays again only when restarted)
+  // (the wall clock: the device's time does not advance while the master homes)
+  if (e != current_ || now_ns() - refreshed_ns_ >= evdev::kEffectRefreshMs * 1000000LL) {
+    if (upload(e)) play();
+  }
 }
 
 void EvdevDevice::advance(double dt_s) {

@@ -8,8 +8,12 @@
 // reads the axis ranges; activate() uploads a constant-force effect and plays it (if the device
 // has FF_CONSTANT; without it the spec declares max_force_n = 0 and the master renders no
 // force); deactivate() stops and removes the effect. read() drains pending events without
-// blocking; write() re-uploads the effect only when its quantised level or direction changed.
+// blocking; write() re-uploads and restarts the effect when its quantised level or direction
+// changed or its last refresh is evdev::kEffectRefreshMs old: each upload plays a finite time
+// and fades at the device's force-rate bound (evdev_mapping.hpp), so a stalled master's force
+// ends by itself.
 // Neither allocates.
+#include <cstdint>
 #include <string>
 
 #include "client/device/evdev_mapping.hpp"
@@ -66,6 +70,8 @@ class EvdevDevice final : public HapticDevice {
  private:
   void drain_events();
   bool upload(const evdev::ConstantForce& e);
+  /// Starts (or restarts) the uploaded effect; false when the device refused the write.
+  bool play();
   Eigen::Vector3d position_now() const;
 
   EvdevDeviceParams params_;
@@ -80,6 +86,7 @@ class EvdevDevice final : public HapticDevice {
   evdev::ConstantForce current_;
   unsigned long uploads_ = 0;
   double time_s_ = 0.0;
+  std::int64_t refreshed_ns_ = 0;  ///< steady clock at the last upload [ns]
   Eigen::Vector3d x_prev_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d v_ = Eigen::Vector3d::Zero();
   bool have_prev_ = false;

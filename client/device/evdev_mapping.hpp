@@ -13,6 +13,13 @@
 // angle, encoded 0x0000 = force towards +y ("down"), 0x4000 = towards -x ("left"), 0x8000 =
 // towards -y ("up"), 0xC000 = towards +x ("right") (linux/input.h). The x-y part of the
 // commanded force is rendered, |f| = max_force_n giving level 0x7fff; the z part cannot be.
+//
+// Expiry: each uploaded effect plays for a finite time (kEffectHoldMs, then a fade to zero at
+// the device's force-rate bound, the envelope's fade_length) and the driver refreshes it (re-
+// uploads and restarts it) at least every kEffectRefreshMs. A master that stalls or dies
+// stops refreshing it, and the device's force then ends by itself, gently.
+#include <linux/input.h>
+
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
@@ -65,6 +72,40 @@ inline Eigen::Vector3d effect_to_force(const ConstantForce& e, double max_force_
   const double mag = static_cast<double>(e.level) / 0x7fff * max_force_n;
   const double theta = static_cast<double>(e.direction) / 65536.0 * 2.0 * M_PI;
   return Eigen::Vector3d(-mag * std::sin(theta), mag * std::cos(theta), 0.0);
+}
+
+/// How long an effect plays at its level after its last refresh before it fades [ms].
+constexpr int kEffectHoldMs = 30;
+/// The driver refreshes the effect at least this often [ms] (well inside kEffectHoldMs).
+constexpr int kEffectRefreshMs = 10;
+
+/// The fade of an effect of level `e.level` (full scale `max_force_n` [N]) to zero at the rate
+/// bound `max_rate_n_per_s` [N/s] [ms], at least 1 for a non-zero level, at most 10 s.
+inline int effect_fade_ms(const ConstantForce& e, double max_force_n, double max_rate_n_per_s) {
+  if (e.level <= 0) return 0;
+  if (!(max_rate_n_per_s > 0.0) || !(max_force_n > 0.0)) return 1;
+  const double force_n = static_cast<double>(e.level) / 0x7fff * max_force_n;
+  const double ms = std::ceil(force_n / max_rate_n_per_s * 1e3);
+  return static_cast<int>(std::clamp(ms, 1.0, 10000.0));
+}
+
+/// The Linux effect the driver uploads for `e` (id -1: a new one): a constant force that plays
+/// kEffectHoldMs at its level, then fades to zero over effect_fade_ms and ends.
+inline ff_effect make_effect(const ConstantForce& e, int id, double max_force_n,
+                             double max_rate_n_per_s) {
+  ff_effect effect{};
+  effect.type = FF_CONSTANT;
+  effect.id = static_cast<std::int16_t>(id);
+  effect.direction = e.direction;
+  effect.u.constant.level = e.level;
+  const int fade_ms = effect_fade_ms(e, max_force_n, max_rate_n_per_s);
+  effect.u.constant.envelope.attack_length = 0;
+  effect.u.constant.envelope.attack_level = 0;
+  effect.u.constant.envelope.fade_length = static_cast<std::uint16_t>(fade_ms);
+  effect.u.constant.envelope.fade_level = 0;
+  effect.replay.length = static_cast<std::uint16_t>(kEffectHoldMs + fade_ms);
+  effect.replay.delay = 0;
+  return effect;
 }
 
 }  // namespace teleop::master::evdev

@@ -770,7 +770,7 @@ struct MasterNode::Impl {
     std::uint64_t device_seen = 0;
     const std::int64_t t0 = now_ns();
     const double t0_s = static_cast<double>(t0) * 1e-9;
-    if (options.realtime.priority > 0 || options.realtime.cpu >= 0) {
+    if (wants_thread_setup(options.realtime)) {
       const std::string problem = make_thread_realtime(options.realtime);
       if (!problem.empty()) {
         std::cerr << "teleop_master: warning: the haptic loop stays a normal thread: " << problem

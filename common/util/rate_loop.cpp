@@ -26,6 +26,24 @@ RateLoop::RateLoop(double rate_hz, std::size_t jitter_capacity, std::int64_t spi
 
 void RateLoop::reset() { next_ns_ = now_ns() + period_ns_; }
 
+namespace {
+
+void sleep_until(std::int64_t t_ns) {
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(t_ns / 1000000000LL);
+  ts.tv_nsec = static_cast<long>(t_ns % 1000000000LL);
+  // steady_clock is CLOCK_MONOTONIC on Linux
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
+  }
+}
+
+}  // namespace
+
+void RateLoop::sleep_until_lead(std::int64_t lead_ns) {
+  const std::int64_t wake_ns = next_ns_ - lead_ns;
+  if (now_ns() < wake_ns) sleep_until(wake_ns);
+}
+
 bool RateLoop::wait() {
   ++iterations_;
   std::int64_t now = now_ns();
@@ -38,14 +56,7 @@ bool RateLoop::wait() {
     on_time = false;
   }
   const std::int64_t wake_ns = next_ns_ - spin_ns_;
-  if (now < wake_ns) {
-    timespec ts{};
-    ts.tv_sec = static_cast<time_t>(wake_ns / 1000000000LL);
-    ts.tv_nsec = static_cast<long>(wake_ns % 1000000000LL);
-    // steady_clock is CLOCK_MONOTONIC on Linux
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) != 0) {
-    }
-  }
+  if (now < wake_ns) sleep_until(wake_ns);
   now = now_ns();
   while (now < next_ns_) now = now_ns();
   lateness_us_.record(static_cast<double>(now - next_ns_) * 1e-3);

@@ -18,6 +18,9 @@ class RateLoop {
   /// Waits until the next period boundary. Returns false when the deadline had already
   /// passed (an overrun); the schedule then skips the missed periods instead of bursting.
   bool wait();
+  /// Sleeps until `lead_ns` before the next deadline (at once when that time has passed), for
+  /// work that must end just before the deadline (a prewarm); wait() then finishes the period.
+  void sleep_until_lead(std::int64_t lead_ns);
 
   double period_s() const { return static_cast<double>(period_ns_) * 1e-9; }
   std::int64_t period_ns() const { return period_ns_; }

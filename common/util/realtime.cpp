@@ -4,13 +4,26 @@
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 
 namespace teleop {
+namespace {
+
+/// Writes every page of a stack frame this large, so the loop's deeper calls find their stack
+/// pages present (with MCL_FUTURE they then stay).
+[[gnu::noinline]] void prefault_stack() {
+  constexpr std::size_t kBytes = 256 * 1024;
+  volatile unsigned char frame[kBytes];
+  for (std::size_t i = 0; i < kBytes; i += 4096) frame[i] = 0;
+}
+
+}  // namespace
 
 DmaLatencyHold::DmaLatencyHold(int latency_us) {
   if (latency_us < 0) return;
@@ -58,10 +71,25 @@ std::string make_thread_realtime(const RealtimeOptions& o) {
       problems += "pinning to CPU " + std::to_string(o.cpu) + ": " + std::strerror(e) + "; ";
     }
   }
+  if (o.lock_memory) {
+    // every page, present and future, stays in memory; the stack is faulted in first
+    if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+      problems += std::string("locking memory: ") + std::strerror(errno) +
+                  " (needs root or CAP_IPC_LOCK, or a large enough `ulimit -l`); ";
+    }
+    prefault_stack();
+  }
+  if (o.nice != 0 && o.priority == 0) {
+    // Linux: the nice value of one thread (its kernel task id)
+    if (setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), o.nice) != 0) {
+      problems += "nice " + std::to_string(o.nice) + ": " + std::strerror(errno) +
+                  " (a negative value needs root or CAP_SYS_NICE); ";
+    }
+  }
   if (o.priority > 0) {
     // the pages touched so far (the loop's preallocated state) stay in memory: no page fault
     // in the loop; later allocations (other threads) are not locked
-    if (mlockall(MCL_CURRENT) != 0) {
+    if (!o.lock_memory && mlockall(MCL_CURRENT) != 0) {
       problems += std::string("locking memory: ") + std::strerror(errno) + "; ";
     }
     sched_param p{};

@@ -13,6 +13,14 @@ struct RealtimeOptions {
   int cpu = -1;             ///< pin the calling thread to this CPU
   int spin_us = 0;          ///< busy-wait this long before each deadline (RateLoop), 0 = sleep
   int dma_latency_us = -1;  ///< hold /dev/cpu_dma_latency at this value while the loop runs
+  /// read the next step's data into the caches during this long before each deadline, 0 = no
+  int prewarm_us = 0;
+  /// lock the process's pages, present and future, in memory and pre-fault the loop's stack
+  /// (implied by priority > 0, which locks the present pages)
+  bool lock_memory = false;
+  /// with priority 0: the loop thread's nice value, -20 to 19 (0 = unchanged; a normal thread
+  /// whose weight is up to 86 times a nice-0 thread's)
+  int nice = 0;
 };
 
 /// Holds /dev/cpu_dma_latency at a value for its lifetime (the kernel then keeps the cores out
@@ -36,6 +44,11 @@ class DmaLatencyHold {
   int fd_ = -1;
   std::string problem_;
 };
+
+/// True when make_thread_realtime has something to do for `o` (priority, pinning or locking).
+inline bool wants_thread_setup(const RealtimeOptions& o) {
+  return o.priority > 0 || o.cpu >= 0 || o.lock_memory || o.nice != 0;
+}
 
 /// Applies `o` to the calling thread. Returns "" on success, else what failed and why (the
 /// caller reports it and goes on as a normal thread: a missing privilege is not fatal).

@@ -22,6 +22,56 @@
 #include "server/node/server_node.hpp"
 #include "server/world/world_model.hpp"
 
+namespace {
+
+/// The physics loop's scheduling flags (common/util/realtime.hpp).
+void add_loop_flags(CLI::App& app, teleop::RealtimeOptions& realtime) {
+  using teleop::config::integer_in;
+  app.add_option("--realtime", realtime.priority,
+                 "run the physics loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)")
+      ->check(integer_in(0.0, 99.0));
+  app.add_option("--cpu", realtime.cpu, "pin the physics loop to this CPU (-1 = no pinning)")
+      ->check(integer_in(-1.0, 4096.0));
+  app.add_option("--spin-us", realtime.spin_us,
+                 "busy-wait this long before each step's deadline [us], 0 to the period (0 = "
+                 "sleep to it)")
+      ->check(integer_in(0.0, 1e5));
+  app.add_option("--prewarm-us", realtime.prewarm_us,
+                 "read the next step's data into the caches during this long before each "
+                 "deadline [us], 0 to the period (0 = no)")
+      ->check(integer_in(0.0, 1e5));
+  app.add_option("--nice", realtime.nice,
+                 "the physics loop's nice value as a normal thread, -20 to 19 (0 = unchanged)")
+      ->check(integer_in(-20.0, 19.0));
+  app.add_flag("--lock-memory", realtime.lock_memory,
+               "lock every page of the process in memory (mlockall, present and future) and "
+               "pre-fault the loop's stack");
+  app.add_option("--dma-latency-us", realtime.dma_latency_us,
+                 "hold /dev/cpu_dma_latency at this value while running [us] (-1 = no)")
+      ->check(integer_in(-1.0, 1e5));
+}
+
+/// The loop flags checked against their ranges (the spin and the prewarm below the period).
+teleop::RealtimeOptions checked_loop_flags(const teleop::RealtimeOptions& realtime,
+                                           double rate_hz) {
+  using teleop::config::check_flag;
+  teleop::RealtimeOptions o;
+  o.priority = static_cast<int>(check_flag("--realtime", realtime.priority, 0.0, 99.0));
+  o.cpu = static_cast<int>(check_flag(
+      "--cpu", realtime.cpu, -1.0, static_cast<double>(std::thread::hardware_concurrency()) - 1));
+  o.spin_us = static_cast<int>(
+      check_flag("--spin-us", realtime.spin_us, 0.0, std::ceil(1e6 / rate_hz) - 1.0));
+  o.prewarm_us = static_cast<int>(
+      check_flag("--prewarm-us", realtime.prewarm_us, 0.0, std::ceil(1e6 / rate_hz) - 1.0));
+  o.lock_memory = realtime.lock_memory;
+  o.nice = static_cast<int>(check_flag("--nice", realtime.nice, -20.0, 19.0));
+  o.dma_latency_us =
+      static_cast<int>(check_flag("--dma-latency-us", realtime.dma_latency_us, -1.0, 1e5));
+  return o;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"teleop_server: simulation server of the teleoperation system"};
   std::string scene_file = teleop::data_path("scenes/default.yaml");
@@ -64,18 +114,7 @@ int main(int argc, char** argv) {
   teleop::dds::NetworkFlags net_flags;
   teleop::dds::add_network_flags(app, net_flags, "server");
   app.add_option("--summary-json", summary_json, "write a JSON summary here at exit");
-  app.add_option("--realtime", realtime.priority,
-                 "run the physics loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)")
-      ->check(teleop::config::integer_in(0.0, 99.0));
-  app.add_option("--cpu", realtime.cpu, "pin the physics loop to this CPU (-1 = no pinning)")
-      ->check(teleop::config::integer_in(-1.0, 4096.0));
-  app.add_option("--spin-us", realtime.spin_us,
-                 "busy-wait this long before each step's deadline [us], 0 to the period (0 = "
-                 "sleep to it)")
-      ->check(teleop::config::integer_in(0.0, 1e5));
-  app.add_option("--dma-latency-us", realtime.dma_latency_us,
-                 "hold /dev/cpu_dma_latency at this value while running [us] (-1 = no)")
-      ->check(teleop::config::integer_in(-1.0, 1e5));
+  add_loop_flags(app, realtime);
   app.add_flag("--quiet", quiet, "print only warnings and errors");
   if (const int status = teleop::config::parse_command_line(app, "teleop_server", argc, argv);
       status >= 0) {
@@ -113,14 +152,7 @@ int main(int argc, char** argv) {
         teleop::config::check_flag("--max-observers", max_observers, 0.0, 10000.0));
     o.summary_json = summary_json;
     if (!summary_json.empty()) teleop::prepare_output_file("--summary-json", summary_json);
-    o.realtime.priority =
-        static_cast<int>(teleop::config::check_flag("--realtime", realtime.priority, 0.0, 99.0));
-    o.realtime.cpu = static_cast<int>(teleop::config::check_flag(
-        "--cpu", realtime.cpu, -1.0, static_cast<double>(std::thread::hardware_concurrency()) - 1));
-    o.realtime.spin_us = static_cast<int>(teleop::config::check_flag(
-        "--spin-us", realtime.spin_us, 0.0, std::ceil(1e6 / o.rate_hz) - 1.0));
-    o.realtime.dma_latency_us = static_cast<int>(
-        teleop::config::check_flag("--dma-latency-us", realtime.dma_latency_us, -1.0, 1e5));
+    o.realtime = checked_loop_flags(realtime, o.rate_hz);
     o.quiet = quiet;
     teleop::server::ServerNode node(o, scene);
     return node.run();

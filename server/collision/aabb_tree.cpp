@@ -1,5 +1,7 @@
 #include "server/collision/aabb_tree.hpp"
 
+#include "common/util/prewarm.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -358,6 +360,12 @@ bool AabbTree::closest_point(const Eigen::Vector3d& p, const Eigen::Matrix3Xd& x
   }
   if (found) out.distance_m = std::sqrt(best);
   return found;
+}
+
+std::uint64_t AabbTree::touch() const {
+  return teleop::touch_lines(nodes_.data(), static_cast<std::size_t>(node_count_) * sizeof(Node)) +
+         teleop::touch(leaves_) + teleop::touch(internal_reverse_) + teleop::touch(tri_index_) +
+         teleop::touch(tri_verts_) + teleop::touch(leaf_verts_) + teleop::touch(tris_);
 }
 
 }  // namespace teleop::sim::collision

@@ -96,6 +96,9 @@ class AabbTree {
   int depth() const { return depth_; }
   /// Number of rebuilds since build().
   std::uint64_t rebuild_count() const { return rebuild_count_; }
+  /// Reads the arrays a query and a refit use into the caches (common/util/prewarm.hpp);
+  /// changes nothing. Returns the sum of the bytes read.
+  std::uint64_t touch() const;
   const Options& options() const { return options_; }
 
   /// Maximum supported depth: build() throws std::length_error past it (never for meshes

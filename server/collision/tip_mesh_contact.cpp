@@ -1,5 +1,7 @@
 #include "server/collision/tip_mesh_contact.hpp"
 
+#include "common/util/prewarm.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -474,6 +476,11 @@ void push_contact_events(const TipContactResult& result, int object_id, double s
     std::snprintf(msg, sizeof(msg), "tip leaves object %d", object_id);
     events.push(EventKind::kContactEnd, Severity::kInfo, sim_time_s, 0.0, msg);
   }
+}
+
+std::uint64_t TipMeshContact::touch() const {
+  return tree_.touch() + teleop::touch(hit_tris_) + teleop::touch(stamp_) +
+         teleop::touch(node_list_) + teleop::touch(node_force_);
 }
 
 }  // namespace teleop::sim::collision

@@ -142,6 +142,8 @@ class TipMeshContact {
   void set_params(const TipContactParams& p) { params_ = p; }
   const TipContactParams& params() const { return params_; }
   const AabbTree& tree() const { return tree_; }
+  /// Reads the tree and the scratch an update uses into the caches; changes nothing.
+  std::uint64_t touch() const;
   AabbTree& tree() { return tree_; }
   const SurfaceTopology& topology() const { return topo_; }
   bool in_contact() const { return in_contact_; }

@@ -1,5 +1,7 @@
 #include "server/node/server_cycle.hpp"
 
+#include <cstdio>
+
 #include "common/util/clock.hpp"
 
 namespace teleop::server {
@@ -19,6 +21,7 @@ ServerCycle::ServerCycle(const sim::WorldModel& model, double dt_s, double comma
     : model_(model),
       data_(sim::make_world_data(model)),
       dt_s_(dt_s),
+      max_gain_n_per_m_(sim::max_position_gain_n_per_m(model, 1.0 / dt_s)),
       timeout_ns_(static_cast<std::int64_t>(command_timeout_s * 1e9)) {
   // until a command arrives the slave holds where it starts
   world_cmd_.position_m = model.tool_start_m;
@@ -88,12 +91,35 @@ void ServerCycle::on_command(const SlaveCommand& c, std::int64_t receive_ns,
   send_time_ns_ = send_time_ns;
   command_ = c;
   world_cmd_ = to_world_command(c);
+  // a K_ps the slave cannot hold at its rate is clamped to the largest it can, and counted
+  const bool clamp = world_cmd_.kp_override_n_per_m > max_gain_n_per_m_;
+  if (clamp) {
+    world_cmd_.kp_override_n_per_m = max_gain_n_per_m_;
+    ++gains_clamped_;
+    if (!gain_clamping_) clamp_event_pending_ = true;
+  }
+  gain_clamping_ = clamp;
   receive_ns_ = receive_ns;
   have_command_ = true;
 }
 
+void ServerCycle::set_period_s(double dt_s) {
+  dt_s_ = dt_s;
+  max_gain_n_per_m_ = sim::max_position_gain_n_per_m(model_, 1.0 / dt_s);
+}
+
 void ServerCycle::step(std::int64_t t_ns, sim::EventQueue& events) {
   const double sim_time_s = data_.out.sim_time_s;
+  if (clamp_event_pending_) {
+    clamp_event_pending_ = false;
+    char text[sizeof(sim::SimEvent::message)];
+    std::snprintf(text, sizeof(text),
+                  "command position_gain_n_per_m %.6g N/m clamped: the slave holds 0-%.6g N/m "
+                  "at its rate",
+                  command_.position_gain_n_per_m, max_gain_n_per_m_);
+    events.push(sim::EventKind::kLimit, sim::Severity::kWarning, sim_time_s,
+                command_.position_gain_n_per_m, text);
+  }
   // watchdog: hold the slave when commands stop arriving
   const bool stale = !have_command_ || (t_ns - receive_ns_) > timeout_ns_;
   if (stale != watchdog_holding_) {

@@ -36,7 +36,7 @@ class ServerCycle {
   void step(std::int64_t t_ns, sim::EventQueue& events);
 
   /// Changes the physics period [s] (an in-process slave stepped at another rate).
-  void set_period_s(double dt_s) { dt_s_ = dt_s; }
+  void set_period_s(double dt_s);
   double period_s() const { return dt_s_; }
 
   const sim::WorldModel& model() const { return model_; }
@@ -54,6 +54,12 @@ class ServerCycle {
   const passivity::SlavePassivityPort& port() const { return port_; }
   std::uint64_t steps() const { return steps_; }
   std::uint64_t watchdog_trips() const { return watchdog_trips_; }
+  /// Commands whose K_ps (position_gain_n_per_m) was above max_gain_n_per_m() and was clamped.
+  std::uint64_t gains_clamped() const { return gains_clamped_; }
+  /// The largest K_ps the slave holds at the cycle's period (sim::max_position_gain_n_per_m).
+  double max_gain_n_per_m() const { return max_gain_n_per_m_; }
+  /// Reads the next step's data into the caches (sim::world_prewarm); changes nothing.
+  std::uint64_t prewarm() const { return sim::world_prewarm(model_, data_); }
   /// Duration of the last world step [us].
   double step_time_us() const { return step_time_us_; }
   /// What the tip touches or is about to: the local model of the model-mediated scheme,
@@ -76,6 +82,7 @@ class ServerCycle {
   const sim::WorldModel& model_;
   sim::WorldData data_;
   double dt_s_;
+  double max_gain_n_per_m_;
   std::int64_t timeout_ns_;
   SlaveCommand command_;
   sim::WorldCommand world_cmd_;
@@ -88,6 +95,9 @@ class ServerCycle {
   bool port_active_ = false;
   std::uint64_t steps_ = 0;
   std::uint64_t watchdog_trips_ = 0;
+  std::uint64_t gains_clamped_ = 0;
+  bool gain_clamping_ = false;        ///< the last command's K_ps was clamped
+  bool clamp_event_pending_ = false;  ///< a clamp began: the next step reports it
   double step_time_us_ = 0.0;
   std::vector<BodySphere> spheres_;
   mmt::ContactEstimator estimator_;

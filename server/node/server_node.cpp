@@ -18,6 +18,7 @@
 #include "common/util/clock.hpp"
 #include "common/util/files.hpp"
 #include "common/util/json.hpp"
+#include "common/util/prewarm.hpp"
 #include "common/util/rate_loop.hpp"
 #include "common/util/signals.hpp"
 #include "common/util/stats.hpp"
@@ -354,7 +355,7 @@ struct ServerNode::Impl {
         1, static_cast<std::uint64_t>(std::llround(options.rate_hz / model.visual_rate_hz)));
     const std::int64_t t_start = now_ns();
     last_stats_ns = t_start;
-    if (options.realtime.priority > 0 || options.realtime.cpu >= 0) {
+    if (wants_thread_setup(options.realtime)) {
       const std::string problem = make_thread_realtime(options.realtime);
       if (!problem.empty()) {
         std::cerr << "teleop_server: warning: the physics loop stays a normal thread: " << problem
@@ -367,6 +368,7 @@ struct ServerNode::Impl {
     }
     RateLoop loop(options.rate_hz, 65536,
                   static_cast<std::int64_t>(options.realtime.spin_us) * 1000);
+    const std::int64_t prewarm_ns = static_cast<std::int64_t>(options.realtime.prewarm_us) * 1000;
     SlaveState state;
     ReceivedCommand rc;
     std::uint64_t seen = 0;
@@ -393,6 +395,10 @@ struct ServerNode::Impl {
       report_rejections(t0);
       drain_events();
       maybe_publish_stats(t0, loop);
+      if (prewarm_ns > 0) {
+        loop.sleep_until_lead(prewarm_ns);
+        keep(cycle.prewarm());
+      }
       loop.wait();
     }
     command_reader->stop();
@@ -419,14 +425,15 @@ struct ServerNode::Impl {
     std::fprintf(stderr,
                  "teleop_server: %llu steps in %.1f s, step p50 %.1f us p99 %.1f us, "
                  "%llu overruns, commands %llu received / %llu rejected (%llu not the owner's), "
-                 "%llu owners, %llu watchdog trips\n",
+                 "%llu owners, %llu watchdog trips, %llu K_ps clamped (allowed 0-%.6g N/m)\n",
                  static_cast<unsigned long long>(cycle.steps()), elapsed_s, s.p50, s.p99,
                  static_cast<unsigned long long>(loop.overruns()),
                  static_cast<unsigned long long>(counters.received.load()),
                  static_cast<unsigned long long>(rejected()),
                  static_cast<unsigned long long>(counters.refused_owner.load()),
                  static_cast<unsigned long long>(ownership_changes),
-                 static_cast<unsigned long long>(cycle.watchdog_trips()));
+                 static_cast<unsigned long long>(cycle.watchdog_trips()),
+                 static_cast<unsigned long long>(cycle.gains_clamped()), cycle.max_gain_n_per_m());
   }
 
   static std::string part_json(const char* name, const SampleWindow& w) {
@@ -454,6 +461,9 @@ struct ServerNode::Impl {
       << part_json("publish", publish_us) << "},\n"
       << "  \"realtime_priority\": " << options.realtime.priority << ",\n"
       << "  \"spin_us\": " << options.realtime.spin_us << ",\n"
+      << "  \"prewarm_us\": " << options.realtime.prewarm_us << ",\n"
+      << "  \"lock_memory\": " << (options.realtime.lock_memory ? "true" : "false") << ",\n"
+      << "  \"nice\": " << options.realtime.nice << ",\n"
       << "  \"dma_latency_us\": " << options.realtime.dma_latency_us << ",\n"
       << "  \"loop_jitter_us\": {\"p50\": " << json_number(late.p50)
       << ", \"p99\": " << json_number(late.p99) << "},\n"
@@ -470,6 +480,8 @@ struct ServerNode::Impl {
       << "  \"observers_max\": " << observers_max_seen << ",\n"
       << "  \"max_observers\": " << options.max_observers << ",\n"
       << "  \"watchdog_trips\": " << cycle.watchdog_trips() << ",\n"
+      << "  \"commands_gain_clamped\": " << cycle.gains_clamped() << ",\n"
+      << "  \"max_position_gain_n_per_m\": " << json_number(cycle.max_gain_n_per_m()) << ",\n"
       << "  \"network_threads\": {\"states_dropped\": " << state_writer.dropped()
       << ", \"events_dropped\": " << event_writer.dropped()
       << ", \"write_failures\": " << state_writer.failures() + event_writer.failures() << "},\n"

@@ -25,6 +25,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -120,6 +121,12 @@ double probe_fem_stiffness(const deformable::DeformableModel& m,
 /// each body's tip contact on the body's present nodes: a jump breaks continuous detection.
 /// Returns false (nothing changed) for a robot scene. Allocates (contact structures).
 bool place_tool(const WorldModel& model, WorldData& data, const Eigen::Vector3d& position_m);
+
+/// Reads the arrays the next world_step will read (each awake body's model and state, each
+/// body's contact tree) into the calling core's caches, one byte per cache line; writes
+/// nothing, so the step that follows computes the same bits with or without it. Allocation-
+/// free. Returns the sum of the bytes read (keep it, so the reads are not elided).
+std::uint64_t world_prewarm(const WorldModel& model, const WorldData& data);
 
 /// Advances the world by dt [s] towards `cmd`. Allocation-free; events go to `events`.
 void world_step(const WorldModel& model, WorldData& data, const WorldCommand& cmd, double dt_s,

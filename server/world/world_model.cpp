@@ -294,6 +294,22 @@ double min_physics_rate_hz(const WorldModel& s) {
   return rate;
 }
 
+double max_position_gain_n_per_m(const WorldModel& s, double rate_hz) {
+  if (s.has_robot() || !(rate_hz > 0.0) || !std::isfinite(rate_hz)) return kMaxPositionGainNPerM;
+  const ToolModel& t = s.tool;
+  const double h = 1.0 / (rate_hz * kRateSafety);
+  const double c = t.kd_ns_per_m + t.linear_damping_ns_per_m;
+  double kc = 0.0;
+  for (const Plane& p : s.planes) kc = std::max(kc, p.stiffness_n_per_m);
+  for (const DeformableBodyModel& b : s.bodies) kc = std::max(kc, b.contact.stiffness_n_per_m);
+  for (int i = 0; i < t.obstacle_count; ++i) {
+    kc = std::max(kc, t.obstacles[static_cast<std::size_t>(i)].stiffness_n_per_m);
+  }
+  const double free_kp = (4.0 * t.mass_kg - 2.0 * h * c) / (h * h);
+  const double contact_kp = 4.0 * t.mass_kg / (h * h) - kc;
+  return std::clamp(std::min(free_kp, contact_kp), 0.0, kMaxPositionGainNPerM);
+}
+
 std::string physics_rate_problem(const WorldModel& s, double rate_hz) {
   if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) return "is not a positive rate";
   const double dt = 1.0 / rate_hz;

@@ -109,6 +109,17 @@ constexpr double kRateSafety = 0.95;
 ///    must not exceed its max_substeps.
 /// Each limit is taken with the factor kRateSafety.
 std::string physics_rate_problem(const WorldModel& model, double rate_hz);
+/// The largest slave position gain K_ps [N/m] a command may request (WorldCommand::
+/// kp_override_n_per_m) at `rate_hz`. Tool slave: the largest kp at which both of
+/// physics_rate_problem()'s limits of its PD still hold with the factor kRateSafety, i.e. with
+/// h = dt / kRateSafety, m its mass, c its damping and k_c the stiffest contact it meets:
+///   free:       h^2 kp / m + 2 h c / m <= 4   (h w <= 2 (sqrt(1 + zeta^2) - zeta))
+///   in contact: h^2 (kp + k_c) / m <= 4       (h w <= 2)
+/// at most kMaxPositionGainNPerM, at least 0. Robot slave (its tracking does not use K_ps):
+/// kMaxPositionGainNPerM.
+double max_position_gain_n_per_m(const WorldModel& model, double rate_hz);
+/// The largest K_ps any command may carry [N/m] (a larger one is rejected as malformed).
+constexpr double kMaxPositionGainNPerM = 1e6;
 /// The lowest physics rate at which physics_rate_problem() finds nothing [Hz].
 double min_physics_rate_hz(const WorldModel& model);
 /// One line for each deformable body that sub-steps at `rate_hz`: its largest stable step,

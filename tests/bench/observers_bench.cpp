@@ -312,8 +312,10 @@ std::vector<int> parse_counts(const std::string& flag, const std::string& text) 
 }
 
 /// One --variants item: remedies joined by '+': normal, fifoP (SCHED_FIFO priority P), spinN
-/// (busy-wait N us before each deadline), dmaN (hold /dev/cpu_dma_latency at N us), pin (the
-/// server's loop on CPU 2, the master's on CPU 3).
+/// (busy-wait N us before each deadline), dmaN (hold /dev/cpu_dma_latency at N us), prewarmN
+/// (the server reads the next step's data into the caches in the last N us before each
+/// deadline), mlock (both lock their memory), niceN (both loops at nice N, e.g. nice-20), pin (the
+/// server's loop on the last CPU, the master's on the one before).
 LoopFlags parse_variant(const std::string& text) {
   LoopFlags f;
   f.name = text;
@@ -334,17 +336,28 @@ LoopFlags parse_variant(const std::string& text) {
   while (std::getline(ss, item, '+')) {
     if (item == "normal") continue;
     if (item == "pin") {
-      f.server.insert(f.server.end(), {"--cpu", "2"});
-      f.master.insert(f.master.end(), {"--cpu", "3"});
+      // the server's loop on the last CPU, the master's on the one before (one CPU: both on it)
+      const unsigned cpus = std::max(1U, std::thread::hardware_concurrency());
+      f.server.insert(f.server.end(), {"--cpu", std::to_string(cpus - 1)});
+      f.master.insert(f.master.end(), {"--cpu", std::to_string(cpus >= 2 ? cpus - 2 : 0)});
     } else if (item.rfind("fifo", 0) == 0) {
       both("--realtime", number_after(item, 4));
     } else if (item.rfind("spin", 0) == 0) {
       both("--spin-us", number_after(item, 4));
     } else if (item.rfind("dma", 0) == 0) {
       both("--dma-latency-us", number_after(item, 3));
+    } else if (item.rfind("prewarm", 0) == 0) {
+      f.server.insert(f.server.end(), {"--prewarm-us", number_after(item, 7)});
+    } else if (item.rfind("nice", 0) == 0) {
+      const bool negative = item.size() > 4 && item[4] == '-';
+      both("--nice", (negative ? "-" : "") + number_after(item, negative ? 5 : 4));
+    } else if (item == "mlock") {
+      f.server.push_back("--lock-memory");
+      f.master.push_back("--lock-memory");
     } else {
-      throw config::ConfigError("--variants '" + text + "': '" + item +
-                                "' is not one of normal, fifoP, spinN, dmaN, pin");
+      throw config::ConfigError(
+          "--variants '" + text + "': '" + item +
+          "' is not one of normal, fifoP, spinN, dmaN, prewarmN, mlock, niceN, pin");
     }
   }
   return f;
@@ -559,22 +572,23 @@ int observers_bench(const CommandArgs& args) {
   return 0;
 }
 
-TELEOP_REGISTER_COMMAND(bench, "observers",
-                        "server + master with 0-32 observer processes: round trip, overruns, "
-                        "link losses, watchdog trips",
-                        observers_bench, text_option("--counts", "observer counts N,N,..."),
-                        text_option("--full-rate-counts", "counts with --full-rate observers"),
-                        text_option("--nice0-counts", "counts with observers at nice 0"),
-                        text_option("--realtime", "priorities P,P,... (live)"),
-                        text_option("--scene", "the server's scene (live; default: default.yaml)"),
-                        text_option("--variants",
-                                    "loop remedies V,V,... (live): normal, fifoP, spinN, dmaN, "
-                                    "pin, joined by +"),
-                        integer_option("--rounds", 1, 100, "rounds"),
-                        number_option("--duration", 1, 600, "session length [s]"),
-                        integer_option("--domain", 0, 232, "DDS domain id"),
-                        text_option("--bin-dir", "build folder of the executables"),
-                        integer_option("--live", 0, 1, "1: the live session benchmark"));
+TELEOP_REGISTER_COMMAND(
+    bench, "observers",
+    "server + master with 0-32 observer processes: round trip, overruns, "
+    "link losses, watchdog trips",
+    observers_bench, text_option("--counts", "observer counts N,N,..."),
+    text_option("--full-rate-counts", "counts with --full-rate observers"),
+    text_option("--nice0-counts", "counts with observers at nice 0"),
+    text_option("--realtime", "priorities P,P,... (live)"),
+    text_option("--scene", "the server's scene (live; default: default.yaml)"),
+    text_option("--variants",
+                "loop remedies V,V,... (live): normal, fifoP, spinN, dmaN, prewarmN, mlock, niceN, "
+                "pin, joined by +"),
+    integer_option("--rounds", 1, 100, "rounds"),
+    number_option("--duration", 1, 600, "session length [s]"),
+    integer_option("--domain", 0, 232, "DDS domain id"),
+    text_option("--bin-dir", "build folder of the executables"),
+    integer_option("--live", 0, 1, "1: the live session benchmark"));
 TELEOP_REGISTER_COMMAND(bench, "observer-probe",
                         "(internal) a headless observer reading what teleop_viewer reads",
                         observer_probe, text_option("--kind", "view | monitor"),

@@ -10,8 +10,12 @@
 // step (idle states, caches and TLB refilled, clock ramp), apart from any network work.
 // With it: --spin-us N busy-waits the last N us before each deadline, --dma-latency-us N holds
 // /dev/cpu_dma_latency, --cpu N pins the thread, --realtime P runs it SCHED_FIFO (the remedies
-// of common/util/realtime.hpp). The CSV's `pacing` column names the variant.
+// of common/util/realtime.hpp), --prewarm-us N reads the next step's data into the caches in
+// the last N us before each deadline (sim::world_prewarm). The CSV's `pacing` column names the
+// variant.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -19,6 +23,7 @@
 #include "common/config/config.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/csv.hpp"
+#include "common/util/prewarm.hpp"
 #include "common/util/rate_loop.hpp"
 #include "common/util/realtime.hpp"
 #include "common/util/registry.hpp"
@@ -39,12 +44,12 @@ int world(const CommandArgs& args) {
   rt.dma_latency_us = std::stoi(args.option("--dma-latency-us", "-1"));
   rt.cpu = std::stoi(args.option("--cpu", "-1"));
   rt.priority = std::stoi(args.option("--realtime", "0"));
-  if (!paced && (rt.spin_us > 0 || rt.dma_latency_us >= 0)) {
-    throw config::ConfigError("--spin-us and --dma-latency-us need --pace 1");
+  rt.prewarm_us = std::stoi(args.option("--prewarm-us", "0"));
+  if (!paced && (rt.spin_us > 0 || rt.dma_latency_us >= 0 || rt.prewarm_us > 0)) {
+    throw config::ConfigError("--spin-us, --dma-latency-us and --prewarm-us need --pace 1");
   }
-  if (rt.spin_us * 1e-6 >= dt) {
-    throw config::ConfigError("--spin-us " + std::to_string(rt.spin_us) +
-                              ": must be shorter than the step (--dt)");
+  if (std::max(rt.spin_us, rt.prewarm_us) * 1e-6 >= dt) {
+    throw config::ConfigError("--spin-us and --prewarm-us must be shorter than the step (--dt)");
   }
   const DmaLatencyHold dma(rt.dma_latency_us);
   if (!dma.problem().empty()) std::fprintf(stderr, "world: %s\n", dma.problem().c_str());
@@ -52,18 +57,21 @@ int world(const CommandArgs& args) {
     const std::string problem = make_thread_realtime(rt);
     if (!problem.empty()) std::fprintf(stderr, "world: %s\n", problem.c_str());
   }
-  const std::string pacing = std::string(paced ? "paced" : "back_to_back") +
-                             (rt.spin_us > 0 ? "_spin" + std::to_string(rt.spin_us) + "us" : "") +
-                             (dma.held() ? "_dma" + std::to_string(rt.dma_latency_us) : "") +
-                             (rt.cpu >= 0 ? "_cpu" + std::to_string(rt.cpu) : "") +
-                             (rt.priority > 0 ? "_fifo" + std::to_string(rt.priority) : "");
+  const std::string pacing =
+      std::string(paced ? "paced" : "back_to_back") +
+      (rt.spin_us > 0 ? "_spin" + std::to_string(rt.spin_us) + "us" : "") +
+      (rt.prewarm_us > 0 ? "_prewarm" + std::to_string(rt.prewarm_us) + "us" : "") +
+      (dma.held() ? "_dma" + std::to_string(rt.dma_latency_us) : "") +
+      (rt.cpu >= 0 ? "_cpu" + std::to_string(rt.cpu) : "") +
+      (rt.priority > 0 ? "_fifo" + std::to_string(rt.priority) : "");
   const sim::WorldModel model = sim::load_world_model(scene_file);
   sim::WorldData w = sim::make_world_data(model);
   sim::EventQueue events;
   sim::SimEvent e;
   CsvWriter csv((args.out_dir / "world.csv").string(),
                 {"pacing", "phase", "dt_s", "steps", "step_us_median", "step_us_p90", "step_us_p99",
-                 "step_us_max", "in_contact_fraction", "sleeping_fraction"});
+                 "step_us_max", "in_contact_fraction", "sleeping_fraction", "collision_us_median",
+                 "deformable_us_median", "slave_us_median"});
   const Eigen::Vector3d start = w.out.tip_position_m;
   Eigen::Vector3d top(0.6, 0.0, 0.5);
   if (!w.bodies.empty()) {
@@ -74,33 +82,42 @@ int world(const CommandArgs& args) {
   }
   Progress progress("world", 4.5 * n, "steps");
   auto run = [&](const char* phase, int steps, auto target) {
-    std::vector<double> us;
+    std::vector<double> us, parts[3];
     us.reserve(static_cast<std::size_t>(steps));
     int contact = 0, sleeping = 0;
     RateLoop loop(1.0 / dt, 16, static_cast<std::int64_t>(rt.spin_us) * 1000);
     for (int k = 0; k < steps; ++k) {
+      if (paced && rt.prewarm_us > 0) {
+        loop.sleep_until_lead(static_cast<std::int64_t>(rt.prewarm_us) * 1000);
+        keep(sim::world_prewarm(model, w));
+      }
       if (paced) loop.wait();
       sim::WorldCommand c;
       c.position_m = target(k);
       const auto t0 = now_ns();
       sim::world_step(model, w, c, dt, events);
       us.push_back(static_cast<double>(now_ns() - t0) * 1e-3);
+      parts[0].push_back(w.cost.collision_us);
+      parts[1].push_back(w.cost.deformable_us);
+      parts[2].push_back(w.cost.slave_us);
       contact += w.out.in_contact;
       if (!w.bodies.empty()) sleeping += w.bodies[0].state.sleeping;
       while (events.pop(e)) {
       }
       progress.add();
     }
-    const Summary s = summarize(us);
+    const Summary s = summarize(us), c = summarize(parts[0]), d = summarize(parts[1]),
+                  sl = summarize(parts[2]);
     csv.row_text({pacing, phase, format_number(dt), std::to_string(steps), format_number(s.p50),
                   format_number(s.p90), format_number(s.p99), format_number(s.max),
                   format_number(static_cast<double>(contact) / steps),
-                  format_number(static_cast<double>(sleeping) / steps)});
+                  format_number(static_cast<double>(sleeping) / steps), format_number(c.p50),
+                  format_number(d.p50), format_number(sl.p50)});
     std::printf(
         "%-10s %s dt %.4f s  step p50 %7.1f us  p90 %7.1f us  p99 %7.1f us  max %7.1f us  "
-        "contact %3.0f%%  asleep %3.0f%%\n",
+        "contact %3.0f%%  asleep %3.0f%%  p50 collision %.1f deformable %.1f slave %.1f us\n",
         phase, pacing.c_str(), dt, s.p50, s.p90, s.p99, s.max, 100.0 * contact / steps,
-        100.0 * sleeping / steps);
+        100.0 * sleeping / steps, c.p50, d.p50, sl.p50);
   };
   const Eigen::Vector3d above = top + Eigen::Vector3d(0, 0, 0.1);
   run("settling", n, [&](int) { return start; });
@@ -132,6 +149,9 @@ TELEOP_REGISTER_COMMAND(bench, "world", "physics step of the assembled default s
                         integer_option("--steps", 30, 1000000, "steps per phase (3000)"),
                         integer_option("--pace", 0, 1, "1: one step per dt, as the live loop"),
                         integer_option("--spin-us", 0, 100000, "busy-wait before each deadline"),
+                        integer_option("--prewarm-us", 0, 100000,
+                                       "read the next step's data into the caches before each "
+                                       "deadline"),
                         integer_option("--dma-latency-us", -1, 100000,
                                        "hold /dev/cpu_dma_latency (-1 = no)"),
                         integer_option("--cpu", -1, 1023, "pin to this CPU (-1 = no)"),

@@ -66,6 +66,32 @@ TEST(EvdevMapping, ForceToConstantEffectFollowsTheLinuxDirectionConvention) {
   }
 }
 
+TEST(EvdevMapping, EffectEndsByItselfWithAFadeAtTheRateBound) {
+  // 1.5 N of 2 N full scale at a 100 N/s bound: fades over 15 ms after the hold
+  const evdev::ConstantForce e = evdev::force_to_effect(Eigen::Vector3d(0, 1.5, 0), 2.0);
+  const ff_effect f = evdev::make_effect(e, 7, 2.0, 100.0);
+  EXPECT_EQ(f.type, FF_CONSTANT);
+  EXPECT_EQ(f.id, 7);
+  EXPECT_EQ(f.u.constant.level, e.level);
+  EXPECT_EQ(f.direction, e.direction);
+  EXPECT_EQ(f.u.constant.envelope.fade_length, 15);
+  EXPECT_EQ(f.u.constant.envelope.fade_level, 0);
+  EXPECT_EQ(f.replay.length, evdev::kEffectHoldMs + 15);  // finite: never 0 (infinite)
+  // the driver refreshes well before the effect would start fading
+  EXPECT_LT(evdev::kEffectRefreshMs, evdev::kEffectHoldMs);
+  // a new effect (id -1), zero force: plays the hold only
+  const ff_effect zero = evdev::make_effect(evdev::ConstantForce{}, -1, 2.0, 100.0);
+  EXPECT_EQ(zero.id, -1);
+  EXPECT_EQ(zero.u.constant.envelope.fade_length, 0);
+  EXPECT_EQ(zero.replay.length, evdev::kEffectHoldMs);
+  // full scale at the default 1000 N/s: 2 ms; no bound: at least 1 ms; a slow bound: at most 10 s
+  const evdev::ConstantForce full = evdev::force_to_effect(Eigen::Vector3d(0, 9, 0), 2.0);
+  EXPECT_EQ(evdev::effect_fade_ms(full, 2.0, 1000.0), 2);
+  EXPECT_EQ(evdev::effect_fade_ms(full, 2.0, 0.0), 1);
+  EXPECT_EQ(evdev::effect_fade_ms(full, 2.0, 1e-6), 10000);
+  EXPECT_GT(evdev::make_effect(full, 1, 2.0, 1e-6).replay.length, 10000);
+}
+
 TEST(DeviceFactory, NamesAndErrors) {
   EXPECT_TRUE(is_hardware_device_name("evdev:/dev/input/event3"));
   EXPECT_TRUE(is_hardware_device_name("vendor"));
@@ -279,6 +305,7 @@ TEST(EvdevDevice, ReadsAxesAndUploadsConstantForceOnAVirtualUinputDevice) {
   EXPECT_EQ(ups.back().type, FF_CONSTANT);
   EXPECT_EQ(ups.back().direction, 0xC000);
   EXPECT_EQ(ups.back().u.constant.level, std::lround(0.5 * 0x7fff));
+  EXPECT_GT(ups.back().replay.length, 0);  // finite: ends by itself without refreshes
   EXPECT_GE(js.plays(), 1);
   dev.deactivate();
   EXPECT_EQ(js.uploads().back().u.constant.level, 0);  // zero force when deactivated

@@ -95,6 +95,50 @@ TEST(ToolScene, StepIsDeterministicAndAllocationFree) {
   EXPECT_EQ(a.velocity_mps, b.velocity_mps);
 }
 
+/// Largest swing of the tip's height over the last 200 of 3000 steps with K_ps `kp`, after a
+/// 0.1 mm step of the target (the PD stays below its force limit) [m].
+double ringing_m(const WorldModel& m, double kp) {
+  WorldData d = make_world_data(m);
+  EventQueue q;
+  SimEvent e;
+  WorldCommand cmd;
+  cmd.position_m = m.tool_start_m + Eigen::Vector3d(0, 0, 1e-4);
+  cmd.kp_override_n_per_m = kp;
+  double lo = INFINITY, hi = -INFINITY;
+  for (int i = 0; i < 3000; ++i) {
+    world_step(m, d, cmd, 1e-3, q);
+    while (q.pop(e)) {
+    }
+    if (i >= 2800) {
+      lo = std::min(lo, d.out.tip_position_m.z());
+      hi = std::max(hi, d.out.tip_position_m.z());
+    }
+  }
+  return std::isfinite(hi - lo) ? hi - lo : INFINITY;
+}
+
+TEST(ToolScene, TheLargestKpsFollowsTheStableStepAndHolds) {
+  const WorldModel m =
+      load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/tool_only.yaml");
+  const double bound = max_position_gain_n_per_m(m, 1000.0);
+  // free: h^2 kp / m + 2 h c / m <= 4 with h = dt / 0.95, m 0.2 kg, c 12 + 0.5 N s/m
+  const double h = 1e-3 / kRateSafety;
+  EXPECT_NEAR(bound, (4.0 * 0.2 - 2.0 * h * 12.5) / (h * h), 1.0);
+  EXPECT_GT(bound, m.tool.kp_n_per_m);
+  EXPECT_LT(bound, kMaxPositionGainNPerM);
+  // the bound grows as the rate squared, up to the wire's 1e6; a robot slave does not use K_ps
+  EXPECT_NEAR(max_position_gain_n_per_m(m, 1100.0) / bound, 1.1 * 1.1, 0.02);
+  EXPECT_EQ(max_position_gain_n_per_m(m, 2000.0), kMaxPositionGainNPerM);
+  WorldModel robot = m;
+  robot.slave = SlaveKind::kRobot;
+  EXPECT_EQ(max_position_gain_n_per_m(robot, 1000.0), kMaxPositionGainNPerM);
+  // at the bound the tip settles; at 1.2 times the limit without the safety factor it rings
+  EXPECT_LT(ringing_m(m, bound), 1e-6);
+  const double unsafe = 1.2 * (4.0 * 0.2 - 2.0 * 1e-3 * 12.5) / 1e-6;
+  EXPECT_LT(unsafe, kMaxPositionGainNPerM);  // a command may carry it: the server clamps it
+  EXPECT_GT(ringing_m(m, unsafe), 1e-5);
+}
+
 TEST(WorldStepToolOnly, NonFiniteCommandIsReportedAndTheStateStaysFinite) {
   WorldModel model;
   model.tool = tool_over_floor();
@@ -263,7 +307,9 @@ TEST(WorldStepRobotSphere, ABodyThatBlowsUpIsResetAndReportedNotPropagated) {
   EXPECT_TRUE(world.out.tip_position_m.allFinite());
 }
 
-TEST(WorldStepRobotSphere, DeterministicAndAllocationFreeThroughAPress) {
+// b reads its data into the caches before each step (world_prewarm, the live loop's prewarm):
+// the same bits as a, which does not
+TEST(WorldStepRobotSphere, DeterministicAllocationFreeAndUnchangedByAPrewarmThroughAPress) {
   const WorldModel model = default_scene();
   WorldData a = make_world_data(model);
   WorldData b = make_world_data(model);
@@ -272,11 +318,12 @@ TEST(WorldStepRobotSphere, DeterministicAndAllocationFreeThroughAPress) {
   const Eigen::Vector3d from = a.out.tip_position_m;
   const Eigen::Vector3d to(0.6, 0.0, 0.52);
   SimEvent e;
-  std::uint64_t allocations = 0;
+  std::uint64_t allocations = 0, touched = 0;
   for (int i = 1; i <= 2500; ++i) {
     cmd.position_m = from + std::min(1.0, i / 2000.0) * (to - from);
     teleop::test::NoAllocScope scope;
     world_step(model, a, cmd, 1e-3, qa);
+    touched += world_prewarm(model, b);
     world_step(model, b, cmd, 1e-3, qb);
     while (qa.pop(e)) {
     }
@@ -289,6 +336,10 @@ TEST(WorldStepRobotSphere, DeterministicAndAllocationFreeThroughAPress) {
   EXPECT_EQ(a.out.tip_position_m, b.out.tip_position_m);
   EXPECT_EQ(a.out.contact_force_n, b.out.contact_force_n);
   EXPECT_EQ(a.bodies[0].state.x, b.bodies[0].state.x);
+  EXPECT_EQ(a.bodies[0].state.v, b.bodies[0].state.v);
+  EXPECT_EQ(a.out.q_rad, b.out.q_rad);
+  EXPECT_EQ(a.out.qd_radps, b.out.qd_radps);
+  EXPECT_GT(touched, 0u);  // it read something
 }
 
 // --- a kinematic tool (prescribed probe, the contact experiments) -----------------------------
