@@ -290,9 +290,9 @@ class ViewerApp {
 
   /// The render loop. Returns the exit status.
   int run() {
-    // --fps, else the display's vsync. A software renderer spends about a core's worth of
-    // 30 ms per frame at 1280x720: 15 fps leaves the CPU to the control loops (docs/viewer.md,
-    // "Measured"). Headless runs only lay out the UI until the snapshot: 30 fps.
+    // --fps, else the display's vsync. A software renderer is slow enough at 1280x720 that a
+    // low frame rate leaves the CPU to the control loops (docs/viewer.md, "Measured"). Headless
+    // runs only lay out the UI until the snapshot: 30 fps.
     double period_s = options_.fps > 0.0 ? 1.0 / options_.fps
                       : headless_        ? 1.0 / 30.0
                       : software_        ? 1.0 / 15.0

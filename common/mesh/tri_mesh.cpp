@@ -34,11 +34,9 @@ std::string point_text(const Eigen::Vector3d& p) {
 
 // Reverse Cuthill-McKee order of the vertices of a triangle list (order[new] = old): a
 // breadth-first walk from vertex 0, each vertex's unvisited neighbours taken by increasing
-// valence then index, the walk reversed. Neighbours end up close in memory (level 4: mean
-// |i - j| over the edges 54 instead of 674 in creation order), which is what the node loops of
-// the deformable models want (measured: the co-rotational step 6-9 % faster at levels 4-5, the
-// mass-spring step 2-6 %; docs/deformable.md, "Vertex order"). Deterministic (no ties left to a
-// hash order).
+// valence then index, the walk reversed. Neighbours end up close in memory, which is what the
+// node loops of the deformable models want (docs/deformable.md, "Vertex order", has the
+// figures). Deterministic (no ties left to a hash order).
 std::vector<int> reverse_cuthill_mckee(int n, const std::vector<std::array<int, 3>>& tris) {
   std::vector<std::vector<int>> nb(static_cast<std::size_t>(n));
   for (const auto& t : tris) {

@@ -19,7 +19,7 @@ namespace {
 /// pages present (with MCL_FUTURE they then stay).
 [[gnu::noinline]] void prefault_stack() {
   constexpr std::size_t kBytes = 256 * 1024;
-  volatile unsigned char frame[kBytes];
+  [[maybe_unused]] volatile unsigned char frame[kBytes];
   for (std::size_t i = 0; i < kBytes; i += 4096) frame[i] = 0;
 }
 

@@ -59,8 +59,8 @@ enum class KernelKind : std::uint8_t {
   kScalar = 0,
   /// A packed float copy of the nodes; every node gathers its own edges; edge and radial forces
   /// in single precision, 8 nodes at a time (AVX2 + FMA when the CPU has them, checked once at
-  /// run time; portable loops otherwise); integration in double. ~2.9x faster with AVX2, the
-  /// default of scene files for mass_spring + symplectic_euler there (docs/deformable.md).
+  /// run time; portable loops otherwise); integration in double. The default of scene files
+  /// for mass_spring + symplectic_euler where AVX2 is present (speed: docs/deformable.md).
   kSimd = 1,
 };
 

@@ -166,7 +166,7 @@ __attribute__((target("avx2,fma"))) inline FlatUpdate flat_update(const Deformab
 
 // AVX2 path: 8 nodes at a time; each node's 8 packed floats (and each neighbour's) are one
 // 32-byte load, the 8 x 8 block transposed to coordinates in registers (cheaper here than
-// gather instructions: measured 16 against 27-40 us for the force pass at level 4).
+// gather instructions).
 __attribute__((target("avx2,fma"))) Internal internal_forces_avx2(const DeformableModel& m,
                                                                   DeformableState& s) {
   const int n = m.node_count, stride = m.simd_stride, width = m.simd_width;
@@ -567,7 +567,7 @@ TELEOP_AVX2_INLINE void flat_positions_sums(const DeformableModel& m, Deformable
 //   and v += h f / m; the contact springs, then the contact impulses; x += h v with the sums in
 //   per-lane partial sums (a fixed order: deterministic).
 // The same physics as integrate_nodes (the rounding differs: the m g' - alpha m v form).
-// (One pass doing all of it per block of 12 was measured 5-7 % slower at levels 4 and 5.)
+// (Separate passes: one pass doing all of it per block of 12 is slower.)
 __attribute__((target("avx2,fma"))) void integrate_flat_avx2(const DeformableModel& m,
                                                              DeformableState& s, double h,
                                                              const double* gp, bool loads_zero,
@@ -639,9 +639,8 @@ void step_mass_spring_simd(const DeformableModel& m, DeformableState& s, double 
 
 #ifdef TELEOP_HAVE_AVX2_PATH
   if (s.pinned_count == 0 && use_avx2()) {
-    // steps 2 and 3 in flat passes; the next sub-step's pack in the position pass. (Fusing step
-    // 3b into the force loop, while a block's forces are in registers, was measured 1-4 % slower
-    // at levels 4 and 5: more live registers there.)
+    // steps 2 and 3 in flat passes; the next sub-step's pack in the position pass (step 3b is
+    // not fused into the force loop: it would hold more live registers there, and is slower).
     const double gp[3] = {p.gravity_mps2.x() + alpha * vmx, p.gravity_mps2.y() + alpha * vmy,
                           p.gravity_mps2.z() + alpha * vmz};
     move_centre(internal_forces_avx2(m, s));
