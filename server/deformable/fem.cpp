@@ -153,6 +153,33 @@ TELEOP_ALWAYS_INLINE void nodal_pressure_forces(const DeformableModel& m, const 
   }
 }
 
+// A second Newton step (the frames r of the quaternions q) for the lanes `step` of the lanes
+// `redo`, those whose first step was a Newton step of less than 0.05 rad. Returns the lanes of
+// `redo` still to finish: not stepped here, or whose second step was not a Newton step with a
+// square below the tolerance.
+TELEOP_ALWAYS_INLINE V4i second_step(const V4* fg, V4i step, V4i redo, double tolerance, V4& qw,
+                                     V4& qx, V4& qy, V4& qz, V4* r) {
+  V4 ox, oy, oz;
+  V4i newton;
+  rotation_step(fg, r, ox, oy, oz, newton);
+  const V4 w2 = ox * ox + oy * oy + oz * oz;
+  const V4i moved = step & (w2 > tolerance * tolerance);
+  const V4 hx = 0.5 * ox, hy = 0.5 * oy, hz = 0.5 * oz;
+  const V4 nw = qw - hx * qx - hy * qy - hz * qz;
+  const V4 nx = qx + hx * qw + hy * qz - hz * qy;
+  const V4 ny = qy - hx * qz + hy * qw + hz * qx;
+  const V4 nz = qz + hx * qy - hy * qx + hz * qw;
+  const V4 n2 = nw * nw + nx * nx + ny * ny + nz * nz;
+  V4 inv;
+  for (int l = 0; l < 4; ++l) inv[l] = 1.0 / std::sqrt(n2[l]);
+  qw = moved ? nw * inv : qw;
+  qx = moved ? nx * inv : qx;
+  qy = moved ? ny * inv : qy;
+  qz = moved ? nz * inv : qz;
+  quaternion_matrix(qw, qx, qy, qz, r);
+  return redo & ~(step & (newton != 0) & (w2 <= tolerance));
+}
+
 // The frames of tetrahedra t0 .. t0 + 3 (deformation gradients fg, one per lane) into r and
 // s.fem_q / s.fem_r: one Newton step from the warm start in four lanes; a lane whose step is not
 // converged after it (the increment's square above the tolerance, or no Newton step) is finished
@@ -187,9 +214,14 @@ TELEOP_ALWAYS_INLINE void group_frames(DeformableState& s, int t0, const V4* fg,
     qy = moved ? ny * inv : qy;
     qz = moved ? nz * inv : qz;
     quaternion_matrix(qw, qx, qy, qz, r);
-    // a Newton step leaves an error of the order of its square: the lanes above are finished by
-    // the scalar iteration (a vector test first: usually none is)
-    const V4i redo = (newton == 0) | (w2 > tolerance);
+    // a Newton step leaves an error of the order of its square: the lanes above take a second
+    // step in four lanes, and those it leaves are finished by the scalar iteration (a vector
+    // test first: usually none is)
+    V4i redo = (newton == 0) | (w2 > tolerance);
+    if ((redo[0] | redo[1] | redo[2] | redo[3]) != 0) {
+      redo =
+          second_step(fg, redo & (newton != 0) & (w2 < 0.0025), redo, tolerance, qw, qx, qy, qz, r);
+    }
     const bool any = (redo[0] | redo[1] | redo[2] | redo[3]) != 0;
     for (int l = 0; any && l < 4; ++l) {
       if (redo[l] == 0) continue;
@@ -227,24 +259,30 @@ TELEOP_ALWAYS_INLINE void group_frames_from_q(const DeformableState& s, int t0, 
   quaternion_matrix(qw, qx, qy, qz, r);
 }
 
+// The four lanes' (x[l], y[l], z[l], 0) of the component vectors x, y, z, one vector per lane.
+TELEOP_ALWAYS_INLINE void lanes_xyz(V4 x, V4 y, V4 z, V4* out) {
+  const V4 zero = {0.0, 0.0, 0.0, 0.0};
+  const V4i even = {0, 4, 2, 6}, odd = {1, 5, 3, 7}, low = {0, 1, 4, 5}, high = {2, 3, 6, 7};
+  const V4 xy02 = __builtin_shuffle(x, y, even), xy13 = __builtin_shuffle(x, y, odd);
+  const V4 z02 = __builtin_shuffle(z, zero, even), z13 = __builtin_shuffle(z, zero, odd);
+  out[0] = __builtin_shuffle(xy02, z02, low);
+  out[1] = __builtin_shuffle(xy13, z13, low);
+  out[2] = __builtin_shuffle(xy02, z02, high);
+  out[3] = __builtin_shuffle(xy13, z13, high);
+}
+
 // Adds the node forces h (h[3 j + i]: component i on node j + 1 of the lane's tetrahedron; node 0
-// takes minus their sum) of four tetrahedra to out.
+// takes minus their sum) of four tetrahedra to out, each node's three components as one vector of
+// four whose last lane adds 0 to the next node's x: `out` holds one column past the last node.
 TELEOP_ALWAYS_INLINE void scatter4(const V4* h, const int* const* ix, double* out) {
+  V4 node[4][4];  // [node k of the tet][lane l]: (x, y, z, 0)
+  for (int j = 0; j < 3; ++j) lanes_xyz(h[3 * j], h[3 * j + 1], h[3 * j + 2], node[j + 1]);
+  lanes_xyz(-(h[0] + h[3] + h[6]), -(h[1] + h[4] + h[7]), -(h[2] + h[5] + h[8]), node[0]);
   for (int l = 0; l < 4; ++l) {
-    double sx = 0.0, sy = 0.0, sz = 0.0;
-    for (int j = 0; j < 3; ++j) {
-      double* o = out + 3 * ix[l][j + 1];
-      o[0] += h[3 * j][l];
-      o[1] += h[3 * j + 1][l];
-      o[2] += h[3 * j + 2][l];
-      sx += h[3 * j][l];
-      sy += h[3 * j + 1][l];
-      sz += h[3 * j + 2][l];
+    for (int k : {1, 2, 3, 0}) {
+      double* o = out + 3 * ix[l][k];
+      store4(o, load4(o) + node[k][l]);
     }
-    double* o0 = out + 3 * ix[l][0];
-    o0[0] -= sx;
-    o0[1] -= sy;
-    o0[2] -= sz;
   }
 }
 
@@ -259,7 +297,8 @@ TELEOP_ALWAYS_INLINE void node_forces4(const V4* p, const V4* b, V4 vol, V4* h) 
 
 // The elastic and damping forces of tetrahedra 4g .. 4g + 3, one per lane: the arithmetic of the
 // scalar loop below in four lanes (the frames: group_frames), added to out. With nodal pressure
-// (`nodal`) these are the deviatoric forces and each tetrahedron's tr(eps) goes to s.fem_theta;
+// (`nodal`) these are the deviatoric forces and each tetrahedron's tr(eps) is added to its nodes'
+// s.fem_node_theta (a quarter by volume);
 // pressure_group adds the pressure's share once the nodes' pressures are known. The frames are
 // kept in s.fem_r only when `keep_frames` (the implicit solve reads them); s.fem_q always.
 TELEOP_ALWAYS_INLINE void element_group(const DeformableModel& m, DeformableState& s, int g,
@@ -294,7 +333,13 @@ TELEOP_ALWAYS_INLINE void element_group(const DeformableModel& m, DeformableStat
   V4 h[9];
   node_forces4(p, b, vol, h);
   scatter4(h, ix, out);
-  if (nodal) store4(s.fem_theta.data() + t0, gm[0] + gm[4] + gm[8] - 3.0);  // tr(eps) (+ rate)
+  if (!nodal) return;
+  // each tetrahedron's tr(eps) (+ rate), a quarter of it by volume to each of its nodes
+  const V4 w = 0.25 * vol * (gm[0] + gm[4] + gm[8] - 3.0);
+  double* node_theta = s.fem_node_theta.data();
+  for (int l = 0; l < 4; ++l) {
+    for (int k = 0; k < 4; ++k) node_theta[ix[l][k]] += w[l];
+  }
 }
 
 // The pressure forces of tetrahedra 4g .. 4g + 3, p_e = lambda (mean of their nodes' theta_a,
@@ -334,6 +379,7 @@ void element_forces(const DeformableModel& m, DeformableState& s, double beta, i
   const double* v = s.v.data();
   const int groups = f.tet_count / 4;
   const bool keep_frames = m.params.integrator == IntegratorKind::kImplicitEuler;
+  if (nodal) std::fill(s.fem_node_theta.begin(), s.fem_node_theta.end(), 0.0);
   for (int g = 0; g < groups; ++g) {
     element_group(m, s, g, beta, iterations, tolerance, nodal, keep_frames, out);
   }
@@ -360,18 +406,16 @@ void element_forces(const DeformableModel& m, DeformableState& s, double beta, i
       for (int k = 0; k < 9; ++k) g[k] += beta * gd[k];
     }
     linear_stress(g, mu, lambda, 1.0, sig);
-    if (nodal) s.fem_theta[static_cast<std::size_t>(t)] = g[0] + g[4] + g[8] - 3.0;
+    if (nodal) {
+      const double w = 0.25 * f.volume_m3(t) * (g[0] + g[4] + g[8] - 3.0);
+      for (int k = 0; k < 4; ++k) s.fem_node_theta[static_cast<std::size_t>(ix[k])] += w;
+    }
     mul33(r, sig, p);  // P = R sigma
     scatter_forces(p, b, f.volume_m3(t), ix, 1.0, out);
   }
   if (!nodal) return;
   // the nodes' mean volumetric strains, then each tetrahedron's forces with its pressure
   double* node_theta = s.fem_node_theta.data();
-  for (int i = 0; i < f.node_count; ++i) node_theta[i] = 0.0;
-  for (int t = 0; t < f.tet_count; ++t) {
-    const double w = 0.25 * f.volume_m3(t) * s.fem_theta[static_cast<std::size_t>(t)];
-    for (int k = 0; k < 4; ++k) node_theta[f.tets(k, t)] += w;
-  }
   for (int i = 0; i < f.node_count; ++i) node_theta[i] *= f.inv_node_volume(i);
   for (int g = 0; g < groups; ++g) pressure_group(m, s, g, node_theta, out);
   for (int t = 4 * groups; t < f.tet_count; ++t) {
