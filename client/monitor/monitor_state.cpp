@@ -82,6 +82,8 @@ std::string experiment_line(const Snapshot& s) {
          dds::experiment_text(s.experiment);
 }
 
+namespace {
+
 OrderedJson experiment_fields(const ExperimentDescription& e) {
   OrderedJson o;
   o["session"] = e.master_session();
@@ -112,6 +114,12 @@ OrderedJson experiment_fields(const ExperimentDescription& e) {
   o["driver_silent_s"] = json_number(e.driver_silent_s());
   o["driver_timeout_ms"] = json_number(e.driver_timeout_ms());
   return o;
+}
+
+}  // namespace
+
+std::string experiment_json(const ExperimentDescription& e) {
+  return json_line(experiment_fields(e));
 }
 
 namespace {

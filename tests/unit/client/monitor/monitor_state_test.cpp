@@ -155,6 +155,7 @@ TEST(MonitorJson, EveryLineParsesAndTextComesBackUnchanged) {
   EXPECT_EQ(st["profile"], "lo\"op");
   EXPECT_EQ(st["experiment"]["scheme"], "force-position");
   EXPECT_EQ(st["experiment"]["seeds"], nlohmann::ordered_json::array({7, 8}));
+  EXPECT_EQ(nlohmann::ordered_json::parse(experiment_json(s.experiment)), st["experiment"]);
 }
 
 }  // namespace
