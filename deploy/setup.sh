@@ -13,7 +13,8 @@
 #        TELEOP_SETUP_MESHER=0    (gmsh, which fills surface files with tetrahedra for model fem)
 set -euo pipefail
 
-# the session: the compiler, CMake, Eigen, Fast DDS, ODE, assimp, yaml-cpp, CLI11, OpenSSL
+# the session: the compiler, CMake, Eigen, Fast DDS, ODE, assimp, yaml-cpp, CLI11, nlohmann-json
+# (summaries, monitor lines, events), OpenSSL
 # (DDS Security checks), libevdev (the evdev device driver) and the charts' matplotlib
 packages=(
   build-essential cmake ninja-build pkg-config git
@@ -21,6 +22,7 @@ packages=(
   libfastrtps-dev libfastcdr-dev fastdds-tools fastddsgen default-jre-headless
   libode-dev libassimp-dev
   libyaml-cpp-dev libcli11-dev
+  nlohmann-json3-dev  # JSON written and read through nlohmann::json (common/util/json.hpp)
   libevdev-dev
   openssl libssl-dev  # DDS Security: deploy/make_security.sh; common/dds/security_check.cpp
   python3-matplotlib python3-numpy

@@ -71,7 +71,6 @@
 #include "common/dds/observer_topics.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/files.hpp"
-#include "common/util/json.hpp"
 #include "common/util/signals.hpp"
 #include "common/util/stats.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"

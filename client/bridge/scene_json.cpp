@@ -4,7 +4,8 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <cstdio>
+
+#include "common/util/json.hpp"
 
 namespace teleop::bridge {
 
@@ -170,25 +171,6 @@ void empty_arrays(std::string& o, std::initializer_list<const char*> names) {
 
 bool finite3(const double* v) {
   return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
-}
-
-std::string escaped(const std::string& s) {
-  std::string out;
-  out.reserve(s.size() + 2);
-  for (const char c : s) {
-    const auto u = static_cast<unsigned char>(c);
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (u < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", u);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out;
 }
 
 }  // namespace
@@ -445,17 +427,15 @@ bool SceneJson::plot(std::string& o, std::uint64_t ns) const {
 }
 
 std::string event_json(const Event& e) {
-  std::string o = "{\"seq\":";
-  integer(o, e.seq());
-  o += ",\"time_ns\":" + std::to_string(e.time_ns());
-  o += ",\"source\":\"" + escaped(e.source().to_string()) + "\",\"kind\":";
-  integer(o, e.kind());
-  o += ",\"severity\":";
-  integer(o, e.severity());
-  o += ",\"message\":\"" + escaped(e.message().to_string()) + "\",\"value\":";
-  num(o, e.value());
-  o += '}';
-  return o;
+  OrderedJson o;
+  o["seq"] = e.seq();
+  o["time_ns"] = e.time_ns();
+  o["source"] = e.source().to_string();
+  o["kind"] = static_cast<unsigned>(e.kind());
+  o["severity"] = static_cast<unsigned>(e.severity());
+  o["message"] = e.message().to_string();
+  o["value"] = std::isfinite(e.value()) ? e.value() : 0.0;
+  return json_compact(o);
 }
 
 }  // namespace teleop::bridge

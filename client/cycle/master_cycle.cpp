@@ -1,5 +1,7 @@
 #include "client/cycle/master_cycle.hpp"
 
+#include "common/util/json.hpp"
+
 #include <algorithm>
 #include <cstdio>
 #include <string>
@@ -401,22 +403,25 @@ void MasterCycle::stop() {
   device_.deactivate();
 }
 
-std::string channel_json(const ChannelReport& r) {
-  char buf[512];
+OrderedJson channel_fields(const ChannelReport& r) {
   const auto& c = r.counters;
-  std::snprintf(
-      buf, sizeof(buf),
-      "{\"pushed\":%llu,\"delivered\":%llu,\"lost_random\":%llu,\"lost_burst\":%llu,"
-      "\"lost_overflow\":%llu,\"lost_window\":%llu,\"stale\":%llu,\"loss_fraction\":%.6g,"
-      "\"delay_mean_ms\":%.6g,\"delay_std_ms\":%.6g,\"delay_p50_ms\":%.6g,"
-      "\"delay_p99_ms\":%.6g,\"delay_max_ms\":%.6g}",
-      static_cast<unsigned long long>(c.pushed), static_cast<unsigned long long>(c.delivered),
-      static_cast<unsigned long long>(c.lost_random), static_cast<unsigned long long>(c.lost_burst),
-      static_cast<unsigned long long>(c.lost_overflow),
-      static_cast<unsigned long long>(c.lost_window), static_cast<unsigned long long>(c.stale),
-      r.loss_fraction, r.delay_mean_ms, r.delay_std_ms, r.delay_p50_ms, r.delay_p99_ms,
-      r.delay_max_ms);
-  return buf;
+  OrderedJson o;
+  o["pushed"] = c.pushed;
+  o["delivered"] = c.delivered;
+  o["lost_random"] = c.lost_random;
+  o["lost_burst"] = c.lost_burst;
+  o["lost_overflow"] = c.lost_overflow;
+  o["lost_window"] = c.lost_window;
+  o["stale"] = c.stale;
+  o["loss_fraction"] = json_number(r.loss_fraction);
+  o["delay_mean_ms"] = json_number(r.delay_mean_ms);
+  o["delay_std_ms"] = json_number(r.delay_std_ms);
+  o["delay_p50_ms"] = json_number(r.delay_p50_ms);
+  o["delay_p99_ms"] = json_number(r.delay_p99_ms);
+  o["delay_max_ms"] = json_number(r.delay_max_ms);
+  return o;
 }
+
+std::string channel_json(const ChannelReport& r) { return json_compact(channel_fields(r)); }
 
 }  // namespace teleop::master

@@ -23,6 +23,7 @@
 // counts from start(). step() and finish() allocate nothing.
 #include <Eigen/Core>
 #include <memory>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
 
@@ -236,7 +237,9 @@ class MasterCycle {
   std::uint64_t tunings_rejected_ = 0;
 };
 
-/// JSON object of a channel report: {"pushed":..,"delay_mean_ms":..,"delay_p50_ms":..,...}.
+/// A channel report as a JSON object: {"pushed":..,"delay_mean_ms":..,"delay_p50_ms":..,...}.
+nlohmann::ordered_json channel_fields(const ChannelReport& r);
+/// channel_fields(r) written compact.
 std::string channel_json(const ChannelReport& r);
 
 /// Minimum-jerk blend s(t) in [0, 1] for t in [0, T].

@@ -254,48 +254,57 @@ double SessionMetrics::mean_contact_force_n() const {
   return n_contact_ ? fenv_sum_ / static_cast<double>(n_contact_) : 0.0;
 }
 
-namespace {
-std::string num(double v) { return json_number(v); }
-}  // namespace
+OrderedJson SessionMetrics::transparency_fields() const {
+  const double nan = std::nan("");
+  OrderedJson o;
+  o["free_force_mean_n"] = json_number(free_force_mean_n());
+  o["free_force_p99_n"] = json_number(free_force_p99_n());
+  o["free_force_max_n"] = json_number(n_free_ ? free_max_ : nan);
+  o["free_time_s"] = json_number(free_time_);
+  o["felt_force_ratio"] = json_number(felt_force_ratio());
+  o["felt_force_error_rms_n"] = json_number(felt_force_error_rms_n());
+  o["felt_stiffness_n_per_m"] = json_number(felt_stiffness_n_per_m());
+  o["felt_offset_n"] = json_number(felt_fit_.offset());
+  o["environment_stiffness_n_per_m"] = json_number(environment_stiffness_n_per_m());
+  o["environment_offset_n"] = json_number(env_fit_.offset());
+  o["loading_samples"] = json_number(static_cast<double>(env_fit_.n));
+  o["loading_depth_min_m"] = json_number(env_fit_.n ? env_fit_.x_min : nan);
+  o["loading_depth_max_m"] = json_number(env_fit_.n ? env_fit_.x_max : nan);
+  o["stiffness_ratio"] = json_number(stiffness_ratio());
+  o["position_error_rms_m"] = json_number(position_error_rms_m());
+  o["over_rating_time_s"] = json_number(over_rating_time_);
+  o["peak_average_force_n"] = json_number(f_avg_max_);
+  return o;
+}
 
 std::string SessionMetrics::transparency_json() const {
-  return "{\"free_force_mean_n\":" + num(free_force_mean_n()) +
-         ",\"free_force_p99_n\":" + num(free_force_p99_n()) +
-         ",\"free_force_max_n\":" + num(n_free_ ? free_max_ : std::nan("")) +
-         ",\"free_time_s\":" + num(free_time_) +
-         ",\"felt_force_ratio\":" + num(felt_force_ratio()) +
-         ",\"felt_force_error_rms_n\":" + num(felt_force_error_rms_n()) +
-         ",\"felt_stiffness_n_per_m\":" + num(felt_stiffness_n_per_m()) +
-         ",\"felt_offset_n\":" + num(felt_fit_.offset()) +
-         ",\"environment_stiffness_n_per_m\":" + num(environment_stiffness_n_per_m()) +
-         ",\"environment_offset_n\":" + num(env_fit_.offset()) +
-         ",\"loading_samples\":" + num(static_cast<double>(env_fit_.n)) +
-         ",\"loading_depth_min_m\":" + num(env_fit_.n ? env_fit_.x_min : std::nan("")) +
-         ",\"loading_depth_max_m\":" + num(env_fit_.n ? env_fit_.x_max : std::nan("")) +
-         ",\"stiffness_ratio\":" + num(stiffness_ratio()) +
-         ",\"position_error_rms_m\":" + num(position_error_rms_m()) +
-         ",\"over_rating_time_s\":" + num(over_rating_time_) +
-         ",\"peak_average_force_n\":" + num(f_avg_max_) + "}";
+  return json_compact(transparency_fields());
 }
 
-std::string SessionMetrics::summary_json() const {
-  char buf[1024];
-  std::snprintf(buf, sizeof(buf),
-                "{\"verdict\":\"%s\",\"verdict_reason\":\"%s\",\"unstable_since_s\":%.6g,"
-                "\"position_error_rms_m\":%.6g,\"position_error_max_m\":%.6g,"
-                "\"force_error_rms_n\":%.6g,\"mean_contact_force_n\":%.6g,"
-                "\"contact_time_s\":%.6g,\"energy_j\":%.6g,\"energy_min_j\":%.6g,"
-                "\"max_device_force_n\":%.6g,\"saturated_time_s\":%.6g,"
-                "\"link_lost_time_s\":%.6g,\"oscillating_windows\":%llu,\"samples\":%llu,"
-                "\"nonfinite_samples\":%llu,\"forward_loss\":%.6g,\"backward_loss\":%.6g}",
-                verdict_name(verdict_), reason_, unstable_time_s_, position_error_rms_m(), err_max_,
-                force_error_rms_n(), mean_contact_force_n(), contact_time_, energy_, energy_min_,
-                f_dev_max_, saturated_time_, link_lost_time_,
-                static_cast<unsigned long long>(osc_windows_total_),
-                static_cast<unsigned long long>(n_), static_cast<unsigned long long>(nonfinite_),
-                forward_loss(), backward_loss());
-  return buf;
+OrderedJson SessionMetrics::summary_fields() const {
+  OrderedJson o;
+  o["verdict"] = verdict_name(verdict_);
+  o["verdict_reason"] = reason_ ? reason_ : "";
+  o["unstable_since_s"] = json_number(unstable_time_s_);
+  o["position_error_rms_m"] = json_number(position_error_rms_m());
+  o["position_error_max_m"] = json_number(err_max_);
+  o["force_error_rms_n"] = json_number(force_error_rms_n());
+  o["mean_contact_force_n"] = json_number(mean_contact_force_n());
+  o["contact_time_s"] = json_number(contact_time_);
+  o["energy_j"] = json_number(energy_);
+  o["energy_min_j"] = json_number(energy_min_);
+  o["max_device_force_n"] = json_number(f_dev_max_);
+  o["saturated_time_s"] = json_number(saturated_time_);
+  o["link_lost_time_s"] = json_number(link_lost_time_);
+  o["oscillating_windows"] = osc_windows_total_;
+  o["samples"] = n_;
+  o["nonfinite_samples"] = nonfinite_;
+  o["forward_loss"] = json_number(forward_loss());
+  o["backward_loss"] = json_number(backward_loss());
+  return o;
 }
+
+std::string SessionMetrics::summary_json() const { return json_compact(summary_fields()); }
 
 const char* SessionMetrics::csv_header() {
   return "time_s,xm_x_m,xm_y_m,xm_z_m,xs_x_m,xs_y_m,xs_z_m,vm_x_mps,vm_y_mps,vm_z_mps,"

@@ -51,6 +51,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 
 namespace teleop::master {
@@ -209,9 +210,13 @@ class SessionMetrics {
   double over_rating_time_s() const { return over_rating_time_; }
   double peak_average_force_n() const { return f_avg_max_; }
 
-  /// JSON object with the summary, e.g. {"verdict":"stable",...}. Allocates.
+  /// The summary as a JSON object ({"verdict":"stable",...}; NaN as null). Allocates.
+  nlohmann::ordered_json summary_fields() const;
+  /// summary_fields() written compact, e.g. {"verdict":"stable",...}. Allocates.
   std::string summary_json() const;
-  /// JSON object with the transparency figures (NaN as null). Allocates.
+  /// The transparency figures as a JSON object (NaN as null). Allocates.
+  nlohmann::ordered_json transparency_fields() const;
+  /// transparency_fields() written compact. Allocates.
   std::string transparency_json() const;
 
   /// CSV header of the per-cycle log (see docs/control.md for the columns).

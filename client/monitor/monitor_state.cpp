@@ -9,6 +9,7 @@
 #include <cstdio>
 
 #include "common/dds/experiment_text.hpp"
+#include "common/util/json.hpp"
 
 namespace teleop::monitor {
 
@@ -23,13 +24,8 @@ std::string fmt(const char* f, ...) {
   return buf;
 }
 
-std::string num(double v) {
-  if (!std::isfinite(v)) return "null";
-  return fmt("%.6g", v);
-}
-
-std::string vec3(const std::array<double, 3>& v) {
-  return "[" + num(v[0]) + ", " + num(v[1]) + ", " + num(v[2]) + "]";
+OrderedJson vec3(const std::array<double, 3>& v) {
+  return OrderedJson::array({json_number(v[0]), json_number(v[1]), json_number(v[2])});
 }
 
 std::uint64_t rejected(const ServerStats& s) {
@@ -66,33 +62,6 @@ std::string Snapshot::status() const {
   return live;
 }
 
-std::string json_string(const std::string& s) {
-  std::string o = "\"";
-  for (const char c : s) {
-    switch (c) {
-      case '"':
-        o += "\\\"";
-        break;
-      case '\\':
-        o += "\\\\";
-        break;
-      case '\n':
-        o += "\\n";
-        break;
-      case '\t':
-        o += "\\t";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          o += fmt("\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
-        } else {
-          o += c;
-        }
-    }
-  }
-  return o + "\"";
-}
-
 std::string scene_line(const SceneDescription& d) {
   return fmt("scene '%s': %zu objects, %u joints, physics %.0f Hz, tip radius %.3f m",
              d.name().c_str(), d.objects().size(), d.joint_count(), d.physics_rate_hz(),
@@ -113,32 +82,44 @@ std::string experiment_line(const Snapshot& s) {
          dds::experiment_text(s.experiment);
 }
 
+namespace {
+
+OrderedJson experiment_fields(const ExperimentDescription& e) {
+  OrderedJson o;
+  o["session"] = e.master_session();
+  o["scheme"] = e.scheme().to_string();
+  o["master_stiffness_n_per_m"] = json_number(e.master_stiffness_n_per_m());
+  o["master_damping_ns_per_m"] = json_number(e.master_damping_ns_per_m());
+  o["force_gain"] = json_number(e.force_gain());
+  o["slave_stiffness_n_per_m"] = json_number(e.slave_stiffness_n_per_m());
+  o["forward_delay_ms"] = json_number(e.forward_delay_ms());
+  o["backward_delay_ms"] = json_number(e.backward_delay_ms());
+  o["forward_jitter_ms"] = json_number(e.forward_jitter_ms());
+  o["backward_jitter_ms"] = json_number(e.backward_jitter_ms());
+  o["forward_jitter_dist"] = e.forward_jitter_dist().to_string();
+  o["backward_jitter_dist"] = e.backward_jitter_dist().to_string();
+  o["forward_loss"] = json_number(e.forward_loss());
+  o["backward_loss"] = json_number(e.backward_loss());
+  o["forward_burst"] = OrderedJson::array(
+      {json_number(e.forward_burst_p_gb()), json_number(e.forward_burst_p_bg())});
+  o["backward_burst"] = OrderedJson::array(
+      {json_number(e.backward_burst_p_gb()), json_number(e.backward_burst_p_bg())});
+  o["seeds"] = OrderedJson::array({e.forward_seed(), e.backward_seed()});
+  o["rate_hz"] = json_number(e.rate_hz());
+  o["loop_delay_p50_ms"] = json_number(e.loop_delay_p50_ms());
+  o["loop_delay_p99_ms"] = json_number(e.loop_delay_p99_ms());
+  o["device"] = e.device().to_string();
+  o["driver_live"] = e.driver_live();
+  o["driver_silences"] = e.driver_silences();
+  o["driver_silent_s"] = json_number(e.driver_silent_s());
+  o["driver_timeout_ms"] = json_number(e.driver_timeout_ms());
+  return o;
+}
+
+}  // namespace
+
 std::string experiment_json(const ExperimentDescription& e) {
-  return "{\"session\": " + std::to_string(e.master_session()) +
-         ", \"scheme\": " + json_string(e.scheme().to_string()) +
-         ", \"master_stiffness_n_per_m\": " + num(e.master_stiffness_n_per_m()) +
-         ", \"master_damping_ns_per_m\": " + num(e.master_damping_ns_per_m()) +
-         ", \"force_gain\": " + num(e.force_gain()) +
-         ", \"slave_stiffness_n_per_m\": " + num(e.slave_stiffness_n_per_m()) +
-         ", \"forward_delay_ms\": " + num(e.forward_delay_ms()) +
-         ", \"backward_delay_ms\": " + num(e.backward_delay_ms()) +
-         ", \"forward_jitter_ms\": " + num(e.forward_jitter_ms()) +
-         ", \"backward_jitter_ms\": " + num(e.backward_jitter_ms()) +
-         ", \"forward_jitter_dist\": " + json_string(e.forward_jitter_dist().to_string()) +
-         ", \"backward_jitter_dist\": " + json_string(e.backward_jitter_dist().to_string()) +
-         ", \"forward_loss\": " + num(e.forward_loss()) +
-         ", \"backward_loss\": " + num(e.backward_loss()) + ", \"forward_burst\": [" +
-         num(e.forward_burst_p_gb()) + ", " + num(e.forward_burst_p_bg()) +
-         "], \"backward_burst\": [" + num(e.backward_burst_p_gb()) + ", " +
-         num(e.backward_burst_p_bg()) + "], \"seeds\": [" + std::to_string(e.forward_seed()) +
-         ", " + std::to_string(e.backward_seed()) + "], \"rate_hz\": " + num(e.rate_hz()) +
-         ", \"loop_delay_p50_ms\": " + num(e.loop_delay_p50_ms()) +
-         ", \"loop_delay_p99_ms\": " + num(e.loop_delay_p99_ms()) +
-         ", \"device\": " + json_string(e.device().to_string()) +
-         ", \"driver_live\": " + (e.driver_live() ? "true" : "false") +
-         ", \"driver_silences\": " + std::to_string(e.driver_silences()) +
-         ", \"driver_silent_s\": " + num(e.driver_silent_s()) +
-         ", \"driver_timeout_ms\": " + num(e.driver_timeout_ms()) + "}";
+  return json_line(experiment_fields(e));
 }
 
 namespace {
@@ -243,84 +224,99 @@ std::string render_lines(const Snapshot& s) {
   return o;
 }
 
-std::string render_json(const Snapshot& s) {
-  std::string o = "{\"type\": \"status\", \"t\": " + num(s.t_s) +
-                  ", \"domain\": " + std::to_string(s.domain) +
-                  ", \"profile\": " + json_string(s.profile) +
-                  ", \"insecure\": " + (s.insecure ? "true" : "false") +
-                  ", \"full_rate\": " + (s.full_rate ? "true" : "false") +
-                  ", \"waiting\": " + (s.waiting() ? "true" : "false") +
-                  ", \"status\": " + json_string(s.status()) + ", \"topics\": {";
-  bool first = true;
+namespace {
+
+OrderedJson topics_fields(const Snapshot& s) {
+  OrderedJson topics = OrderedJson::object();
   for (const auto& t : s.topics) {
-    o += (first ? "" : ", ") + json_string(t.name) + ": {\"count\": " + std::to_string(t.count) +
-         ", \"rate_hz\": " + num(t.rate_hz) +
-         ", \"age_s\": " + (t.seen() ? num(t.age_s) : std::string("null")) +
-         ", \"stale\": " + (t.stale() ? "true" : "false") + "}";
-    first = false;
+    topics[t.name] = {{"count", t.count},
+                      {"rate_hz", json_number(t.rate_hz)},
+                      {"age_s", t.seen() ? json_number(t.age_s) : OrderedJson(nullptr)},
+                      {"stale", t.stale()}};
   }
-  o += "}";
-  const TopicView* ts = s.topic("slave_state");
-  if (s.have_slave && !(ts && ts->stale())) {
-    o += ", \"slave\": {\"tip_m\": " + vec3(s.slave.tip_position_m()) +
-         ", \"contact_force_n\": " + vec3(s.slave.contact_force_n()) +
-         ", \"penetration_m\": " + num(s.slave.penetration_m()) +
-         ", \"in_contact\": " + (s.slave.in_contact() ? "true" : "false") +
-         ", \"holding\": " + (s.slave.holding() ? "true" : "false") + "}";
-  } else {
-    o += ", \"slave\": null";
+  return topics;
+}
+
+OrderedJson server_fields(const ServerStats& st) {
+  return {{"loop_rate_hz", json_number(st.loop_rate_hz())},
+          {"step_us_p50", json_number(st.step_us_p50())},
+          {"step_us_p99", json_number(st.step_us_p99())},
+          {"overruns", st.overruns()},
+          {"rejected", rejected(st)},
+          {"watchdog_trips", st.watchdog_trips()},
+          {"matched_state_readers", st.matched_state_readers()}};
+}
+
+}  // namespace
+
+std::string render_json(const Snapshot& s) {
+  OrderedJson o;
+  o["type"] = "status";
+  o["t"] = json_number(s.t_s);
+  o["domain"] = s.domain;
+  o["profile"] = s.profile;
+  o["insecure"] = s.insecure;
+  o["full_rate"] = s.full_rate;
+  o["waiting"] = s.waiting();
+  o["status"] = s.status();
+  o["topics"] = topics_fields(s);
+  // a stale topic's last sample is not shown as live
+  const auto live = [&s](const char* topic) {
+    const TopicView* t = s.topic(topic);
+    return !(t && t->stale());
+  };
+  o["slave"] = nullptr;
+  if (s.have_slave && live("slave_state")) {
+    o["slave"] = {{"tip_m", vec3(s.slave.tip_position_m())},
+                  {"contact_force_n", vec3(s.slave.contact_force_n())},
+                  {"penetration_m", json_number(s.slave.penetration_m())},
+                  {"in_contact", s.slave.in_contact()},
+                  {"holding", s.slave.holding()}};
   }
-  const TopicView* tm = s.topic("master_state");
-  if (s.have_master && !(tm && tm->stale())) {
-    o += ", \"master\": {\"rtt_ms\": " + num(s.master.rtt_ms()) +
-         ", \"rendered_force_n\": " + vec3(s.master.rendered_force_n()) +
-         ", \"position_error_m\": " + num(s.master.position_error_m()) +
-         ", \"link_ok\": " + (s.master.link_ok() ? "true" : "false") + "}";
-  } else {
-    o += ", \"master\": null";
+  o["master"] = nullptr;
+  if (s.have_master && live("master_state")) {
+    o["master"] = {{"rtt_ms", json_number(s.master.rtt_ms())},
+                   {"rendered_force_n", vec3(s.master.rendered_force_n())},
+                   {"position_error_m", json_number(s.master.position_error_m())},
+                   {"link_ok", s.master.link_ok()}};
   }
-  const TopicView* tss = s.topic("server_stats");
-  if (s.have_stats && !(tss && tss->stale())) {
-    o += ", \"server\": {\"loop_rate_hz\": " + num(s.stats.loop_rate_hz()) +
-         ", \"step_us_p50\": " + num(s.stats.step_us_p50()) +
-         ", \"step_us_p99\": " + num(s.stats.step_us_p99()) +
-         ", \"overruns\": " + std::to_string(s.stats.overruns()) +
-         ", \"rejected\": " + std::to_string(rejected(s.stats)) +
-         ", \"watchdog_trips\": " + std::to_string(s.stats.watchdog_trips()) +
-         ", \"matched_state_readers\": " + std::to_string(s.stats.matched_state_readers()) + "}";
-  } else {
-    o += ", \"server\": null";
-  }
-  o += ", \"experiment\": " + (s.have_experiment ? experiment_json(s.experiment) : "null");
-  return o + "}";
+  o["server"] =
+      s.have_stats && live("server_stats") ? server_fields(s.stats) : OrderedJson(nullptr);
+  o["experiment"] = s.have_experiment ? experiment_fields(s.experiment) : OrderedJson(nullptr);
+  return json_line(o);
 }
 
 std::string event_json(const EventView& e) {
-  return "{\"type\": \"event\", \"t\": " + num(e.at_s) +
-         ", \"source\": " + json_string(e.event.source().to_string()) +
-         ", \"kind\": " + json_string(dds::event_kind_name(e.event.kind())) +
-         ", \"severity\": " + std::to_string(e.event.severity()) +
-         ", \"message\": " + json_string(e.event.message().to_string()) +
-         ", \"value\": " + num(e.event.value()) + "}";
+  OrderedJson o;
+  o["type"] = "event";
+  o["t"] = json_number(e.at_s);
+  o["source"] = e.event.source().to_string();
+  o["kind"] = dds::event_kind_name(e.event.kind());
+  o["severity"] = static_cast<int>(e.event.severity());
+  o["message"] = e.event.message().to_string();
+  o["value"] = json_number(e.event.value());
+  return json_line(o);
 }
 
 std::string scene_json(const SceneDescription& d) {
   // each deformable body's automatic step: its stable step and the sub-steps it takes
-  std::string deformables;
-  for (const SceneObject& o : d.objects()) {
-    if (o.kind() != OBJECT_DEFORMABLE_MESH) continue;
-    deformables += std::string(deformables.empty() ? "" : ", ") +
-                   "{\"id\": " + std::to_string(o.id()) +
-                   ", \"highest_frequency_radps\": " + num(o.highest_frequency_radps()) +
-                   ", \"stable_step_s\": " + num(o.stable_step_s()) +
-                   ", \"substeps\": " + std::to_string(o.substeps()) + "}";
+  OrderedJson deformables = OrderedJson::array();
+  for (const SceneObject& ob : d.objects()) {
+    if (ob.kind() != OBJECT_DEFORMABLE_MESH) continue;
+    deformables.push_back({{"id", ob.id()},
+                           {"highest_frequency_radps", json_number(ob.highest_frequency_radps())},
+                           {"stable_step_s", json_number(ob.stable_step_s())},
+                           {"substeps", ob.substeps()}});
   }
-  return "{\"type\": \"scene\", \"name\": " + json_string(d.name().to_string()) +
-         ", \"objects\": " + std::to_string(d.objects().size()) +
-         ", \"joints\": " + std::to_string(d.joint_count()) +
-         ", \"physics_rate_hz\": " + num(d.physics_rate_hz()) +
-         ", \"tip_radius_m\": " + num(d.tip_radius_m()) + ", \"deformables\": [" + deformables +
-         "]}";
+  OrderedJson o;
+  o["type"] = "scene";
+  o["name"] = d.name().to_string();
+  o["objects"] = d.objects().size();
+  o["joints"] = d.joint_count();
+  o["physics_rate_hz"] = json_number(d.physics_rate_hz());
+  o["tip_radius_m"] = json_number(d.tip_radius_m());
+  o["deformables"] = std::move(deformables);
+  return json_line(o);
 }
 
 }  // namespace teleop::monitor

@@ -11,7 +11,6 @@
 #include <iostream>
 #include <limits>
 #include <mutex>
-#include <sstream>
 #include <thread>
 
 #include "client/cycle/master_cycle.hpp"
@@ -882,111 +881,128 @@ struct MasterNode::Impl {
 
   void write_summary_json(const MasterCycle& cycle, const SessionReport& rep) const {
     const SessionMetrics& metrics = cycle.metrics();
-    const SafetyLayer& safety = cycle.safety();
+    const SessionVerdict verdict = session_verdict(metrics, rep, cycle.config().controller.scheme);
+    const HertzReference hz = hertz_for_session(metrics);
+    OrderedJson out;
+    out["version"] = version_string();
+    out["hertz"] = {{"valid", hz.valid},
+                    {"travel_m", json_number(hz.travel_m)},
+                    {"force_n", json_number(hz.force_n)},
+                    {"tangent_n_per_m", json_number(hz.tangent_n_per_m)},
+                    {"secant_n_per_m", json_number(hz.secant_n_per_m)},
+                    {"fit_from_m", json_number(hz.fit_from_m)},
+                    {"fit_to_m", json_number(hz.fit_to_m)},
+                    {"fit_n_per_m", json_number(hz.fit_n_per_m)}};
+    out["duration_s"] = json_number(rep.elapsed_s);
+    out["session_s"] = json_number(rep.session_s);
+    out["rate_hz"] = json_number(options.rate_hz);
+    out["scheme"] = cycle.config().controller.scheme;
+    out["device"] = options.device;
+    out["device_samples_ignored"] = device_driver.ignored();
+    out["script"] = options.script;
+    add_link_fields(out, rep);
+    out["force_error_relative"] = json_number(relative_force_error(metrics));
+    out["echoed"] = rep.echoed;
+    out["states_received"] = rep.states_received;
+    add_timing_fields(out, rep);
+    out["insecure"] = options.dds.insecure;
+    out["verdict"] = verdict.name;
+    out["verdict_reason"] = verdict.reason;
+    out["metrics"] = metrics.summary_fields();
+    out["transparency"] = metrics.transparency_fields();
+    out["delay"] = {{"forward", channel_fields(rep.forward)},
+                    {"backward", channel_fields(rep.backward)}};
+    add_safety_fields(out, cycle, rep);
+    out["experiment_writes"] = rep.experiment_writes;
+    out["tuning"] = tuning_fields(cycle);
+    out["ownership"] = {{"session", master_session},
+                        {"refused", rep.refused},
+                        {"issued_before_owning", rep.issued_before_owning},
+                        {"waited_s", json_number(rep.waited_for_owner_s)},
+                        {"server_says", rep.owner_message}};
+    write_text_file(options.summary_json, json_document(out));
+  }
+
+  /// The summary's counts of the command link, the server's and the network threads'.
+  void add_link_fields(OrderedJson& out, const SessionReport& rep) const {
+    out["issued"] = rep.issued;
+    out["dropped_by_channel"] = rep.dropped;
+    out["sent"] = rep.sent;
+    out["received"] = rep.received;
+    out["in_flight"] = rep.in_flight;
+    out["lost"] = lost_commands(link_counts(rep));
+    out["server"] = {{"faults", rep.server_faults},
+                     {"watchdog_trips", rep.server_watchdog_trips},
+                     {"overruns", rep.server_overruns},
+                     {"rejected", rep.server_rejected},
+                     {"restarts", rep.server_restarts}};
+    out["server_binding"] = binding_fields();
+    out["network_threads"] = {{"commands_dropped", rep.commands_dropped},
+                              {"command_write_failures", rep.command_write_failures},
+                              {"states_replaced", rep.states_replaced},
+                              {"events_dropped", rep.events_dropped},
+                              {"write_failures", rep.write_failures}};
+  }
+
+  /// The summary's round trip, loop delay and jitter, overruns, link losses and stalls.
+  static void add_timing_fields(OrderedJson& out, const SessionReport& rep) {
     const Summary& r = rep.rtt_ms;
     const Summary& ld = rep.loop_delay_ms;
     const Summary& j = rep.jitter_us;
-    const SessionVerdict verdict = session_verdict(metrics, rep, cycle.config().controller.scheme);
-    std::ostringstream out;
-    const HertzReference hz = hertz_for_session(metrics);
-    out << "{\n"
-        << "  \"version\": \"" << json_escape(version_string()) << "\",\n"
-        << "  \"hertz\": {\"valid\": " << (hz.valid ? "true" : "false")
-        << ", \"travel_m\": " << json_number(hz.travel_m)
-        << ", \"force_n\": " << json_number(hz.force_n)
-        << ", \"tangent_n_per_m\": " << json_number(hz.tangent_n_per_m)
-        << ", \"secant_n_per_m\": " << json_number(hz.secant_n_per_m)
-        << ", \"fit_from_m\": " << json_number(hz.fit_from_m)
-        << ", \"fit_to_m\": " << json_number(hz.fit_to_m)
-        << ", \"fit_n_per_m\": " << json_number(hz.fit_n_per_m) << "},\n"
-        << "  \"duration_s\": " << json_number(rep.elapsed_s) << ",\n"
-        << "  \"session_s\": " << json_number(rep.session_s) << ",\n"
-        << "  \"rate_hz\": " << json_number(options.rate_hz) << ",\n"
-        << "  \"scheme\": \"" << cycle.config().controller.scheme << "\",\n"
-        << "  \"device\": \"" << options.device << "\",\n"
-        << "  \"device_samples_ignored\": " << device_driver.ignored() << ",\n"
-        << "  \"script\": \"" << options.script << "\",\n"
-        << "  \"issued\": " << rep.issued << ",\n"
-        << "  \"dropped_by_channel\": " << rep.dropped << ",\n"
-        << "  \"sent\": " << rep.sent << ",\n"
-        << "  \"received\": " << rep.received << ",\n"
-        << "  \"in_flight\": " << rep.in_flight << ",\n"
-        << "  \"lost\": " << lost_commands(link_counts(rep)) << ",\n"
-        << "  \"server\": {\"faults\": " << rep.server_faults
-        << ", \"watchdog_trips\": " << rep.server_watchdog_trips
-        << ", \"overruns\": " << rep.server_overruns << ", \"rejected\": " << rep.server_rejected
-        << ", \"restarts\": " << rep.server_restarts << "},\n"
-        << "  \"server_binding\": " << binding_json() << ",\n"
-        << "  \"network_threads\": {\"commands_dropped\": " << rep.commands_dropped
-        << ", \"command_write_failures\": " << rep.command_write_failures
-        << ", \"states_replaced\": " << rep.states_replaced
-        << ", \"events_dropped\": " << rep.events_dropped
-        << ", \"write_failures\": " << rep.write_failures << "},\n"
-        << "  \"force_error_relative\": " << json_number(relative_force_error(metrics)) << ",\n"
-        << "  \"echoed\": " << rep.echoed << ",\n"
-        << "  \"states_received\": " << rep.states_received << ",\n"
-        << "  \"rtt_ms\": {\"p50\": " << json_number(r.p50) << ", \"p90\": " << json_number(r.p90)
-        << ", \"p99\": " << json_number(r.p99) << ", \"p999\": " << json_number(r.p999)
-        << ", \"max\": " << json_number(r.max) << ", \"mean\": " << json_number(r.mean)
-        << ", \"count\": " << r.count << "},\n"
-        << "  \"loop_delay_ms\": {\"p50\": " << json_number(ld.p50)
-        << ", \"p99\": " << json_number(ld.p99) << ", \"max\": " << json_number(ld.max)
-        << ", \"count\": " << ld.count << "},\n"
-        << "  \"loop_jitter_us\": {\"p50\": " << json_number(j.p50)
-        << ", \"p99\": " << json_number(j.p99) << ", \"max\": " << json_number(j.max) << "},\n"
-        << "  \"overruns\": " << rep.overruns << ",\n"
-        << "  \"closing_cycles\": " << rep.closing_cycles << ",\n"
-        << "  \"releases_sent\": " << rep.releases_sent << ",\n"
-        << "  \"link_losses\": " << rep.link_losses << ",\n"
-        << "  \"stalls\": {\"count\": " << rep.stalls
-        << ", \"longest_s\": " << json_number(rep.longest_stall_s) << "},\n"
-        << "  \"wait_server_s\": " << json_number(rep.wait_s) << ",\n"
-        << "  \"insecure\": " << (options.dds.insecure ? "true" : "false") << ",\n"
-        << "  \"verdict\": \"" << verdict.name << "\",\n"
-        << "  \"verdict_reason\": \"" << json_escape(verdict.reason) << "\",\n"
-        << "  \"metrics\": " << metrics.summary_json() << ",\n"
-        << "  \"transparency\": " << metrics.transparency_json() << ",\n"
-        << "  \"delay\": {\"forward\": " << channel_json(rep.forward)
-        << ", \"backward\": " << channel_json(rep.backward) << "},\n"
-        << "  \"safety\": {\"cut\": " << (safety.cut() ? "true" : "false") << ", \"reason\": \""
-        << safety.cut_reason() << "\", \"max_output_n\": " << json_number(safety.max_output_n())
-        << ", \"max_step_n\": " << json_number(safety.max_step_n())
-        << ", \"max_force_rate_n_per_s\": "
-        << json_number(cycle.device_spec().max_force_rate_n_per_s)
-        << ", \"rate_limited_cycles\": " << safety.rate_limited_cycles()
-        << ", \"workspace_violations\": " << cycle.workspace_violations() << "},\n"
-        << "  \"rehomes\": {\"total\": " << cycle.rehomes()
-        << ", \"link_back\": " << cycle.rehomes(RehomeReason::kLinkBack)
-        << ", \"slave_restart\": " << cycle.rehomes(RehomeReason::kSlaveRestart)
-        << ", \"takeover\": " << cycle.rehomes(RehomeReason::kTakeover)
-        << ", \"driver_back\": " << cycle.rehomes(RehomeReason::kDriverBack) << "},\n"
-        << "  \"driver\": {\"timeout_ms\": " << json_number(options.driver_timeout_s * 1e3)
-        << ", \"silences\": " << rep.driver_silences
-        << ", \"silent_s\": " << json_number(rep.driver_silent_s)
-        << ", \"live_s\": " << json_number(std::max(0.0, rep.session_s - rep.driver_silent_s))
-        << ", \"figures\": \"over the time the device was live\"},\n"
-        << "  \"experiment_writes\": " << rep.experiment_writes << ",\n"
-        << "  \"tuning\": " << tuning_json(cycle) << ",\n"
-        << "  \"ownership\": {\"session\": " << master_session
-        << ", \"refused\": " << (rep.refused ? "true" : "false")
-        << ", \"issued_before_owning\": " << rep.issued_before_owning
-        << ", \"waited_s\": " << json_number(rep.waited_for_owner_s) << ", \"server_says\": \""
-        << json_escape(rep.owner_message) << "\"}\n"
-        << "}\n";
-    write_text_file(options.summary_json, out.str());
+    out["rtt_ms"] = {{"p50", json_number(r.p50)}, {"p90", json_number(r.p90)},
+                     {"p99", json_number(r.p99)}, {"p999", json_number(r.p999)},
+                     {"max", json_number(r.max)}, {"mean", json_number(r.mean)},
+                     {"count", r.count}};
+    out["loop_delay_ms"] = {{"p50", json_number(ld.p50)},
+                            {"p99", json_number(ld.p99)},
+                            {"max", json_number(ld.max)},
+                            {"count", ld.count}};
+    out["loop_jitter_us"] = {
+        {"p50", json_number(j.p50)}, {"p99", json_number(j.p99)}, {"max", json_number(j.max)}};
+    out["overruns"] = rep.overruns;
+    out["closing_cycles"] = rep.closing_cycles;
+    out["releases_sent"] = rep.releases_sent;
+    out["link_losses"] = rep.link_losses;
+    out["stalls"] = {{"count", rep.stalls}, {"longest_s", json_number(rep.longest_stall_s)}};
+    out["wait_server_s"] = json_number(rep.wait_s);
+  }
+
+  /// The summary's safety layer, re-homes and device driver.
+  void add_safety_fields(OrderedJson& out, const MasterCycle& cycle,
+                         const SessionReport& rep) const {
+    const SafetyLayer& safety = cycle.safety();
+    out["safety"] = {
+        {"cut", safety.cut()},
+        {"reason", safety.cut_reason()},
+        {"max_output_n", json_number(safety.max_output_n())},
+        {"max_step_n", json_number(safety.max_step_n())},
+        {"max_force_rate_n_per_s", json_number(cycle.device_spec().max_force_rate_n_per_s)},
+        {"rate_limited_cycles", safety.rate_limited_cycles()},
+        {"workspace_violations", cycle.workspace_violations()}};
+    out["rehomes"] = {{"total", cycle.rehomes()},
+                      {"link_back", cycle.rehomes(RehomeReason::kLinkBack)},
+                      {"slave_restart", cycle.rehomes(RehomeReason::kSlaveRestart)},
+                      {"takeover", cycle.rehomes(RehomeReason::kTakeover)},
+                      {"driver_back", cycle.rehomes(RehomeReason::kDriverBack)}};
+    out["driver"] = {{"timeout_ms", json_number(options.driver_timeout_s * 1e3)},
+                     {"silences", rep.driver_silences},
+                     {"silent_s", json_number(rep.driver_silent_s)},
+                     {"live_s", json_number(std::max(0.0, rep.session_s - rep.driver_silent_s))},
+                     {"figures", "over the time the device was live"}};
   }
 
   /// {"server": prefix, "bound":.., "rebinds":.., "foreign": {"states":.., "stats":..,
   /// "events":..}, "first_foreign": prefix}: which server this master believed, and what it
   /// ignored from other participants.
-  std::string binding_json() const {
-    return "{\"server\": \"" + binding.server() +
-           "\", \"bound\": " + (binding.bound() ? "true" : "false") +
-           ", \"rebinds\": " + std::to_string(binding.rebinds()) +
-           ", \"foreign\": {\"states\": " + std::to_string(binding.foreign(ServerBinding::kState)) +
-           ", \"stats\": " + std::to_string(binding.foreign(ServerBinding::kStats)) +
-           ", \"events\": " + std::to_string(binding.foreign(ServerBinding::kEvent)) +
-           "}, \"first_foreign\": \"" + binding.first_foreign() + "\"}";
+  OrderedJson binding_fields() const {
+    return {{"server", binding.server()},
+            {"bound", binding.bound()},
+            {"rebinds", binding.rebinds()},
+            {"foreign",
+             {{"states", binding.foreign(ServerBinding::kState)},
+              {"stats", binding.foreign(ServerBinding::kStats)},
+              {"events", binding.foreign(ServerBinding::kEvent)}}},
+            {"first_foreign", binding.first_foreign()}};
   }
 
   /// The summary's lines on the server binding and the loop's network threads.
@@ -1042,21 +1058,18 @@ struct MasterNode::Impl {
 
   /// {"accepting":..,"received":..,"applied":..,"rejected":..,"ignored":..,"dropped":..,
   ///  "in_force": {...}}: live tuning over the session.
-  std::string tuning_json(const MasterCycle& cycle) const {
+  OrderedJson tuning_fields(const MasterCycle& cycle) const {
     const TuningValues& v = cycle.tuning().current();
-    return std::string("{\"accepting\": ") + (tuning->accepting() ? "true" : "false") +
-           ", \"received\": " + std::to_string(tuning->received()) +
-           ", \"applied\": " + std::to_string(cycle.tunings_accepted()) +
-           ", \"rejected\": " + std::to_string(cycle.tunings_rejected()) +
-           ", \"ignored\": " + std::to_string(tuning->ignored()) +
-           ", \"dropped\": " + std::to_string(tuning->dropped()) +
-           ", \"in_force\": {\"master_stiffness_n_per_m\": " +
-           json_number(v.master_stiffness_n_per_m) +
-           ", \"master_damping_ns_per_m\": " + json_number(v.master_damping_ns_per_m) +
-           ", \"force_gain\": " + json_number(v.force_gain) +
-           ", \"slave_stiffness_n_per_m\": " + json_number(v.slave_stiffness_n_per_m) +
-           ", \"forward_delay_ms\": " + json_number(v.forward_delay_s * 1e3) +
-           ", \"backward_delay_ms\": " + json_number(v.backward_delay_s * 1e3) + "}}";
+    OrderedJson in_force = {{"master_stiffness_n_per_m", json_number(v.master_stiffness_n_per_m)},
+                            {"master_damping_ns_per_m", json_number(v.master_damping_ns_per_m)},
+                            {"force_gain", json_number(v.force_gain)},
+                            {"slave_stiffness_n_per_m", json_number(v.slave_stiffness_n_per_m)},
+                            {"forward_delay_ms", json_number(v.forward_delay_s * 1e3)},
+                            {"backward_delay_ms", json_number(v.backward_delay_s * 1e3)}};
+    return {{"accepting", tuning->accepting()},    {"received", tuning->received()},
+            {"applied", cycle.tunings_accepted()}, {"rejected", cycle.tunings_rejected()},
+            {"ignored", tuning->ignored()},        {"dropped", tuning->dropped()},
+            {"in_force", std::move(in_force)}};
   }
 
   void print_summary(const MasterCycle& cycle, const SessionReport& rep) const {

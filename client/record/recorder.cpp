@@ -11,11 +11,11 @@
 #include <array>
 #include <chrono>
 #include <cstring>
-#include <sstream>
 
 #include "client/record/raw_reader.hpp"
 #include "client/record/raw_type.hpp"
 #include "client/record/topic_table.hpp"
+#include "common/util/json.hpp"
 #include "common/util/version.hpp"
 
 namespace teleop::record {
@@ -244,24 +244,26 @@ std::uint64_t Recorder::stored_bytes() const { return stored_bytes_.load(); }
 std::uint64_t Recorder::raw_bytes() const { return raw_bytes_.load(); }
 
 std::string Recorder::summary_json() const {
-  std::ostringstream o;
   std::uint64_t total = 0, dropped = 0, gaps = 0;
-  o << "{\"topics\": {";
-  bool first = true;
+  OrderedJson topics = OrderedJson::object();
   for (const auto& c : counts()) {
-    o << (first ? "" : ", ") << "\"" << c.name << "\": {\"samples\": " << c.samples
-      << ", \"bytes\": " << c.bytes << ", \"writers\": " << c.writers << ", \"gaps\": " << c.gaps
-      << ", \"before_first\": " << c.before_first << ", \"dropped\": " << c.dropped << "}";
-    first = false;
+    topics[c.name] = {{"samples", c.samples},           {"bytes", c.bytes},
+                      {"writers", c.writers},           {"gaps", c.gaps},
+                      {"before_first", c.before_first}, {"dropped", c.dropped}};
     total += c.samples;
     dropped += c.dropped;
     gaps += c.gaps;
   }
-  o << "}, \"format\": \"" << format_name(file_->format()) << "\", \"samples\": " << total
-    << ", \"gaps\": " << gaps << ", \"dropped\": " << dropped
-    << ", \"payload_bytes\": " << raw_bytes() << ", \"stored_bytes\": " << stored_bytes()
-    << ", \"version\": \"" << version_string() << "\"}";
-  return o.str();
+  OrderedJson o;
+  o["topics"] = std::move(topics);
+  o["format"] = format_name(file_->format());
+  o["samples"] = total;
+  o["gaps"] = gaps;
+  o["dropped"] = dropped;
+  o["payload_bytes"] = raw_bytes();
+  o["stored_bytes"] = stored_bytes();
+  o["version"] = version_string();
+  return json_line(o);
 }
 
 }  // namespace teleop::record

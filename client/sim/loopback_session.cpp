@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "common/util/json.hpp"
 #include "common/util/version.hpp"
 
 namespace teleop::master {
@@ -61,18 +62,15 @@ void LoopbackSession::run() {
 }
 
 std::string LoopbackSession::summary_json() const {
-  std::string s = "{\"scheme\":\"";
-  s += controller().name();
-  s += "\",\"metrics\":" + metrics().summary_json();
-  s += ",\"transparency\":" + metrics().transparency_json();
-  s += ",\"forward\":" + channel_json(forward().report());
-  s += ",\"backward\":" + channel_json(backward().report());
-  s += ",\"safety\":{\"cut\":";
-  s += safety().cut() ? "true" : "false";
-  s += ",\"reason\":\"";
-  s += safety().cut_reason();
-  s += "\"},\"version\":\"" + version_string() + "\"}";
-  return s;
+  OrderedJson s;
+  s["scheme"] = controller().name();
+  s["metrics"] = metrics().summary_fields();
+  s["transparency"] = metrics().transparency_fields();
+  s["forward"] = channel_fields(forward().report());
+  s["backward"] = channel_fields(backward().report());
+  s["safety"] = {{"cut", safety().cut()}, {"reason", safety().cut_reason()}};
+  s["version"] = version_string();
+  return json_compact(s);
 }
 
 }  // namespace teleop::master

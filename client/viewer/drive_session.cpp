@@ -130,24 +130,27 @@ DriveView DriveSession::view() const {
 
 std::string DriveSession::summary_json() const {
   const DriveView v = view();
-  std::string out = "{\"states_written\": " + std::to_string(v.states_written) +
-                    ", \"commands_received\": " + std::to_string(v.commands_received) +
-                    ", \"max_force_n\": " + json_number(v.max_force_n) +
-                    ", \"final_position_m\": [" + json_number(v.position_m.x()) + ", " +
-                    json_number(v.position_m.y()) + ", " + json_number(v.position_m.z()) +
-                    "], \"tunings_sent\": " + std::to_string(v.tunings_sent);
+  OrderedJson out;
+  out["states_written"] = v.states_written;
+  out["commands_received"] = v.commands_received;
+  out["max_force_n"] = json_number(v.max_force_n);
+  out["final_position_m"] =
+      OrderedJson::array({json_number(v.position_m.x()), json_number(v.position_m.y()),
+                          json_number(v.position_m.z())});
+  out["tunings_sent"] = v.tunings_sent;
   if (v.have_status) {
     const TuningStatus& s = v.status;
-    out += ", \"status\": {\"accepting\": " + std::string(s.accepting() ? "true" : "false") +
-           ", \"accepted_count\": " + std::to_string(s.accepted_count()) +
-           ", \"rejected_count\": " + std::to_string(s.rejected_count()) +
-           ", \"last_accepted\": " + (s.accepted() ? "true" : "false") + ", \"message\": \"" +
-           json_escape(s.message().to_string()) +
-           "\", \"force_gain\": " + json_number(s.force_gain()) +
-           ", \"master_damping_ns_per_m\": " + json_number(s.master_damping_ns_per_m()) +
-           ", \"forward_delay_ms\": " + json_number(s.forward_delay_ms()) + "}";
+    out["status"] = {{"accepting", s.accepting()},
+                     {"accepted_count", s.accepted_count()},
+                     {"rejected_count", s.rejected_count()},
+                     {"last_accepted", s.accepted()},
+                     {"message", s.message().to_string()},
+                     {"force_gain", json_number(s.force_gain())},
+                     {"master_damping_ns_per_m", json_number(s.master_damping_ns_per_m())},
+                     {"forward_delay_ms", json_number(s.forward_delay_ms())}};
   }
-  return out + ", \"version\": \"" + json_escape(version_string()) + "\"}";
+  out["version"] = version_string();
+  return json_line(out);
 }
 
 }  // namespace teleop::viewer

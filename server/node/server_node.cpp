@@ -6,7 +6,6 @@
 #include <fstream>
 #include <iostream>
 #include <mutex>
-#include <sstream>
 #include <vector>
 
 #include "common/dds/async_writer.hpp"
@@ -436,58 +435,55 @@ struct ServerNode::Impl {
                  static_cast<unsigned long long>(cycle.gains_clamped()), cycle.max_gain_n_per_m());
   }
 
-  static std::string part_json(const char* name, const SampleWindow& w) {
-    const Summary p = summarize(w.snapshot());
-    return std::string("\"") + name + "\": {\"p50\": " + json_number(p.p50) +
-           ", \"p99\": " + json_number(p.p99) + ", \"max\": " + json_number(p.max) + "}";
+  static OrderedJson percentiles(const Summary& p, bool with_max = true) {
+    OrderedJson o = {{"p50", json_number(p.p50)}, {"p99", json_number(p.p99)}};
+    if (with_max) o["max"] = json_number(p.max);
+    return o;
   }
 
   void write_summary(const RateLoop& loop, double elapsed_s, const Summary& s) {
     const Summary late = summarize(loop.lateness_us().snapshot());
-    std::ostringstream f;
-    f << "{\n"
-      << "  \"version\": \"" << version_string() << "\",\n"
-      << "  \"scene\": \"" << model.name << "\",\n"
-      << "  \"profile\": \"" << options.dds.profile << "\",\n"
-      << "  \"insecure\": " << (options.dds.insecure ? "true" : "false") << ",\n"
-      << "  \"elapsed_s\": " << json_number(elapsed_s) << ",\n"
-      << "  \"steps\": " << cycle.steps() << ",\n"
-      << "  \"rate_hz\": " << json_number(options.rate_hz) << ",\n"
-      << "  \"overruns\": " << loop.overruns() << ",\n"
-      << "  \"step_us\": {\"p50\": " << json_number(s.p50) << ", \"p99\": " << json_number(s.p99)
-      << ", \"max\": " << json_number(s.max) << "},\n"
-      << "  \"step_parts_us\": {" << part_json("collision", collision_us) << ", "
-      << part_json("deformable", deformable_us) << ", " << part_json("slave", slave_us) << ", "
-      << part_json("publish", publish_us) << "},\n"
-      << "  \"realtime_priority\": " << options.realtime.priority << ",\n"
-      << "  \"spin_us\": " << options.realtime.spin_us << ",\n"
-      << "  \"prewarm_us\": " << options.realtime.prewarm_us << ",\n"
-      << "  \"lock_memory\": " << (options.realtime.lock_memory ? "true" : "false") << ",\n"
-      << "  \"nice\": " << options.realtime.nice << ",\n"
-      << "  \"dma_latency_us\": " << options.realtime.dma_latency_us << ",\n"
-      << "  \"loop_jitter_us\": {\"p50\": " << json_number(late.p50)
-      << ", \"p99\": " << json_number(late.p99) << "},\n"
-      << "  \"commands_received\": " << counters.received.load() << ",\n"
-      << "  \"commands_accepted\": " << counters.accepted.load() << ",\n"
-      << "  \"commands_rejected_nan\": " << counters.rejected_nan.load() << ",\n"
-      << "  \"commands_rejected_workspace\": " << counters.rejected_workspace.load() << ",\n"
-      << "  \"commands_rejected_stale\": " << counters.rejected_stale.load() << ",\n"
-      << "  \"commands_rejected_passivity\": " << counters.rejected_passivity.load() << ",\n"
-      << "  \"commands_refused_owner\": " << counters.refused_owner.load() << ",\n"
-      << "  \"ownership_changes\": " << ownership_changes << ",\n"
-      << "  \"commands_malformed\": " << command_reader->malformed() << ",\n"
-      << "  \"samples_oversized\": " << dds::oversized_samples() << ",\n"
-      << "  \"observers_max\": " << observers_max_seen << ",\n"
-      << "  \"max_observers\": " << options.max_observers << ",\n"
-      << "  \"watchdog_trips\": " << cycle.watchdog_trips() << ",\n"
-      << "  \"commands_gain_clamped\": " << cycle.gains_clamped() << ",\n"
-      << "  \"max_position_gain_n_per_m\": " << json_number(cycle.max_gain_n_per_m()) << ",\n"
-      << "  \"network_threads\": {\"states_dropped\": " << state_writer.dropped()
-      << ", \"events_dropped\": " << event_writer.dropped()
-      << ", \"write_failures\": " << state_writer.failures() + event_writer.failures() << "},\n"
-      << "  \"faults\": " << faults << "\n"
-      << "}\n";
-    write_text_file(options.summary_json, f.str());
+    OrderedJson f;
+    f["version"] = version_string();
+    f["scene"] = model.name;
+    f["profile"] = options.dds.profile;
+    f["insecure"] = options.dds.insecure;
+    f["elapsed_s"] = json_number(elapsed_s);
+    f["steps"] = cycle.steps();
+    f["rate_hz"] = json_number(options.rate_hz);
+    f["overruns"] = loop.overruns();
+    f["step_us"] = percentiles(s);
+    f["step_parts_us"] = {{"collision", percentiles(summarize(collision_us.snapshot()))},
+                          {"deformable", percentiles(summarize(deformable_us.snapshot()))},
+                          {"slave", percentiles(summarize(slave_us.snapshot()))},
+                          {"publish", percentiles(summarize(publish_us.snapshot()))}};
+    f["realtime_priority"] = options.realtime.priority;
+    f["spin_us"] = options.realtime.spin_us;
+    f["prewarm_us"] = options.realtime.prewarm_us;
+    f["lock_memory"] = options.realtime.lock_memory;
+    f["nice"] = options.realtime.nice;
+    f["dma_latency_us"] = options.realtime.dma_latency_us;
+    f["loop_jitter_us"] = percentiles(late, false);
+    f["commands_received"] = counters.received.load();
+    f["commands_accepted"] = counters.accepted.load();
+    f["commands_rejected_nan"] = counters.rejected_nan.load();
+    f["commands_rejected_workspace"] = counters.rejected_workspace.load();
+    f["commands_rejected_stale"] = counters.rejected_stale.load();
+    f["commands_rejected_passivity"] = counters.rejected_passivity.load();
+    f["commands_refused_owner"] = counters.refused_owner.load();
+    f["ownership_changes"] = ownership_changes;
+    f["commands_malformed"] = command_reader->malformed();
+    f["samples_oversized"] = dds::oversized_samples();
+    f["observers_max"] = observers_max_seen;
+    f["max_observers"] = options.max_observers;
+    f["watchdog_trips"] = cycle.watchdog_trips();
+    f["commands_gain_clamped"] = cycle.gains_clamped();
+    f["max_position_gain_n_per_m"] = json_number(cycle.max_gain_n_per_m());
+    f["network_threads"] = {{"states_dropped", state_writer.dropped()},
+                            {"events_dropped", event_writer.dropped()},
+                            {"write_failures", state_writer.failures() + event_writer.failures()}};
+    f["faults"] = faults;
+    write_text_file(options.summary_json, json_document(f));
   }
 };
 

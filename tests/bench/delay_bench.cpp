@@ -30,6 +30,8 @@
 
 #include "client/analysis/press_scenario.hpp"
 #include "common/util/csv.hpp"
+#include "common/util/files.hpp"
+#include "common/util/json.hpp"
 #include "common/util/progress.hpp"
 #include "common/util/registry.hpp"
 #include "common/util/stats.hpp"
@@ -360,33 +362,37 @@ int run_delay_bench(const teleop::CommandArgs& args) {
   const teleop::Summary st_wave = loop_cost("wave-variables");
   const teleop::Summary st_tdpa = loop_cost("tdpa");
 
-  std::string json;
-  {
-    char buf[1024];
-    std::snprintf(buf, sizeof(buf),
-                  "{\"runs\":%zu,\"sweep_wall_s\":%.3f,\"theory_agreement\":%.4f,"
-                  "\"theory_judged_runs\":%d,\"tool_scene_vs_point_agreement\":%.4f,"
-                  "\"tool_scene_pairs\":%d,\"loop_step_us_p50\":%.3f,\"loop_step_us_p99\":%.3f,"
-                  "\"loop_step_us_max\":%.3f,\"loop_step_us_p50_wave\":%.3f,"
-                  "\"loop_step_us_p99_wave\":%.3f,\"loop_step_us_p50_tdpa\":%.3f,"
-                  "\"loop_step_us_p99_tdpa\":%.3f,\"schemes\":{",
-                  rows.size(), sweep_s, judged ? static_cast<double>(agree) / judged : 0.0, judged,
-                  tool_pairs ? static_cast<double>(tool_agree) / tool_pairs : 0.0, tool_pairs,
-                  st.p50, st.p99, st.max, st_wave.p50, st_wave.p99, st_tdpa.p50, st_tdpa.p99);
-    json = "{\"version\":\"" + teleop::version_string() + "\"," + std::string(buf + 1);
-    for (std::size_t i = 0; i < std::size(kSchemes); ++i) {
-      const SchemeStats& c = stats[i];
-      std::snprintf(buf, sizeof(buf),
-                    "%s\"%s\":{\"runs\":%d,\"stable\":%d,\"theory_agreement\":%d,"
-                    "\"base_theory_unstable\":%d,\"stable_where_base_theory_unstable\":%d,"
-                    "\"not_stable_saturation\":%d,\"not_stable_other\":%d}",
-                    i ? "," : "", kSchemes[i].label, c.runs, c.stable, c.agree, c.base_unstable,
-                    c.base_unstable_stable, c.saturation, c.other);
-      json += buf;
-    }
-    json += "}}\n";
+  // timings to the microsecond's thousandth, fractions to four decimals
+  const auto rounded = [](double v, double scale) { return std::round(v * scale) / scale; };
+  teleop::OrderedJson summary;
+  summary["version"] = teleop::version_string();
+  summary["runs"] = rows.size();
+  summary["sweep_wall_s"] = rounded(sweep_s, 1e3);
+  summary["theory_agreement"] = rounded(judged ? static_cast<double>(agree) / judged : 0.0, 1e4);
+  summary["theory_judged_runs"] = judged;
+  summary["tool_scene_vs_point_agreement"] =
+      rounded(tool_pairs ? static_cast<double>(tool_agree) / tool_pairs : 0.0, 1e4);
+  summary["tool_scene_pairs"] = tool_pairs;
+  summary["loop_step_us_p50"] = rounded(st.p50, 1e3);
+  summary["loop_step_us_p99"] = rounded(st.p99, 1e3);
+  summary["loop_step_us_max"] = rounded(st.max, 1e3);
+  summary["loop_step_us_p50_wave"] = rounded(st_wave.p50, 1e3);
+  summary["loop_step_us_p99_wave"] = rounded(st_wave.p99, 1e3);
+  summary["loop_step_us_p50_tdpa"] = rounded(st_tdpa.p50, 1e3);
+  summary["loop_step_us_p99_tdpa"] = rounded(st_tdpa.p99, 1e3);
+  teleop::OrderedJson& schemes = summary["schemes"];
+  for (std::size_t i = 0; i < std::size(kSchemes); ++i) {
+    const SchemeStats& c = stats[i];
+    schemes[kSchemes[i].label] = {{"runs", c.runs},
+                                  {"stable", c.stable},
+                                  {"theory_agreement", c.agree},
+                                  {"base_theory_unstable", c.base_unstable},
+                                  {"stable_where_base_theory_unstable", c.base_unstable_stable},
+                                  {"not_stable_saturation", c.saturation},
+                                  {"not_stable_other", c.other}};
   }
-  std::ofstream((args.out_dir / "delay_summary.json").string()) << json;
+  teleop::write_text_file((args.out_dir / "delay_summary.json").string(),
+                          teleop::json_compact(summary) + "\n");
   std::printf(
       "delay sweep: %zu runs in %.2f s; simulation agrees with the analytic margin in "
       "%d/%d runs (position-position, force-position); wall runs repeated (rows tool_scene) agree "

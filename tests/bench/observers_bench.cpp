@@ -49,6 +49,7 @@
 #include "common/dds/observer_topics.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/csv.hpp"
+#include "common/util/json.hpp"
 #include "common/util/registry.hpp"
 #include "common/util/signals.hpp"
 #include "common/util/stats.hpp"
@@ -60,6 +61,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using teleop::test::json_nested;
+using teleop::test::json_text;
 using teleop::test::json_value;
 using teleop::test::Process;
 
@@ -137,16 +139,18 @@ int observer_probe(const CommandArgs& args) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   const double elapsed = seconds_between(t0, now_ns());
-  std::printf(
-      "{\"type\": \"probe\", \"kind\": \"%s\", \"full_rate\": %s, \"elapsed_s\": %.3f, "
-      "\"topics\": {\"slave_state\": {\"count\": %llu}, \"master_state\": {\"count\": %llu}, "
-      "\"mesh_frame\": {\"count\": %llu}, \"master_command\": {\"count\": %llu}, "
-      "\"server_stats\": {\"count\": %llu}, \"scene\": {\"count\": %llu}}}\n",
-      kind_text.c_str(), full_rate ? "true" : "false", elapsed,
-      static_cast<unsigned long long>(slave.load()), static_cast<unsigned long long>(master.load()),
-      static_cast<unsigned long long>(frames.load()),
-      static_cast<unsigned long long>(commands.load()),
-      static_cast<unsigned long long>(stats.load()), static_cast<unsigned long long>(scene.load()));
+  const auto count = [](const std::atomic<std::uint64_t>& n) {
+    return teleop::OrderedJson{{"count", n.load()}};
+  };
+  teleop::OrderedJson line;
+  line["type"] = "probe";
+  line["kind"] = kind_text;
+  line["full_rate"] = full_rate;
+  line["elapsed_s"] = std::round(elapsed * 1e3) / 1e3;
+  line["topics"] = {{"slave_state", count(slave)},  {"master_state", count(master)},
+                    {"mesh_frame", count(frames)},  {"master_command", count(commands)},
+                    {"server_stats", count(stats)}, {"scene", count(scene)}};
+  std::printf("%s\n", teleop::json_line(line).c_str());
   std::fflush(stdout);
   return 0;
 }
@@ -179,10 +183,22 @@ double median(std::vector<double> v) {
 
 /// The count of `topic` in the last JSON object of an observer's output that has it.
 double last_count(const std::string& out, const std::string& topic) {
-  const std::string key = "\"" + topic + "\": {\"count\": ";
-  const auto pos = out.rfind(key);
-  if (pos == std::string::npos) return 0.0;
-  return std::atof(out.c_str() + pos + key.size());
+  std::istringstream lines(out);
+  double count = 0.0;
+  for (std::string line; std::getline(lines, line);) {
+    const double c = json_nested(line, topic, "count");
+    if (!std::isnan(c)) count = c;
+  }
+  return count;
+}
+
+/// Whether an observer's output has a scene line ({"type": "scene", ...}).
+bool has_scene_line(const std::string& out) {
+  std::istringstream lines(out);
+  for (std::string line; std::getline(lines, line);) {
+    if (json_text(line, "type") == "scene") return true;
+  }
+  return false;
 }
 
 /// Scheduling flags given to the server's and the master's loops in a live session.
@@ -249,7 +265,7 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   for (std::size_t i = 0; i < obs.size(); ++i) {
     if (obs[i]->wait_for(20.0) < 0) obs[i]->signal(SIGKILL);
     const std::string out = obs[i]->out();
-    if (last_count(out, "scene") > 0 || out.find("\"type\": \"scene\"") != std::string::npos) {
+    if (last_count(out, "scene") > 0 || has_scene_line(out)) {
       ++r.observers_with_scene;
     }
     const double alive = stopped_s - started_s[i];
@@ -271,8 +287,7 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   r.link_losses = json_value(m, "link_losses");
   r.sent = json_value(m, "sent");
   r.received = json_value(m, "received");
-  const auto v = m.find("\"verdict\": \"");
-  if (v != std::string::npos) r.verdict = m.substr(v + 12, m.find('"', v + 12) - (v + 12));
+  if (const std::string v = json_text(m, "verdict"); !v.empty()) r.verdict = v;
   // the master's end stops the commands: the server's watchdog trips once then, by design
   const double trips = json_value(s, "watchdog_trips");
   r.watchdog_trips = std::isnan(trips) ? trips : std::max(0.0, trips - 1.0);
@@ -282,11 +297,7 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   r.view_state_hz = median(view_rates);
   r.server_steps = json_value(s, "steps");
   r.server_step_p50_us = json_nested(s, "step_us", "p50");
-  const auto part_p99 = [&](const char* part) {
-    const auto at = s.find(std::string("\"") + part + "\": {");
-    return at == std::string::npos ? std::numeric_limits<double>::quiet_NaN()
-                                   : json_value(s.substr(at), "p99");
-  };
+  const auto part_p99 = [&](const char* part) { return json_nested(s, part, "p99"); };
   r.collision_p99_us = part_p99("collision");
   r.deformable_p99_us = part_p99("deformable");
   r.slave_p99_us = part_p99("slave");

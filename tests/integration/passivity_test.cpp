@@ -45,7 +45,7 @@ void run_session(const std::string& scheme, int domain, const std::string& tag) 
   const std::string m = Process::slurp(mj);
   EXPECT_NE(m.find("\"scheme\": \"" + scheme + "\""), std::string::npos) << m;
   // stable, no safety cut, passive at the operator's port
-  EXPECT_NE(m.find("\"verdict\": \"stable\""), std::string::npos) << m;
+  EXPECT_EQ(json_text(m, "verdict"), "stable") << m;
   EXPECT_NE(m.find("\"cut\": false"), std::string::npos) << m;
   EXPECT_GE(json_nested(m, "metrics", "energy_min_j"), -1e-3) << m;
   // the tool went down to the floor and pressed it, and followed the master

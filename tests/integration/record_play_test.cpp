@@ -227,8 +227,10 @@ std::map<SampleKey, std::vector<std::uint8_t>> samples_of(const std::string& pat
 
 /// The value of the top-level "samples" of a recorder's --summary-json (after its topics).
 double total_samples(const std::string& json) {
-  const auto at = json.find("\"format\"");
-  return at == std::string::npos ? -1.0 : json_value(json.substr(at), "samples");
+  const auto j = parse_json(json);
+  return j.is_object() && j.contains("samples") && j["samples"].is_number()
+             ? j["samples"].get<double>()
+             : -1.0;
 }
 
 // The default format is MCAP. One live session, two recorders: one finishes

@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "tests/support/json_fields.hpp"
+
 namespace teleop::test {
 
 /// The executables under test.
@@ -22,10 +24,9 @@ inline const std::string kViewerBinary = std::string(TELEOP_BINARY_DIR) + "/clie
 inline int verdict_exit_status(const std::string& summary_json) {
   const std::pair<const char*, int> statuses[] = {
       {"stable", 0}, {"degraded", 5}, {"oscillating", 6}, {"out-of-spec", 7}, {"unstable", 8}};
+  const std::string verdict = json_text(summary_json, "verdict");
   for (const auto& [name, status] : statuses) {
-    if (summary_json.find(std::string("\"verdict\": \"") + name + "\"") != std::string::npos) {
-      return status;
-    }
+    if (verdict == name) return status;
   }
   return -1;
 }

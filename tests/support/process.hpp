@@ -15,6 +15,8 @@
 #include <thread>
 #include <vector>
 
+#include "tests/support/json_fields.hpp"
+
 namespace teleop::test {
 
 class Process {
@@ -82,24 +84,5 @@ class Process {
   int status_ = -1;
   std::string out_path_, err_path_;
 };
-
-/// Reads a number following "\"key\": " in a JSON text (flat or nested: first match wins).
-inline double json_value(const std::string& json, const std::string& key) {
-  const std::string needle = "\"" + key + "\":";
-  const auto pos = json.find(needle);
-  if (pos == std::string::npos) return std::nan("");
-  std::size_t p = pos + needle.size();
-  while (p < json.size() && json[p] == ' ') ++p;
-  if (json.compare(p, 4, "null") == 0) return std::nan("");
-  return std::stod(json.substr(p));
-}
-
-/// Reads "outer": {... "inner": value ...}.
-inline double json_nested(const std::string& json, const std::string& outer,
-                          const std::string& inner) {
-  const auto pos = json.find("\"" + outer + "\"");
-  if (pos == std::string::npos) return std::nan("");
-  return json_value(json.substr(pos), inner);
-}
 
 }  // namespace teleop::test

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace teleop::monitor {
@@ -130,6 +131,31 @@ TEST(MonitorExperiment, ScreenAndJsonCarryItAndSayWhenThereIsNone) {
   // the description is latched: once its master is gone the line says so
   s.topics[1].age_s = 2.0;
   EXPECT_EQ(experiment_line(s).find("experiment (master gone"), 0u) << experiment_line(s);
+}
+
+TEST(MonitorJson, EveryLineParsesAndTextComesBackUnchanged) {
+  EventView e;
+  e.at_s = 1.5;
+  e.event.source("server");
+  e.event.message("a \"quoted\" \\ line\nbreak\x01 and a bad byte \xff");
+  e.event.value(std::numeric_limits<double>::quiet_NaN());
+  const auto ev = nlohmann::ordered_json::parse(event_json(e));
+  EXPECT_EQ(ev["type"], "event");
+  EXPECT_EQ(ev["source"], "server");
+  EXPECT_EQ(ev["message"], "a \"quoted\" \\ line\nbreak\x01 and a bad byte \xEF\xBF\xBD");
+  EXPECT_TRUE(ev["value"].is_null()) << "NaN is written as null";
+  EXPECT_EQ(ev.begin().key(), "type") << "keys stay in the order written";
+
+  Snapshot s = live_session();
+  s.profile = "lo\"op";
+  s.have_experiment = true;
+  s.experiment = experiment_50ms_2pct();
+  const auto st = nlohmann::ordered_json::parse(render_json(s));
+  EXPECT_EQ(st["type"], "status");
+  EXPECT_EQ(st["profile"], "lo\"op");
+  EXPECT_EQ(st["experiment"]["scheme"], "force-position");
+  EXPECT_EQ(st["experiment"]["seeds"], nlohmann::ordered_json::array({7, 8}));
+  EXPECT_EQ(nlohmann::ordered_json::parse(experiment_json(s.experiment)), st["experiment"]);
 }
 
 }  // namespace
