@@ -460,7 +460,7 @@ double slope(const std::vector<double>& x, const std::vector<double>& y) {
     sxy += (x[i] - mx) * (y[i] - my);
     sxx += (x[i] - mx) * (x[i] - mx);
   }
-  return sxx > 0 ? sxy / sxx : NAN;
+  return sxx > 0 ? sxy / sxx : std::numeric_limits<double>::quiet_NaN();
 }
 
 /// The cost of one observer: per observer count, the medians over the rounds of the master's
