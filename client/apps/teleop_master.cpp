@@ -27,6 +27,7 @@
 #include "client/node/master_node.hpp"
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
+#include "common/config/realtime_flags.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/dds/participant.hpp"
 #include "common/util/files.hpp"
@@ -62,29 +63,6 @@ struct Flags {
   teleop::dds::NetworkFlags net_flags;
   bool progress = false, no_progress = false;
 };
-
-/// The haptic loop's scheduling (common/util/realtime.hpp).
-void add_loop_flags(CLI::App& app, teleop::RealtimeOptions& rt) {
-  using teleop::config::integer_in;
-  app.add_option("--realtime", rt.priority,
-                 "run the haptic loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)")
-      ->check(integer_in(0.0, 99.0));
-  app.add_option("--cpu", rt.cpu, "pin the haptic loop to this CPU (-1 = no pinning)")
-      ->check(integer_in(-1.0, 4096.0));
-  app.add_option("--spin-us", rt.spin_us,
-                 "busy-wait this long before each cycle's deadline [us], 0 to the period (0 = "
-                 "sleep to it)")
-      ->check(integer_in(0.0, 1e5));
-  app.add_option("--dma-latency-us", rt.dma_latency_us,
-                 "hold /dev/cpu_dma_latency at this value while running [us] (-1 = no)")
-      ->check(integer_in(-1.0, 1e5));
-  app.add_option("--nice", rt.nice,
-                 "the haptic loop's nice value as a normal thread, -20 to 19 (0 = unchanged)")
-      ->check(integer_in(-20.0, 19.0));
-  app.add_flag("--lock-memory", rt.lock_memory,
-               "lock every page of the process in memory (mlockall, present and future) and "
-               "pre-fault the loop's stack");
-}
 
 /// The injected channel's flags (both directions).
 void add_channel_flags(CLI::App& app, Flags& f) {
@@ -196,7 +174,7 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
                  "haptic cycle; model-mediated: 1000 with the haptic loop at 4000), 1 to --rate")
       ->check(number_in(0.0, 20000.0));
   teleop::dds::add_reconnect_flag(app, o.reconnect_s);
-  add_loop_flags(app, o.realtime);
+  teleop::config::add_realtime_flags(app, o.realtime, "haptic loop", "cycle", false);
   app.add_option("--name", o.name,
                  "who this master is in the server's ownership events, up to 48 characters "
                  "(default IDENTITY@HOST:PID)");

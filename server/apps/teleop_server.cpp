@@ -15,6 +15,7 @@
 
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
+#include "common/config/realtime_flags.hpp"
 #include "common/dds/network_flags.hpp"
 #include "common/dds/participant.hpp"
 #include "common/util/data_dir.hpp"
@@ -23,33 +24,6 @@
 #include "server/world/world_model.hpp"
 
 namespace {
-
-/// The physics loop's scheduling flags (common/util/realtime.hpp).
-void add_loop_flags(CLI::App& app, teleop::RealtimeOptions& realtime) {
-  using teleop::config::integer_in;
-  app.add_option("--realtime", realtime.priority,
-                 "run the physics loop SCHED_FIFO at this priority, 1-99 (0 = a normal thread)")
-      ->check(integer_in(0.0, 99.0));
-  app.add_option("--cpu", realtime.cpu, "pin the physics loop to this CPU (-1 = no pinning)")
-      ->check(integer_in(-1.0, 4096.0));
-  app.add_option("--spin-us", realtime.spin_us,
-                 "busy-wait this long before each step's deadline [us], 0 to the period (0 = "
-                 "sleep to it)")
-      ->check(integer_in(0.0, 1e5));
-  app.add_option("--prewarm-us", realtime.prewarm_us,
-                 "read the next step's data into the caches during this long before each "
-                 "deadline [us], 0 to the period (0 = no)")
-      ->check(integer_in(0.0, 1e5));
-  app.add_option("--nice", realtime.nice,
-                 "the physics loop's nice value as a normal thread, -20 to 19 (0 = unchanged)")
-      ->check(integer_in(-20.0, 19.0));
-  app.add_flag("--lock-memory", realtime.lock_memory,
-               "lock every page of the process in memory (mlockall, present and future) and "
-               "pre-fault the loop's stack");
-  app.add_option("--dma-latency-us", realtime.dma_latency_us,
-                 "hold /dev/cpu_dma_latency at this value while running [us] (-1 = no)")
-      ->check(integer_in(-1.0, 1e5));
-}
 
 /// The loop flags checked against their ranges (the spin and the prewarm below the period).
 teleop::RealtimeOptions checked_loop_flags(const teleop::RealtimeOptions& realtime,
@@ -114,7 +88,7 @@ int main(int argc, char** argv) {
   teleop::dds::NetworkFlags net_flags;
   teleop::dds::add_network_flags(app, net_flags, "server");
   app.add_option("--summary-json", summary_json, "write a JSON summary here at exit");
-  add_loop_flags(app, realtime);
+  teleop::config::add_realtime_flags(app, realtime, "physics loop", "step", true);
   app.add_flag("--quiet", quiet, "print only warnings and errors");
   if (const int status = teleop::config::parse_command_line(app, "teleop_server", argc, argv);
       status >= 0) {

@@ -262,13 +262,15 @@ TELEOP_ALWAYS_INLINE void group_frames_from_q(const DeformableState& s, int t0, 
 // The four lanes' (x[l], y[l], z[l], 0) of the component vectors x, y, z, one vector per lane.
 TELEOP_ALWAYS_INLINE void lanes_xyz(V4 x, V4 y, V4 z, V4* out) {
   const V4 zero = {0.0, 0.0, 0.0, 0.0};
-  const V4i even = {0, 4, 2, 6}, odd = {1, 5, 3, 7}, low = {0, 1, 4, 5}, high = {2, 3, 6, 7};
-  const V4 xy02 = __builtin_shuffle(x, y, even), xy13 = __builtin_shuffle(x, y, odd);
-  const V4 z02 = __builtin_shuffle(z, zero, even), z13 = __builtin_shuffle(z, zero, odd);
-  out[0] = __builtin_shuffle(xy02, z02, low);
-  out[1] = __builtin_shuffle(xy13, z13, low);
-  out[2] = __builtin_shuffle(xy02, z02, high);
-  out[3] = __builtin_shuffle(xy13, z13, high);
+  // __builtin_shufflevector (GCC 12 and clang): lanes 0-3 of the first vector, 4-7 of the second
+  const V4 xy02 = __builtin_shufflevector(x, y, 0, 4, 2, 6);
+  const V4 xy13 = __builtin_shufflevector(x, y, 1, 5, 3, 7);
+  const V4 z02 = __builtin_shufflevector(z, zero, 0, 4, 2, 6);
+  const V4 z13 = __builtin_shufflevector(z, zero, 1, 5, 3, 7);
+  out[0] = __builtin_shufflevector(xy02, z02, 0, 1, 4, 5);
+  out[1] = __builtin_shufflevector(xy13, z13, 0, 1, 4, 5);
+  out[2] = __builtin_shufflevector(xy02, z02, 2, 3, 6, 7);
+  out[3] = __builtin_shufflevector(xy13, z13, 2, 3, 6, 7);
 }
 
 // Adds the node forces h (h[3 j + i]: component i on node j + 1 of the lane's tetrahedron; node 0

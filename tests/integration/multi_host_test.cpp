@@ -146,8 +146,8 @@ class MultiHost : public ::testing::Test {
       // one after the other, a second apart: two clients of a TCP profile started in the same
       // instant on one host have been seen (once in CI) to leave one of them never matched
       std::this_thread::sleep_for(std::chrono::milliseconds(1000));
-      std::vector<std::string> oargs = {"--domain",   d,   "--profile", r.profile_client,
-                                        "--duration", "9", "--period",  "0.5",
+      std::vector<std::string> oargs = {"--domain",   d,    "--profile", r.profile_client,
+                                        "--duration", "14", "--period",  "0.5",
                                         "--insecure"};
       oargs.insert(oargs.end(), r.observer.begin(), r.observer.end());
       observers.push_back(on(3, kMonitorBinary, oargs, name + "_obs" + std::to_string(k)));
