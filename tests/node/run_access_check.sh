@@ -60,23 +60,8 @@ expect_refused "--tls-cert $tmp/cert.pem" --tls-cert --tls-key
 expect_refused "--port 0 --tls-cert $tmp/none.pem --tls-key $tmp/key.pem" "$tmp/none.pem"
 expect_refused "--port 0 --tls-cert $tmp/key.pem --tls-key $tmp/key.pem" "$tmp/key.pem" certificate
 
-"$build/server/teleop_server" --domain "$domain" --duration 60 --quiet >"$tmp/server.log" 2>&1 &
-pids+=("$!")
-"$bridge_bin" --domain "$domain" --listen 127.0.0.1:0 --tls-cert "$tmp/cert.pem" \
-  --tls-key "$tmp/key.pem" --token-file "$tmp/token" --stats-s 0 >"$tmp/bridge.log" 2>&1 &
-bridge=$!
-pids+=("$bridge")
-port=""
-for _ in $(seq 100); do
-  port="$(grep -o 'wss://127.0.0.1:[0-9]*' "$tmp/bridge.log" | head -1 | cut -d: -f3)"
-  [ -n "$port" ] && break
-  sleep 0.1
-done
-if [ -z "$port" ]; then
-  echo "FAILED: teleop_bridge did not start with TLS"
-  cat "$tmp/bridge.log"
-  exit 1
-fi
+start_server_and_bridge "$build" "$domain" --listen 127.0.0.1:0 --tls-cert "$tmp/cert.pem" \
+  --tls-key "$tmp/key.pem" --token-file "$tmp/token"
 NODE_EXTRA_CA_CERTS="$tmp/cert.pem" node "${node_flags[@]}" "$here/access_check.mjs" \
   "https://127.0.0.1:$port" "$(cat "$tmp/token")" || failed=1
 kill -INT "$bridge"

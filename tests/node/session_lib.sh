@@ -24,23 +24,27 @@ session_cleanup() {
   rm -rf "$tmp"
 }
 
-# start_server_and_bridge BUILD DOMAIN: teleop_server, then teleop_bridge on a port the system
-# picks; sets bridge (its pid) and port, or exits 1 naming what did not start
+# start_server_and_bridge BUILD DOMAIN [BRIDGE_FLAG...]: teleop_server, then teleop_bridge
+# (default flags --port 0: a port the system picks; given flags replace them); sets bridge (its
+# pid) and port from the ws:// or wss:// address it prints, or exits 1 naming what did not start
 start_server_and_bridge() {
   local build="$1" domain="$2"
+  shift 2
+  local flags=("$@")
+  [ "${#flags[@]}" -gt 0 ] || flags=(--port 0)
   "$build/server/teleop_server" --domain "$domain" --duration 60 --quiet >"$tmp/server.log" 2>&1 &
   pids+=("$!")
-  "$build/client/teleop_bridge" --domain "$domain" --port 0 --stats-s 0 >"$tmp/bridge.log" 2>&1 &
+  "$build/client/teleop_bridge" --domain "$domain" "${flags[@]}" --stats-s 0 >"$tmp/bridge.log" 2>&1 &
   bridge=$!
   pids+=("$bridge")
   port=""
   for _ in $(seq 100); do
-    port="$(grep -o 'ws://127.0.0.1:[0-9]*' "$tmp/bridge.log" | head -1 | cut -d: -f3)"
+    port="$(grep -oE 'wss?://127.0.0.1:[0-9]*' "$tmp/bridge.log" | head -1 | cut -d: -f3)"
     [ -n "$port" ] && break
     sleep 0.1
   done
   if [ -z "$port" ]; then
-    echo "FAILED: teleop_bridge did not start"
+    echo "FAILED: teleop_bridge ${flags[*]} did not start"
     cat "$tmp/bridge.log"
     exit 1
   fi
