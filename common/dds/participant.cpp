@@ -614,13 +614,19 @@ Participant::Participant(const ParticipantOptions& options) : options_(options) 
         why = ": DDS Security refused identity '" + s.identity + "' of " + security_dir_label(s) +
               ": " + reason;
       } else {
-        why = ": DDS Security refused identity '" + s.identity + "' of " + security_dir_label(s) +
-              " (its certificate must be signed by identity_ca.cert.pem and match its key; "
+        // the files pass the checks made here: the cause is Fast DDS's line above, a transport
+        // or profile setting as well as what these checks cannot see in the security files
+        why = ": Fast DDS's own error is printed above (identity '" + s.identity + "' of " +
+              security_dir_label(s) +
+              " passes the file checks made here; if that error is DDS Security's: the "
+              "certificate must be signed by identity_ca.cert.pem and match its key, "
               "governance.p7s and its permissions.p7s must be signed by permissions_ca.cert.pem, "
               "the permissions must name the certificate's subject, be valid now and allow "
               "domain " +
-              std::to_string(options.domain) + "); Fast DDS's own error is printed above";
+              std::to_string(options.domain) + ")";
       }
+    } else {
+      why = ": Fast DDS's own error is printed above";
     }
     throw DdsError("cannot create a DDS participant with profile '" + ref.name + "' from " +
                    ref.file + " on domain " + std::to_string(options.domain) + why);

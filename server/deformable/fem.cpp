@@ -672,13 +672,11 @@ void implicit_step(const DeformableModel& m, DeformableState& s, double h, doubl
 
 }  // namespace
 
-void build_fem(DeformableModel& m, const teleop::mesh::TetMesh& tm) {
-  DeformableModel::Fem& f = m.fem;
-  const DeformableParams& p = m.params;
-  f.node_count = tm.node_count();
-  f.tet_count = tm.tet_count();
-  f.rest = tm.vertices;
-  f.tets = tm.tets;
+namespace {
+
+// The rest shape's inverse edge matrices and volumes, per tetrahedron and in groups of four (one
+// per lane); returns the body's volume.
+double build_rest_geometry(DeformableModel::Fem& f) {
   f.dm_inv.assign(9 * static_cast<std::size_t>(f.tet_count), 0.0);
   f.volume_m3.resize(f.tet_count);
   double volume = 0.0;
@@ -704,14 +702,20 @@ void build_fem(DeformableModel& m, const teleop::mesh::TetMesh& tm) {
       f.volume4[t] = f.volume_m3(static_cast<Eigen::Index>(t));
     }
   }
-  // material
+  return volume;
+}
+
+// The material's Lame constants, the body's mass and the lumped node masses (a quarter of each
+// tetrahedron's).
+void build_masses(DeformableModel& m, double volume) {
+  DeformableModel::Fem& f = m.fem;
+  const DeformableParams& p = m.params;
   const double E = p.youngs_modulus_pa, nu = p.poisson_ratio;
   m.lame_lambda_pa = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
   m.lame_mu_pa = E / (2.0 * (1.0 + nu));
   m.volume_m3 = volume;
   m.total_mass_kg = p.density_kg_per_m3 > 0.0 ? p.density_kg_per_m3 * volume : p.mass_kg;
   m.density_kg_per_m3 = m.total_mass_kg / volume;
-  // lumped masses: a quarter of each tetrahedron's
   f.mass_kg = Eigen::VectorXd::Zero(f.node_count);
   for (int t = 0; t < f.tet_count; ++t) {
     for (int k = 0; k < 4; ++k)
@@ -727,8 +731,14 @@ void build_fem(DeformableModel& m, const teleop::mesh::TetMesh& tm) {
   const int ns = m.node_count;
   m.mass_kg = f.mass_kg.head(ns);
   m.inv_mass = f.inv_mass.head(ns);
-  // node areas of the surface (a third of each adjacent triangle)
-  m.area_m2 = Eigen::VectorXd::Zero(ns);
+}
+
+// The surface nodes' areas (a third of each adjacent triangle) and their contact: pressure per
+// depth on each node's area, damped at contact_damping_ratio.
+void build_surface_contact(DeformableModel& m, double volume) {
+  DeformableModel::Fem& f = m.fem;
+  const DeformableParams& p = m.params;
+  m.area_m2 = Eigen::VectorXd::Zero(m.node_count);
   const auto& X = m.mesh.vertices;
   for (int t = 0; t < m.mesh.triangle_count(); ++t) {
     const int a = m.mesh.triangles(0, t), b = m.mesh.triangles(1, t), c = m.mesh.triangles(2, t);
@@ -737,14 +747,18 @@ void build_fem(DeformableModel& m, const teleop::mesh::TetMesh& tm) {
     m.area_m2(b) += area / 3.0;
     m.area_m2(c) += area / 3.0;
   }
-  // contact: pressure per depth on each node's area, damped at contact_damping_ratio
+  const double E = p.youngs_modulus_pa, nu = p.poisson_ratio;
   const double size = std::cbrt(volume);
   f.pressure_stiffness_pa_per_m = p.contact_pressure_stiffness_pa_per_m > 0.0
                                       ? p.contact_pressure_stiffness_pa_per_m
                                       : 1000.0 * E / (1.0 - nu * nu) / size;
   m.contact_k = f.pressure_stiffness_pa_per_m * m.area_m2;
   m.contact_c = (2.0 * p.contact_damping_ratio) * (m.contact_k.cwiseProduct(m.mass_kg)).cwiseSqrt();
-  // diagonal of the rest stiffness: K_jj = V (mu |b_j|^2 I + (lambda + mu) b_j b_j^T)
+}
+
+// The diagonal of the rest stiffness: K_jj = V (mu |b_j|^2 I + (lambda + mu) b_j b_j^T).
+void build_preconditioner(DeformableModel& m) {
+  DeformableModel::Fem& f = m.fem;
   f.precond = Eigen::Matrix3Xd::Zero(3, f.node_count);
   const double mu = m.lame_mu_pa, lambda = m.lame_lambda_pa;
   for (int t = 0; t < f.tet_count; ++t) {
@@ -758,6 +772,20 @@ void build_fem(DeformableModel& m, const teleop::mesh::TetMesh& tm) {
                                                        (lambda + mu) * g.cwiseProduct(g));
     }
   }
+}
+
+}  // namespace
+
+void build_fem(DeformableModel& m, const teleop::mesh::TetMesh& tm) {
+  DeformableModel::Fem& f = m.fem;
+  f.node_count = tm.node_count();
+  f.tet_count = tm.tet_count();
+  f.rest = tm.vertices;
+  f.tets = tm.tets;
+  const double volume = build_rest_geometry(f);
+  build_masses(m, volume);
+  build_surface_contact(m, volume);
+  build_preconditioner(m);
 }
 
 void init_fem_state(const DeformableModel& m, DeformableState& s) {

@@ -468,11 +468,80 @@ TELEOP_AVX2_INLINE void pack_block(const __m256d* xq, const __m256d* vq, const _
   for (int l = 0; l < 4; ++l) _mm256_storeu_ps(pk + 8 * l, _mm256_set_m128(nv[l], nx[l]));
 }
 
+// The x/y/z pattern of a block of 12 coordinates (x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3) for
+// the vector (c0, c1, c2).
+TELEOP_AVX2_INLINE void block_pattern(const double* c, __m256d* pat) {
+  pat[0] = _mm256_setr_pd(c[0], c[1], c[2], c[0]);
+  pat[1] = _mm256_setr_pd(c[1], c[2], c[0], c[1]);
+  pat[2] = _mm256_setr_pd(c[2], c[0], c[1], c[2]);
+}
+
+// The 4 nodes' squared speeds (x^2 + y^2) + z^2 of a block from the squares of its 12
+// coordinates: a = x^2 of nodes 0-3, b = y^2, c = z^2 gathered from a0 a1 a2 a3 | b0 b1 b2 b3 |
+// c0 c1 c2 c3.
+TELEOP_AVX2_INLINE __m256d block_speeds2(const __m256d* v2s) {
+  const __m256d sa = _mm256_permute4x64_pd(
+      _mm256_blend_pd(_mm256_blend_pd(v2s[0], v2s[1], 0x4), v2s[2], 0x2), 0x6C);  // 0 3 2 1
+  const __m256d sb = _mm256_permute4x64_pd(
+      _mm256_blend_pd(_mm256_blend_pd(v2s[1], v2s[0], 0x2), v2s[2], 0x4), 0xB1);  // 1 0 3 2
+  const __m256d sc = _mm256_permute4x64_pd(
+      _mm256_blend_pd(_mm256_blend_pd(v2s[2], v2s[0], 0x4), v2s[1], 0x2), 0xC6);  // 2 1 0 3
+  return _mm256_add_pd(_mm256_add_pd(sa, sb), sc);
+}
+
+// The per-lane partial sums of the blocks (ax: positions, av: squared speeds, am: mass-weighted
+// positions) and the lanes' largest squared speed, reduced in a fixed order into sums.
+TELEOP_AVX2_INLINE void reduce_block_sums(const __m256d* ax, const __m256d* av, const __m256d* am,
+                                          __m256d top, KernelSums& sums) {
+  alignas(32) double lane[3][3][4];
+  for (int t = 0; t < 3; ++t) {
+    _mm256_store_pd(lane[0][t], ax[t]);
+    _mm256_store_pd(lane[1][t], av[t]);
+    _mm256_store_pd(lane[2][t], am[t]);
+  }
+  alignas(32) double tops[4];
+  _mm256_store_pd(tops, top);
+  sums.fastest2 = std::max(std::max(tops[0], tops[1]), std::max(tops[2], tops[3]));
+  sums.sum_x = 0.0;
+  sums.sum_v = 0.0;
+  sums.mx[0] = sums.mx[1] = sums.mx[2] = 0.0;
+  for (int j = 0; j < 12; ++j) {  // coordinate j of the block is component j % 3
+    sums.sum_x += lane[0][j / 4][j % 4];
+    sums.sum_v += lane[1][j / 4][j % 4];
+    sums.mx[j % 3] += lane[2][j / 4][j % 4];
+  }
+}
+
+// x += h v for the nodes from `first` on (those past the last whole block), one by one, added to
+// the sums (and the momentum and packs with kPack).
+template <bool kPack>
+TELEOP_AVX2_INLINE void tail_positions_sums(const DeformableModel& m, DeformableState& s, double h,
+                                            int first, KernelSums& sums, NextPack* next) {
+  double* x = s.x.data();
+  const double* v = s.v.data();
+  const double* dm = m.simd_dof_mass.data();
+  float* pk = s.simd_pack.data();
+  for (int i = first; i < m.node_count; ++i) {
+    double sp2 = 0.0;
+    for (int d = 0; d < 3; ++d) {
+      const int q = 3 * i + d;
+      const double xq = x[q] + h * v[q];
+      x[q] = xq;
+      sp2 += v[q] * v[q];
+      sums.sum_x += xq;
+      sums.mx[d] += dm[q] * xq;
+      if (kPack) next->vm[d] = std::fma(dm[q], v[q], next->vm[d]);
+    }
+    if (kPack) pack_node(x + 3 * i, v + 3 * i, next->c, next->cv, pk + 8 * i);
+    sums.sum_v += sp2;
+    sums.fastest2 = sp2 > sums.fastest2 ? sp2 : sums.fastest2;
+  }
+}
+
 template <bool kPack>
 TELEOP_AVX2_INLINE void flat_positions_sums(const DeformableModel& m, DeformableState& s, double h,
                                             KernelSums& sums, NextPack* next) {
-  const int n = m.node_count;
-  const int n3 = 3 * n;
+  const int n3 = 3 * m.node_count;
   double* x = s.x.data();
   const double* v = s.v.data();
   const double* dm = m.simd_dof_mass.data();
@@ -482,14 +551,8 @@ TELEOP_AVX2_INLINE void flat_positions_sums(const DeformableModel& m, Deformable
   __m256d ax[3], av[3], am[3], acc[3], cpat[3], cvpat[3];
   for (int t = 0; t < 3; ++t) ax[t] = av[t] = am[t] = acc[t] = _mm256_setzero_pd();
   if (kPack) {
-    const double* c = next->c;
-    const double* cv = next->cv;
-    cpat[0] = _mm256_setr_pd(c[0], c[1], c[2], c[0]);
-    cpat[1] = _mm256_setr_pd(c[1], c[2], c[0], c[1]);
-    cpat[2] = _mm256_setr_pd(c[2], c[0], c[1], c[2]);
-    cvpat[0] = _mm256_setr_pd(cv[0], cv[1], cv[2], cv[0]);
-    cvpat[1] = _mm256_setr_pd(cv[1], cv[2], cv[0], cv[1]);
-    cvpat[2] = _mm256_setr_pd(cv[2], cv[0], cv[1], cv[2]);
+    block_pattern(next->c, cpat);
+    block_pattern(next->cv, cvpat);
   }
   __m256d top = _mm256_setzero_pd();  // lane l: the largest squared speed of node l of a block
   for (int q0 = 0; q0 < blocks; q0 += 12) {
@@ -507,58 +570,16 @@ TELEOP_AVX2_INLINE void flat_positions_sums(const DeformableModel& m, Deformable
       vs[t] = vq;
       v2s[t] = v2;
     }
-    // the 4 nodes' squared speeds (x^2 + y^2) + z^2: a = x^2 of nodes 0-3, b = y^2, c = z^2
-    // gathered from a0 a1 a2 a3 | b0 b1 b2 b3 | c0 c1 c2 c3 (the squares of the 12 coordinates)
-    const __m256d sa = _mm256_permute4x64_pd(
-        _mm256_blend_pd(_mm256_blend_pd(v2s[0], v2s[1], 0x4), v2s[2], 0x2), 0x6C);  // 0 3 2 1
-    const __m256d sb = _mm256_permute4x64_pd(
-        _mm256_blend_pd(_mm256_blend_pd(v2s[1], v2s[0], 0x2), v2s[2], 0x4), 0xB1);  // 1 0 3 2
-    const __m256d sc = _mm256_permute4x64_pd(
-        _mm256_blend_pd(_mm256_blend_pd(v2s[2], v2s[0], 0x4), v2s[1], 0x2), 0xC6);  // 2 1 0 3
-    top = _mm256_max_pd(_mm256_add_pd(_mm256_add_pd(sa, sb), sc), top);  // sp2 > top ? sp2 : top
+    top = _mm256_max_pd(block_speeds2(v2s), top);  // sp2 > top ? sp2 : top
     if (kPack) {
       momentum_block(dm + q0, vs, acc);
       pack_block(xs, vs, cpat, cvpat, pk + 8 * (q0 / 3));
     }
   }
-  alignas(32) double lane[3][3][4];
-  for (int t = 0; t < 3; ++t) {
-    _mm256_store_pd(lane[0][t], ax[t]);
-    _mm256_store_pd(lane[1][t], av[t]);
-    _mm256_store_pd(lane[2][t], am[t]);
-  }
-  alignas(32) double tops[4];
-  _mm256_store_pd(tops, top);
-  double fastest2 = std::max(std::max(tops[0], tops[1]), std::max(tops[2], tops[3]));
-  double sum_x = 0.0, sum_v = 0.0, mx[3] = {0.0, 0.0, 0.0};
-  for (int j = 0; j < 12; ++j) {  // coordinate j of the block is component j % 3
-    sum_x += lane[0][j / 4][j % 4];
-    sum_v += lane[1][j / 4][j % 4];
-    mx[j % 3] += lane[2][j / 4][j % 4];
-  }
+  reduce_block_sums(ax, av, am, top, sums);
   if (kPack) momentum_reduce(acc, next->vm);
-  for (int i = blocks / 3; i < n; ++i) {
-    double sp2 = 0.0;
-    for (int d = 0; d < 3; ++d) {
-      const int q = 3 * i + d;
-      const double xq = x[q] + h * v[q];
-      x[q] = xq;
-      sp2 += v[q] * v[q];
-      sum_x += xq;
-      mx[d] += dm[q] * xq;
-      if (kPack) next->vm[d] = std::fma(dm[q], v[q], next->vm[d]);
-    }
-    if (kPack) pack_node(x + 3 * i, v + 3 * i, next->c, next->cv, pk + 8 * i);
-    sum_v += sp2;
-    fastest2 = sp2 > fastest2 ? sp2 : fastest2;
-  }
-  if (!(sum_v == sum_v)) fastest2 = sum_v;  // a NaN speed fails every comparison above
-  sums.fastest2 = fastest2;
-  sums.sum_x = sum_x;
-  sums.sum_v = sum_v;
-  sums.mx[0] = mx[0];
-  sums.mx[1] = mx[1];
-  sums.mx[2] = mx[2];
+  tail_positions_sums<kPack>(m, s, h, blocks / 3, sums, next);
+  if (!(sums.sum_v == sums.sum_v)) sums.fastest2 = sums.sum_v;  // a NaN fails every comparison
 }
 
 // Step 3 when no node is held (the usual case), in flat AVX2 passes over the 3N coordinates

@@ -1,6 +1,8 @@
 // Parsing and validation of the `deformable:` YAML mapping.
 #include <algorithm>
 #include <cmath>
+#include <set>
+#include <string>
 
 #include "server/deformable/deformable.hpp"
 
@@ -123,12 +125,11 @@ void load_mass_spring_source(const teleop::config::Node& node, DeformableParams&
 
 }  // namespace
 
-DeformableParams load_deformable_params(const teleop::config::Node& node) {
-  if (!node.is_map()) {
-    throw config::ConfigError(node.file() + ": field '" + node.path() +
-                              "' must be a mapping of deformable-body parameters");
-  }
-  node.reject_unknown_keys({"model",
+namespace {
+
+// The fields of a deformable body's mapping.
+const std::set<std::string>& deformable_keys() {
+  static const std::set<std::string> keys = {"model",
                             "integrator",
                             "kernel",
                             "level",
@@ -162,8 +163,12 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
                             "sleep_time_s",
                             "max_speed_mps",
                             "max_substeps",
-                            "min_substeps"});
-  DeformableParams p;
+                            "min_substeps"};
+  return keys;
+}
+
+// model, integrator, kernel and level.
+void load_kind_fields(const teleop::config::Node& node, DeformableParams& p) {
   p.model = parse_model_kind(node.choice_or(
       "model", "mass_spring", {"mass_spring", "navier_linear", "navier_corotational", "fem"}));
   const bool fem = p.model == ModelKind::kFem;
@@ -183,6 +188,10 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   // fuzz builds only (tests/fuzz): a level-6 body takes 0.2 s to build; level 2 takes 1 ms
   p.level = std::min(p.level, 2);
 #endif
+}
+
+// The shape: radius, centre, surface mesh and its scale.
+void load_shape_fields(const teleop::config::Node& node, DeformableParams& p) {
   p.radius_m = node.number_or("radius_m", p.radius_m, 1e-3, 100.0);
   const auto c =
       node.numbers_or("centre_m", {p.centre_m.x(), p.centre_m.y(), p.centre_m.z()}, -1e4, 1e4);
@@ -190,7 +199,11 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   p.centre_m = Eigen::Vector3d(c[0], c[1], c[2]);
   p.mesh_file = node.string_or("mesh_file", "");
   p.mesh_scale = node.number_or("mesh_scale", 1.0, 1e-6, 1e6);
-  load_volume_fields(node, p);
+}
+
+// Mass, stiffness, material and damping.
+void load_material_fields(const teleop::config::Node& node, DeformableParams& p) {
+  const bool fem = p.model == ModelKind::kFem;
   if (node.has("mass_kg") && node.has("density_kg_per_m3")) {
     node.fail("density_kg_per_m3", "give either mass_kg or density_kg_per_m3, not both");
   }
@@ -215,6 +228,10 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   p.radial_damping_s = node.number_or("radial_damping_s", p.radial_damping_s, 0.0, 1.0);
   p.mass_damping_per_s =
       node.number_or("mass_damping_per_s", fem ? 5.0 : p.mass_damping_per_s, 0.0, 1e3);
+}
+
+// Gravity, contact, the implicit solve, sleep and sub-steps.
+void load_solver_fields(const teleop::config::Node& node, DeformableParams& p) {
   const auto g = node.numbers_or(
       "gravity_mps2", {p.gravity_mps2.x(), p.gravity_mps2.y(), p.gravity_mps2.z()}, -100.0, 100.0);
   if (g.size() != 3) node.fail("gravity_mps2", "must be a list of 3 numbers [m/s^2]");
@@ -232,6 +249,22 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   p.max_speed_mps = node.number_or("max_speed_mps", p.max_speed_mps, 1e-3, 1e6);
   p.max_substeps = static_cast<int>(node.integer_or("max_substeps", p.max_substeps, 1, 10000));
   p.min_substeps = static_cast<int>(node.integer_or("min_substeps", p.min_substeps, 1, 10000));
+}
+
+}  // namespace
+
+DeformableParams load_deformable_params(const teleop::config::Node& node) {
+  if (!node.is_map()) {
+    throw config::ConfigError(node.file() + ": field '" + node.path() +
+                              "' must be a mapping of deformable-body parameters");
+  }
+  node.reject_unknown_keys(deformable_keys());
+  DeformableParams p;
+  load_kind_fields(node, p);
+  load_shape_fields(node, p);
+  load_volume_fields(node, p);
+  load_material_fields(node, p);
+  load_solver_fields(node, p);
   load_mass_spring_source(node, p);
   if (p.model == ModelKind::kMassSpring && !p.springs_from_material &&
       p.edge_stiffness_n_per_m <= 0.0 && p.radial_stiffness_n_per_m3 <= 0.0) {

@@ -67,11 +67,11 @@ TELEOP_ALWAYS_INLINE void rotation_step(const T* a, const T* r, T& ox, T& oy, T&
           m11 = h00 * h22 - h02 * h02, m12 = h01 * h02 - h00 * h12, m22 = h00 * h11 - h01 * h01;
   const T det = h00 * m00 + h01 * m01 + h02 * m02;
   newton = (h00 > 0.0) & (m22 > 0.0) & (det > 1e-9 * tr * tr * tr);
-  const T inv_det = 1.0 / det;
-  const T inv_den = 1.0 / (abs_of(tr) + 1e-12);
-  ox = newton ? (m00 * gx + m01 * gy + m02 * gz) * inv_det : gx * inv_den;
-  oy = newton ? (m01 * gx + m11 * gy + m12 * gz) * inv_det : gy * inv_den;
-  oz = newton ? (m02 * gx + m12 * gy + m22 * gz) * inv_det : gz * inv_den;
+  // one division: by det for a Newton step, by |tr C| for Mueller's
+  const T inv = 1.0 / (newton ? det : abs_of(tr) + 1e-12);
+  ox = (newton ? m00 * gx + m01 * gy + m02 * gz : gx) * inv;
+  oy = (newton ? m01 * gx + m11 * gy + m12 * gz : gy) * inv;
+  oz = (newton ? m02 * gx + m12 * gy + m22 * gz : gz) * inv;
 }
 
 // Rotational part of A (a[9], column-major; polar decomposition), warm-started from q (r[9]

@@ -165,97 +165,140 @@ double contact_and_damping_limit_s(const DeformableModel& m, double wmax, int do
   return c > 0.0 ? std::min(h, 2.0 / c) : h;
 }
 
-}  // namespace
-
-StabilityEstimate estimate_stability(const DeformableModel& m) {
-  StabilityEstimate out;
-  const bool fem = m.params.model == ModelKind::kFem;
-  const int n = fem ? m.fem.node_count : m.node_count;
-  const int dofs = 3 * n + (m.has_centre ? 3 : 0);
-  out.omega_bound_rad_per_s = gershgorin_omega_bound(m);
-  Eigen::VectorXd inv_sqrt_m(dofs);
-  for (int i = 0; i < n; ++i) {
-    inv_sqrt_m.segment<3>(3 * i).setConstant(1.0 /
-                                             std::sqrt(fem ? m.fem.mass_kg(i) : m.mass_kg(i)));
-  }
-  if (m.has_centre) inv_sqrt_m.tail<3>().setConstant(1.0 / std::sqrt(m.centre_mass_kg));
-
-  // y = A q = M^-1/2 K M^-1/2 q, with the edge and radial parts apart (for the damping ratio;
-  // model fem: all of it elastic)
-  Eigen::VectorXd p(dofs), ke(dofs), kr(dofs);
-  auto apply = [&](const Eigen::VectorXd& q, Eigen::VectorXd& ye, Eigen::VectorXd& yr) {
-    p = inv_sqrt_m.cwiseProduct(q);
-    if (fem) {
-      detail::fem_apply_rest_stiffness(m, p, ke);
-      kr.setZero(dofs);
-    } else {
-      apply_rest_stiffness(m, p, ke, kr);
+// y = A q = M^-1/2 K M^-1/2 q, with the edge and radial parts apart (for the damping ratio;
+// model fem: all of it elastic).
+class ScaledStiffness {
+ public:
+  explicit ScaledStiffness(const DeformableModel& m)
+      : m_(m),
+        fem_(m.params.model == ModelKind::kFem),
+        n_(fem_ ? m.fem.node_count : m.node_count),
+        dofs_(3 * n_ + (m.has_centre ? 3 : 0)),
+        inv_sqrt_m_(dofs_),
+        p_(dofs_),
+        ke_(dofs_),
+        kr_(dofs_) {
+    for (int i = 0; i < n_; ++i) {
+      inv_sqrt_m_.segment<3>(3 * i).setConstant(
+          1.0 / std::sqrt(fem_ ? m.fem.mass_kg(i) : m.mass_kg(i)));
     }
-    ye = inv_sqrt_m.cwiseProduct(ke);
-    yr = inv_sqrt_m.cwiseProduct(kr);
-  };
-
-  // Lanczos without reorthogonalisation (its loss of orthogonality only duplicates converged
-  // Ritz values; the largest one is still a lower bound that converges to lambda_max)
-  const int iterations = std::min(dofs, kStabilityLanczosIterations);
-  Eigen::VectorXd alpha(iterations), beta(iterations);
-  Eigen::VectorXd q0(dofs);
-  for (int k = 0; k < dofs; ++k) q0(k) = hashed_unit(static_cast<std::uint64_t>(k));
-  q0.normalize();
-  Eigen::VectorXd q = q0, q_prev = Eigen::VectorXd::Zero(dofs), w(dofs), ye(dofs), yr(dofs);
-  int used = 0;
-  for (int k = 0; k < iterations; ++k) {
-    apply(q, ye, yr);
-    w = ye + yr;
-    alpha(k) = q.dot(w);
-    w -= alpha(k) * q;
-    if (k > 0) w -= beta(k - 1) * q_prev;
-    beta(k) = w.norm();
-    ++used;
-    if (!(beta(k) > 1e-12 * std::abs(alpha(k)))) break;  // invariant subspace: exact
-    q_prev = q;
-    q = w / beta(k);
+    if (m.has_centre) inv_sqrt_m_.tail<3>().setConstant(1.0 / std::sqrt(m.centre_mass_kg));
   }
+
+  int dofs() const { return dofs_; }
+  bool fem() const { return fem_; }
+
+  void apply(const Eigen::VectorXd& q, Eigen::VectorXd& ye, Eigen::VectorXd& yr) {
+    p_ = inv_sqrt_m_.cwiseProduct(q);
+    if (fem_) {
+      detail::fem_apply_rest_stiffness(m_, p_, ke_);
+      kr_.setZero(dofs_);
+    } else {
+      apply_rest_stiffness(m_, p_, ke_, kr_);
+    }
+    ye = inv_sqrt_m_.cwiseProduct(ke_);
+    yr = inv_sqrt_m_.cwiseProduct(kr_);
+  }
+
+ private:
+  const DeformableModel& m_;
+  bool fem_;
+  int n_, dofs_;
+  Eigen::VectorXd inv_sqrt_m_, p_, ke_, kr_;
+};
+
+// The Lanczos tridiagonalisation of A from a fixed start vector, and its largest Ritz pair.
+struct LanczosTop {
+  Eigen::VectorXd q0, alpha, beta;
+  int used = 0;
+  double lambda = 0.0;   // the largest Ritz value (>= 0)
+  Eigen::VectorXd ritz;  // its eigenvector in the Lanczos basis
+};
+
+// Lanczos without reorthogonalisation (its loss of orthogonality only duplicates converged Ritz
+// values; the largest one is still a lower bound that converges to lambda_max).
+LanczosTop lanczos_top(ScaledStiffness& a, int iterations) {
+  const int dofs = a.dofs();
+  LanczosTop out;
+  out.alpha.resize(iterations);
+  out.beta.resize(iterations);
+  out.q0.resize(dofs);
+  for (int k = 0; k < dofs; ++k) out.q0(k) = hashed_unit(static_cast<std::uint64_t>(k));
+  out.q0.normalize();
+  Eigen::VectorXd q = out.q0, q_prev = Eigen::VectorXd::Zero(dofs), w(dofs), ye(dofs), yr(dofs);
+  for (int k = 0; k < iterations; ++k) {
+    a.apply(q, ye, yr);
+    w = ye + yr;
+    out.alpha(k) = q.dot(w);
+    w -= out.alpha(k) * q;
+    if (k > 0) w -= out.beta(k - 1) * q_prev;
+    out.beta(k) = w.norm();
+    ++out.used;
+    if (!(out.beta(k) > 1e-12 * std::abs(out.alpha(k)))) break;  // invariant subspace: exact
+    q_prev = q;
+    q = w / out.beta(k);
+  }
+  const int used = out.used;
   Eigen::MatrixXd t = Eigen::MatrixXd::Zero(used, used);
   for (int k = 0; k < used; ++k) {
-    t(k, k) = alpha(k);
-    if (k + 1 < used) t(k, k + 1) = t(k + 1, k) = beta(k);
+    t(k, k) = out.alpha(k);
+    if (k + 1 < used) t(k, k + 1) = t(k + 1, k) = out.beta(k);
   }
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(t);
   const Eigen::Index top = used - 1;  // eigenvalues ascending
-  const double lambda = std::max(es.eigenvalues()(top), 0.0);
-  out.omega_max_rad_per_s = std::sqrt(lambda);
-  out.lanczos_iterations = used;
+  out.lambda = std::max(es.eigenvalues()(top), 0.0);
+  out.ritz = es.eigenvectors().col(top);
+  return out;
+}
 
-  // Ritz vector of the top mode (a second pass regenerates the Lanczos vectors) and the share of
-  // its stiffness carried by the edges and by the radial springs: the damping ratio of that mode
-  //   zeta = (beta_e psi^T A_e psi + beta_r psi^T A_r psi + alpha) / (2 w)
-  // (C = beta_e K_e + beta_r K_r + alpha M; the drag is relative to the mean velocity, which the
-  // top mode does not move, so alpha M is its exact contribution there).
-  const Eigen::VectorXd y = es.eigenvectors().col(top);
+// The top mode's Ritz vector (a second pass regenerates the Lanczos vectors) and the shares of
+// its stiffness carried by the edges and by the radial springs.
+void top_mode_shares(ScaledStiffness& a, const LanczosTop& l, double& share_e, double& share_r) {
+  const int dofs = a.dofs();
   Eigen::VectorXd psi = Eigen::VectorXd::Zero(dofs);
-  q = q0;
-  q_prev.setZero();
-  for (int k = 0; k < used; ++k) {
-    psi += y(k) * q;
-    if (k + 1 == used) break;
-    apply(q, ye, yr);
-    w = ye + yr - alpha(k) * q;
-    if (k > 0) w -= beta(k - 1) * q_prev;
+  Eigen::VectorXd q = l.q0, q_prev = Eigen::VectorXd::Zero(dofs), w(dofs), ye(dofs), yr(dofs);
+  for (int k = 0; k < l.used; ++k) {
+    psi += l.ritz(k) * q;
+    if (k + 1 == l.used) break;
+    a.apply(q, ye, yr);
+    w = ye + yr - l.alpha(k) * q;
+    if (k > 0) w -= l.beta(k - 1) * q_prev;
     q_prev = q;
-    q = w / beta(k);
+    q = w / l.beta(k);
   }
   const double psi_norm = psi.norm();
-  double share_e = 1.0, share_r = 0.0;
-  if (psi_norm > 0.0 && lambda > 0.0) {
+  share_e = 1.0;
+  share_r = 0.0;
+  if (psi_norm > 0.0 && l.lambda > 0.0) {
     psi /= psi_norm;
-    apply(psi, ye, yr);
+    a.apply(psi, ye, yr);
     const double e = std::max(psi.dot(ye), 0.0), r = std::max(psi.dot(yr), 0.0);
     if (e + r > 0.0) {
       share_e = e / (e + r);
       share_r = r / (e + r);
     }
   }
+}
+
+}  // namespace
+
+StabilityEstimate estimate_stability(const DeformableModel& m) {
+  StabilityEstimate out;
+  out.omega_bound_rad_per_s = gershgorin_omega_bound(m);
+  ScaledStiffness a(m);
+  const int dofs = a.dofs();
+  const int iterations = std::min(dofs, kStabilityLanczosIterations);
+  const LanczosTop l = lanczos_top(a, iterations);
+  const double lambda = l.lambda;
+  out.omega_max_rad_per_s = std::sqrt(lambda);
+  out.lanczos_iterations = l.used;
+
+  // the damping ratio of the top mode
+  //   zeta = (beta_e psi^T A_e psi + beta_r psi^T A_r psi + alpha) / (2 w)
+  // (C = beta_e K_e + beta_r K_r + alpha M; the drag is relative to the mean velocity, which the
+  // top mode does not move, so alpha M is its exact contribution there).
+  double share_e = 1.0, share_r = 0.0;
+  top_mode_shares(a, l, share_e, share_r);
   const DeformableParams& prm = m.params;
   const double wmax = out.omega_max_rad_per_s;
   out.radial_share = share_r;
@@ -267,12 +310,13 @@ StabilityEstimate estimate_stability(const DeformableModel& m) {
 
   // the largest stable step of the integrator for that mode, times the safety factor
   out.limit_step_s = integrator_step_limit(m, out.omega_max_rad_per_s, out.damping_ratio);
-  if (!fem && prm.integrator == IntegratorKind::kSymplecticEuler) {
+  if (!a.fem() && prm.integrator == IntegratorKind::kSymplecticEuler) {
+    Eigen::VectorXd ye(dofs), yr(dofs);
     out.limit_step_s =
         std::min(out.limit_step_s,
                  contact_and_damping_limit_s(
                      m, wmax, dofs, iterations, [&](const Eigen::VectorXd& q, Eigen::VectorXd& y) {
-                       apply(q, ye, yr);
+                       a.apply(q, ye, yr);
                        y = prm.stiffness_damping_s * ye + prm.radial_damping_s * yr;
                      }));
   }
