@@ -413,6 +413,10 @@ struct DeformableState {
   double tip_radius_m = 0.0;
   Eigen::Vector3d tip_from_m = Eigen::Vector3d::Zero(), tip_to_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d tip_velocity_mps = Eigen::Vector3d::Zero();
+  /// Model fem: Coulomb friction between the sphere and the surface nodes it touches (static
+  /// mu_s: a node sliding slower than mu_s times its normal impulse allows is stopped relative
+  /// to the sphere; otherwise kinetic mu_k <= mu_s opposes its sliding). 0: frictionless.
+  double tip_friction_static = 0.0, tip_friction_kinetic = 0.0;
   /// Outputs of the last step (model fem): the force of the body on the sphere [N] (mean over
   /// the sub-steps), the surface nodes it touched at the end, the deepest node [m].
   Eigen::Vector3d tip_force_n = Eigen::Vector3d::Zero();

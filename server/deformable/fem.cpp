@@ -482,6 +482,23 @@ inline void node_friction(const Vec3& n, double jn, double mu, double mi, Vec3& 
   if (st > 1e-12) vi -= (std::min(mu * jn, mi * st) / (mi * st)) * vt;
 }
 
+// Coulomb friction between node i (velocity vi, mass mi) and the tip sphere moving at vo, for a
+// contact of normal n and normal impulse jn: the node sticks to the sphere when stopping its
+// sliding takes at most mu_s jn, else a tangential impulse mu_k jn opposes the sliding. Returns
+// the impulse on the node (the sphere takes its opposite).
+inline Vec3 tip_friction(const Vec3& n, double jn, double mu_s, double mu_k, double mi,
+                         const Vec3& vo, Vec3& vi) {
+  const Vec3 rel = vi - vo;
+  const Vec3 vt = rel - n.dot(rel) * n;
+  const double st = vt.norm();
+  if (!(st > 1e-12) || !(jn > 0.0)) return Vec3::Zero();
+  const double stop = mi * st;  // the impulse that stops the sliding
+  const double jt = stop <= mu_s * jn ? stop : std::min(mu_k * jn, stop);
+  const Vec3 impulse = -(jt / st) * vt;
+  vi += impulse / mi;
+  return impulse;
+}
+
 // The tip sphere's centre at fraction a of the caller's step.
 inline Vec3 tip_centre(const DeformableState& s, double a) {
   return s.tip_from_m + a * (s.tip_to_m - s.tip_from_m);
@@ -520,7 +537,9 @@ void contact_impulses(const DeformableModel& m, DeformableState& s, double h, do
         const double dist = std::sqrt(e2);
         const Vec3 n = e / dist;
         const double j = node_contact(n, r - dist, n.dot(s.tip_velocity_mps), k, cd, mi, h, vi);
-        s.tip_force_n -= j * n;  // impulse on the tip; step() divides by the step
+        const Vec3 jt = tip_friction(n, j, s.tip_friction_static, s.tip_friction_kinetic, mi,
+                                     s.tip_velocity_mps, vi);
+        s.tip_force_n -= j * n + jt;  // impulse on the tip; step() divides by the step
         ++touching;
         deepest = std::max(deepest, r - dist);
       }
@@ -664,7 +683,13 @@ void implicit_step(const DeformableModel& m, DeformableState& s, double h, doubl
     if (code >= 0) {
       s.plane_force_n += fn * nn;
     } else {
-      s.tip_force_n -= (h * fn) * nn;
+      // friction as an impulse on the solved velocity, from the contact's impulse h fn (held
+      // nodes have no contacts)
+      Vec3 vi = s.v.col(i);
+      const Vec3 jt = tip_friction(nn, h * fn, s.tip_friction_static, s.tip_friction_kinetic,
+                                   f.mass_kg(i), s.tip_velocity_mps, vi);
+      s.v.col(i) = vi;
+      s.tip_force_n -= (h * fn) * nn + jt;
     }
   }
   for (int i = 0; i < n; ++i) s.x.col(i) += h * s.v.col(i);

@@ -145,6 +145,8 @@ BodiesOnTip step_bodies(const WorldModel& model, WorldData& d, double dt_s, Even
       b.state.tip_from_m = d.tip_prev_m;
       b.state.tip_to_m = tip_now;
       b.state.tip_velocity_mps = tip_vel;
+      b.state.tip_friction_static = bm.contact.friction_static;
+      b.state.tip_friction_kinetic = bm.contact.friction_kinetic;
       const deformable::StepStatus st = deformable::step(bm.body, b.state, dt_s, &events);
       d.cost.deformable_us += static_cast<double>(now_ns() - t1) * 1e-3;
       read_fem_contact(b, tip_now, r, st);

@@ -667,7 +667,22 @@ void parse_deformables(const config::Node& root, WorldModel& s) {
     std::string mesh_given;
     DeformableBodyModel b = parse_deformable_body(n, s, next_id, mesh_given);
     check_deformable_placement(n.at("body"), b, s, mesh_given);
-    b.contact = load_tip_contact_params(n.child("contact"));
+    const config::Node contact = n.child("contact");
+    b.contact = load_tip_contact_params(contact);
+    const config::Node model_field = n.at("body").child("model");
+    if (model_field.defined() && model_field.raw().IsScalar() &&
+        model_field.raw().Scalar() == "fem" && contact.defined()) {
+      // a body of model fem keeps the tip out with its own surface pressure: only friction
+      // applies (with model auto the other fields serve the surface model it may choose)
+      for (const auto& kv : contact.raw()) {
+        const std::string key = kv.first.Scalar();
+        if (key != "friction_static" && key != "friction_kinetic") {
+          contact.fail(key, "does not apply to a body of model fem, which keeps the tip out "
+                            "with its surface's pressure (body.contact_pressure_stiffness_pa_per_m)"
+                            "; allowed here: friction_static, friction_kinetic");
+        }
+      }
+    }
     s.bodies.push_back(std::move(b));
   }
 }

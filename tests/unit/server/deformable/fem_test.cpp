@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "server/deformable/deformable.hpp"
 #include "tests/support/alloc_counter.hpp"
@@ -194,6 +195,60 @@ TEST(Fem, TheTipSphereIsKeptOutAndFeelsTheReaction) {
   EXPECT_GT(s.tip_force_n.z(), 0.05);  // the body pushes the tip up
   EXPECT_LT(std::fabs(s.tip_force_n.x()) + std::fabs(s.tip_force_n.y()), 0.05 * s.tip_force_n.z());
   EXPECT_LT(s.tip_depth_m, 0.2e-3);  // nodes barely inside the sphere: a stiff contact
+}
+
+// The ratio of the tangential to the normal force on the tip sphere while it slides along x at
+// 20 mm/s over the top of a ball held at its bottom cap, pressed 5 mm in (zero gravity), with
+// tip friction (mu_s, mu_k); the mean over the last 0.2 s of 0.4 s of sliding.
+double sliding_force_ratio(df::IntegratorKind integ, double mu_s, double mu_k) {
+  df::DeformableParams p = fem_params(2, integ);
+  p.gravity_mps2.setZero();
+  p.mass_damping_per_s = 30.0;
+  const df::DeformableModel m = df::make_model(p);
+  df::DeformableState s = df::make_state(m);
+  for (int i = 0; i < m.fem.node_count; ++i) {
+    if (m.fem.rest(2, i) < 0.02) {
+      s.pinned[static_cast<std::size_t>(i)] = 1;
+      s.pin_target.col(i) = m.fem.rest.col(i);
+    }
+  }
+  s.tip_friction_static = mu_s;
+  s.tip_friction_kinetic = mu_k;
+  const double r = 0.05, top = 0.5, h = 1e-3;
+  Eigen::Vector3d c(0, 0, top + r);
+  s.tip_radius_m = r;
+  double fx = 0.0, fz = 0.0;
+  for (int k = 0; k < 650; ++k) {
+    Eigen::Vector3d next(0, 0, top + r - std::min(5e-3, 2e-5 * k));
+    if (k >= 250) next.x() = 0.02 * h * (k - 249);
+    s.tip_from_m = c;
+    s.tip_to_m = next;
+    s.tip_velocity_mps = (next - c) / h;
+    c = next;
+    EXPECT_EQ(df::step(m, s, h, nullptr), df::StepStatus::kOk) << k;
+    if (k >= 450) {
+      fx += s.tip_force_n.x();
+      fz += s.tip_force_n.z();
+    }
+  }
+  EXPECT_EQ(s.fault_count, 0u);
+  return -fx / fz;  // the force on the tip opposes its motion along +x
+}
+
+TEST(Fem, TheTipSlidingOverTheBallFeelsCoulombFriction) {
+  for (auto integ : {df::IntegratorKind::kSymplecticEuler, df::IntegratorKind::kImplicitEuler}) {
+    SCOPED_TRACE(df::to_string(integ));
+    const double frictionless = sliding_force_ratio(integ, 0.0, 0.0);
+    const double sliding = sliding_force_ratio(integ, 0.3, 0.24);
+    std::printf("%s: tangential / normal force on the sliding tip: %.4f frictionless, %.4f with "
+                "mu_s 0.3, mu_k 0.24\n",
+                df::to_string(integ), frictionless, sliding);
+    // frictionless: only the tilt of the contact normal over the curved top (a few degrees)
+    EXPECT_LT(std::fabs(frictionless), 0.06);
+    // sliding: the kinetic coefficient, never more than the static one
+    EXPECT_GT(sliding, 0.24 * 0.85);
+    EXPECT_LT(sliding, 0.3);
+  }
 }
 
 TEST(Fem, StableStepEstimateIsBelowItsBoundAndStepsAllocateNothing) {

@@ -134,6 +134,11 @@ TEST_F(SceneDir, EveryBadSceneIsRefusedNamingFileFieldAndValue) {
        "world: {min_m: [-1, -1, -1], max_m: [1, 1, 1]}\n",
        {"'command.workspace_min_m'", "[-1.5, -1.5, -0.1]", "outside the world box"}},
       {"world_inverted", "world: {min_m: [0, 0, 0], max_m: [0, 1, 1]}\n", {"'world.min_m'"}},
+      // a fem body keeps the tip out itself: of a contact block only the friction applies
+      {"fem_contact_stiffness",
+       tool_scene(", model: fem", "    contact: {friction_static: 0.3, stiffness_n_per_m: 300}\n"),
+       {"'deformables[0].contact.stiffness_n_per_m'", "model fem",
+        "allowed here: friction_static, friction_kinetic"}},
       // rates the scene cannot run at
       {"robot_rate_10",
        "kind: robot\nphysics: {rate_hz: 10}\nrobot: {include: " + kRobotFile + "}\n",

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "server/world/world.hpp"
@@ -394,6 +395,53 @@ TEST(WorldStepKinematic, TheProbeGoesWhereToldAndFeelsOnlyTheBody) {
   EXPECT_EQ(world.out.tip_position_m, Eigen::Vector3d(-0.6, 0.0, -0.02));
   c.drain(events, -1);
   EXPECT_EQ(c.faults, 1);
+}
+
+/// The mean tangential / normal force on a probe that presses 5 mm into the top of the shipped
+/// fem ball (ball_fem.yaml, settled on the floor) and slides along +x at 20 mm/s, with the tip
+/// friction (mu_s, mu_k) of the body's contact block; over the last 0.2 s of 0.4 s of sliding.
+double fem_probe_friction_ratio(double mu_s, double mu_k) {
+  ToolModel tool = tool_over_floor();
+  tool.radius_m = 0.05;
+  WorldModel model = tool_world_model(tool, Eigen::Vector3d(0.6, 0.0, 0.6));
+  model.bodies =
+      load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/ball_fem.yaml").bodies;
+  model.bodies[0].contact.friction_static = mu_s;
+  model.bodies[0].contact.friction_kinetic = mu_k;
+  WorldData world = make_world_data(model);
+  EventQueue events;
+  WorldCommand cmd;
+  cmd.kinematic = true;
+  // down onto the settled top, then 5 mm into it, then along +x
+  const double top = world.bodies[0].state.x.row(2).maxCoeff();
+  cmd.position_m = Eigen::Vector3d(0.6, 0.0, top + 0.05 + 1e-3);
+  double fx = 0.0, fz = 0.0;
+  for (int k = 0; k < 700; ++k) {
+    cmd.velocity_mps = k < 300 ? Eigen::Vector3d(0.0, 0.0, -0.02) : Eigen::Vector3d(0.02, 0.0, 0.0);
+    cmd.position_m += cmd.velocity_mps * 1e-3;
+    world_step(model, world, cmd, 1e-3, events);
+    if (k >= 500) {
+      fx += world.out.contact_force_n.x();
+      fz += world.out.contact_force_n.z();
+    }
+  }
+  EXPECT_TRUE(world.out.in_contact);
+  return -fx / fz;
+}
+
+TEST(WorldStepKinematic, AFemBallTakesTheTipFrictionOfItsContactBlock) {
+  const double frictionless = fem_probe_friction_ratio(0.0, 0.0);
+  const double sliding = fem_probe_friction_ratio(0.3, 0.24);
+  std::printf("fem ball, probe sliding: tangential / normal force %.4f frictionless, %.4f with "
+              "mu_s 0.3, mu_k 0.24\n",
+              frictionless, sliding);
+  // the ball is free on the floor: dragged at its top it rolls along, so the tip mostly sticks
+  // and the force stays below mu_k (the slide against a held ball: fem_test.cpp); frictionless,
+  // only the tilt of the contact normal remains
+  EXPECT_LT(std::fabs(frictionless), 0.03);
+  EXPECT_GT(sliding, 5.0 * std::fabs(frictionless));
+  EXPECT_GT(sliding, 0.05);
+  EXPECT_LT(sliding, 0.3);
 }
 
 TEST(WorldStepKinematic, PlaceToolResetsTheContactsAndRobotsRefuse) {
