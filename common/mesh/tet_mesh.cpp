@@ -225,8 +225,7 @@ void read_mesh_format(MshLines& r) {
     throw r.fail("MSH version " + std::to_string(version) +
                  " is not supported: write MSH 2.2 (gmsh -format msh22)");
   }
-  if (file_type != 0)
-    throw r.fail("binary MSH is not supported: write ASCII (gmsh -format msh22)");
+  if (file_type != 0) throw r.fail("binary MSH is not supported: write ASCII (gmsh -format msh22)");
 }
 
 /// The $Nodes section after its header: each node scaled and moved into `nodes`, its id
@@ -238,8 +237,8 @@ void read_nodes(MshLines& r, double scale, const Eigen::Vector3d& offset_m,
   long long n = -1;
   std::istringstream cs(r.line());
   if (!(cs >> n) || n < 4 || n > kMaxMeshVertices) {
-    throw r.fail("node count '" + r.line() + "' is not in [4, " +
-                 std::to_string(kMaxMeshVertices) + "]");
+    throw r.fail("node count '" + r.line() + "' is not in [4, " + std::to_string(kMaxMeshVertices) +
+                 "]");
   }
   nodes.reserve(static_cast<std::size_t>(n));
   for (long long k = 0; k < n; ++k) {

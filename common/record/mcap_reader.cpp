@@ -174,8 +174,8 @@ ChunkInfo parse_chunk_index(Cursor& c, std::uint64_t header_end, std::uint64_t d
     c.fail("chunk_start_offset",
            std::to_string(ci.offset) + " (length " + std::to_string(ci.length) + ")",
            "a chunk of at most " + std::to_string(kMaxChunkRecord) + " bytes within the " +
-               "data section [" + std::to_string(header_end) + ", " +
-               std::to_string(data_end) + ")");
+               "data section [" + std::to_string(header_end) + ", " + std::to_string(data_end) +
+               ")");
   }
   if (ci.start_ns > ci.end_ns) {
     c.fail("message_start_time", std::to_string(ci.start_ns),

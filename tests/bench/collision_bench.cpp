@@ -77,8 +77,8 @@ struct Emitter {
                   std::to_string(us.size()), teleop::format_number(sm.p50),
                   teleop::format_number(sm.p99), teleop::format_number(sm.mean),
                   teleop::format_number(err)});
-    std::printf("level %d (%5d tris) %-17s median %9.2f us  p99 %9.2f us  max err %.2e m\n",
-                level, tri_count, method, sm.p50, sm.p99, err);
+    std::printf("level %d (%5d tris) %-17s median %9.2f us  p99 %9.2f us  max err %.2e m\n", level,
+                tri_count, method, sm.p50, sm.p99, err);
   }
 };
 

@@ -152,8 +152,9 @@ std::vector<RunRow> run_sweep(const SweepGrid& g, teleop::Progress& progress) {
   for (const SweepScheme& scheme : kSchemes) {
     const double default_gain = scheme.force_gain ? 1.0 : 400.0;
     const std::vector<double> only_default = {default_gain};
-    const auto& gains =
-        scheme.one_gain ? only_default : scheme.force_gain ? g.fp_gains : g.pp_gains;
+    const auto& gains = scheme.one_gain     ? only_default
+                        : scheme.force_gain ? g.fp_gains
+                                            : g.pp_gains;
     for (double gain : gains) {
       for (double d : g.delays_ms) {
         add("gain", scheme, Environment::kSphere, 2000.0, gain, d, false);
@@ -404,8 +405,8 @@ struct LoopCosts {
 };
 
 /// delay_summary.json: the sweep's figures, overall and per scheme.
-void write_delay_summary(const std::string& path, std::size_t runs, double sweep_s,
-                         const Tally& t, const LoopCosts& cost) {
+void write_delay_summary(const std::string& path, std::size_t runs, double sweep_s, const Tally& t,
+                         const LoopCosts& cost) {
   // timings to the microsecond's thousandth, fractions to four decimals
   const auto rounded = [](double v, double scale) { return std::round(v * scale) / scale; };
   teleop::OrderedJson summary;
