@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Lists C++ function bodies longer than a limit (no function in server/ or client/
-outside tests is longer than about 120 lines).
+"""Lists C++ function bodies longer than a limit (no function in server/ or client/ is longer
+than 120 lines, none in common/ or tests/ longer than 80).
 
     function_length.py [--limit N] [--list] [--exclude DIR]... DIR...
 
