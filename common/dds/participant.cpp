@@ -349,20 +349,27 @@ void check_open_profile(ParticipantOptions& o, const DomainParticipantQos& qos, 
 
 }  // namespace
 
-DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileKind* kind_out) {
-  using namespace eprosima::fastrtps::rtps;
-  using eprosima::fastdds::rtps::TCPv4TransportDescriptor;
-  using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
-  const ProfileRef ref = resolve_profile(options.profile);
+namespace {
+
+/// The QoS of participant profile `ref` as its XML file gives it.
+DomainParticipantQos profile_qos(const ProfileRef& ref) {
   load_once(ref.file);
   DomainParticipantQos qos;
   if (DomainParticipantFactory::get_instance()->get_participant_qos_from_profile(ref.name, qos) !=
       ReturnCode_t::RETCODE_OK) {
     throw DdsError("profile '" + ref.name + "' not found in " + ref.file);
   }
-  qos.name(options.name);
-  auto& builtin = qos.wire_protocol().builtin;
-  bool tcp = false, loopback_only = false;
+  return qos;
+}
+
+/// Discovery client, TCP or UDP, from the profile's discovery protocol and transports;
+/// `loopback_only` is set when a UDP transport is bound to 127.0.0.1 alone.
+ProfileKind profile_kind(const DomainParticipantQos& qos, bool& loopback_only) {
+  using namespace eprosima::fastrtps::rtps;
+  using eprosima::fastdds::rtps::TCPv4TransportDescriptor;
+  using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
+  bool tcp = false;
+  loopback_only = false;
   for (const auto& t : qos.transport().user_transports) {
     if (std::dynamic_pointer_cast<TCPv4TransportDescriptor>(t)) tcp = true;
     if (auto u = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(t)) {
@@ -370,15 +377,21 @@ DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileK
                                         u->interfaceWhiteList[0] == "127.0.0.1");
     }
   }
-  const auto protocol = builtin.discovery_config.discoveryProtocol;
-  const ProfileKind kind =
-      (protocol == DiscoveryProtocol_t::CLIENT || protocol == DiscoveryProtocol_t::SUPER_CLIENT)
-          ? ProfileKind::kDiscoveryClient
-          : (tcp ? ProfileKind::kTcp : ProfileKind::kUdp);
-  if (kind_out) *kind_out = kind;
+  const auto protocol = qos.wire_protocol().builtin.discovery_config.discoveryProtocol;
+  return (protocol == DiscoveryProtocol_t::CLIENT || protocol == DiscoveryProtocol_t::SUPER_CLIENT)
+             ? ProfileKind::kDiscoveryClient
+             : (tcp ? ProfileKind::kTcp : ProfileKind::kUdp);
+}
 
-  const NetworkOptions& net = options.network;
-  const std::string in_profile = " does not apply to profile '" + ref.name + "'";
+/// " does not apply to profile 'NAME'": the tail of the errors for an option a profile refuses.
+std::string not_in_profile(const std::string& profile) {
+  return " does not apply to profile '" + profile + "'";
+}
+
+/// --listen, --public-address and --discovery-server refused by a profile of the wrong kind.
+void check_network_options_fit(ProfileKind kind, const NetworkOptions& net,
+                               const std::string& profile) {
+  const std::string in_profile = not_in_profile(profile);
   if (kind != ProfileKind::kTcp && net.listen_port != 0) {
     throw config::ConfigError("--listen " + std::to_string(net.listen_port) + in_profile +
                               " (TCP profiles only: wan_tcp_server, wan_tcp_client)");
@@ -391,124 +404,182 @@ DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileK
     throw config::ConfigError("--discovery-server " + net.discovery_servers[0].address +
                               in_profile + " (use --profile discovery_client)");
   }
-  const SecurityOptions& sec = net.security;
-  if (is_secure(qos)) {
-    if (sec.dir.empty()) {
-      throw config::ConfigError(
-          "profile '" + ref.name +
-          "' needs --security-dir DIR (or TELEOP_SECURITY_DIR): the folder made by "
-          "deploy/make_security.sh, with identity_ca.cert.pem, permissions_ca.cert.pem, "
-          "governance.p7s and IDENTITY/{identity.cert.pem, identity.key.pem, permissions.p7s} "
-          "(identity '" +
-          sec.identity + "'; another with --identity NAME)");
-    }
-    const SecurityFiles f = security_files(sec);
-    auto& props = qos.properties().properties();
-    auto set = [&props](const std::string& name, const std::string& value) {
-      for (auto& p : props) {
-        if (p.name() == name) {
-          p.value() = value;
-          return;
-        }
-      }
-      props.emplace_back(name, value);
-    };
-    set("dds.sec.auth.builtin.PKI-DH.identity_ca", file_uri(f.identity_ca));
-    set("dds.sec.auth.builtin.PKI-DH.identity_certificate", file_uri(f.identity_certificate));
-    set("dds.sec.auth.builtin.PKI-DH.private_key", file_uri(f.private_key));
-    set("dds.sec.access.builtin.Access-Permissions.permissions_ca", file_uri(f.permissions_ca));
-    set("dds.sec.access.builtin.Access-Permissions.governance", file_uri(f.governance));
-    set("dds.sec.access.builtin.Access-Permissions.permissions", file_uri(f.permissions));
-  } else if (!sec.dir.empty()) {
-    throw config::ConfigError(security_dir_label(sec) + in_profile +
-                              " (secure profiles only: " + secure_profile_names() + ")");
-  } else if (!sec.identity_source.empty()) {
-    throw config::ConfigError(sec.identity_source + " '" + sec.identity + "'" + in_profile +
-                              " (secure profiles only: " + secure_profile_names() + ")");
-  }
-  auto udp_locator = [](const HostPort& hp) {
-    Locator_t loc;
-    loc.kind = LOCATOR_KIND_UDPv4;
-    IPLocator::setIPv4(loc, hp.address);
-    loc.port = static_cast<uint32_t>(hp.port);  // 0: the well-known ports of the domain
-    return loc;
-  };
+}
 
+/// A secure profile gets the DDS Security file properties of `sec` (which must name a
+/// folder); an open one refuses --security-dir and --identity.
+void apply_security(DomainParticipantQos& qos, const SecurityOptions& sec,
+                    const std::string& profile) {
+  if (!is_secure(qos)) {
+    if (!sec.dir.empty()) {
+      throw config::ConfigError(security_dir_label(sec) + not_in_profile(profile) +
+                                " (secure profiles only: " + secure_profile_names() + ")");
+    }
+    if (!sec.identity_source.empty()) {
+      throw config::ConfigError(sec.identity_source + " '" + sec.identity + "'" +
+                                not_in_profile(profile) +
+                                " (secure profiles only: " + secure_profile_names() + ")");
+    }
+    return;
+  }
+  if (sec.dir.empty()) {
+    throw config::ConfigError(
+        "profile '" + profile +
+        "' needs --security-dir DIR (or TELEOP_SECURITY_DIR): the folder made by "
+        "deploy/make_security.sh, with identity_ca.cert.pem, permissions_ca.cert.pem, "
+        "governance.p7s and IDENTITY/{identity.cert.pem, identity.key.pem, permissions.p7s} "
+        "(identity '" +
+        sec.identity + "'; another with --identity NAME)");
+  }
+  const SecurityFiles f = security_files(sec);
+  auto& props = qos.properties().properties();
+  auto set = [&props](const std::string& name, const std::string& value) {
+    for (auto& p : props) {
+      if (p.name() == name) {
+        p.value() = value;
+        return;
+      }
+    }
+    props.emplace_back(name, value);
+  };
+  set("dds.sec.auth.builtin.PKI-DH.identity_ca", file_uri(f.identity_ca));
+  set("dds.sec.auth.builtin.PKI-DH.identity_certificate", file_uri(f.identity_certificate));
+  set("dds.sec.auth.builtin.PKI-DH.private_key", file_uri(f.private_key));
+  set("dds.sec.access.builtin.Access-Permissions.permissions_ca", file_uri(f.permissions_ca));
+  set("dds.sec.access.builtin.Access-Permissions.governance", file_uri(f.governance));
+  set("dds.sec.access.builtin.Access-Permissions.permissions", file_uri(f.permissions));
+}
+
+/// A UDPv4 locator for `hp`; port 0 stands for the well-known ports of the domain.
+eprosima::fastrtps::rtps::Locator_t udp_locator(const HostPort& hp) {
+  using namespace eprosima::fastrtps::rtps;
+  Locator_t loc;
+  loc.kind = LOCATOR_KIND_UDPv4;
+  IPLocator::setIPv4(loc, hp.address);
+  loc.port = static_cast<uint32_t>(hp.port);  // 0: the well-known ports of the domain
+  return loc;
+}
+
+/// UDP profiles: --peer addresses as initial peers (refused by a loopback-only profile,
+/// required by the unicast ones), widened to the whole domain when asked.
+void apply_udp_peers(DomainParticipantQos& qos, const ParticipantOptions& options,
+                     const std::string& profile, bool loopback_only) {
+  const NetworkOptions& net = options.network;
+  if (!net.peers.empty() && loopback_only) {
+    throw config::ConfigError("--peer " + net.peers[0].address + not_in_profile(profile) +
+                              " (it talks to 127.0.0.1 only; use lan or lan_unicast)");
+  }
+  if (net.peers.empty() && (profile == "lan_unicast" || profile == "secure_lan_unicast")) {
+    throw config::ConfigError("profile '" + profile +
+                              "' needs --peer ADDR[:PORT] (or TELEOP_PEERS)"
+                              ": the addresses of the other hosts");
+  }
+  for (const auto& p : net.peers) {
+    qos.wire_protocol().builtin.initialPeersList.push_back(udp_locator(p));
+  }
+  if (options.announce_to_whole_domain) widen_initial_peers(qos, options.domain);
+}
+
+/// TCP profiles: each TCP transport copied with the --listen port and --public-address put
+/// in; true when one of them listens.
+bool apply_tcp_listening(DomainParticipantQos& qos, const NetworkOptions& net) {
+  using eprosima::fastdds::rtps::TCPv4TransportDescriptor;
+  bool listening = false;
+  for (auto& t : qos.transport().user_transports) {
+    auto old = std::dynamic_pointer_cast<TCPv4TransportDescriptor>(t);
+    if (!old) continue;
+    auto d = std::make_shared<TCPv4TransportDescriptor>(*old);  // the XML's stays intact
+    if (net.listen_port != 0) d->listening_ports = {static_cast<uint16_t>(net.listen_port)};
+    if (!net.public_address.empty()) {
+      if (d->listening_ports.empty()) {
+        throw config::ConfigError("--public-address " + net.public_address +
+                                  " needs a listening port (--listen PORT, or profile "
+                                  "wan_tcp_server)");
+      }
+      d->set_WAN_address(net.public_address);
+    }
+    listening = listening || !d->listening_ports.empty();
+    t = d;
+  }
+  return listening;
+}
+
+/// TCP profiles: the listening port and public address, a participant id of its own for a
+/// client that does not listen (which needs --peer), and the --peer servers as initial peers.
+void apply_tcp(DomainParticipantQos& qos, const NetworkOptions& net, const std::string& profile) {
+  using namespace eprosima::fastrtps::rtps;
+  const bool listening = apply_tcp_listening(qos, net);
+  if (!listening) {
+    // A client that opens no port: Fast DDS 2.9 gives every such participant id 0, so two
+    // clients on one host announce the same logical ports and the server has been seen
+    // (in CI, about one run in six) to answer only one of them. A participant id of each
+    // process's own keeps their logical ports apart (7400 + 250 domain + 10 + 2 id stays
+    // below 65536 for every domain up to 232 with ids up to 60).
+    qos.wire_protocol().participant_id = 1 + static_cast<int32_t>(getpid() % 60);
+  }
+  if (!listening && net.peers.empty()) {
+    throw config::ConfigError("profile '" + profile +
+                              "' needs --peer SERVER_ADDRESS[:PORT] (or TELEOP_PEERS): the "
+                              "address of the teleop_server host (port default 5100)");
+  }
+  for (const auto& p : net.peers) {
+    Locator_t loc;
+    loc.kind = LOCATOR_KIND_TCPv4;
+    IPLocator::setIPv4(loc, p.address);
+    IPLocator::setPhysicalPort(loc, static_cast<uint16_t>(p.port ? p.port : kDefaultTcpPort));
+    IPLocator::setLogicalPort(loc, 0);  // 0: the logical ports of the domain
+    qos.wire_protocol().builtin.initialPeersList.push_back(loc);
+  }
+}
+
+/// Discovery client profiles: the --discovery-server addresses replace the XML's servers
+/// (one of the two is needed); --peer is refused.
+void apply_discovery_servers(DomainParticipantQos& qos, const NetworkOptions& net,
+                             const std::string& profile) {
+  using namespace eprosima::fastrtps::rtps;
+  auto& discovery = qos.wire_protocol().builtin.discovery_config;
+  if (!net.peers.empty()) {
+    throw config::ConfigError("--peer " + net.peers[0].address + not_in_profile(profile) +
+                              " (give the servers with --discovery-server)");
+  }
+  if (net.discovery_servers.empty() && discovery.m_DiscoveryServers.empty()) {
+    throw config::ConfigError(
+        "profile '" + profile +
+        "' needs --discovery-server ADDR[:PORT] (or TELEOP_DISCOVERY_SERVERS), once per "
+        "server in server-id order (port default 11811)");
+  }
+  if (!net.discovery_servers.empty()) discovery.m_DiscoveryServers.clear();
+  for (std::size_t i = 0; i < net.discovery_servers.size(); ++i) {
+    RemoteServerAttributes server;
+    get_server_client_default_guidPrefix(static_cast<int>(i), server.guidPrefix);
+    HostPort hp = net.discovery_servers[i];
+    if (hp.port == 0) hp.port = kDefaultDiscoveryPort;
+    server.metatrafficUnicastLocatorList.push_back(udp_locator(hp));
+    discovery.m_DiscoveryServers.push_back(server);
+  }
+}
+
+}  // namespace
+
+DomainParticipantQos participant_qos(const ParticipantOptions& options, ProfileKind* kind_out) {
+  const ProfileRef ref = resolve_profile(options.profile);
+  DomainParticipantQos qos = profile_qos(ref);
+  qos.name(options.name);
+  bool loopback_only = false;
+  const ProfileKind kind = profile_kind(qos, loopback_only);
+  if (kind_out) *kind_out = kind;
+
+  check_network_options_fit(kind, options.network, ref.name);
+  apply_security(qos, options.network.security, ref.name);
   switch (kind) {
     case ProfileKind::kUdp:
-      if (!net.peers.empty() && loopback_only) {
-        throw config::ConfigError("--peer " + net.peers[0].address + in_profile +
-                                  " (it talks to 127.0.0.1 only; use lan or lan_unicast)");
-      }
-      if (net.peers.empty() && (ref.name == "lan_unicast" || ref.name == "secure_lan_unicast")) {
-        throw config::ConfigError("profile '" + ref.name +
-                                  "' needs --peer ADDR[:PORT] (or TELEOP_PEERS)"
-                                  ": the addresses of the other hosts");
-      }
-      for (const auto& p : net.peers) builtin.initialPeersList.push_back(udp_locator(p));
-      if (options.announce_to_whole_domain) widen_initial_peers(qos, options.domain);
+      apply_udp_peers(qos, options, ref.name, loopback_only);
       break;
-    case ProfileKind::kTcp: {
-      bool listening = false;
-      for (auto& t : qos.transport().user_transports) {
-        auto old = std::dynamic_pointer_cast<TCPv4TransportDescriptor>(t);
-        if (!old) continue;
-        auto d = std::make_shared<TCPv4TransportDescriptor>(*old);  // the XML's stays intact
-        if (net.listen_port != 0) d->listening_ports = {static_cast<uint16_t>(net.listen_port)};
-        if (!net.public_address.empty()) {
-          if (d->listening_ports.empty()) {
-            throw config::ConfigError("--public-address " + net.public_address +
-                                      " needs a listening port (--listen PORT, or profile "
-                                      "wan_tcp_server)");
-          }
-          d->set_WAN_address(net.public_address);
-        }
-        listening = listening || !d->listening_ports.empty();
-        t = d;
-      }
-      if (!listening) {
-        // A client that opens no port: Fast DDS 2.9 gives every such participant id 0, so two
-        // clients on one host announce the same logical ports and the server has been seen
-        // (in CI, about one run in six) to answer only one of them. A participant id of each
-        // process's own keeps their logical ports apart (7400 + 250 domain + 10 + 2 id stays
-        // below 65536 for every domain up to 232 with ids up to 60).
-        qos.wire_protocol().participant_id = 1 + static_cast<int32_t>(getpid() % 60);
-      }
-      if (!listening && net.peers.empty()) {
-        throw config::ConfigError("profile '" + ref.name +
-                                  "' needs --peer SERVER_ADDRESS[:PORT] (or TELEOP_PEERS): the "
-                                  "address of the teleop_server host (port default 5100)");
-      }
-      for (const auto& p : net.peers) {
-        Locator_t loc;
-        loc.kind = LOCATOR_KIND_TCPv4;
-        IPLocator::setIPv4(loc, p.address);
-        IPLocator::setPhysicalPort(loc, static_cast<uint16_t>(p.port ? p.port : kDefaultTcpPort));
-        IPLocator::setLogicalPort(loc, 0);  // 0: the logical ports of the domain
-        builtin.initialPeersList.push_back(loc);
-      }
+    case ProfileKind::kTcp:
+      apply_tcp(qos, options.network, ref.name);
       break;
-    }
     case ProfileKind::kDiscoveryClient:
-      if (!net.peers.empty()) {
-        throw config::ConfigError("--peer " + net.peers[0].address + in_profile +
-                                  " (give the servers with --discovery-server)");
-      }
-      if (net.discovery_servers.empty() && builtin.discovery_config.m_DiscoveryServers.empty()) {
-        throw config::ConfigError(
-            "profile '" + ref.name +
-            "' needs --discovery-server ADDR[:PORT] (or TELEOP_DISCOVERY_SERVERS), once per "
-            "server in server-id order (port default 11811)");
-      }
-      if (!net.discovery_servers.empty()) builtin.discovery_config.m_DiscoveryServers.clear();
-      for (std::size_t i = 0; i < net.discovery_servers.size(); ++i) {
-        RemoteServerAttributes server;
-        get_server_client_default_guidPrefix(static_cast<int>(i), server.guidPrefix);
-        HostPort hp = net.discovery_servers[i];
-        if (hp.port == 0) hp.port = kDefaultDiscoveryPort;
-        server.metatrafficUnicastLocatorList.push_back(udp_locator(hp));
-        builtin.discovery_config.m_DiscoveryServers.push_back(server);
-      }
+      apply_discovery_servers(qos, options.network, ref.name);
       break;
   }
   return qos;

@@ -46,18 +46,13 @@ double total_volume(const TetMesh& mesh) {
   return v;
 }
 
-TetMesh make_tet_mesh(const Eigen::Matrix3Xd& vertices, const Eigen::Matrix4Xi& tets_in) {
+namespace {
+
+/// `tets_in` checked (node indices in range, no degenerate tetrahedron) and each tetrahedron
+/// ordered to a positive volume.
+Eigen::Matrix4Xi oriented_tets(const Eigen::Matrix3Xd& vertices, const Eigen::Matrix4Xi& tets_in) {
   const int nv = static_cast<int>(vertices.cols());
   const int nt = static_cast<int>(tets_in.cols());
-  if (nv < 4 || nt < 1) {
-    throw MeshError("a tetrahedral mesh needs at least 4 nodes and 1 tetrahedron (has " +
-                    std::to_string(nv) + " and " + std::to_string(nt) + ")");
-  }
-  for (int i = 0; i < nv; ++i) {
-    if (!vertices.col(i).allFinite()) {
-      throw MeshError("node " + std::to_string(i) + " has a non-finite coordinate");
-    }
-  }
   const Eigen::Vector3d lo = vertices.rowwise().minCoeff(), hi = vertices.rowwise().maxCoeff();
   const double box_volume = (hi - lo).prod();
   Eigen::Matrix4Xi tets = tets_in;
@@ -76,12 +71,18 @@ TetMesh make_tet_mesh(const Eigen::Matrix3Xd& vertices, const Eigen::Matrix4Xi& 
     }
     if (vol < 0.0) std::swap(tets(1, t), tets(2, t));
   }
+  return tets;
+}
 
-  // boundary: the faces that belong to one tetrahedron, oriented outward
+/// The boundary: the faces that belong to one tetrahedron, oriented outward; a face shared by
+/// more than two tetrahedra is refused.
+std::vector<std::array<int, 3>> boundary_faces(const Eigen::Matrix3Xd& vertices,
+                                               const Eigen::Matrix4Xi& tets) {
   struct Face {
     std::array<int, 3> key;  // sorted
     std::array<int, 3> tri;  // outward
   };
+  const int nt = static_cast<int>(tets.cols());
   std::vector<Face> faces;
   faces.reserve(static_cast<std::size_t>(nt) * 4);
   for (int t = 0; t < nt; ++t) {
@@ -108,10 +109,17 @@ TetMesh make_tet_mesh(const Eigen::Matrix3Xd& vertices, const Eigen::Matrix4Xi& 
     }
     i = j;
   }
+  return boundary;
+}
 
-  // renumber: boundary nodes first, then interior nodes, each in their old order; unused dropped
+/// The new index of each of `nv` nodes: boundary nodes first, then interior nodes, each in
+/// their old order; -1 for a node no tetrahedron uses. `boundary_count` gets the number of
+/// boundary nodes, `used_count` the number of used ones.
+std::vector<int> boundary_first_order(int nv, const Eigen::Matrix4Xi& tets,
+                                      const std::vector<std::array<int, 3>>& boundary,
+                                      int& boundary_count, int& used_count) {
   std::vector<int> role(static_cast<std::size_t>(nv), 0);  // 0 unused, 1 interior, 2 boundary
-  for (int t = 0; t < nt; ++t) {
+  for (int t = 0; t < static_cast<int>(tets.cols()); ++t) {
     for (int k = 0; k < 4; ++k) role[static_cast<std::size_t>(tets(k, t))] = 1;
   }
   for (const auto& f : boundary) {
@@ -125,6 +133,32 @@ TetMesh make_tet_mesh(const Eigen::Matrix3Xd& vertices, const Eigen::Matrix4Xi& 
         new_index[static_cast<std::size_t>(i)] = next++;
     }
   }
+  used_count = next;
+  boundary_count = 0;
+  for (int i = 0; i < nv; ++i) boundary_count += role[static_cast<std::size_t>(i)] == 2 ? 1 : 0;
+  return new_index;
+}
+
+}  // namespace
+
+TetMesh make_tet_mesh(const Eigen::Matrix3Xd& vertices, const Eigen::Matrix4Xi& tets_in) {
+  const int nv = static_cast<int>(vertices.cols());
+  const int nt = static_cast<int>(tets_in.cols());
+  if (nv < 4 || nt < 1) {
+    throw MeshError("a tetrahedral mesh needs at least 4 nodes and 1 tetrahedron (has " +
+                    std::to_string(nv) + " and " + std::to_string(nt) + ")");
+  }
+  for (int i = 0; i < nv; ++i) {
+    if (!vertices.col(i).allFinite()) {
+      throw MeshError("node " + std::to_string(i) + " has a non-finite coordinate");
+    }
+  }
+  const Eigen::Matrix4Xi tets = oriented_tets(vertices, tets_in);
+  const std::vector<std::array<int, 3>> boundary = boundary_faces(vertices, tets);
+
+  // renumber: boundary nodes first, then interior nodes; unused dropped
+  int ns = 0, next = 0;
+  const std::vector<int> new_index = boundary_first_order(nv, tets, boundary, ns, next);
   TetMesh out;
   out.vertices.resize(3, next);
   for (int i = 0; i < nv; ++i) {
@@ -136,8 +170,6 @@ TetMesh make_tet_mesh(const Eigen::Matrix3Xd& vertices, const Eigen::Matrix4Xi& 
   for (int t = 0; t < nt; ++t) {
     for (int k = 0; k < 4; ++k) out.tets(k, t) = new_index[static_cast<std::size_t>(tets(k, t))];
   }
-  int ns = 0;
-  for (int i = 0; i < nv; ++i) ns += role[static_cast<std::size_t>(i)] == 2 ? 1 : 0;
   out.surface_vertex_count = ns;
   Eigen::Matrix3Xi tris(3, static_cast<Eigen::Index>(boundary.size()));
   for (std::size_t f = 0; f < boundary.size(); ++f) {
@@ -155,105 +187,110 @@ TetMesh make_tet_mesh(const Eigen::Matrix3Xd& vertices, const Eigen::Matrix4Xi& 
   return out;
 }
 
-TetMesh load_tet_mesh(const std::string& path, double scale, const Eigen::Vector3d& offset_m) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (path.empty()) throw MeshError("the tetrahedral mesh file name is empty");
-  if (!fs::is_regular_file(path, ec)) {
-    throw MeshError(path + ": no such regular file (a gmsh MSH 2.2 ASCII tetrahedral mesh)");
-  }
-  if (fs::file_size(path, ec) > kMaxMeshFileBytes) {
-    throw MeshError(path + ": larger than " + std::to_string(kMaxMeshFileBytes >> 20) + " MiB");
-  }
-  std::ifstream in(path);
-  if (!in) throw MeshError(path + ": cannot be opened");
-  int line_no = 0;
-  std::string line;
-  auto fail = [&](const std::string& why) -> MeshError {
-    return MeshError(path + ": line " + std::to_string(line_no) + ": " + why);
-  };
-  auto next_line = [&]() -> bool {
-    if (!std::getline(in, line)) return false;
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
+namespace {
+
+/// Reads an MSH file line by line (a trailing '\r' dropped) and makes errors that name the
+/// file and the line.
+class MshLines {
+ public:
+  MshLines(const std::string& path, std::istream& in) : path_(path), in_(in) {}
+
+  /// The next line into line(); false at the end of the file.
+  bool next() {
+    if (!std::getline(in_, line_)) return false;
+    ++line_no_;
+    if (!line_.empty() && line_.back() == '\r') line_.pop_back();
     return true;
-  };
-  bool have_format = false, have_nodes = false, have_elements = false;
-  std::unordered_map<long long, int> id_to_index;
-  std::vector<Eigen::Vector3d> nodes;
-  std::vector<std::array<long long, 4>> raw_tets;
-  while (next_line()) {
-    if (line == "$MeshFormat") {
-      if (!next_line()) throw fail("$MeshFormat has no content");
-      std::istringstream is(line);
-      double version = 0.0;
-      int file_type = -1, data_size = 0;
-      if (!(is >> version >> file_type >> data_size)) throw fail("bad $MeshFormat line");
-      if (version < 2.0 || version >= 3.0) {
-        throw fail("MSH version " + std::to_string(version) +
-                   " is not supported: write MSH 2.2 (gmsh -format msh22)");
-      }
-      if (file_type != 0)
-        throw fail("binary MSH is not supported: write ASCII (gmsh -format msh22)");
-      have_format = true;
-    } else if (line == "$Nodes") {
-      if (!next_line()) throw fail("$Nodes has no count");
-      long long n = -1;
-      std::istringstream cs(line);
-      if (!(cs >> n) || n < 4 || n > kMaxMeshVertices) {
-        throw fail("node count '" + line + "' is not in [4, " + std::to_string(kMaxMeshVertices) +
-                   "]");
-      }
-      nodes.reserve(static_cast<std::size_t>(n));
-      for (long long k = 0; k < n; ++k) {
-        if (!next_line()) throw fail("the file ends inside $Nodes");
-        std::istringstream is(line);
-        long long id = 0;
-        double x = 0, y = 0, z = 0;
-        if (!(is >> id >> x >> y >> z)) throw fail("bad node line '" + line + "'");
-        if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
-          throw fail("node " + std::to_string(id) + " has a non-finite coordinate");
-        }
-        if (!id_to_index.emplace(id, static_cast<int>(nodes.size())).second) {
-          throw fail("node id " + std::to_string(id) + " appears twice");
-        }
-        nodes.emplace_back(Eigen::Vector3d(x, y, z) * scale + offset_m);
-      }
-      if (!next_line() || line != "$EndNodes") throw fail("expected $EndNodes");
-      have_nodes = true;
-    } else if (line == "$Elements") {
-      if (!next_line()) throw fail("$Elements has no count");
-      long long n = -1;
-      std::istringstream cs(line);
-      if (!(cs >> n) || n < 1 || n > 8LL * kMaxMeshVertices)
-        throw fail("bad element count '" + line + "'");
-      for (long long k = 0; k < n; ++k) {
-        if (!next_line()) throw fail("the file ends inside $Elements");
-        std::istringstream is(line);
-        long long id = 0, type = 0, ntags = 0;
-        if (!(is >> id >> type >> ntags) || ntags < 0 || ntags > 64) {
-          throw fail("bad element line '" + line + "'");
-        }
-        for (long long t = 0; t < ntags; ++t) {
-          long long tag;
-          if (!(is >> tag)) throw fail("bad element tags in '" + line + "'");
-        }
-        if (type != 4) continue;  // only 4-node tetrahedra
-        std::array<long long, 4> v{};
-        for (auto& x : v) {
-          if (!(is >> x)) throw fail("a tetrahedron needs 4 node ids: '" + line + "'");
-        }
-        raw_tets.push_back(v);
-      }
-      if (!next_line() || line != "$EndElements") throw fail("expected $EndElements");
-      have_elements = true;
-    }
   }
-  if (!have_format) throw MeshError(path + ": no $MeshFormat section (not a gmsh MSH file)");
-  if (!have_nodes || !have_elements) throw MeshError(path + ": missing $Nodes or $Elements");
-  if (raw_tets.empty()) throw MeshError(path + ": no 4-node tetrahedra (element type 4)");
-  Eigen::Matrix3Xd v(3, static_cast<Eigen::Index>(nodes.size()));
-  for (std::size_t i = 0; i < nodes.size(); ++i) v.col(static_cast<Eigen::Index>(i)) = nodes[i];
+  const std::string& line() const { return line_; }
+  MeshError fail(const std::string& why) const {
+    return MeshError(path_ + ": line " + std::to_string(line_no_) + ": " + why);
+  }
+
+ private:
+  const std::string& path_;
+  std::istream& in_;
+  std::string line_;
+  int line_no_ = 0;
+};
+
+/// The line after $MeshFormat: MSH 2.x ASCII only.
+void read_mesh_format(MshLines& r) {
+  if (!r.next()) throw r.fail("$MeshFormat has no content");
+  std::istringstream is(r.line());
+  double version = 0.0;
+  int file_type = -1, data_size = 0;
+  if (!(is >> version >> file_type >> data_size)) throw r.fail("bad $MeshFormat line");
+  if (version < 2.0 || version >= 3.0) {
+    throw r.fail("MSH version " + std::to_string(version) +
+                 " is not supported: write MSH 2.2 (gmsh -format msh22)");
+  }
+  if (file_type != 0) throw r.fail("binary MSH is not supported: write ASCII (gmsh -format msh22)");
+}
+
+/// The $Nodes section after its header: each node scaled and moved into `nodes`, its id
+/// mapped to its index in `id_to_index`.
+void read_nodes(MshLines& r, double scale, const Eigen::Vector3d& offset_m,
+                std::vector<Eigen::Vector3d>& nodes,
+                std::unordered_map<long long, int>& id_to_index) {
+  if (!r.next()) throw r.fail("$Nodes has no count");
+  long long n = -1;
+  std::istringstream cs(r.line());
+  if (!(cs >> n) || n < 4 || n > kMaxMeshVertices) {
+    throw r.fail("node count '" + r.line() + "' is not in [4, " + std::to_string(kMaxMeshVertices) +
+                 "]");
+  }
+  nodes.reserve(static_cast<std::size_t>(n));
+  for (long long k = 0; k < n; ++k) {
+    if (!r.next()) throw r.fail("the file ends inside $Nodes");
+    std::istringstream is(r.line());
+    long long id = 0;
+    double x = 0, y = 0, z = 0;
+    if (!(is >> id >> x >> y >> z)) throw r.fail("bad node line '" + r.line() + "'");
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
+      throw r.fail("node " + std::to_string(id) + " has a non-finite coordinate");
+    }
+    if (!id_to_index.emplace(id, static_cast<int>(nodes.size())).second) {
+      throw r.fail("node id " + std::to_string(id) + " appears twice");
+    }
+    nodes.emplace_back(Eigen::Vector3d(x, y, z) * scale + offset_m);
+  }
+  if (!r.next() || r.line() != "$EndNodes") throw r.fail("expected $EndNodes");
+}
+
+/// The $Elements section after its header: the node ids of each 4-node tetrahedron into
+/// `raw_tets` (other element types skipped).
+void read_elements(MshLines& r, std::vector<std::array<long long, 4>>& raw_tets) {
+  if (!r.next()) throw r.fail("$Elements has no count");
+  long long n = -1;
+  std::istringstream cs(r.line());
+  if (!(cs >> n) || n < 1 || n > 8LL * kMaxMeshVertices)
+    throw r.fail("bad element count '" + r.line() + "'");
+  for (long long k = 0; k < n; ++k) {
+    if (!r.next()) throw r.fail("the file ends inside $Elements");
+    std::istringstream is(r.line());
+    long long id = 0, type = 0, ntags = 0;
+    if (!(is >> id >> type >> ntags) || ntags < 0 || ntags > 64) {
+      throw r.fail("bad element line '" + r.line() + "'");
+    }
+    for (long long t = 0; t < ntags; ++t) {
+      long long tag;
+      if (!(is >> tag)) throw r.fail("bad element tags in '" + r.line() + "'");
+    }
+    if (type != 4) continue;  // only 4-node tetrahedra
+    std::array<long long, 4> v{};
+    for (auto& x : v) {
+      if (!(is >> x)) throw r.fail("a tetrahedron needs 4 node ids: '" + r.line() + "'");
+    }
+    raw_tets.push_back(v);
+  }
+  if (!r.next() || r.line() != "$EndElements") throw r.fail("expected $EndElements");
+}
+
+/// The tetrahedra of `raw_tets` with node ids turned into node indices.
+Eigen::Matrix4Xi tets_by_index(const std::string& path,
+                               const std::vector<std::array<long long, 4>>& raw_tets,
+                               const std::unordered_map<long long, int>& id_to_index) {
   Eigen::Matrix4Xi t(4, static_cast<Eigen::Index>(raw_tets.size()));
   for (std::size_t e = 0; e < raw_tets.size(); ++e) {
     for (int k = 0; k < 4; ++k) {
@@ -266,6 +303,46 @@ TetMesh load_tet_mesh(const std::string& path, double scale, const Eigen::Vector
       t(k, static_cast<Eigen::Index>(e)) = it->second;
     }
   }
+  return t;
+}
+
+}  // namespace
+
+TetMesh load_tet_mesh(const std::string& path, double scale, const Eigen::Vector3d& offset_m) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (path.empty()) throw MeshError("the tetrahedral mesh file name is empty");
+  if (!fs::is_regular_file(path, ec)) {
+    throw MeshError(path + ": no such regular file (a gmsh MSH 2.2 ASCII tetrahedral mesh)");
+  }
+  if (fs::file_size(path, ec) > kMaxMeshFileBytes) {
+    throw MeshError(path + ": larger than " + std::to_string(kMaxMeshFileBytes >> 20) + " MiB");
+  }
+  std::ifstream in(path);
+  if (!in) throw MeshError(path + ": cannot be opened");
+  MshLines r(path, in);
+  bool have_format = false, have_nodes = false, have_elements = false;
+  std::unordered_map<long long, int> id_to_index;
+  std::vector<Eigen::Vector3d> nodes;
+  std::vector<std::array<long long, 4>> raw_tets;
+  while (r.next()) {
+    if (r.line() == "$MeshFormat") {
+      read_mesh_format(r);
+      have_format = true;
+    } else if (r.line() == "$Nodes") {
+      read_nodes(r, scale, offset_m, nodes, id_to_index);
+      have_nodes = true;
+    } else if (r.line() == "$Elements") {
+      read_elements(r, raw_tets);
+      have_elements = true;
+    }
+  }
+  if (!have_format) throw MeshError(path + ": no $MeshFormat section (not a gmsh MSH file)");
+  if (!have_nodes || !have_elements) throw MeshError(path + ": missing $Nodes or $Elements");
+  if (raw_tets.empty()) throw MeshError(path + ": no 4-node tetrahedra (element type 4)");
+  Eigen::Matrix3Xd v(3, static_cast<Eigen::Index>(nodes.size()));
+  for (std::size_t i = 0; i < nodes.size(); ++i) v.col(static_cast<Eigen::Index>(i)) = nodes[i];
+  const Eigen::Matrix4Xi t = tets_by_index(path, raw_tets, id_to_index);
   try {
     return make_tet_mesh(v, t);
   } catch (const MeshError& e) {

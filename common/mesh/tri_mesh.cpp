@@ -14,6 +14,7 @@
 #include <fstream>
 #include <sstream>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace teleop::mesh {
@@ -243,29 +244,14 @@ void build_adjacency(TriMesh& m) {
   }
 }
 
-void validate_closed_manifold(const TriMesh& m) {
-  const int nv = m.vertex_count();
-  const int nt = m.triangle_count();
-  if (nt < 4 || nv < 4) {
-    throw MeshError("the mesh has " + std::to_string(nv) + " vertices and " + std::to_string(nt) +
-                    " triangles; a closed surface needs at least 4 of each");
-  }
-  if (static_cast<int>(m.vertex_face_offsets.size()) != nv + 1 ||
-      static_cast<int>(m.vertex_neighbour_offsets.size()) != nv + 1) {
-    throw MeshError("adjacency tables are missing or stale: call build_adjacency() first");
-  }
-  if (!m.vertices.allFinite()) {
-    for (int i = 0; i < nv; ++i) {
-      if (!m.vertices.col(i).allFinite()) {
-        throw MeshError("vertex " + std::to_string(i) + " has a non-finite coordinate");
-      }
-    }
-  }
+namespace {
+
+/// Degenerate triangles refused: a repeated vertex or (near) zero area.
+void check_no_degenerate_triangle(const TriMesh& m) {
   // a triangle is degenerate when its area is below 1e-6 of its longest edge squared (a
   // sliver of aspect ratio ~1e6; float-stored files put collinear points ~1e-8 off the line)
   constexpr double kMinAreaRatio = 1e-6;
-  // degenerate triangles: repeated vertex or (near) zero area
-  for (int t = 0; t < nt; ++t) {
+  for (int t = 0; t < m.triangle_count(); ++t) {
     const int a = m.triangles(0, t), b = m.triangles(1, t), c = m.triangles(2, t);
     if (a == b || b == c || c == a) {
       throw MeshError("degenerate triangle " + std::to_string(t) + " (" + std::to_string(a) + ", " +
@@ -283,19 +269,16 @@ void validate_closed_manifold(const TriMesh& m) {
       throw MeshError(os.str());
     }
   }
-  // unused vertices
-  for (int i = 0; i < nv; ++i) {
-    if (m.face_count_of(i) == 0) {
-      throw MeshError("vertex " + std::to_string(i) + " at " + point_text(m.vertices.col(i)) +
-                      " is not used by any triangle");
-    }
-  }
-  // every undirected edge: exactly two triangles, traversed in opposite directions
+}
+
+/// Every undirected edge: exactly two triangles, traversed in opposite directions.
+void check_edges_shared_by_two(const TriMesh& m) {
   struct Use {
     std::uint64_t key;
     int tri;
     bool forward;  // a < b in the triangle's winding
   };
+  const int nt = m.triangle_count();
   std::vector<Use> uses;
   uses.reserve(static_cast<std::size_t>(nt) * 3);
   for (int t = 0; t < nt; ++t) {
@@ -332,7 +315,11 @@ void validate_closed_manifold(const TriMesh& m) {
     }
     s = e;
   }
-  // every vertex: its triangles form one closed fan (else two surfaces touch at the vertex)
+}
+
+/// Every vertex: its triangles form one closed fan (else two surfaces touch at the vertex).
+void check_vertex_fans(const TriMesh& m) {
+  const int nv = m.vertex_count();
   std::vector<int> next_of(static_cast<std::size_t>(nv), -1);
   for (int i = 0; i < nv; ++i) {
     const int f0 = m.vertex_face_offsets[static_cast<std::size_t>(i)];
@@ -362,6 +349,38 @@ void validate_closed_manifold(const TriMesh& m) {
                       " triangles do not form a single fan (surfaces touch at a point)");
     }
   }
+}
+
+}  // namespace
+
+void validate_closed_manifold(const TriMesh& m) {
+  const int nv = m.vertex_count();
+  const int nt = m.triangle_count();
+  if (nt < 4 || nv < 4) {
+    throw MeshError("the mesh has " + std::to_string(nv) + " vertices and " + std::to_string(nt) +
+                    " triangles; a closed surface needs at least 4 of each");
+  }
+  if (static_cast<int>(m.vertex_face_offsets.size()) != nv + 1 ||
+      static_cast<int>(m.vertex_neighbour_offsets.size()) != nv + 1) {
+    throw MeshError("adjacency tables are missing or stale: call build_adjacency() first");
+  }
+  if (!m.vertices.allFinite()) {
+    for (int i = 0; i < nv; ++i) {
+      if (!m.vertices.col(i).allFinite()) {
+        throw MeshError("vertex " + std::to_string(i) + " has a non-finite coordinate");
+      }
+    }
+  }
+  check_no_degenerate_triangle(m);
+  // unused vertices
+  for (int i = 0; i < nv; ++i) {
+    if (m.face_count_of(i) == 0) {
+      throw MeshError("vertex " + std::to_string(i) + " at " + point_text(m.vertices.col(i)) +
+                      " is not used by any triangle");
+    }
+  }
+  check_edges_shared_by_two(m);
+  check_vertex_fans(m);
   const double vol = enclosed_volume(m);
   if (!(vol > 0.0)) {
     std::ostringstream os;
@@ -544,12 +563,11 @@ TriMesh load_mesh_from_memory(const void* data, std::size_t size, const std::str
 }
 
 namespace {
-TriMesh mesh_from_scene(const aiScene* scene, const std::string& path, const LoadOptions& options) {
-  if (!std::isfinite(options.scale) || options.scale <= 0.0) {
-    throw MeshError(path + ": the scale must be a finite number > 0");
-  }
-  std::vector<Eigen::Vector3d> raw;
-  std::vector<std::array<int, 3>> tris;
+
+/// The vertices (scaled) and triangles of every mesh of `scene` appended into one soup,
+/// indices offset to it; points, lines and out-of-range indices refused.
+void scene_soup(const aiScene* scene, const std::string& path, double scale,
+                std::vector<Eigen::Vector3d>& raw, std::vector<std::array<int, 3>>& tris) {
   for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
     const aiMesh* am = scene->mMeshes[mi];
     const int base = static_cast<int>(raw.size());
@@ -558,9 +576,8 @@ TriMesh mesh_from_scene(const aiScene* scene, const std::string& path, const Loa
     }
     for (unsigned v = 0; v < am->mNumVertices; ++v) {
       const aiVector3D& p = am->mVertices[v];
-      const Eigen::Vector3d q(options.scale * static_cast<double>(p.x),
-                              options.scale * static_cast<double>(p.y),
-                              options.scale * static_cast<double>(p.z));
+      const Eigen::Vector3d q(scale * static_cast<double>(p.x), scale * static_cast<double>(p.y),
+                              scale * static_cast<double>(p.z));
       if (!q.allFinite()) {
         throw MeshError(path + ": mesh " + std::to_string(mi) + " vertex " + std::to_string(v) +
                         " has a coordinate that is not a finite number");
@@ -586,14 +603,19 @@ TriMesh mesh_from_scene(const aiScene* scene, const std::string& path, const Loa
                       base + static_cast<int>(face.mIndices[2])});
     }
   }
-  if (tris.empty()) throw MeshError(path + ": the file contains no triangles");
-  // weld duplicates: hash on a grid of cell = tolerance, compare with the 27 nearby cells
+}
+
+/// Duplicate points welded: `welded` gets one point per cluster within weld_tolerance of the
+/// bounding-box diagonal; the result maps each raw point to its welded index.
+std::vector<int> weld(const std::vector<Eigen::Vector3d>& raw, double weld_tolerance,
+                      std::vector<Eigen::Vector3d>& welded) {
+  // hash on a grid of cell = tolerance, compare with the 27 nearby cells
   Eigen::Vector3d lo = raw[0], hi = raw[0];
   for (const auto& p : raw) {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
-  const double tol = std::max(options.weld_tolerance * (hi - lo).norm(), 1e-300);
+  const double tol = std::max(weld_tolerance * (hi - lo).norm(), 1e-300);
   auto cell_of = [&](const Eigen::Vector3d& p) {
     return Eigen::Vector3<long long>(static_cast<long long>(std::floor((p.x() - lo.x()) / tol)),
                                      static_cast<long long>(std::floor((p.y() - lo.y()) / tol)),
@@ -605,7 +627,6 @@ TriMesh mesh_from_scene(const aiScene* scene, const std::string& path, const Loa
            static_cast<std::uint64_t>(z) * 83492791ULL;
   };
   std::unordered_map<std::uint64_t, std::vector<int>> grid;
-  std::vector<Eigen::Vector3d> welded;
   std::vector<int> remap(raw.size(), -1);
   for (std::size_t i = 0; i < raw.size(); ++i) {
     const auto c = cell_of(raw[i]);
@@ -631,7 +652,13 @@ TriMesh mesh_from_scene(const aiScene* scene, const std::string& path, const Loa
     }
     remap[i] = found;
   }
-  // drop vertices no triangle uses (e.g. stray points in the file)
+  return remap;
+}
+
+/// The mesh of the welded points that `tris` (raw indices, mapped through `remap`) uses, in
+/// the file's vertex order; points no triangle uses (e.g. stray points in the file) dropped.
+TriMesh used_mesh(const std::vector<Eigen::Vector3d>& welded, const std::vector<int>& remap,
+                  std::vector<std::array<int, 3>> tris) {
   std::vector<int> used(welded.size(), -1);
   for (auto& t : tris) {
     for (int& i : t) {
@@ -653,6 +680,20 @@ TriMesh mesh_from_scene(const aiScene* scene, const std::string& path, const Loa
           used[static_cast<std::size_t>(tris[t][static_cast<std::size_t>(k)])];
     }
   }
+  return m;
+}
+
+TriMesh mesh_from_scene(const aiScene* scene, const std::string& path, const LoadOptions& options) {
+  if (!std::isfinite(options.scale) || options.scale <= 0.0) {
+    throw MeshError(path + ": the scale must be a finite number > 0");
+  }
+  std::vector<Eigen::Vector3d> raw;
+  std::vector<std::array<int, 3>> tris;
+  scene_soup(scene, path, options.scale, raw, tris);
+  if (tris.empty()) throw MeshError(path + ": the file contains no triangles");
+  std::vector<Eigen::Vector3d> welded;
+  const std::vector<int> remap = weld(raw, options.weld_tolerance, welded);
+  TriMesh m = used_mesh(welded, remap, std::move(tris));
   if (options.fix_inward_orientation && enclosed_volume(m) < 0.0) {
     m.triangles.row(1).swap(m.triangles.row(2));
   }
@@ -664,6 +705,7 @@ TriMesh mesh_from_scene(const aiScene* scene, const std::string& path, const Loa
   }
   return m;
 }
+
 }  // namespace
 
 void save_obj(const TriMesh& m, const std::string& path) {

@@ -154,6 +154,53 @@ void check_compression(Cursor& c, const std::string& compression) {
   }
 }
 
+/// A Chunk Index record: the chunk within the data section [header_end, data_end) and at
+/// most kMaxChunkRecord bytes long, its time range ordered.
+ChunkInfo parse_chunk_index(Cursor& c, std::uint64_t header_end, std::uint64_t data_end) {
+  ChunkInfo ci;
+  ci.start_ns = c.u64("message_start_time");
+  ci.end_ns = c.u64("message_end_time");
+  ci.offset = c.u64("chunk_start_offset");
+  ci.length = c.u64("chunk_length");
+  const std::uint64_t map_end = c.group_end("message_index_offsets");
+  while (c.pos() < map_end) {
+    ci.channels.push_back(c.u16("message_index_offsets"));
+    c.u64("message_index_offsets");
+  }
+  c.u64("message_index_length");
+  check_compression(c, c.str("compression"));
+  if (ci.offset < header_end || ci.length < kRecordPrefix || ci.offset > data_end ||
+      ci.length > data_end - ci.offset || ci.length > kMaxChunkRecord) {
+    c.fail("chunk_start_offset",
+           std::to_string(ci.offset) + " (length " + std::to_string(ci.length) + ")",
+           "a chunk of at most " + std::to_string(kMaxChunkRecord) + " bytes within the " +
+               "data section [" + std::to_string(header_end) + ", " + std::to_string(data_end) +
+               ")");
+  }
+  if (ci.start_ns > ci.end_ns) {
+    c.fail("message_start_time", std::to_string(ci.start_ns),
+           "at most message_end_time " + std::to_string(ci.end_ns));
+  }
+  return ci;
+}
+
+/// A Statistics record: the per-channel message counts into `counts`, the rest skipped.
+void parse_statistics(Cursor& c, std::map<std::uint16_t, std::uint64_t>& counts) {
+  c.u64("message_count");
+  c.u16("schema_count");
+  c.u32("channel_count");
+  c.u32("attachment_count");
+  c.u32("metadata_count");
+  c.u32("chunk_count");
+  c.u64("message_start_time");
+  c.u64("message_end_time");
+  const std::uint64_t map_end = c.group_end("channel_message_counts");
+  while (c.pos() < map_end) {
+    const std::uint16_t id = c.u16("channel_message_counts");
+    counts[id] = c.u64("channel_message_counts");
+  }
+}
+
 }  // namespace
 
 /// Where the bytes come from: a file (pread) or memory.
@@ -351,46 +398,11 @@ void Reader::read_summary_records(const std::vector<std::uint8_t>& bytes, std::u
       channels_.emplace(ch.id, std::move(ch));
     } else if (op == kOpChunkIndex) {
       Cursor c(name_, {"Chunk Index", at}, p, len);
-      ChunkInfo ci;
-      ci.start_ns = c.u64("message_start_time");
-      ci.end_ns = c.u64("message_end_time");
-      ci.offset = c.u64("chunk_start_offset");
-      ci.length = c.u64("chunk_length");
-      const std::uint64_t map_end = c.group_end("message_index_offsets");
-      while (c.pos() < map_end) {
-        ci.channels.push_back(c.u16("message_index_offsets"));
-        c.u64("message_index_offsets");
-      }
-      c.u64("message_index_length");
-      check_compression(c, c.str("compression"));
-      if (ci.offset < header_end_ || ci.length < kRecordPrefix || ci.offset > data_end ||
-          ci.length > data_end - ci.offset || ci.length > kMaxChunkRecord) {
-        c.fail("chunk_start_offset",
-               std::to_string(ci.offset) + " (length " + std::to_string(ci.length) + ")",
-               "a chunk of at most " + std::to_string(kMaxChunkRecord) + " bytes within the " +
-                   "data section [" + std::to_string(header_end_) + ", " +
-                   std::to_string(data_end) + ")");
-      }
-      if (ci.start_ns > ci.end_ns) {
-        c.fail("message_start_time", std::to_string(ci.start_ns),
-               "at most message_end_time " + std::to_string(ci.end_ns));
-      }
+      ChunkInfo ci = parse_chunk_index(c, header_end_, data_end);
       chunks_.push_back(std::move(ci));
     } else if (op == kOpStatistics) {
       Cursor c(name_, {"Statistics", at}, p, len);
-      c.u64("message_count");
-      c.u16("schema_count");
-      c.u32("channel_count");
-      c.u32("attachment_count");
-      c.u32("metadata_count");
-      c.u32("chunk_count");
-      c.u64("message_start_time");
-      c.u64("message_end_time");
-      const std::uint64_t map_end = c.group_end("channel_message_counts");
-      while (c.pos() < map_end) {
-        const std::uint16_t id = c.u16("channel_message_counts");
-        counts_[id] = c.u64("channel_message_counts");
-      }
+      parse_statistics(c, counts_);
       counts_known_ = true;
     } else if (op == kOpMetadataIndex) {
       Cursor c(name_, {"Metadata Index", at}, p, len);

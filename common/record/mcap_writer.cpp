@@ -314,6 +314,68 @@ void Writer::write_chunk() {
   }
 }
 
+/// One Chunk Index record per chunk written.
+void Writer::put_chunk_indexes(ByteWriter& w) const {
+  for (const ChunkEntry& c : chunks_) {
+    const std::size_t rec = w.begin_record(kOpChunkIndex);
+    w.u64(c.start_ns);
+    w.u64(c.end_ns);
+    w.u64(c.offset);
+    w.u64(c.length);
+    const std::size_t map = w.begin_group();
+    for (const auto& [id, off] : c.index_offsets) {
+      w.u16(id);
+      w.u64(off);
+    }
+    w.end_group(map);
+    w.u64(c.index_length);
+    w.str("zstd");
+    w.u64(c.compressed);
+    w.u64(c.uncompressed);
+    w.end_record(rec);
+  }
+}
+
+/// One Metadata Index record per Metadata record written.
+void Writer::put_metadata_indexes(ByteWriter& w) const {
+  for (std::size_t i = 0; i < metadata_at_.size(); ++i) {
+    const std::size_t rec = w.begin_record(kOpMetadataIndex);
+    w.u64(metadata_at_[i].first);
+    w.u64(metadata_at_[i].second);
+    w.str(metadata_names_[i]);
+    w.end_record(rec);
+  }
+}
+
+/// The Statistics record: record counts, and the messages per channel and their time range
+/// over the chunks written.
+void Writer::put_statistics(ByteWriter& w) const {
+  std::map<std::uint16_t, std::uint64_t> counts;
+  std::uint64_t messages = 0, first = 0, last = 0;
+  for (const ChunkEntry& c : chunks_) {
+    for (const auto& [id, n] : c.counts) counts[id] += n;
+    first = messages == 0 ? c.start_ns : std::min(first, c.start_ns);
+    last = messages == 0 ? c.end_ns : std::max(last, c.end_ns);
+    messages += c.messages;
+  }
+  const std::size_t rec = w.begin_record(kOpStatistics);
+  w.u64(messages);
+  w.u16(static_cast<std::uint16_t>(schema_records_.size()));
+  w.u32(static_cast<std::uint32_t>(channel_records_.size()));
+  w.u32(0);  // attachments
+  w.u32(static_cast<std::uint32_t>(metadata_at_.size()));
+  w.u32(static_cast<std::uint32_t>(chunks_.size()));
+  w.u64(first);
+  w.u64(last);
+  const std::size_t map = w.begin_group();
+  for (const auto& [id, n] : counts) {
+    w.u16(id);
+    w.u64(n);
+  }
+  w.end_group(map);
+  w.end_record(rec);
+}
+
 std::vector<std::uint8_t> Writer::build_tail() const {
   std::vector<std::uint8_t> out;
   ByteWriter w(out);
@@ -337,59 +399,9 @@ std::vector<std::uint8_t> Writer::build_tail() const {
   group(kOpChannel, [&] {
     for (const auto& r : channel_records_) w.raw(r.data(), r.size());
   });
-  std::map<std::uint16_t, std::uint64_t> counts;
-  std::uint64_t messages = 0, first = 0, last = 0;
-  group(kOpChunkIndex, [&] {
-    for (const ChunkEntry& c : chunks_) {
-      const std::size_t rec = w.begin_record(kOpChunkIndex);
-      w.u64(c.start_ns);
-      w.u64(c.end_ns);
-      w.u64(c.offset);
-      w.u64(c.length);
-      const std::size_t map = w.begin_group();
-      for (const auto& [id, off] : c.index_offsets) {
-        w.u16(id);
-        w.u64(off);
-      }
-      w.end_group(map);
-      w.u64(c.index_length);
-      w.str("zstd");
-      w.u64(c.compressed);
-      w.u64(c.uncompressed);
-      w.end_record(rec);
-      for (const auto& [id, n] : c.counts) counts[id] += n;
-      first = messages == 0 ? c.start_ns : std::min(first, c.start_ns);
-      last = messages == 0 ? c.end_ns : std::max(last, c.end_ns);
-      messages += c.messages;
-    }
-  });
-  group(kOpMetadataIndex, [&] {
-    for (std::size_t i = 0; i < metadata_at_.size(); ++i) {
-      const std::size_t rec = w.begin_record(kOpMetadataIndex);
-      w.u64(metadata_at_[i].first);
-      w.u64(metadata_at_[i].second);
-      w.str(metadata_names_[i]);
-      w.end_record(rec);
-    }
-  });
-  group(kOpStatistics, [&] {
-    const std::size_t rec = w.begin_record(kOpStatistics);
-    w.u64(messages);
-    w.u16(static_cast<std::uint16_t>(schema_records_.size()));
-    w.u32(static_cast<std::uint32_t>(channel_records_.size()));
-    w.u32(0);  // attachments
-    w.u32(static_cast<std::uint32_t>(metadata_at_.size()));
-    w.u32(static_cast<std::uint32_t>(chunks_.size()));
-    w.u64(first);
-    w.u64(last);
-    const std::size_t map = w.begin_group();
-    for (const auto& [id, n] : counts) {
-      w.u16(id);
-      w.u64(n);
-    }
-    w.end_group(map);
-    w.end_record(rec);
-  });
+  group(kOpChunkIndex, [&] { put_chunk_indexes(w); });
+  group(kOpMetadataIndex, [&] { put_metadata_indexes(w); });
+  group(kOpStatistics, [&] { put_statistics(w); });
   const std::uint64_t summary_offset_start = offset_ + out.size();
   for (const Group& g : groups) {
     const std::size_t rec = w.begin_record(kOpSummaryOffset);

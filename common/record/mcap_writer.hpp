@@ -29,6 +29,8 @@
 
 namespace teleop::record::mcap {
 
+class ByteWriter;  // common/record/mcap_format.hpp
+
 struct WriterOptions {
   std::uint64_t chunk_bytes = std::uint64_t{1} << 20;  ///< close a chunk at this size [bytes]
   std::int64_t chunk_ns = 1'000'000'000;  ///< ... or when its first message is this old [ns]
@@ -88,6 +90,9 @@ class Writer {
   void write_chunk();
   void write_tail();
   std::vector<std::uint8_t> build_tail() const;
+  void put_chunk_indexes(ByteWriter& w) const;
+  void put_metadata_indexes(ByteWriter& w) const;
+  void put_statistics(ByteWriter& w) const;
   void mark_boundary(std::uint8_t kind);
   [[noreturn]] void fail(const std::string& what);
   void finish_after_failure();

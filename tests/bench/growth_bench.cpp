@@ -19,6 +19,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <limits>
 #include <string>
@@ -156,11 +157,9 @@ std::array<double, 3> fit_power(const std::vector<double>& n, const std::vector<
   return {b, std::exp(la), ss_tot > 0 ? 1.0 - ss_res / ss_tot : 1.0};
 }
 
-int bench_growth(const teleop::CommandArgs& a) {
-  const int min_level = 2;
-  const int top = a.quick ? 3 : 6;
-  const int rounds = std::stoi(a.option("--rounds", a.quick ? "1" : "3"));
-  std::vector<Series> series = {
+/// The series measured: the deformable models and integrators, and the collision tree.
+std::vector<Series> growth_series() {
+  return {
       {"mass_spring symplectic scalar", "deformable", dm::ModelKind::kMassSpring,
        dm::IntegratorKind::kSymplecticEuler, dm::KernelKind::kScalar, 6},
       {"mass_spring symplectic simd", "deformable", dm::ModelKind::kMassSpring,
@@ -175,6 +174,15 @@ int bench_growth(const teleop::CommandArgs& a) {
       {"collision tree_query", "collision", {}, {}, {}, 6},
       {"collision tree_refit_query", "collision", {}, {}, {}, 6},
   };
+}
+
+/// Step times [us] per series and level.
+using Samples = std::vector<std::vector<std::vector<double>>>;
+
+/// Every (series, level) job timed `rounds` times, the job order rotated each round; one
+/// collision job fills the three collision series.
+Samples collect_samples(const std::vector<Series>& series, int min_level, int top, int rounds,
+                        bool quick) {
   struct Job {
     std::size_t series;  // first series of a collision job fills all three
     int level;
@@ -184,8 +192,7 @@ int bench_growth(const teleop::CommandArgs& a) {
     if (series[i].kind == "collision" && series[i].name != "collision tree_refit") continue;
     for (int l = min_level; l <= std::min(top, series[i].max_level); ++l) jobs.push_back({i, l});
   }
-  std::vector<std::vector<std::vector<double>>> samples(series.size(),
-                                                        std::vector<std::vector<double>>(7));
+  Samples samples(series.size(), std::vector<std::vector<double>>(7));
   teleop::Progress progress("growth", static_cast<double>(rounds) * jobs.size(), "jobs");
   for (int r = 0; r < rounds; ++r) {
     for (std::size_t j = 0; j < jobs.size(); ++j) {
@@ -193,10 +200,10 @@ int bench_growth(const teleop::CommandArgs& a) {
       const Series& s = series[job.series];
       auto& dst = samples[job.series][static_cast<std::size_t>(job.level)];
       if (s.kind == "deformable") {
-        const auto us = time_deformable(s, job.level, a.quick);
+        const auto us = time_deformable(s, job.level, quick);
         dst.insert(dst.end(), us.begin(), us.end());
       } else {
-        const auto us = time_collision(job.level, a.quick);
+        const auto us = time_collision(job.level, quick);
         for (std::size_t k = 0; k < 3; ++k) {
           auto& d = samples[job.series + k][static_cast<std::size_t>(job.level)];
           d.insert(d.end(), us[k].begin(), us[k].end());
@@ -206,9 +213,16 @@ int bench_growth(const teleop::CommandArgs& a) {
     }
   }
   progress.finish();
-  teleop::CsvWriter csv((a.out_dir / "growth.csv").string(),
+  return samples;
+}
+
+/// growth.csv (median and p99 per series and level) and growth_fit.csv (the power law of each
+/// series measured at two levels or more), echoed on stdout.
+void write_growth(const std::filesystem::path& out_dir, const std::vector<Series>& series,
+                  const Samples& samples, int min_level, int top) {
+  teleop::CsvWriter csv((out_dir / "growth.csv").string(),
                         {"series", "kind", "level", "n", "samples", "median_us", "p99_us"});
-  teleop::CsvWriter fit_csv((a.out_dir / "growth_fit.csv").string(),
+  teleop::CsvWriter fit_csv((out_dir / "growth_fit.csv").string(),
                             {"series", "kind", "exponent", "prefactor_us", "r2", "levels"});
   for (std::size_t i = 0; i < series.size(); ++i) {
     const Series& s = series[i];
@@ -238,6 +252,15 @@ int bench_growth(const teleop::CommandArgs& a) {
   }
   csv.flush();
   fit_csv.flush();
+}
+
+int bench_growth(const teleop::CommandArgs& a) {
+  const int min_level = 2;
+  const int top = a.quick ? 3 : 6;
+  const int rounds = std::stoi(a.option("--rounds", a.quick ? "1" : "3"));
+  const std::vector<Series> series = growth_series();
+  const Samples samples = collect_samples(series, min_level, top, rounds, a.quick);
+  write_growth(a.out_dir, series, samples, min_level, top);
   if (!a.no_chart) {
     teleop::run_chart_script(
         "growth.py", {(a.out_dir / "growth.csv").string(), (a.out_dir / "growth_fit.csv").string(),

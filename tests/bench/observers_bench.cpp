@@ -207,6 +207,89 @@ struct LoopFlags {
   std::vector<std::string> server, master;
 };
 
+/// The observer processes of a session and when each started [s since the session's start].
+struct Observers {
+  std::vector<std::unique_ptr<Process>> procs;
+  std::vector<double> started_s;
+};
+
+/// N observers: even ones `teleop_monitor --json`, odd ones a view probe (this program's
+/// observer-probe), all at `nice`, with --full-rate when `full_rate`.
+Observers start_observers(const Binaries& bin, int observers, bool full_rate, int nice,
+                          const std::string& d, const fs::path& work, std::int64_t t0) {
+  Observers obs;
+  for (int i = 0; i < observers; ++i) {
+    const bool monitor = i % 2 == 0;
+    std::vector<std::string> a;
+    if (monitor) {
+      a = {"--domain", d, "--json", "--period", "1", "--nice", std::to_string(nice)};
+      if (full_rate) a.push_back("--full-rate");
+      obs.procs.push_back(
+          std::make_unique<Process>(bin.monitor, a, "obs_bench_mon" + std::to_string(i)));
+    } else {
+      a = {"observer-probe",
+           "--out",
+           work.string(),
+           "--kind",
+           "view",
+           "--domain",
+           d,
+           "--full-rate",
+           full_rate ? "1" : "0",
+           "--nice",
+           std::to_string(nice)};
+      obs.procs.push_back(
+          std::make_unique<Process>(bin.self, a, "obs_bench_view" + std::to_string(i)));
+    }
+    obs.started_s.push_back(seconds_between(t0, now_ns()));
+  }
+  return obs;
+}
+
+/// Stops the observers (SIGINT, SIGKILL after 20 s) and reads from their output how many got
+/// the scene and the median slave_state rate of the monitors and of the view probes.
+void stop_observers(Observers& obs, double stopped_s, SessionResult& r) {
+  for (auto& o : obs.procs) o->signal(SIGINT);
+  std::vector<double> monitor_rates, view_rates;
+  for (std::size_t i = 0; i < obs.procs.size(); ++i) {
+    if (obs.procs[i]->wait_for(20.0) < 0) obs.procs[i]->signal(SIGKILL);
+    const std::string out = obs.procs[i]->out();
+    if (last_count(out, "scene") > 0 || has_scene_line(out)) {
+      ++r.observers_with_scene;
+    }
+    const double alive = stopped_s - obs.started_s[i];
+    if (alive > 0) {
+      (i % 2 == 0 ? monitor_rates : view_rates).push_back(last_count(out, "slave_state") / alive);
+    }
+  }
+  r.monitor_state_hz = median(monitor_rates);
+  r.view_state_hz = median(view_rates);
+}
+
+/// The master's (`m`) and the server's (`s`) summary JSON into `r`.
+void read_summaries(const std::string& m, const std::string& s, SessionResult& r) {
+  r.rtt_p50 = json_nested(m, "rtt_ms", "p50");
+  r.rtt_p99 = json_nested(m, "rtt_ms", "p99");
+  r.rtt_p999 = json_nested(m, "rtt_ms", "p999");
+  r.master_overruns = json_value(m, "overruns");  // the first "overruns" key is the loop's
+  r.link_losses = json_value(m, "link_losses");
+  r.sent = json_value(m, "sent");
+  r.received = json_value(m, "received");
+  if (const std::string v = json_text(m, "verdict"); !v.empty()) r.verdict = v;
+  // the master's end stops the commands: the server's watchdog trips once then, by design
+  const double trips = json_value(s, "watchdog_trips");
+  r.watchdog_trips = std::isnan(trips) ? trips : std::max(0.0, trips - 1.0);
+  r.server_step_p99_us = json_nested(s, "step_us", "p99");
+  r.server_overruns = json_value(s, "overruns");
+  r.server_steps = json_value(s, "steps");
+  r.server_step_p50_us = json_nested(s, "step_us", "p50");
+  const auto part_p99 = [&](const char* part) { return json_nested(s, part, "p99"); };
+  r.collision_p99_us = part_p99("collision");
+  r.deformable_p99_us = part_p99("deformable");
+  r.slave_p99_us = part_p99("slave");
+  r.publish_p99_us = part_p99("publish");
+}
+
 SessionResult run_session(const Binaries& bin, int observers, bool full_rate, int nice, int domain,
                           double duration_s, const fs::path& work,
                           const LoopFlags& loops = LoopFlags{}) {
@@ -224,32 +307,8 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   sargs.insert(sargs.end(), loops.server.begin(), loops.server.end());
   Process server(bin.server, sargs, "obs_bench_server");
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
-  std::vector<std::unique_ptr<Process>> obs;
-  std::vector<double> started_s;
   const auto t0 = now_ns();
-  for (int i = 0; i < observers; ++i) {
-    const bool monitor = i % 2 == 0;
-    std::vector<std::string> a;
-    if (monitor) {
-      a = {"--domain", d, "--json", "--period", "1", "--nice", std::to_string(nice)};
-      if (full_rate) a.push_back("--full-rate");
-      obs.push_back(std::make_unique<Process>(bin.monitor, a, "obs_bench_mon" + std::to_string(i)));
-    } else {
-      a = {"observer-probe",
-           "--out",
-           work.string(),
-           "--kind",
-           "view",
-           "--domain",
-           d,
-           "--full-rate",
-           full_rate ? "1" : "0",
-           "--nice",
-           std::to_string(nice)};
-      obs.push_back(std::make_unique<Process>(bin.self, a, "obs_bench_view" + std::to_string(i)));
-    }
-    started_s.push_back(seconds_between(t0, now_ns()));
-  }
+  Observers obs = start_observers(bin, observers, full_rate, nice, d, work, t0);
   // let every observer start and discover the others before the session starts: the steady
   // state is measured (32 participants starting at once on 2 cores take a few seconds of CPU)
   std::this_thread::sleep_for(std::chrono::milliseconds(2000 + 150 * observers));
@@ -259,49 +318,13 @@ SessionResult run_session(const Binaries& bin, int observers, bool full_rate, in
   margs.insert(margs.end(), loops.master.begin(), loops.master.end());
   Process master(bin.master, margs, "obs_bench_master");
   const int mst = master.wait_for(duration_s + 60.0);
-  const double stopped_s = seconds_between(t0, now_ns());
-  for (auto& o : obs) o->signal(SIGINT);
-  std::vector<double> monitor_rates, view_rates;
-  for (std::size_t i = 0; i < obs.size(); ++i) {
-    if (obs[i]->wait_for(20.0) < 0) obs[i]->signal(SIGKILL);
-    const std::string out = obs[i]->out();
-    if (last_count(out, "scene") > 0 || has_scene_line(out)) {
-      ++r.observers_with_scene;
-    }
-    const double alive = stopped_s - started_s[i];
-    if (alive > 0) {
-      (i % 2 == 0 ? monitor_rates : view_rates).push_back(last_count(out, "slave_state") / alive);
-    }
-  }
+  stop_observers(obs, seconds_between(t0, now_ns()), r);
   server.signal(SIGTERM);
   server.wait_for(20.0);
   if (mst != 0) {
     std::fprintf(stderr, "observers: master exited with %d: %s\n", mst, master.err().c_str());
   }
-  const std::string m = Process::slurp(master_json);
-  const std::string s = Process::slurp(server_json);
-  r.rtt_p50 = json_nested(m, "rtt_ms", "p50");
-  r.rtt_p99 = json_nested(m, "rtt_ms", "p99");
-  r.rtt_p999 = json_nested(m, "rtt_ms", "p999");
-  r.master_overruns = json_value(m, "overruns");  // the first "overruns" key is the loop's
-  r.link_losses = json_value(m, "link_losses");
-  r.sent = json_value(m, "sent");
-  r.received = json_value(m, "received");
-  if (const std::string v = json_text(m, "verdict"); !v.empty()) r.verdict = v;
-  // the master's end stops the commands: the server's watchdog trips once then, by design
-  const double trips = json_value(s, "watchdog_trips");
-  r.watchdog_trips = std::isnan(trips) ? trips : std::max(0.0, trips - 1.0);
-  r.server_step_p99_us = json_nested(s, "step_us", "p99");
-  r.server_overruns = json_value(s, "overruns");
-  r.monitor_state_hz = median(monitor_rates);
-  r.view_state_hz = median(view_rates);
-  r.server_steps = json_value(s, "steps");
-  r.server_step_p50_us = json_nested(s, "step_us", "p50");
-  const auto part_p99 = [&](const char* part) { return json_nested(s, part, "p99"); };
-  r.collision_p99_us = part_p99("collision");
-  r.deformable_p99_us = part_p99("deformable");
-  r.slave_p99_us = part_p99("slave");
-  r.publish_p99_us = part_p99("publish");
+  read_summaries(Process::slurp(master_json), Process::slurp(server_json), r);
   return r;
 }
 

@@ -32,6 +32,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -222,6 +223,111 @@ struct Config {
   double dt;
 };
 
+/// Every (level, world step, engine) configuration; Bullet's only when it is built in.
+std::vector<Config> peer_configs(const std::vector<int>& levels, const std::vector<double>& dts,
+                                 bool have_bullet) {
+  std::vector<Config> configs;
+  for (int level : levels) {
+    for (double dt : dts) {
+      for (const char* e : {"ours-scalar", "ours-simd", "bullet"}) {
+        if (std::string(e) == "bullet" && !have_bullet) continue;
+        configs.push_back({e, level, dt});
+      }
+    }
+  }
+  return configs;
+}
+
+/// What the rounds measured, per configuration.
+struct PeerResults {
+  std::vector<std::vector<double>> times;  ///< step times of every round [us]
+  std::vector<Trace> first;                ///< round 1's run
+  std::vector<int> substeps;               ///< our sub-steps per world step (1 for Bullet)
+};
+
+/// Every configuration once per round, in an order rotated each round so no engine always
+/// runs first or last.
+PeerResults run_rounds(const std::vector<Config>& configs, int rounds, double t_end,
+                       double sample_dt, [[maybe_unused]] int piterations) {
+  PeerResults res;
+  res.times.resize(configs.size());
+  res.first.resize(configs.size());
+  res.substeps.assign(configs.size(), 1);
+  teleop::Progress progress("peers", static_cast<double>(rounds) * configs.size(), "runs");
+  for (int r = 0; r < rounds; ++r) {
+    for (std::size_t j = 0; j < configs.size(); ++j) {
+      const std::size_t i = (j + static_cast<std::size_t>(r)) % configs.size();
+      const Config& c = configs[i];
+      Trace tr;
+      if (c.engine == "bullet") {
+#ifdef TELEOP_HAVE_BULLET
+        tr = run_bullet(c.level, c.dt, t_end, sample_dt, piterations);
+#endif
+      } else {
+        tr = run_ours(c.level, c.dt, t_end, sample_dt,
+                      c.engine == "ours-simd" ? KernelKind::kSimd : KernelKind::kScalar,
+                      &res.substeps[i]);
+      }
+      res.times[i].insert(res.times[i].end(), tr.step_us.begin(), tr.step_us.end());
+      if (r == 0) res.first[i] = std::move(tr);
+      progress.add();
+    }
+  }
+  progress.finish();
+  return res;
+}
+
+/// peers.csv (one row per configuration), peers_trace.csv (round 1's samples) and the table
+/// on stdout.
+void write_peers(const std::filesystem::path& out_dir, const std::vector<Config>& configs,
+                 const PeerResults& res) {
+  teleop::CsvWriter csv((out_dir / "peers.csv").string(),
+                        {"engine", "level", "nodes", "dt_s", "substeps", "step_us_median",
+                         "step_us_p99", "overshoot_mm", "residual_mm", "drift_mm",
+                         "max_volume_error_pct", "end_volume_error_pct", "failed"});
+  teleop::CsvWriter trace((out_dir / "peers_trace.csv").string(),
+                          {"engine", "level", "dt_s", "t_s", "probe_mm", "volume_pct"});
+  std::printf("%-12s %5s %6s %5s %10s %10s %9s %9s %9s %9s\n", "engine", "level", "dt_ms", "sub",
+              "median_us", "p99_us", "overshoot", "residual", "drift_mm", "max_dV_%");
+  for (std::size_t i = 0; i < configs.size(); ++i) {
+    const Config& c = configs[i];
+    const Trace& tr = res.first[i];
+    const double med = teleop::percentile(res.times[i], 50.0);
+    const double p99 = teleop::percentile(res.times[i], 99.0);
+    const int nodes = 10 * (1 << (2 * c.level)) + 2;
+    csv.row_text({c.engine, std::to_string(c.level), std::to_string(nodes),
+                  teleop::format_number(c.dt), std::to_string(res.substeps[i]),
+                  teleop::format_number(med), teleop::format_number(p99),
+                  teleop::format_number(tr.overshoot_mm), teleop::format_number(tr.residual_mm),
+                  teleop::format_number(tr.drift_mm), teleop::format_number(tr.max_volume_pct),
+                  teleop::format_number(tr.end_volume_pct), tr.failed ? "1" : "0"});
+    for (std::size_t k = 0; k < tr.t_s.size(); ++k) {
+      trace.row_text({c.engine, std::to_string(c.level), teleop::format_number(c.dt),
+                      teleop::format_number(tr.t_s[k]), teleop::format_number(tr.probe_mm[k]),
+                      teleop::format_number(tr.volume_pct[k])});
+    }
+    std::printf("%-12s %5d %6.3g %5d %10.1f %10.1f %9.3f %9.3f %9.3f %9.3f%s\n", c.engine.c_str(),
+                c.level, c.dt * 1e3, res.substeps[i], med, p99, tr.overshoot_mm, tr.residual_mm,
+                tr.drift_mm, tr.max_volume_pct, tr.failed ? "  FAILED" : "");
+  }
+  // ratios: Bullet's median over ours at the same level and step
+  for (std::size_t i = 0; i < configs.size(); ++i) {
+    if (configs[i].engine != "bullet") continue;
+    const double b = teleop::percentile(res.times[i], 50.0);
+    for (std::size_t j = 0; j < configs.size(); ++j) {
+      if (configs[j].engine == "bullet" || configs[j].level != configs[i].level ||
+          configs[j].dt != configs[i].dt) {
+        continue;
+      }
+      std::printf("ratio bullet / %s, level %d, dt %.3g ms: %.2fx\n", configs[j].engine.c_str(),
+                  configs[i].level, configs[i].dt * 1e3,
+                  b / teleop::percentile(res.times[j], 50.0));
+    }
+  }
+  csv.flush();
+  trace.flush();
+}
+
 int bench_peers(const teleop::CommandArgs& a) {
 #ifdef TELEOP_HAVE_BULLET
   const bool have_bullet = true;
@@ -236,8 +342,9 @@ int bench_peers(const teleop::CommandArgs& a) {
   const int rounds = std::stoi(a.option("--rounds", a.quick ? "1" : "3"));
   const double t_end = a.quick ? 0.05 : 1.0;
   const double sample_dt = 1e-3;
+  int piterations = 1;
 #ifdef TELEOP_HAVE_BULLET
-  const int piterations = std::stoi(a.option("--bullet-piterations", "1"));  // 1: its default
+  piterations = std::stoi(a.option("--bullet-piterations", "1"));  // 1: its default
   g_bullet_pressure = std::stod(a.option("--bullet-kpr", "2"));
   const std::string randomize = a.option("--bullet-randomize", "1");
   if (randomize != "0" && randomize != "1") {
@@ -247,84 +354,9 @@ int bench_peers(const teleop::CommandArgs& a) {
   }
   g_bullet_randomize = randomize == "1";
 #endif
-  std::vector<Config> configs;
-  for (int level : levels) {
-    for (double dt : dts) {
-      for (const char* e : {"ours-scalar", "ours-simd", "bullet"}) {
-        if (std::string(e) == "bullet" && !have_bullet) continue;
-        configs.push_back({e, level, dt});
-      }
-    }
-  }
-  std::vector<std::vector<double>> times(configs.size());
-  std::vector<Trace> first(configs.size());
-  std::vector<int> substeps(configs.size(), 1);
-  teleop::Progress progress("peers", static_cast<double>(rounds) * configs.size(), "runs");
-  for (int r = 0; r < rounds; ++r) {
-    for (std::size_t j = 0; j < configs.size(); ++j) {
-      // rotate the order each round so no engine always runs first or last
-      const std::size_t i = (j + static_cast<std::size_t>(r)) % configs.size();
-      const Config& c = configs[i];
-      Trace tr;
-      if (c.engine == "bullet") {
-#ifdef TELEOP_HAVE_BULLET
-        tr = run_bullet(c.level, c.dt, t_end, sample_dt, piterations);
-#endif
-      } else {
-        tr = run_ours(c.level, c.dt, t_end, sample_dt,
-                      c.engine == "ours-simd" ? KernelKind::kSimd : KernelKind::kScalar,
-                      &substeps[i]);
-      }
-      times[i].insert(times[i].end(), tr.step_us.begin(), tr.step_us.end());
-      if (r == 0) first[i] = std::move(tr);
-      progress.add();
-    }
-  }
-  progress.finish();
-  teleop::CsvWriter csv((a.out_dir / "peers.csv").string(),
-                        {"engine", "level", "nodes", "dt_s", "substeps", "step_us_median",
-                         "step_us_p99", "overshoot_mm", "residual_mm", "drift_mm",
-                         "max_volume_error_pct", "end_volume_error_pct", "failed"});
-  teleop::CsvWriter trace((a.out_dir / "peers_trace.csv").string(),
-                          {"engine", "level", "dt_s", "t_s", "probe_mm", "volume_pct"});
-  std::printf("%-12s %5s %6s %5s %10s %10s %9s %9s %9s %9s\n", "engine", "level", "dt_ms", "sub",
-              "median_us", "p99_us", "overshoot", "residual", "drift_mm", "max_dV_%");
-  for (std::size_t i = 0; i < configs.size(); ++i) {
-    const Config& c = configs[i];
-    const Trace& tr = first[i];
-    const double med = teleop::percentile(times[i], 50.0);
-    const double p99 = teleop::percentile(times[i], 99.0);
-    const int nodes = 10 * (1 << (2 * c.level)) + 2;
-    csv.row_text({c.engine, std::to_string(c.level), std::to_string(nodes),
-                  teleop::format_number(c.dt), std::to_string(substeps[i]),
-                  teleop::format_number(med), teleop::format_number(p99),
-                  teleop::format_number(tr.overshoot_mm), teleop::format_number(tr.residual_mm),
-                  teleop::format_number(tr.drift_mm), teleop::format_number(tr.max_volume_pct),
-                  teleop::format_number(tr.end_volume_pct), tr.failed ? "1" : "0"});
-    for (std::size_t k = 0; k < tr.t_s.size(); ++k) {
-      trace.row_text({c.engine, std::to_string(c.level), teleop::format_number(c.dt),
-                      teleop::format_number(tr.t_s[k]), teleop::format_number(tr.probe_mm[k]),
-                      teleop::format_number(tr.volume_pct[k])});
-    }
-    std::printf("%-12s %5d %6.3g %5d %10.1f %10.1f %9.3f %9.3f %9.3f %9.3f%s\n", c.engine.c_str(),
-                c.level, c.dt * 1e3, substeps[i], med, p99, tr.overshoot_mm, tr.residual_mm,
-                tr.drift_mm, tr.max_volume_pct, tr.failed ? "  FAILED" : "");
-  }
-  // ratios: Bullet's median over ours at the same level and step
-  for (std::size_t i = 0; i < configs.size(); ++i) {
-    if (configs[i].engine != "bullet") continue;
-    const double b = teleop::percentile(times[i], 50.0);
-    for (std::size_t j = 0; j < configs.size(); ++j) {
-      if (configs[j].engine == "bullet" || configs[j].level != configs[i].level ||
-          configs[j].dt != configs[i].dt) {
-        continue;
-      }
-      std::printf("ratio bullet / %s, level %d, dt %.3g ms: %.2fx\n", configs[j].engine.c_str(),
-                  configs[i].level, configs[i].dt * 1e3, b / teleop::percentile(times[j], 50.0));
-    }
-  }
-  csv.flush();
-  trace.flush();
+  const std::vector<Config> configs = peer_configs(levels, dts, have_bullet);
+  const PeerResults res = run_rounds(configs, rounds, t_end, sample_dt, piterations);
+  write_peers(a.out_dir, configs, res);
   if (!a.no_chart) {
     teleop::run_chart_script(
         "peers.py", {(a.out_dir / "peers.csv").string(), (a.out_dir / "peers_trace.csv").string(),

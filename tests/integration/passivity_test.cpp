@@ -79,6 +79,22 @@ TEST(Passivity, TdpaSessionOverDdsFollowsAndIsStable) {
   run_session("tdpa", domains::kTdpaSession, "tdpa");
 }
 
+/// A usable wave-variables command of session 42 (tool at (0.6, 0, 0.7)): impedance `b`
+/// [N s/m], the integral [sqrt(W) s] and the energy [J] of the wave sent so far along z.
+MasterCommand wave_command(std::uint64_t seq, double b, double integral, double energy) {
+  MasterCommand c;
+  c.seq(seq);
+  c.position_m() = {0.6, 0.0, 0.7};
+  c.orientation_wxyz() = {1, 0, 0, 0};
+  c.enabled(true);
+  c.scheme(SCHEME_WAVE_VARIABLES);
+  c.passivity_session(42);
+  c.wave_impedance_ns_per_m(b);
+  c.wave_u_integral() = {0.0, 0.0, integral};
+  c.wave_u_energy_j() = {0.0, 0.0, energy};
+  return c;
+}
+
 TEST(Passivity, ServerRejectsUnusableWaveCommandsAndCountsThem) {
   const int domain = domains::kBadWaveCommands;
   const std::string sj = tmp("badwave_server.json");
@@ -113,19 +129,7 @@ TEST(Passivity, ServerRejectsUnusableWaveCommandsAndCountsThem) {
     writer.write(c);
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   };
-  const auto good = [&]() {
-    MasterCommand c;
-    c.seq(++seq);
-    c.position_m() = {0.6, 0.0, 0.7};
-    c.orientation_wxyz() = {1, 0, 0, 0};
-    c.enabled(true);
-    c.scheme(SCHEME_WAVE_VARIABLES);
-    c.passivity_session(42);
-    c.wave_impedance_ns_per_m(b);
-    c.wave_u_integral() = {0.0, 0.0, integral};
-    c.wave_u_energy_j() = {0.0, 0.0, energy};
-    return c;
-  };
+  const auto good = [&]() { return wave_command(++seq, b, integral, energy); };
   for (int i = 0; i < 100; ++i) {  // 0.2 s at 2 ms: about 1 cm down
     integral += 0.002 * u;
     energy += 0.5 * 0.002 * u * u;

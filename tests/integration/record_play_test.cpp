@@ -41,10 +41,10 @@ double topic_field(const std::string& json, const std::string& topic, const std:
   return json_nested(json, "teleop/" + topic, field);
 }
 
-TEST(RecordPlay, SessionRecordedWithoutLossThenPlayedBack) {
-  const std::string d = std::to_string(domains::kRecordSession);
-  const std::string rec_file = tmp("session.db"), rec_json = tmp("rec.json");
-  const std::string master_json = tmp("master.json"), server_json = tmp("server.json");
+/// A server + master session (2 s) on domain `d`, recorded to `rec_file`; the three
+/// summaries to their files.
+void record_session(const std::string& d, const std::string& rec_file, const std::string& rec_json,
+                    const std::string& master_json, const std::string& server_json) {
   Process recorder(kRecordBinary, {"--domain", d, "--out", rec_file, "--summary-json", rec_json},
                    "rec_recorder");
   ASSERT_TRUE(wait_for_output(recorder, "recording", 20.0)) << recorder.err();
@@ -62,6 +62,60 @@ TEST(RecordPlay, SessionRecordedWithoutLossThenPlayedBack) {
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // last samples in flight
   recorder.signal(SIGINT);
   ASSERT_EQ(recorder.wait_for(20.0), 0) << recorder.err();
+}
+
+/// Plays `rec_file` back at 4x to a subscriber on another domain: the scene once, at least
+/// half of the `st` slave states and `cmd` commands recorded (best effort over loopback).
+void expect_played_back(const std::string& rec_file, double st, double cmd) {
+  const int pd = domains::kPlayback;
+  dds::Participant p(dds::ParticipantOptions{"loopback", pd, "playback-subscriber"});
+  std::atomic<std::uint64_t> states{0}, scenes{0}, commands{0};
+  dds::Reader<SlaveStatePubSubType> r_state(
+      p, dds::topics::kSlaveState, dds::TopicQos::kStream,
+      [&](const SlaveState&, const eprosima::fastdds::dds::SampleInfo&) { ++states; });
+  dds::Reader<MasterCommandPubSubType> r_cmd(
+      p, dds::topics::kMasterCommand, dds::TopicQos::kStream,
+      [&](const MasterCommand&, const eprosima::fastdds::dds::SampleInfo&) { ++commands; });
+  dds::Reader<SceneDescriptionPubSubType> r_scene(
+      p, dds::topics::kScene, dds::TopicQos::kLatched,
+      [&](const SceneDescription& sd, const eprosima::fastdds::dds::SampleInfo&) {
+        if (sd.name() == "tool-only") ++scenes;
+      });
+  Process player(
+      kPlayBinary,
+      {rec_file, "--domain", std::to_string(pd), "--speed", "4", "--wait", "1", "--linger", "0.5"},
+      "rec_player");
+  ASSERT_EQ(player.wait_for(60.0), 0) << player.err();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  std::printf("[ played   ] slave_state %llu of %.0f, master_command %llu of %.0f, scene %llu\n",
+              static_cast<unsigned long long>(states.load()), st,
+              static_cast<unsigned long long>(commands.load()), cmd,
+              static_cast<unsigned long long>(scenes.load()));
+  EXPECT_NE(player.out().find("0 refused"), std::string::npos) << player.out();
+  EXPECT_EQ(scenes.load(), 1u);
+  // best effort over loopback: most, not necessarily all, arrive
+  EXPECT_GE(static_cast<double>(states.load()), 0.5 * st);
+  EXPECT_GE(static_cast<double>(commands.load()), 0.5 * cmd);
+}
+
+/// Bad flags exit 2 naming the flag, its value and the allowed range.
+void expect_bad_play_flags_refused(const std::string& rec_file) {
+  Process bad_speed(kPlayBinary, {rec_file, "--speed", "500"}, "rec_bad_speed");
+  EXPECT_EQ(bad_speed.wait_for(20.0), 2);
+  EXPECT_NE(bad_speed.err().find("--speed"), std::string::npos) << bad_speed.err();
+  EXPECT_NE(bad_speed.err().find("500"), std::string::npos) << bad_speed.err();
+  Process bad_seek(kPlayBinary,
+                   {rec_file, "--seek", "1000", "--domain", std::to_string(domains::kPlayback)},
+                   "rec_bad_seek");
+  EXPECT_EQ(bad_seek.wait_for(20.0), 2);
+  EXPECT_NE(bad_seek.err().find("--seek"), std::string::npos) << bad_seek.err();
+}
+
+TEST(RecordPlay, SessionRecordedWithoutLossThenPlayedBack) {
+  const std::string d = std::to_string(domains::kRecordSession);
+  const std::string rec_file = tmp("session.db"), rec_json = tmp("rec.json");
+  const std::string master_json = tmp("master.json"), server_json = tmp("server.json");
+  ASSERT_NO_FATAL_FAILURE(record_session(d, rec_file, rec_json, master_json, server_json));
 
   const std::string rec = Process::slurp(rec_json);
   const std::string m = Process::slurp(master_json);
@@ -89,49 +143,8 @@ TEST(RecordPlay, SessionRecordedWithoutLossThenPlayedBack) {
   EXPECT_GT(topic_field(rec, "events", "samples"), 0.0) << rec;
   EXPECT_GT(topic_field(rec, "server_stats", "samples"), 0.0) << rec;
 
-  // play it back at 4x to a subscriber on another domain
-  {
-    const int pd = domains::kPlayback;
-    dds::Participant p(dds::ParticipantOptions{"loopback", pd, "playback-subscriber"});
-    std::atomic<std::uint64_t> states{0}, scenes{0}, commands{0};
-    dds::Reader<SlaveStatePubSubType> r_state(
-        p, dds::topics::kSlaveState, dds::TopicQos::kStream,
-        [&](const SlaveState&, const eprosima::fastdds::dds::SampleInfo&) { ++states; });
-    dds::Reader<MasterCommandPubSubType> r_cmd(
-        p, dds::topics::kMasterCommand, dds::TopicQos::kStream,
-        [&](const MasterCommand&, const eprosima::fastdds::dds::SampleInfo&) { ++commands; });
-    dds::Reader<SceneDescriptionPubSubType> r_scene(
-        p, dds::topics::kScene, dds::TopicQos::kLatched,
-        [&](const SceneDescription& sd, const eprosima::fastdds::dds::SampleInfo&) {
-          if (sd.name() == "tool-only") ++scenes;
-        });
-    Process player(kPlayBinary,
-                   {rec_file, "--domain", std::to_string(pd), "--speed", "4", "--wait", "1",
-                    "--linger", "0.5"},
-                   "rec_player");
-    ASSERT_EQ(player.wait_for(60.0), 0) << player.err();
-    std::this_thread::sleep_for(std::chrono::milliseconds(300));
-    std::printf("[ played   ] slave_state %llu of %.0f, master_command %llu of %.0f, scene %llu\n",
-                static_cast<unsigned long long>(states.load()), st,
-                static_cast<unsigned long long>(commands.load()), cmd,
-                static_cast<unsigned long long>(scenes.load()));
-    EXPECT_NE(player.out().find("0 refused"), std::string::npos) << player.out();
-    EXPECT_EQ(scenes.load(), 1u);
-    // best effort over loopback: most, not necessarily all, arrive
-    EXPECT_GE(static_cast<double>(states.load()), 0.5 * st);
-    EXPECT_GE(static_cast<double>(commands.load()), 0.5 * cmd);
-  }
-
-  // bad flags exit 2 naming the flag, its value and the allowed range
-  Process bad_speed(kPlayBinary, {rec_file, "--speed", "500"}, "rec_bad_speed");
-  EXPECT_EQ(bad_speed.wait_for(20.0), 2);
-  EXPECT_NE(bad_speed.err().find("--speed"), std::string::npos) << bad_speed.err();
-  EXPECT_NE(bad_speed.err().find("500"), std::string::npos) << bad_speed.err();
-  Process bad_seek(kPlayBinary,
-                   {rec_file, "--seek", "1000", "--domain", std::to_string(domains::kPlayback)},
-                   "rec_bad_seek");
-  EXPECT_EQ(bad_seek.wait_for(20.0), 2);
-  EXPECT_NE(bad_seek.err().find("--seek"), std::string::npos) << bad_seek.err();
+  ASSERT_NO_FATAL_FAILURE(expect_played_back(rec_file, st, cmd));
+  expect_bad_play_flags_refused(rec_file);
   std::remove(rec_file.c_str());
 }
 
@@ -233,128 +246,100 @@ double total_samples(const std::string& json) {
              : -1.0;
 }
 
-// The default format is MCAP. One live session, two recorders: one finishes
-// normally (its file read through the summary, played back, converted, re-simulated from a
-// window found through the chunk index), the other is killed with -9 mid-session (its file
-// recovered: every complete chunk, each sample identical to the finished recording's).
-TEST(RecordPlay, McapSessionPlaysReSimulatesAndSurvivesAKill) {
-  const std::string d = std::to_string(domains::kRecordMcap);
-  const std::string full = tmp("session.mcap"), killed = tmp("killed.mcap");
-  const std::string rec_json = tmp("mcap_rec.json"), scene = scene_file("tool_only.yaml");
-  std::int64_t killed_at_ns = 0;
-  {
-    Process recorder(kRecordBinary, {"--domain", d, "--out", full, "--summary-json", rec_json},
-                     "mcap_recorder");
-    Process victim(kRecordBinary, {"--domain", d, "--out", killed, "--chunk-s", "0.5"},
-                   "mcap_victim");
-    ASSERT_TRUE(wait_for_output(recorder, "(mcap)", 20.0)) << recorder.err();
-    ASSERT_TRUE(wait_for_output(victim, "(mcap)", 20.0)) << victim.err();
-    Process server(kServerBinary, {"--domain", d, "--duration", "60", "--scene", scene},
-                   "mcap_server");
-    Process master(kMasterBinary, {"--domain", d, "--duration", "4", "--homing", "0.5", "--quiet"},
-                   "mcap_master");
-    std::this_thread::sleep_for(std::chrono::milliseconds(3000));
-    victim.signal(SIGKILL);
-    killed_at_ns = wall_ns();
-    EXPECT_EQ(victim.wait_for(10.0), -2);
-    ASSERT_EQ(master.wait_for(60.0), 0) << master.err();
-    server.signal(SIGTERM);
-    ASSERT_EQ(server.wait_for(20.0), 0) << server.err();
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    recorder.signal(SIGINT);
-    ASSERT_EQ(recorder.wait_for(20.0), 0) << recorder.err();
+/// One live session on domain `d` recorded twice: to `full` (finished normally) and to
+/// `killed` (0.5 s chunks, killed with -9 after 3 s, the time of the kill in `killed_at_ns`).
+void record_twice_one_killed(const std::string& d, const std::string& full,
+                             const std::string& killed, const std::string& rec_json,
+                             const std::string& scene, std::int64_t& killed_at_ns) {
+  Process recorder(kRecordBinary, {"--domain", d, "--out", full, "--summary-json", rec_json},
+                   "mcap_recorder");
+  Process victim(kRecordBinary, {"--domain", d, "--out", killed, "--chunk-s", "0.5"},
+                 "mcap_victim");
+  ASSERT_TRUE(wait_for_output(recorder, "(mcap)", 20.0)) << recorder.err();
+  ASSERT_TRUE(wait_for_output(victim, "(mcap)", 20.0)) << victim.err();
+  Process server(kServerBinary, {"--domain", d, "--duration", "60", "--scene", scene},
+                 "mcap_server");
+  Process master(kMasterBinary, {"--domain", d, "--duration", "4", "--homing", "0.5", "--quiet"},
+                 "mcap_master");
+  std::this_thread::sleep_for(std::chrono::milliseconds(3000));
+  victim.signal(SIGKILL);
+  killed_at_ns = wall_ns();
+  EXPECT_EQ(victim.wait_for(10.0), -2);
+  ASSERT_EQ(master.wait_for(60.0), 0) << master.err();
+  server.signal(SIGTERM);
+  ASSERT_EQ(server.wait_for(20.0), 0) << server.err();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  recorder.signal(SIGINT);
+  ASSERT_EQ(recorder.wait_for(20.0), 0) << recorder.err();
+}
+
+/// The killed recorder's file: recovered, each of its samples as the finished file (`whole`)
+/// has it, and what it lost is the end of the session: the open chunk (--chunk-s 0.5) and the
+/// queue.
+void expect_killed_file_recovered(const std::string& killed,
+                                  const std::map<SampleKey, std::vector<std::uint8_t>>& whole,
+                                  std::int64_t killed_at_ns) {
+  record::RecordingReader r(killed);
+  const record::RecordingHealth h = r.health();
+  EXPECT_TRUE(h.recovered) << h.how;
+  EXPECT_GT(h.chunks, 0u) << h.note;
+  const auto got = samples_of(killed);
+  // the first sequence number the finished recorder heard from each writer: a recorder that
+  // matched a writer sooner holds its earlier samples too
+  std::map<std::pair<std::string, std::string>, std::int64_t> first_seq;
+  for (const auto& [key, payload] : whole) {
+    const auto w = std::make_pair(std::get<0>(key), std::get<1>(key));
+    if (!first_seq.count(w)) first_seq[w] = std::get<2>(key);
   }
-  const std::string rec = Process::slurp(rec_json);
-  EXPECT_NE(rec.find("\"format\": \"mcap\""), std::string::npos) << rec;
-  EXPECT_EQ(json_value(rec, "gaps"), 0.0) << rec;
-  EXPECT_EQ(json_value(rec, "dropped"), 0.0) << rec;
-
-  // the finished file: read through its summary, every CRC checked
-  Process info(kPlayBinary, {full, "--info"}, "mcap_info");
-  ASSERT_EQ(info.wait_for(60.0), 0) << info.err();
-  std::printf("[ info     ] %s", info.out().c_str());
-  EXPECT_NE(info.out().find("read through its summary"), std::string::npos) << info.out();
-  EXPECT_NE(info.out().find("whole file: ok"), std::string::npos) << info.out();
-  const auto whole = samples_of(full);
-  EXPECT_EQ(static_cast<double>(whole.size()), total_samples(rec)) << rec;
-  // which build wrote it
-  EXPECT_EQ(record::RecordingReader(full).meta().at("version"), version_string());
-
-  // the killed recorder's file: recovered, each of its samples as the finished file has it,
-  // and what it lost is the end of the session: the open chunk (--chunk-s 0.5) and the queue
-  {
-    record::RecordingReader r(killed);
-    const record::RecordingHealth h = r.health();
-    EXPECT_TRUE(h.recovered) << h.how;
-    EXPECT_GT(h.chunks, 0u) << h.note;
-    const auto got = samples_of(killed);
-    // the first sequence number the finished recorder heard from each writer: a recorder that
-    // matched a writer sooner holds its earlier samples too
-    std::map<std::pair<std::string, std::string>, std::int64_t> first_seq;
-    for (const auto& [key, payload] : whole) {
-      const auto w = std::make_pair(std::get<0>(key), std::get<1>(key));
-      if (!first_seq.count(w)) first_seq[w] = std::get<2>(key);
+  std::size_t same = 0, earlier = 0;
+  for (const auto& [key, payload] : got) {
+    const auto it = whole.find(key);
+    const auto w = first_seq.find(std::make_pair(std::get<0>(key), std::get<1>(key)));
+    if (it != whole.end()) {
+      same += it->second == payload ? 1 : 0;
+    } else if (w == first_seq.end() || std::get<2>(key) < w->second) {
+      ++earlier;
     }
-    std::size_t same = 0, earlier = 0;
-    for (const auto& [key, payload] : got) {
-      const auto it = whole.find(key);
-      const auto w = first_seq.find(std::make_pair(std::get<0>(key), std::get<1>(key)));
-      if (it != whole.end()) {
-        same += it->second == payload ? 1 : 0;
-      } else if (w == first_seq.end() || std::get<2>(key) < w->second) {
-        ++earlier;
-      }
-    }
-    EXPECT_EQ(same + earlier, got.size()) << same << " the same, " << earlier << " earlier";
-    const double lost_s = static_cast<double>(killed_at_ns - r.last_ns()) * 1e-9;
-    std::printf(
-        "[ kill -9  ] recovered %zu samples in %llu chunks; the last was received %.3f s "
-        "before the kill; dropped %llu bytes (%llu chunk, %llu messages seen in it)\n",
-        got.size(), static_cast<unsigned long long>(h.chunks), lost_s,
-        static_cast<unsigned long long>(h.dropped_bytes),
-        static_cast<unsigned long long>(h.dropped_chunks),
-        static_cast<unsigned long long>(h.dropped_messages));
-    // a bound for a loaded 2-core machine: --chunk-s 0.5 plus the queue, several times over
-    EXPECT_LT(lost_s, 5.0);
-    EXPECT_GT(got.size(), 1000u);
   }
-  Process killed_info(kPlayBinary, {killed, "--info"}, "mcap_killed_info");
-  EXPECT_EQ(killed_info.wait_for(60.0), 0) << killed_info.err();
-  EXPECT_NE(killed_info.out().find("recovered"), std::string::npos) << killed_info.out();
+  EXPECT_EQ(same + earlier, got.size()) << same << " the same, " << earlier << " earlier";
+  const double lost_s = static_cast<double>(killed_at_ns - r.last_ns()) * 1e-9;
+  std::printf(
+      "[ kill -9  ] recovered %zu samples in %llu chunks; the last was received %.3f s "
+      "before the kill; dropped %llu bytes (%llu chunk, %llu messages seen in it)\n",
+      got.size(), static_cast<unsigned long long>(h.chunks), lost_s,
+      static_cast<unsigned long long>(h.dropped_bytes),
+      static_cast<unsigned long long>(h.dropped_chunks),
+      static_cast<unsigned long long>(h.dropped_messages));
+  // a bound for a loaded 2-core machine: --chunk-s 0.5 plus the queue, several times over
+  EXPECT_LT(lost_s, 5.0);
+  EXPECT_GT(got.size(), 1000u);
+}
 
-  // played back to a subscriber on another domain (as the SQLite test does)
-  {
-    const int pd = domains::kPlaybackMcap;
-    dds::Participant p(dds::ParticipantOptions{"loopback", pd, "mcap-playback-subscriber"});
-    std::atomic<std::uint64_t> states{0}, scenes{0};
-    dds::Reader<SlaveStatePubSubType> r_state(
-        p, dds::topics::kSlaveState, dds::TopicQos::kStream,
-        [&](const SlaveState&, const eprosima::fastdds::dds::SampleInfo&) { ++states; });
-    dds::Reader<SceneDescriptionPubSubType> r_scene(
-        p, dds::topics::kScene, dds::TopicQos::kLatched,
-        [&](const SceneDescription&, const eprosima::fastdds::dds::SampleInfo&) { ++scenes; });
-    Process player(kPlayBinary,
-                   {full, "--domain", std::to_string(pd), "--speed", "4", "--wait", "1", "--linger",
-                    "0.5", "--seek", "1"},
-                   "mcap_player");
-    ASSERT_EQ(player.wait_for(60.0), 0) << player.err();
-    std::this_thread::sleep_for(std::chrono::milliseconds(300));
-    EXPECT_NE(player.out().find("0 refused"), std::string::npos) << player.out();
-    EXPECT_EQ(scenes.load(), 1u);  // the latched scene, recorded before the seek point
-    EXPECT_GT(states.load(), 500u);
-  }
+/// `full` played back from 1 s on to a subscriber on another domain (as the SQLite test does).
+void expect_mcap_played_back(const std::string& full) {
+  const int pd = domains::kPlaybackMcap;
+  dds::Participant p(dds::ParticipantOptions{"loopback", pd, "mcap-playback-subscriber"});
+  std::atomic<std::uint64_t> states{0}, scenes{0};
+  dds::Reader<SlaveStatePubSubType> r_state(
+      p, dds::topics::kSlaveState, dds::TopicQos::kStream,
+      [&](const SlaveState&, const eprosima::fastdds::dds::SampleInfo&) { ++states; });
+  dds::Reader<SceneDescriptionPubSubType> r_scene(
+      p, dds::topics::kScene, dds::TopicQos::kLatched,
+      [&](const SceneDescription&, const eprosima::fastdds::dds::SampleInfo&) { ++scenes; });
+  Process player(kPlayBinary,
+                 {full, "--domain", std::to_string(pd), "--speed", "4", "--wait", "1", "--linger",
+                  "0.5", "--seek", "1"},
+                 "mcap_player");
+  ASSERT_EQ(player.wait_for(60.0), 0) << player.err();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_NE(player.out().find("0 refused"), std::string::npos) << player.out();
+  EXPECT_EQ(scenes.load(), 1u);  // the latched scene, recorded before the seek point
+  EXPECT_GT(states.load(), 500u);
+}
 
-  // converted to SQLite and back: the same samples
-  const std::string db = tmp("converted.db"), back = tmp("back.mcap");
-  Process to_db(kPlayBinary, {full, "--convert", db}, "mcap_to_db");
-  ASSERT_EQ(to_db.wait_for(60.0), 0) << to_db.err();
-  Process to_mcap(kPlayBinary, {db, "--convert", back}, "mcap_back");
-  ASSERT_EQ(to_mcap.wait_for(60.0), 0) << to_mcap.err();
-  EXPECT_TRUE(samples_of(db) == whole);
-  EXPECT_TRUE(samples_of(back) == whole);
-
-  // re-simulated straight from the MCAP file, and from its exported command stream: the same
-  const std::string stream = tmp("mcap_stream.csv");
+/// Re-simulated straight from the MCAP file, and from its exported command stream: the same.
+void expect_resim_from_file_and_stream_agree(const std::string& full, const std::string& stream,
+                                             const std::string& scene) {
   Process exporter(kPlayBinary, {full, "--export-commands", stream}, "mcap_export");
   ASSERT_EQ(exporter.wait_for(60.0), 0) << exporter.err();
   std::string hashes[2];
@@ -371,7 +356,10 @@ TEST(RecordPlay, McapSessionPlaysReSimulatesAndSurvivesAKill) {
   }
   ASSERT_EQ(hashes[0].size(), 16u);
   EXPECT_EQ(hashes[0], hashes[1]);
-  // a window of the recording, found through its chunk index
+}
+
+/// A window of the recording, found through its chunk index; one outside it refused.
+void expect_resim_window(const std::string& full, const std::string& scene) {
   Process window(kExperimentBinary,
                  {"resim", "--recording", full, "--from", "1", "--to", "2", "--scene", scene,
                   "--out", tmp("mcap_resim_window"), "--no-chart"},
@@ -385,6 +373,53 @@ TEST(RecordPlay, McapSessionPlaysReSimulatesAndSurvivesAKill) {
                      "mcap_resim_bad");
   EXPECT_EQ(bad_window.wait_for(60.0), 2);
   EXPECT_NE(bad_window.err().find("--from"), std::string::npos) << bad_window.err();
+}
+
+// The default format is MCAP. One live session, two recorders: one finishes
+// normally (its file read through the summary, played back, converted, re-simulated from a
+// window found through the chunk index), the other is killed with -9 mid-session (its file
+// recovered: every complete chunk, each sample identical to the finished recording's).
+TEST(RecordPlay, McapSessionPlaysReSimulatesAndSurvivesAKill) {
+  const std::string d = std::to_string(domains::kRecordMcap);
+  const std::string full = tmp("session.mcap"), killed = tmp("killed.mcap");
+  const std::string rec_json = tmp("mcap_rec.json"), scene = scene_file("tool_only.yaml");
+  std::int64_t killed_at_ns = 0;
+  ASSERT_NO_FATAL_FAILURE(record_twice_one_killed(d, full, killed, rec_json, scene, killed_at_ns));
+  const std::string rec = Process::slurp(rec_json);
+  EXPECT_NE(rec.find("\"format\": \"mcap\""), std::string::npos) << rec;
+  EXPECT_EQ(json_value(rec, "gaps"), 0.0) << rec;
+  EXPECT_EQ(json_value(rec, "dropped"), 0.0) << rec;
+
+  // the finished file: read through its summary, every CRC checked
+  Process info(kPlayBinary, {full, "--info"}, "mcap_info");
+  ASSERT_EQ(info.wait_for(60.0), 0) << info.err();
+  std::printf("[ info     ] %s", info.out().c_str());
+  EXPECT_NE(info.out().find("read through its summary"), std::string::npos) << info.out();
+  EXPECT_NE(info.out().find("whole file: ok"), std::string::npos) << info.out();
+  const auto whole = samples_of(full);
+  EXPECT_EQ(static_cast<double>(whole.size()), total_samples(rec)) << rec;
+  // which build wrote it
+  EXPECT_EQ(record::RecordingReader(full).meta().at("version"), version_string());
+
+  expect_killed_file_recovered(killed, whole, killed_at_ns);
+  Process killed_info(kPlayBinary, {killed, "--info"}, "mcap_killed_info");
+  EXPECT_EQ(killed_info.wait_for(60.0), 0) << killed_info.err();
+  EXPECT_NE(killed_info.out().find("recovered"), std::string::npos) << killed_info.out();
+
+  ASSERT_NO_FATAL_FAILURE(expect_mcap_played_back(full));
+
+  // converted to SQLite and back: the same samples
+  const std::string db = tmp("converted.db"), back = tmp("back.mcap");
+  Process to_db(kPlayBinary, {full, "--convert", db}, "mcap_to_db");
+  ASSERT_EQ(to_db.wait_for(60.0), 0) << to_db.err();
+  Process to_mcap(kPlayBinary, {db, "--convert", back}, "mcap_back");
+  ASSERT_EQ(to_mcap.wait_for(60.0), 0) << to_mcap.err();
+  EXPECT_TRUE(samples_of(db) == whole);
+  EXPECT_TRUE(samples_of(back) == whole);
+
+  const std::string stream = tmp("mcap_stream.csv");
+  ASSERT_NO_FATAL_FAILURE(expect_resim_from_file_and_stream_agree(full, stream, scene));
+  ASSERT_NO_FATAL_FAILURE(expect_resim_window(full, scene));
   // the killed recorder's shared-memory segments
   if (std::system("fastdds shm clean >/dev/null 2>&1") != 0)
     std::printf("fastdds shm clean failed\n");

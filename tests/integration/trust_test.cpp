@@ -216,45 +216,18 @@ TEST(Trust, ARogueParticipantChangesNothingTheOperatorFeelsOrTheSummarySays) {
   EXPECT_EQ(json_nested(base.master_json, "foreign", "states"), 0.0) << base.master_json;
 }
 
-TEST(Trust, TcpLinkCutKeepsTheHapticLoopsPeriod) {
-  // not beside the multi-host sessions (six processes at 1 kHz each), which take the same lock
-  const int lock_fd = open("/tmp/teleop_multi_host_test.lock", O_CREAT | O_RDWR, 0666);
-  if (lock_fd >= 0) flock(lock_fd, LOCK_EX);
-  struct Unlock {
-    int fd;
-    ~Unlock() {
-      if (fd >= 0) close(fd);
-    }
-  } unlock{lock_fd};
-  NetnsLab lab(2);
-  if (!lab.create()) {
-    std::printf("trust_test TcpLinkCut: SKIPPED: %s\n", lab.why().c_str());
-    GTEST_SKIP() << "cannot build the test network: " << lab.why();
-  }
-  const std::string d = std::to_string(domains::kTcpLinkCut);
-  const std::string mj = tmp("tcp_cut_master.json"), log = tmp("tcp_cut_master_log.csv");
-  std::remove(mj.c_str());
-  std::remove(log.c_str());
-  const std::string h1 = NetnsLab::address(1);
-  auto on = [&](int host, const std::string& exe, std::vector<std::string> args,
-                const std::string& tag) {
-    std::vector<std::string> argv = lab.exec_prefix(host);
-    argv.push_back(exe);
-    argv.insert(argv.end(), args.begin(), args.end());
-    return std::make_unique<Process>(lab.ip(), argv, "trust_" + tag);
-  };
-  auto server =
-      on(1, kServerBinary,
-         {"--domain", d, "--profile", "wan_tcp_server", "--listen", "5100", "--public-address", h1,
-          "--duration", "60", "--quiet", "--scene", scene_file("default.yaml"), "--insecure"},
-         "tcp_server");
-  auto master = on(2, kMasterBinary,
-                   {"--domain", d, "--profile", "wan_tcp_client", "--peer", h1 + ":5100",
-                    "--duration", "6", "--homing", "0.5", "--wait-server", "20", "--log", log,
-                    "--summary-json", mj, "--quiet", "--insecure"},
-                   "tcp_master");
-  // the cut: 2 s into the session, the master's port leaves the bridge for 1 s (its packets
-  // vanish silently, as on a broken path)
+/// `exe` with `args` run on host `host` of the lab.
+std::unique_ptr<Process> on_host(NetnsLab& lab, int host, const std::string& exe,
+                                 const std::vector<std::string>& args, const std::string& tag) {
+  std::vector<std::string> argv = lab.exec_prefix(host);
+  argv.push_back(exe);
+  argv.insert(argv.end(), args.begin(), args.end());
+  return std::make_unique<Process>(lab.ip(), argv, "trust_" + tag);
+}
+
+/// The session time in the master's `log` 2 s after its first live cycle (phase 1), looked
+/// for over 30 s; -1 when the session never started.
+double two_seconds_into_the_session(const std::string& log) {
   double cut_at_s = -1.0;
   for (int k = 0; k < 300 && cut_at_s < 0; ++k) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -266,18 +239,22 @@ TEST(Trust, TcpLinkCutKeepsTheHapticLoopsPeriod) {
       cut_at_s = now.empty() || now[0].empty() ? 0.0 : now[0].back();
     }
   }
-  ASSERT_GE(cut_at_s, 0.0) << "the session never started: " << master->err();
+  return cut_at_s;
+}
+
+/// The master's port leaves the bridge for 1 s (its packets vanish silently, as on a broken
+/// path).
+void cut_master_link_for_a_second(NetnsLab& lab) {
   const std::string port = "-n " + lab.switch_ns() + " link set p2 ";
   ASSERT_EQ(std::system((lab.ip() + " " + port + "nomaster").c_str()), 0);
   std::this_thread::sleep_for(std::chrono::milliseconds(1000));
   ASSERT_EQ(std::system((lab.ip() + " " + port + "master br0").c_str()), 0);
-  const int rc = master->wait_for(60.0);
-  server->signal(SIGTERM);
-  server->wait_for(20.0);
-  // a second of a 6 s session without a link loses a sixth of the commands: degraded (exit 5)
-  const std::string m = Process::slurp(mj);
-  ASSERT_EQ(rc, 5) << master->err() << m;
-  EXPECT_EQ(json_text(m, "verdict"), "degraded") << m;
+}
+
+/// Through the cut at `cut_at_s` the loop kept its period, saw the link lost and faded the
+/// force within its rate bound (`m`: the master's summary, `log`: its log).
+void expect_period_kept_through_the_cut(const std::string& m, const std::string& log,
+                                        double cut_at_s) {
   const Trace t = read_trace(log, cut_at_s);
   const double rate_bound = json_nested(m, "safety", "max_force_rate_n_per_s");
   const double rate_hz = json_value(m, "rate_hz");
@@ -304,6 +281,50 @@ TEST(Trust, TcpLinkCutKeepsTheHapticLoopsPeriod) {
   // with the link lost the force faded over the link fade (0.2 s), it did not jump to zero: a
   // tenth of a newton per cycle is generous (a fade of the session's force takes thousandths)
   EXPECT_LE(t.window_step_n, 0.1) << m;
+}
+
+TEST(Trust, TcpLinkCutKeepsTheHapticLoopsPeriod) {
+  // not beside the multi-host sessions (six processes at 1 kHz each), which take the same lock
+  const int lock_fd = open("/tmp/teleop_multi_host_test.lock", O_CREAT | O_RDWR, 0666);
+  if (lock_fd >= 0) flock(lock_fd, LOCK_EX);
+  struct Unlock {
+    int fd;
+    ~Unlock() {
+      if (fd >= 0) close(fd);
+    }
+  } unlock{lock_fd};
+  NetnsLab lab(2);
+  if (!lab.create()) {
+    std::printf("trust_test TcpLinkCut: SKIPPED: %s\n", lab.why().c_str());
+    GTEST_SKIP() << "cannot build the test network: " << lab.why();
+  }
+  const std::string d = std::to_string(domains::kTcpLinkCut);
+  const std::string mj = tmp("tcp_cut_master.json"), log = tmp("tcp_cut_master_log.csv");
+  std::remove(mj.c_str());
+  std::remove(log.c_str());
+  const std::string h1 = NetnsLab::address(1);
+  auto server = on_host(
+      lab, 1, kServerBinary,
+      {"--domain", d, "--profile", "wan_tcp_server", "--listen", "5100", "--public-address", h1,
+       "--duration", "60", "--quiet", "--scene", scene_file("default.yaml"), "--insecure"},
+      "tcp_server");
+  auto master = on_host(lab, 2, kMasterBinary,
+                        {"--domain", d, "--profile", "wan_tcp_client", "--peer", h1 + ":5100",
+                         "--duration", "6", "--homing", "0.5", "--wait-server", "20", "--log", log,
+                         "--summary-json", mj, "--quiet", "--insecure"},
+                        "tcp_master");
+  // the cut: 2 s into the session, for 1 s
+  const double cut_at_s = two_seconds_into_the_session(log);
+  ASSERT_GE(cut_at_s, 0.0) << "the session never started: " << master->err();
+  ASSERT_NO_FATAL_FAILURE(cut_master_link_for_a_second(lab));
+  const int rc = master->wait_for(60.0);
+  server->signal(SIGTERM);
+  server->wait_for(20.0);
+  // a second of a 6 s session without a link loses a sixth of the commands: degraded (exit 5)
+  const std::string m = Process::slurp(mj);
+  ASSERT_EQ(rc, 5) << master->err() << m;
+  EXPECT_EQ(json_text(m, "verdict"), "degraded") << m;
+  expect_period_kept_through_the_cut(m, log, cut_at_s);
 }
 
 }  // namespace

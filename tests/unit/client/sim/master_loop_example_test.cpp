@@ -17,6 +17,44 @@
 using namespace teleop::master;
 using namespace teleop;
 
+namespace {
+
+/// The server's cycle on a tool world with an elastic sphere (the default 25 cm radius, centre
+/// 25 cm up, 2000 N/m), the tool starting at `tool_m`, stepped at 1 kHz.
+teleop::server::WorldSlave sphere_slave(const Eigen::Vector3d& tool_m) {
+  teleop::sim::ToolModel sp;
+  teleop::sim::Obstacle sphere;
+  sphere.kind = teleop::sim::Obstacle::Kind::kSphere;
+  sphere.centre_m = Eigen::Vector3d(0.0, 0.0, 0.25);
+  sphere.stiffness_n_per_m = 2000.0;
+  sphere.damping_ns_per_m = 5.0;
+  sp.add(sphere);
+  return teleop::server::WorldSlave(teleop::sim::tool_world_model(sp, tool_m, 1.0 / 1e-3));
+}
+
+/// What one haptic cycle gives the session metrics.
+MetricsSample metrics_sample(double now, double dt, const DeviceReading& r,
+                             const ControlOutput& out, const SlaveSample& newest,
+                             const Eigen::Vector3d& f, const WorkspaceMap& workspace,
+                             const BilateralController& controller, const SafetyLayer& safety) {
+  MetricsSample ms;
+  ms.time_s = now;
+  ms.dt_s = dt;
+  ms.master_position_m = out.command.position_m;
+  ms.slave_position_m = newest.position_m;
+  ms.have_slave = newest.valid;
+  ms.master_velocity_mps = r.linear_velocity_mps;
+  ms.device_force_n = f;
+  ms.environment_force_n = workspace.to_master_force(newest.contact_force_n);
+  ms.in_contact = newest.in_contact;
+  ms.force_limit_n = controller.force_limit_n();
+  ms.link_ok = !safety.link_lost();
+  ms.safety_scale = safety.scale();
+  return ms;
+}
+
+}  // namespace
+
 TEST(MasterLoopExample, HandWiredLoopPressesTheSphere) {
   // --- setup (allocates; outside the real-time loop) ---
   SimulatedDeviceParams dp;
@@ -42,15 +80,8 @@ TEST(MasterLoopExample, HandWiredLoopPressesTheSphere) {
   safety.configure(SafetyParams{}, device.spec());
   SessionMetrics metrics;
 
-  teleop::sim::ToolModel sp;  // the world teleop_server would step
-  teleop::sim::Obstacle sphere;
-  sphere.kind = teleop::sim::Obstacle::Kind::kSphere;
-  sphere.centre_m = Eigen::Vector3d(0.0, 0.0, 0.25);
-  sphere.stiffness_n_per_m = 2000.0;
-  sphere.damping_ns_per_m = 5.0;
-  sp.add(sphere);
-  teleop::server::WorldSlave slave(teleop::sim::tool_world_model(
-      sp, cp.workspace.to_slave_position(device.read().position_m), 1.0 / 1e-3));
+  teleop::server::WorldSlave slave = sphere_slave(cp.workspace.to_slave_position(
+      device.read().position_m));  // the world teleop_server would step
   SlaveCommand at_slave;
   at_slave.enabled = false;
 
@@ -70,20 +101,7 @@ TEST(MasterLoopExample, HandWiredLoopPressesTheSphere) {
     device.write(f, out.torque_nm);
     to_slave.push(out.command, now);  // node: write MasterCommand when it leaves the channel
 
-    MetricsSample ms;
-    ms.time_s = now;
-    ms.dt_s = dt;
-    ms.master_position_m = out.command.position_m;
-    ms.slave_position_m = newest.position_m;
-    ms.have_slave = newest.valid;
-    ms.master_velocity_mps = r.linear_velocity_mps;
-    ms.device_force_n = f;
-    ms.environment_force_n = cp.workspace.to_master_force(newest.contact_force_n);
-    ms.in_contact = newest.in_contact;
-    ms.force_limit_n = controller->force_limit_n();
-    ms.link_ok = !safety.link_lost();
-    ms.safety_scale = safety.scale();
-    metrics.update(ms);
+    metrics.update(metrics_sample(now, dt, r, out, newest, f, cp.workspace, *controller, safety));
     device.advance(dt);
 
     // --- the far side (teleop_server) ---

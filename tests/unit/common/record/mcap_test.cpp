@@ -379,6 +379,89 @@ std::string open_and_read(const std::vector<std::uint8_t>& bytes) {
   }
 }
 
+/// A file with a chunk that claims 2^40 uncompressed bytes.
+std::vector<std::uint8_t> chunk_claiming_a_terabyte() {
+  auto big = header_only();
+  std::vector<std::uint8_t> c;
+  ByteWriter cw(c);
+  cw.u64(1);
+  cw.u64(2);
+  cw.u64(std::uint64_t{1} << 40);
+  cw.u32(0);
+  cw.str("zstd");
+  cw.u64(4);
+  cw.u32(0xFD2FB528);
+  record(big, kOpChunk, c);
+  return big;
+}
+
+/// A file with a chunk compressed with lz4 (unknown to the reader).
+std::vector<std::uint8_t> chunk_in_lz4() {
+  auto lz4 = header_only();
+  std::vector<std::uint8_t> c;
+  ByteWriter cw(c);
+  cw.u64(1);
+  cw.u64(2);
+  cw.u64(4);
+  cw.u32(0);
+  cw.str("lz4");
+  cw.u64(4);
+  cw.u32(0);
+  record(lz4, kOpChunk, c);
+  return lz4;
+}
+
+/// A file with a message on a channel nobody defined, inside an uncompressed chunk.
+std::vector<std::uint8_t> message_without_channel() {
+  auto orphan = header_only();
+  std::vector<std::uint8_t> recs;
+  std::vector<std::uint8_t> msg;
+  ByteWriter mw(msg);
+  mw.u16(9);
+  mw.u32(1);
+  mw.u64(5);
+  mw.u64(5);
+  record(recs, kOpMessage, msg);
+  std::vector<std::uint8_t> c;
+  ByteWriter cw(c);
+  cw.u64(5);
+  cw.u64(5);
+  cw.u64(recs.size());
+  cw.u32(crc32(recs.data(), recs.size()));
+  cw.str("");
+  cw.u64(recs.size());
+  cw.raw(recs.data(), recs.size());
+  record(orphan, kOpChunk, c);
+  return orphan;
+}
+
+/// A file whose footer points outside it.
+std::vector<std::uint8_t> footer_pointing_outside() {
+  auto footer = header_only();
+  std::vector<std::uint8_t> f;
+  ByteWriter fw(f);
+  fw.u64(std::uint64_t{1} << 50);
+  fw.u64(7);
+  fw.u32(0);
+  record(footer, kOpFooter, f);
+  footer.insert(footer.end(), kMagic, kMagic + 8);
+  return footer;
+}
+
+/// A file with a Channel record whose metadata map is longer than the record.
+std::vector<std::uint8_t> channel_map_past_its_record() {
+  auto channel = header_only();
+  std::vector<std::uint8_t> ch;
+  ByteWriter chw(ch);
+  chw.u16(1);
+  chw.u16(0);
+  chw.str("t");
+  chw.str("cdr");
+  chw.u32(1000);  // a metadata map longer than the record
+  record(channel, kOpChannel, ch);
+  return channel;
+}
+
 TEST(Mcap, HostileBytesAreRefusedWithTheFieldAndItsRange) {
   // not MCAP, too short, a wrong first record
   EXPECT_NE(open_and_read({'h', 'e', 'l', 'l', 'o'}).find("too few"), std::string::npos);
@@ -392,78 +475,27 @@ TEST(Mcap, HostileBytesAreRefusedWithTheFieldAndItsRange) {
   lw.u64(std::uint64_t{1} << 60);
   EXPECT_NE(open_and_read(long_header).find("field 'length'"), std::string::npos);
   // a chunk that claims 2^40 uncompressed bytes
-  auto big = header_only();
-  std::vector<std::uint8_t> c;
-  ByteWriter cw(c);
-  cw.u64(1);
-  cw.u64(2);
-  cw.u64(std::uint64_t{1} << 40);
-  cw.u32(0);
-  cw.str("zstd");
-  cw.u64(4);
-  cw.u32(0xFD2FB528);
-  record(big, kOpChunk, c);
+  const auto big = chunk_claiming_a_terabyte();
   Reader big_reader(big.data(), big.size(), "big");
   EXPECT_EQ(big_reader.health().dropped_chunks, 1u);
   EXPECT_NE(big_reader.health().note.find("uncompressed_size"), std::string::npos)
       << big_reader.health().note;
   // an unknown compression
-  auto lz4 = header_only();
-  c.clear();
-  cw.u64(1);
-  cw.u64(2);
-  cw.u64(4);
-  cw.u32(0);
-  cw.str("lz4");
-  cw.u64(4);
-  cw.u32(0);
-  record(lz4, kOpChunk, c);
+  const auto lz4 = chunk_in_lz4();
   Reader lz4_reader(lz4.data(), lz4.size(), "lz4");
   EXPECT_NE(lz4_reader.health().note.find("'lz4'"), std::string::npos) << lz4_reader.health().note;
   // a message on a channel nobody defined, inside an uncompressed chunk
-  auto orphan = header_only();
-  std::vector<std::uint8_t> recs;
-  std::vector<std::uint8_t> msg;
-  ByteWriter mw(msg);
-  mw.u16(9);
-  mw.u32(1);
-  mw.u64(5);
-  mw.u64(5);
-  record(recs, kOpMessage, msg);
-  c.clear();
-  cw.u64(5);
-  cw.u64(5);
-  cw.u64(recs.size());
-  cw.u32(crc32(recs.data(), recs.size()));
-  cw.str("");
-  cw.u64(recs.size());
-  cw.raw(recs.data(), recs.size());
-  record(orphan, kOpChunk, c);
+  const auto orphan = message_without_channel();
   Reader orphan_reader(orphan.data(), orphan.size(), "orphan");
   EXPECT_NE(orphan_reader.health().note.find("channel_id"), std::string::npos)
       << orphan_reader.health().note;
   // a footer pointing outside the file, a map length past its record: no crash, an answer
-  auto footer = header_only();
-  std::vector<std::uint8_t> f;
-  ByteWriter fw(f);
-  fw.u64(std::uint64_t{1} << 50);
-  fw.u64(7);
-  fw.u32(0);
-  record(footer, kOpFooter, f);
-  footer.insert(footer.end(), kMagic, kMagic + 8);
+  const auto footer = footer_pointing_outside();
   EXPECT_EQ(open_and_read(footer), "");
   Reader footer_reader(footer.data(), footer.size(), "footer");
   EXPECT_TRUE(footer_reader.health().recovered);
-  auto channel = header_only();
-  std::vector<std::uint8_t> ch;
-  ByteWriter chw(ch);
-  chw.u16(1);
-  chw.u16(0);
-  chw.str("t");
-  chw.str("cdr");
-  chw.u32(1000);  // a metadata map longer than the record
-  record(channel, kOpChannel, ch);
-  EXPECT_NE(open_and_read(channel).find("field 'metadata'"), std::string::npos);
+  EXPECT_NE(open_and_read(channel_map_past_its_record()).find("field 'metadata'"),
+            std::string::npos);
 }
 
 TEST(Mcap, AddingAMessageDoesNotAllocate) {

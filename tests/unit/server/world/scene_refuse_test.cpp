@@ -76,8 +76,9 @@ struct Case {
   std::vector<std::string> expected;  ///< each must be in the message (besides the file)
 };
 
-TEST_F(SceneDir, EveryBadSceneIsRefusedNamingFileFieldAndValue) {
-  const std::vector<Case> cases = {
+/// Bad YAML documents: empty, what yaml-cpp lets pass, null and malformed sections.
+std::vector<Case> bad_document_cases() {
+  return {
       // empty documents
       {"empty", "", {"the scene is empty"}},
       {"comments_only", "# a scene\n# with nothing in it\n", {"the scene is empty"}},
@@ -105,6 +106,13 @@ TEST_F(SceneDir, EveryBadSceneIsRefusedNamingFileFieldAndValue) {
       {"scalar_section", "physics: 5\n", {"'physics'", "'5'", "must be a mapping"}},
       {"unknown_key", "tool: {mass: 1}\n", {"'tool.mass'", "unknown field"}},
       {"unknown_world_key", "world: {size: 1}\n", {"'world.size'", "unknown field"}},
+  };
+}
+
+/// Bad worlds: repeated ids and names, objects outside the world, rates the scene cannot run
+/// at.
+std::vector<Case> bad_world_cases() {
+  return {
       // ids and names
       {"dup_ids",
        tool_scene("", "  - id: 10\n    body: {level: 1, radius_m: 0.1, centre_m: [0, 0.5, 0.1]}\n"),
@@ -154,6 +162,13 @@ TEST_F(SceneDir, EveryBadSceneIsRefusedNamingFileFieldAndValue) {
       {"explicit_undamped",
        tool_scene(", integrator: explicit_euler, stiffness_damping_s: 0, radial_damping_s: 0"),
        {"'deformables[0].body.integrator'", "'explicit_euler'", "unstable at any step"}},
+  };
+}
+
+/// Bad files a scene refers to: meshes (the scene file and the field that referenced the mesh)
+/// and includes (the including file and the field).
+std::vector<Case> bad_file_cases() {
+  return {
       // meshes: the scene file and the field that referenced the mesh
       {"mesh_missing",
        tool_scene(", mesh_file: nothere.obj"),
@@ -190,6 +205,13 @@ TEST_F(SceneDir, EveryBadSceneIsRefusedNamingFileFieldAndValue) {
        "kind: robot\nrobot: {include: robot_ok.yaml}\n",
        {"'robot.include'", "'robot_ok.yaml'", "robot.include"}},
   };
+}
+
+TEST_F(SceneDir, EveryBadSceneIsRefusedNamingFileFieldAndValue) {
+  std::vector<Case> cases = bad_document_cases();
+  const std::vector<Case> worlds = bad_world_cases(), files = bad_file_cases();
+  cases.insert(cases.end(), worlds.begin(), worlds.end());
+  cases.insert(cases.end(), files.begin(), files.end());
   for (const Case& c : cases) {
     const std::string file = write(c.name + ".yaml", c.yaml);
     const std::string msg = load_error(file);
