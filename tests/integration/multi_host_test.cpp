@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <initializer_list>
 #include <memory>
 #include <string>
 #include <thread>
@@ -81,45 +82,111 @@ class MultiHost : public ::testing::Test {
     return std::make_unique<Process>(lab_->ip(), argv, "mh_" + tag);
   }
 
+  /// A main discovery server (id 0) on host 1 and a second one (id 1, --backup) on host 2; the
+  /// first is killed at once with r.lose_discovery_server_0.
+  void start_discovery_servers(const std::string& name, const Roles& r,
+                               std::unique_ptr<Process>& ds0, std::unique_ptr<Process>& ds1) {
+    ds0 = on(1, "/bin/bash",
+             {kDiscoveryScript, "--id", "0", "--address", NetnsLab::address(1), "--port", "11811"},
+             name + "_ds0");
+    ds1 = on(2, "/bin/bash",
+             {kDiscoveryScript, "--id", "1", "--address", NetnsLab::address(2), "--port", "11811",
+              "--backup", "--backup-dir", temp_path("mh", name + "_ds1")},
+             name + "_ds1");
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    ASSERT_TRUE(ds0->running()) << ds0->err() << ds0->out();
+    ASSERT_TRUE(ds1->running()) << ds1->err() << ds1->out();
+    if (r.lose_discovery_server_0) {
+      ds0->signal(SIGKILL);
+      ASSERT_NE(ds0->wait_for(10.0), -1);
+    }
+  }
+
+  /// A network delay: tc netem on the master's and the server's veth where the kernel has it
+  /// (no flags returned), else the master's user-space delay channel (both directions).
+  std::vector<std::string> delay_flags(const std::string& name, const Roles& r) {
+    if (r.delay.empty()) return {};
+    if (lab_->add_netem_delay(1, r.delay) && lab_->add_netem_delay(2, r.delay)) {
+      std::printf("multi_host %s: %s one-way delay from tc netem\n", name.c_str(),
+                  r.delay.c_str());
+      return {};
+    }
+    std::printf(
+        "multi_host %s: no tc netem here; %s one-way delay from the master's delay channel\n",
+        name.c_str(), r.delay.c_str());
+    return {"--delay", r.delay};
+  }
+
+  /// Two observers on host 3, one after the other a second apart: two clients of a TCP profile
+  /// started in the same instant on one host have been seen (once in CI) to leave one of them
+  /// never matched.
+  std::vector<std::unique_ptr<Process>> start_observers(const std::string& name, const Roles& r,
+                                                        const std::string& d) {
+    std::vector<std::unique_ptr<Process>> observers;
+    for (int k = 0; k < 2; ++k) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+      std::vector<std::string> oargs = {"--domain",   d,    "--profile", r.profile_client,
+                                        "--duration", "14", "--period",  "0.5",
+                                        "--insecure"};
+      oargs.insert(oargs.end(), r.observer.begin(), r.observer.end());
+      observers.push_back(on(3, kMonitorBinary, oargs, name + "_obs" + std::to_string(k)));
+    }
+    return observers;
+  }
+
+  /// The master's summary: every command issued, written or counted, received, and its round
+  /// trip.
+  static void check_master(const std::string& name, const Roles& r, const std::string& m,
+                           int master_rc, Process& master) {
+    const double issued = json_value(m, "issued");
+    const double sent = json_value(m, "sent"), received = json_value(m, "received");
+    const double replaced = json_nested(m, "network_threads", "commands_dropped");
+    const double p50 = json_nested(m, "rtt_ms", "p50"), p99 = json_nested(m, "rtt_ms", "p99");
+    std::printf(
+        "multi_host %-16s commands %.0f issued, %.0f written, %.0f replaced unwritten, %.0f "
+        "received, rtt p50 %.3f ms p99 %.3f ms\n",
+        name.c_str(), issued, sent, replaced, received, p50, p99);
+    // the loop issues every command whatever the link carries
+    EXPECT_GE(issued, 2900) << m;
+    EXPECT_GE(received, 0.99 * sent) << m;
+    if (r.link_limited) {
+      // every issued command is written or counted as replaced; the link carries at least
+      // 400 commands per second; the verdict says stable, or degraded for the lost commands
+      EXPECT_GE(sent + replaced, issued - 20) << m;
+      EXPECT_GE(sent, 1200) << m;
+      EXPECT_TRUE(master_rc == 0 || master_rc == 5) << master_rc << master.err() << m;
+      EXPECT_TRUE(json_text(m, "verdict") == "stable" || json_text(m, "verdict") == "degraded")
+          << m;
+    } else {
+      ASSERT_EQ(master_rc, 0) << master.err() << master.out();
+      // with a delay, the last commands are still in the channel when the master stops
+      EXPECT_GE(sent, 2900) << m;
+      EXPECT_EQ(json_text(m, "verdict"), "stable") << m;
+    }
+    EXPECT_GT(p99, 0.0) << m;
+    EXPECT_LT(p99, 100.0) << m;  // generous: a loaded 2-core machine
+  }
+
+  /// Each observer got the scene and the 10 Hz state copies (teleop/slave_state_monitor).
+  static void check_observers(const std::string& name,
+                              const std::vector<std::unique_ptr<Process>>& observers) {
+    for (std::size_t k = 0; k < observers.size(); ++k) {
+      const std::string out = observers[k]->out();
+      EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos)
+          << name << " observer " << k << "\n"
+          << out << observers[k]->err();
+      EXPECT_GT(max_rate(out, "slave_state"), 4.0) << name << " observer " << k;
+    }
+  }
+
   void session(const std::string& name, int domain, const Roles& r) {
     const std::string d = std::to_string(domain);
     const std::string master_json = temp_path("mh", name + "_master.json");
     const std::string server_json = temp_path("mh", name + "_server.json");
     std::remove(master_json.c_str());
     std::unique_ptr<Process> ds0, ds1;
-    if (r.discovery) {
-      // a main server (id 0) on host 1 and a second one (id 1, --backup) on host 2
-      ds0 =
-          on(1, "/bin/bash",
-             {kDiscoveryScript, "--id", "0", "--address", NetnsLab::address(1), "--port", "11811"},
-             name + "_ds0");
-      ds1 = on(2, "/bin/bash",
-               {kDiscoveryScript, "--id", "1", "--address", NetnsLab::address(2), "--port", "11811",
-                "--backup", "--backup-dir", temp_path("mh", name + "_ds1")},
-               name + "_ds1");
-      std::this_thread::sleep_for(std::chrono::milliseconds(500));
-      ASSERT_TRUE(ds0->running()) << ds0->err() << ds0->out();
-      ASSERT_TRUE(ds1->running()) << ds1->err() << ds1->out();
-      if (r.lose_discovery_server_0) {
-        ds0->signal(SIGKILL);
-        ASSERT_NE(ds0->wait_for(10.0), -1);
-      }
-    }
-    std::vector<std::string> delay_flags;
-    if (!r.delay.empty()) {
-      // a network delay: tc netem on the master's and the server's veth where the kernel has
-      // it, else the master's user-space delay channel (both directions)
-      if (lab_->add_netem_delay(1, r.delay) && lab_->add_netem_delay(2, r.delay)) {
-        std::printf("multi_host %s: %s one-way delay from tc netem\n", name.c_str(),
-                    r.delay.c_str());
-      } else {
-        std::printf(
-            "multi_host %s: no tc netem here; %s one-way delay from the master's delay "
-            "channel\n",
-            name.c_str(), r.delay.c_str());
-        delay_flags = {"--delay", r.delay};
-      }
-    }
+    if (r.discovery) ASSERT_NO_FATAL_FAILURE(start_discovery_servers(name, r, ds0, ds1));
+    const std::vector<std::string> delay = delay_flags(name, r);
     std::vector<std::string> sargs = {"--domain",
                                       d,
                                       "--profile",
@@ -139,61 +206,33 @@ class MultiHost : public ::testing::Test {
         "3000",           "--homing",  "0.5",       "--wait-server",  "20",
         "--summary-json", master_json, "--quiet",   "--insecure"};
     margs.insert(margs.end(), r.master.begin(), r.master.end());
-    margs.insert(margs.end(), delay_flags.begin(), delay_flags.end());
+    margs.insert(margs.end(), delay.begin(), delay.end());
     auto master = on(2, kMasterBinary, margs, name + "_master");
-    std::vector<std::unique_ptr<Process>> observers;
-    for (int k = 0; k < 2; ++k) {
-      // one after the other, a second apart: two clients of a TCP profile started in the same
-      // instant on one host have been seen (once in CI) to leave one of them never matched
-      std::this_thread::sleep_for(std::chrono::milliseconds(1000));
-      std::vector<std::string> oargs = {"--domain",   d,    "--profile", r.profile_client,
-                                        "--duration", "14", "--period",  "0.5",
-                                        "--insecure"};
-      oargs.insert(oargs.end(), r.observer.begin(), r.observer.end());
-      observers.push_back(on(3, kMonitorBinary, oargs, name + "_obs" + std::to_string(k)));
-    }
+    const std::vector<std::unique_ptr<Process>> observers = start_observers(name, r, d);
     const int master_rc = master->wait_for(60.0);
     for (auto& o : observers) EXPECT_EQ(o->wait_for(30.0), 0) << o->err();
     server->signal(SIGTERM);
     EXPECT_EQ(server->wait_for(20.0), 0) << server->err();
-    const std::string m = Process::slurp(master_json);
-    const double issued = json_value(m, "issued");
-    const double sent = json_value(m, "sent"), received = json_value(m, "received");
-    const double replaced = json_nested(m, "network_threads", "commands_dropped");
-    const double p50 = json_nested(m, "rtt_ms", "p50"), p99 = json_nested(m, "rtt_ms", "p99");
-    std::printf(
-        "multi_host %-16s commands %.0f issued, %.0f written, %.0f replaced unwritten, %.0f "
-        "received, rtt p50 %.3f ms p99 %.3f ms\n",
-        name.c_str(), issued, sent, replaced, received, p50, p99);
-    // the loop issues every command whatever the link carries
-    EXPECT_GE(issued, 2900) << m;
-    EXPECT_GE(received, 0.99 * sent) << m;
-    if (r.link_limited) {
-      // every issued command is written or counted as replaced; the link carries at least
-      // 400 commands per second; the verdict says stable, or degraded for the lost commands
-      EXPECT_GE(sent + replaced, issued - 20) << m;
-      EXPECT_GE(sent, 1200) << m;
-      EXPECT_TRUE(master_rc == 0 || master_rc == 5) << master_rc << master->err() << m;
-      EXPECT_TRUE(json_text(m, "verdict") == "stable" || json_text(m, "verdict") == "degraded")
-          << m;
-    } else {
-      ASSERT_EQ(master_rc, 0) << master->err() << master->out();
-      // with a delay, the last commands are still in the channel when the master stops
-      EXPECT_GE(sent, 2900) << m;
-      EXPECT_EQ(json_text(m, "verdict"), "stable") << m;
-    }
-    EXPECT_GT(p99, 0.0) << m;
-    EXPECT_LT(p99, 100.0) << m;  // generous: a loaded 2-core machine
-    for (std::size_t k = 0; k < observers.size(); ++k) {
-      const std::string out = observers[k]->out();
-      EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos)
-          << name << " observer " << k << "\n"
-          << out << observers[k]->err();
-      // the monitor's default topics: the 10 Hz copies (teleop/slave_state_monitor)
-      EXPECT_GT(max_rate(out, "slave_state"), 4.0) << name << " observer " << k;
-    }
+    check_master(name, r, Process::slurp(master_json), master_rc, *master);
+    check_observers(name, observers);
     if (ds0) ds0->signal(SIGTERM);
     if (ds1) ds1->signal(SIGTERM);
+  }
+
+  /// Whether no process runs in the namespaces of `hosts` within `seconds` (polled).
+  bool hosts_empty_within(std::initializer_list<int> hosts, double seconds) {
+    for (int t = 0; t < static_cast<int>(seconds / 0.05); ++t) {
+      bool empty = true;
+      for (int i : hosts) {
+        FILE* f = popen((lab_->ip() + " netns pids " + lab_->host(i)).c_str(), "r");
+        int pid = 0;
+        if (f && std::fscanf(f, "%d", &pid) == 1) empty = false;
+        if (f) pclose(f);
+      }
+      if (empty) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return false;
   }
 
   std::unique_ptr<NetnsLab> lab_;
@@ -353,18 +392,8 @@ TEST_F(MultiHost, LauncherStartsAndStopsASessionOnThreeHosts) {
     EXPECT_NE(out.find("scene 'tool-only'"), std::string::npos) << out;
   }
   // the launcher stopped what it started: nothing is left running on hosts 1 and 3
-  bool empty = false;
-  for (int t = 0; t < 200 && !empty; ++t) {
-    empty = true;
-    for (int i : {1, 3}) {
-      FILE* f = popen((lab_->ip() + " netns pids " + lab_->host(i)).c_str(), "r");
-      int pid = 0;
-      if (f && std::fscanf(f, "%d", &pid) == 1) empty = false;
-      if (f) pclose(f);
-    }
-    if (!empty) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  EXPECT_TRUE(empty) << "processes left in the namespaces after the launcher ended";
+  EXPECT_TRUE(hosts_empty_within({1, 3}, 10.0))
+      << "processes left in the namespaces after the launcher ended";
 }
 
 }  // namespace
