@@ -126,6 +126,65 @@ struct OwnershipWatch {
   double waited_s = 0.0;
 };
 
+/// The loop delay: from a command's entry into the forward channel to the cycle whose controller
+/// uses its echo. It remembers the entry times of the newest kEntryRing commands and allocates
+/// only when made.
+class LoopDelayMeter {
+ public:
+  LoopDelayMeter() : entry_time_s_(kEntryRing, 0.0), window_ms_(1 << 20) {}
+  /// Command `seq` entered the forward channel at `now_s` [s].
+  void entered(std::uint64_t seq, double now_s) { entry_time_s_[seq % kEntryRing] = now_s; }
+  /// The controller used the echo of command `echoed` at `now_s` while `newest` is the newest
+  /// command. Returns true and records the delay (last_ms()) when the echo is newer than the last
+  /// one used and its entry time is still remembered.
+  bool echo_used(std::uint64_t echoed, std::uint64_t newest, double now_s) {
+    if (echoed <= last_used_seq_ || echoed >= newest || echoed + kEntryRing <= newest) {
+      return false;
+    }
+    last_used_seq_ = echoed;
+    last_ms_ = (now_s - entry_time_s_[echoed % kEntryRing]) * 1e3;
+    window_ms_.record(last_ms_);
+    return true;
+  }
+  /// The newest loop delay (NaN before the first) [ms].
+  double last_ms() const { return last_ms_; }
+  /// Over the session (allocates: after the loop).
+  Summary summary() const { return summarize(window_ms_.snapshot()); }
+
+ private:
+  std::vector<double> entry_time_s_;
+  SampleWindow window_ms_;
+  std::uint64_t last_used_seq_ = 0;
+  double last_ms_ = std::nan("");
+};
+
+/// The haptic loop's state across its cycles (MasterNode::Impl::run_loop), made before the first
+/// cycle so that a cycle allocates nothing.
+struct LoopState {
+  LoopState(MasterCycle& c, RateLoop& l, DdsSlaveLink& k, ExternalDevice* e, SessionReport& r)
+      : cycle(c), loop(l), link(k), external(e), rep(r) {}
+  MasterCycle& cycle;
+  RateLoop& loop;
+  DdsSlaveLink& link;
+  ExternalDevice* external;  // the device, when it is driven over teleop/device_state
+  SessionReport& rep;
+  LoopDelayMeter loop_delay;
+  MasterState ms;             // MasterState for observers, filled in place
+  DeviceState device_sample;  // the newest teleop/device_state sample (external device)
+  std::uint64_t device_seen = 0;
+  std::uint64_t cycles = 0;
+  std::uint64_t state_every = 1;  // MasterState every this many cycles
+  std::uint64_t faults_seen = 0;  // the server's faults so far in this session
+  bool was_link_lost = false;
+  double prev_cycle_s = -1.0;     // when the previous cycle began [s]; -1 before the first
+  double session_length_s = 0.0;  // after homing [s]
+  double grace_s = 0.0;  // how long the first commands' answer may take (watch_ownership) [s]
+  std::int64_t t0 = 0;   // the loop's start [ns]
+  double t0_s = 0.0;
+  OwnershipWatch owner;
+  std::function<void(std::uint8_t, const std::string&)> report_tuning;  // TuningEndpoint::poll
+};
+
 struct MasterNode::Impl {
   MasterOptions options;
   // this master's session id; the one server it believes (SlaveState, ServerStats, server
@@ -409,25 +468,20 @@ struct MasterNode::Impl {
     }
   }
 
-  int run(double waited_before_s = 0.0) {
-    install_stop_signal_handlers();
-    // 1. wait for the server: a matched command reader, a first SlaveState and the scene
-    double wait_s = 0.0;
-    if (const int status = wait_for_server(wait_s, waited_before_s); status != -1) {
-      waited_s = wait_s;
-      return status;
-    }
-    DdsSlaveLink link(command_writer, mailbox, master_session, options.name);
-    link.take_newest();
+  /// The scene as the session begins into scene_at_start; false when none came.
+  bool take_scene() {
     SceneDescription scene;
     std::uint64_t scene_seen = 0;
-    const bool have_scene = scene_box.take_if_newer(scene, scene_seen);
-    const Eigen::Vector3d tip0 = detail::get3(link.newest_state().tip_position_m());
+    if (!scene_box.take_if_newer(scene, scene_seen)) return false;
+    scene_at_start = std::move(scene);
+    return true;
+  }
 
-    // 2. device, controller, channels, safety, metrics (all allocation happens here)
+  /// The cycle's configuration from the options; the master's origin maps to `contact_point_m`.
+  MasterCycleConfig cycle_config(const Eigen::Vector3d& contact_point_m) const {
     MasterCycleConfig cc;
     cc.controller = options.controller;
-    cc.controller.workspace.offset_m = contact_point(have_scene ? &scene : nullptr, tip0);
+    cc.controller.workspace.offset_m = contact_point_m;
     cc.forward = options.forward;
     cc.backward = options.backward;
     cc.safety = options.safety;
@@ -441,46 +495,36 @@ struct MasterNode::Impl {
     // a session id the server has not seen from an earlier master (it restarts its wave /
     // TDPA state when the id changes)
     cc.session_id = static_cast<std::uint32_t>(now_ns() / 1000) | 1u;
-    std::unique_ptr<HapticDevice> device = make_device();
-    device->configure();
-    MasterCycle cycle(cc, *device, link);
-    ExternalDevice* external = dynamic_cast<ExternalDevice*>(device.get());
-    open_log();
-    if (!options.quiet) {
-      std::fprintf(stderr,
-                   "teleop_master: server found after %.3f s (scene '%s'); %s, device %s, "
-                   "script %s, contact point (%.3f, %.3f, %.3f) m, %s / %s\n",
-                   wait_s, have_scene ? scene.name().c_str() : "?", cc.controller.scheme.c_str(),
-                   options.device.c_str(), options.script.c_str(),
-                   cc.controller.workspace.offset_m.x(), cc.controller.workspace.offset_m.y(),
-                   cc.controller.workspace.offset_m.z(), options.forward.describe().c_str(),
-                   options.backward.describe().c_str());
-    }
+    return cc;
+  }
 
-    // 3. the haptic loop: homing (slave from where it is to the mapped script start, no force
-    // rendered), then the session
-    SessionReport rep;
-    rep.wait_s = wait_s;
-    if (have_scene) scene_at_start = scene;
-    const DmaLatencyHold dma(options.realtime.dma_latency_us);
-    if (!dma.problem().empty()) {
-      std::fprintf(stderr, "teleop_master: warning: the cores may sleep deeply: %s\n",
-                   dma.problem().c_str());
-    }
-    RateLoop loop(options.rate_hz, 65536,
-                  static_cast<std::int64_t>(options.realtime.spin_us) * 1000);
-    run_loop(cycle, loop, link, external, tip0, rep);
-    cycle.stop();
+  /// The line on stderr once the server answered.
+  void announce_start(const MasterCycleConfig& cc, double wait_s, bool have_scene) const {
+    if (options.quiet) return;
+    std::fprintf(stderr,
+                 "teleop_master: server found after %.3f s (scene '%s'); %s, device %s, "
+                 "script %s, contact point (%.3f, %.3f, %.3f) m, %s / %s\n",
+                 wait_s, have_scene ? scene_at_start.name().c_str() : "?",
+                 cc.controller.scheme.c_str(), options.device.c_str(), options.script.c_str(),
+                 cc.controller.workspace.offset_m.x(), cc.controller.workspace.offset_m.y(),
+                 cc.controller.workspace.offset_m.z(), options.forward.describe().c_str(),
+                 options.backward.describe().c_str());
+  }
 
-    // 4. drain: late echoes and the server's final receive count
+  /// After the loop: keep reading for drain_s (late echoes and the server's final receive
+  /// count), then stop the state reader.
+  void drain(DdsSlaveLink& link) {
     const std::int64_t drain_start = now_ns();
     while (seconds_between(drain_start, now_ns()) < options.drain_s) {
       link.drain();
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     state_reader->stop();
+  }
 
-    fill_report(cycle, link, loop, rep);
+  /// The session's report out (the log closed, the JSON summary, the printout). Returns the exit
+  /// status: refused, or the verdict's.
+  int finish_session(const MasterCycle& cycle, const SessionReport& rep) {
     // a file that could not be written is an error naming it, after everything else is out
     std::string write_error;
     try {
@@ -491,7 +535,9 @@ struct MasterNode::Impl {
     if (!options.summary_json.empty()) {
       write_session_summary_json(options.summary_json, cycle, rep, report_context());
     }
-    if (!options.quiet) std::fputs(session_summary_text(cycle, rep, report_context()).c_str(), stdout);
+    if (!options.quiet) {
+      std::fputs(session_summary_text(cycle, rep, report_context()).c_str(), stdout);
+    }
     if (!write_error.empty()) throw std::runtime_error(write_error);
     if (rep.refused) {
       std::cerr << "teleop_master: refused: another master owns the slave ("
@@ -505,6 +551,45 @@ struct MasterNode::Impl {
       return exit_code::kRefused;
     }
     return session_verdict(cycle.metrics(), rep, cycle.config().controller.scheme).exit_status;
+  }
+
+  int run(double waited_before_s = 0.0) {
+    install_stop_signal_handlers();
+    // 1. wait for the server: a matched command reader, a first SlaveState and the scene
+    double wait_s = 0.0;
+    if (const int status = wait_for_server(wait_s, waited_before_s); status != -1) {
+      waited_s = wait_s;
+      return status;
+    }
+    DdsSlaveLink link(command_writer, mailbox, master_session, options.name);
+    link.take_newest();
+    const bool have_scene = take_scene();
+    const Eigen::Vector3d tip0 = detail::get3(link.newest_state().tip_position_m());
+    // 2. device, controller, channels, safety, metrics (all allocation happens here)
+    const MasterCycleConfig cc =
+        cycle_config(contact_point(have_scene ? &scene_at_start : nullptr, tip0));
+    std::unique_ptr<HapticDevice> device = make_device();
+    device->configure();
+    MasterCycle cycle(cc, *device, link);
+    open_log();
+    announce_start(cc, wait_s, have_scene);
+    // 3. the haptic loop: homing (slave from where it is to the mapped script start, no force
+    // rendered), then the session, then the close
+    SessionReport rep;
+    rep.wait_s = wait_s;
+    const DmaLatencyHold dma(options.realtime.dma_latency_us);
+    if (!dma.problem().empty()) {
+      std::fprintf(stderr, "teleop_master: warning: the cores may sleep deeply: %s\n",
+                   dma.problem().c_str());
+    }
+    RateLoop loop(options.rate_hz, 65536,
+                  static_cast<std::int64_t>(options.realtime.spin_us) * 1000);
+    run_loop(cycle, loop, link, dynamic_cast<ExternalDevice*>(device.get()), tip0, rep);
+    cycle.stop();
+    // 4. drain, then the report
+    drain(link);
+    fill_report(cycle, link, loop, rep);
+    return finish_session(cycle, rep);
   }
 
   /// Ownership, once per cycle (see OwnershipWatch): a master refused the slave holds (renders
@@ -632,28 +717,24 @@ struct MasterNode::Impl {
     return std::max<std::uint64_t>(health.faults.total(), server_fault_events.load());
   }
 
-  /// The haptic loop until the session length, the sample limit or a stop signal.
-  void run_loop(MasterCycle& cycle, RateLoop& loop, DdsSlaveLink& link, ExternalDevice* external,
-                const Eigen::Vector3d& tip0, SessionReport& rep) {
-    std::vector<double> entry_time_s(kEntryRing, 0.0);
-    std::uint64_t last_used_seq = 0;
-    SampleWindow loop_delay_ms(1 << 20);
-    double last_loop_delay_ms = std::nan("");
-    MasterState ms;
-    std::uint64_t cycles = 0;
-    bool was_link_lost = false;
-    double prev_cycle_s = -1.0;
-    const auto state_every = std::max<std::uint64_t>(
+  /// Before the first cycle: the loop's pace and length, the thread's scheduling, the server's
+  /// fault baseline, homing, and the first tuning status and experiment description.
+  void begin_loop(LoopState& s, const Eigen::Vector3d& tip0) {
+    s.state_every = std::max<std::uint64_t>(
         1, static_cast<std::uint64_t>(std::llround(options.rate_hz / options.state_rate_hz)));
-    const double session_length =
-        options.duration_s > 0 ? options.duration_s
-                               : (options.device == "simulated"
-                                      ? std::max(2.0, script_duration_s(make_device_script()) + 1.0)
-                                      : 10.0);
-    DeviceState device_sample;
-    std::uint64_t device_seen = 0;
-    const std::int64_t t0 = now_ns();
-    const double t0_s = static_cast<double>(t0) * 1e-9;
+    s.session_length_s = options.duration_s > 0
+                             ? options.duration_s
+                             : (options.device == "simulated"
+                                    ? std::max(2.0, script_duration_s(make_device_script()) + 1.0)
+                                    : 10.0);
+    s.grace_s = 0.5 + 2.0 * (options.forward.delay_s + options.backward.delay_s);
+    // made once: the loop passes it by reference every cycle without building a std::function
+    s.report_tuning = [this](std::uint8_t severity, const std::string& msg) {
+      event(static_cast<std::uint8_t>(sim::EventKind::kTuning), severity, msg, 0.0);
+      if (!options.quiet && severity == 0) std::cerr << "teleop_master: " << msg << "\n";
+    };
+    s.t0 = now_ns();
+    s.t0_s = static_cast<double>(s.t0) * 1e-9;
     if (wants_thread_setup(options.realtime)) {
       const std::string problem = make_thread_realtime(options.realtime);
       if (!problem.empty()) {
@@ -662,89 +743,118 @@ struct MasterNode::Impl {
       }
     }
     update_health();  // the baseline: the server's counts from before this session
-    session_start_ns.store(t0);
-    cycle.start_homing(t0_s, tip0, options.homing_s);
-    tuning->publish_status(cycle, t0);
-    experiment->begin(cycle, master_session, options.name, options.device, options.rate_hz);
-    // made once: the loop passes it by reference every cycle without building a std::function
-    const std::function<void(std::uint8_t, const std::string&)> report_tuning =
-        [this](std::uint8_t severity, const std::string& msg) {
-          event(static_cast<std::uint8_t>(sim::EventKind::kTuning), severity, msg, 0.0);
-          if (!options.quiet && severity == 0) std::cerr << "teleop_master: " << msg << "\n";
-        };
-    std::uint64_t faults_seen = 0;
-    OwnershipWatch owner;
-    SessionStatus status(options.homing_s + session_length);  // homing, then the session
-    const double grace_s = 0.5 + 2.0 * (options.forward.delay_s + options.backward.delay_s);
+    session_start_ns.store(s.t0);
+    s.cycle.start_homing(s.t0_s, tip0, options.homing_s);
+    tuning->publish_status(s.cycle, s.t0);
+    experiment->begin(s.cycle, master_session, options.name, options.device, options.rate_hz);
+  }
 
+  /// The session length, the sample limit or a refusal without waiting ends the loop.
+  bool loop_over(const LoopState& s, std::int64_t now) const {
+    const double now_s = static_cast<double>(now) * 1e-9;
+    if (options.samples > 0 && s.cycles >= options.samples) return true;
+    if (s.owner.give_up) return true;
+    return !s.cycle.homing() && now_s - s.cycle.session_start_s() >= s.session_length_s;
+  }
+
+  /// With --device external: the newest teleop/device_state sample into the device, and a
+  /// warning once when a second driver writes that topic.
+  void take_device_sample(LoopState& s) {
+    if (!s.external) return;
+    if (device_box.take_if_newer(s.device_sample, s.device_seen)) {
+      s.external->on_sample(from_idl(s.device_sample));
+    }
+    if (!device_foreign_reported && device_driver.ignored() > 0) {
+      device_foreign_reported = true;
+      event(static_cast<std::uint8_t>(sim::EventKind::kOwnership), 1,
+            "ignoring teleop/device_state from a second driver while the first one is live", 0.0);
+    }
+  }
+
+  /// One haptic cycle: the device's sample, tuning, the cycle's step, the loop delay, the
+  /// external device's command, ownership, then what follows from it (after_cycle).
+  void run_cycle(LoopState& s, std::int64_t now) {
+    const double now_s = static_cast<double>(now) * 1e-9;
+    MasterCycle& cycle = s.cycle;
+    ++s.cycles;
+    take_device_sample(s);
+    tuning->poll(cycle, now_s, now, s.report_tuning);
+    check_stall(cycle, now_s, s.prev_cycle_s, s.rep);
+    s.prev_cycle_s = now_s;
+    cycle.step(now_s);
+    s.loop_delay.entered(cycle.command_seq(), now_s);
+    if (cycle.sample_arrived() &&
+        s.loop_delay.echo_used(cycle.slave_at_master().command_seq, cycle.command_seq(), now_s)) {
+      experiment->record_loop_delay(s.loop_delay.last_ms());
+    }
+    if (s.external && device_command_writer) {
+      DeviceCommand dc = to_idl(s.external->next_command(), now);
+      device_command_writer->write(dc);
+    }
+    watch_ownership(cycle, s.link, now_s, s.t0_s, s.grace_s, s.owner);
+    report_second_server();
+    cycle.finish(now_s);
+    experiment->update(cycle, now_s, now);
+    after_cycle(s, now);
+  }
+
+  /// What follows a cycle: a fault on the server, a link loss, the safety layer's events,
+  /// MasterState for observers and the log row.
+  void after_cycle(LoopState& s, std::int64_t now) {
+    const double now_s = static_cast<double>(now) * 1e-9;
+    MasterCycle& cycle = s.cycle;
+    // a session whose slave faulted is never stable
+    if (const std::uint64_t faults = update_health(); faults > s.faults_seen) {
+      s.faults_seen = faults;
+      cycle.metrics().mark_unstable("the slave faulted on the server", now_s - s.t0_s);
+    }
+    if (cycle.safety().link_lost() && !s.was_link_lost) ++s.rep.link_losses;
+    s.was_link_lost = cycle.safety().link_lost();
+    sim::SimEvent se;
+    while (cycle.safety().events().pop(se)) {
+      event(static_cast<std::uint8_t>(se.kind), static_cast<std::uint8_t>(se.severity), se.message,
+            se.value);
+    }
+    if (s.cycles % s.state_every == 0) {
+      publish_state(cycle, s.cycles, now, s.link.last_rtt_ms(), s.ms);
+    }
+    if (log) log->row(cycle, now_s - s.t0_s, s.link.last_rtt_ms(), s.loop_delay.last_ms());
+  }
+
+  /// After the last cycle: the loop's figures and the ownership into the report, then the close
+  /// (close_session).
+  void end_loop(LoopState& s) {
+    MasterCycle& cycle = s.cycle;
+    SessionReport& rep = s.rep;
+    const double end_s = static_cast<double>(now_ns()) * 1e-9;
+    rep.elapsed_s = end_s - s.t0_s;
+    rep.session_s = cycle.session_start_s() < 0 ? 0.0 : end_s - cycle.session_start_s();
+    rep.loop_delay_ms = s.loop_delay.summary();
+    rep.refused = s.owner.give_up;
+    rep.refused_first = s.owner.refused_first;
+    rep.waited_for_owner_s =
+        s.owner.waited_s + (s.owner.refused ? end_s - s.owner.refused_at_s : 0.0);
+    rep.driver_silences = cycle.driver_silences();
+    rep.driver_silent_s = cycle.driver_silent_s(end_s);
+    rep.closing_cycles = close_session(cycle, s.loop, s.link, s.t0_s);
+    rep.releases_sent = s.link.releases_sent();
+  }
+
+  /// The haptic loop until the session length, the sample limit or a stop signal, then the
+  /// close.
+  void run_loop(MasterCycle& cycle, RateLoop& loop, DdsSlaveLink& link, ExternalDevice* external,
+                const Eigen::Vector3d& tip0, SessionReport& rep) {
+    LoopState s(cycle, loop, link, external, rep);
+    begin_loop(s, tip0);
+    SessionStatus status(options.homing_s + s.session_length_s);  // homing, then the session
     while (!stop_requested()) {
       const std::int64_t now = now_ns();
-      const double now_s = static_cast<double>(now) * 1e-9;
-      if (options.samples > 0 && cycles >= options.samples) break;
-      if (owner.give_up) break;
-      if (!cycle.homing() && now_s - cycle.session_start_s() >= session_length) break;
-      ++cycles;
-
-      if (external && device_box.take_if_newer(device_sample, device_seen)) {
-        external->on_sample(from_idl(device_sample));
-      }
-      if (external && !device_foreign_reported && device_driver.ignored() > 0) {
-        device_foreign_reported = true;
-        event(static_cast<std::uint8_t>(sim::EventKind::kOwnership), 1,
-              "ignoring teleop/device_state from a second driver while the first one is live", 0.0);
-      }
-      tuning->poll(cycle, now_s, now, report_tuning);
-      check_stall(cycle, now_s, prev_cycle_s, rep);
-      prev_cycle_s = now_s;
-      cycle.step(now_s);
-      entry_time_s[cycle.command_seq() % kEntryRing] = now_s;
-      if (cycle.sample_arrived()) {
-        // loop delay: the command entered the forward channel -> its echo reaches the controller
-        const std::uint64_t echoed = cycle.slave_at_master().command_seq;
-        const std::uint64_t seq = cycle.command_seq();
-        if (echoed > last_used_seq && echoed < seq && echoed + kEntryRing > seq) {
-          last_used_seq = echoed;
-          last_loop_delay_ms = (now_s - entry_time_s[echoed % kEntryRing]) * 1e3;
-          loop_delay_ms.record(last_loop_delay_ms);
-          experiment->record_loop_delay(last_loop_delay_ms);
-        }
-      }
-      if (external && device_command_writer) {
-        DeviceCommand dc = to_idl(external->next_command(), now);
-        device_command_writer->write(dc);
-      }
-      watch_ownership(cycle, link, now_s, t0_s, grace_s, owner);
-      report_second_server();
-      cycle.finish(now_s);
-      experiment->update(cycle, now_s, now);
-      // a session whose slave faulted is never stable
-      if (const std::uint64_t faults = update_health(); faults > faults_seen) {
-        faults_seen = faults;
-        cycle.metrics().mark_unstable("the slave faulted on the server", now_s - t0_s);
-      }
-      if (cycle.safety().link_lost() && !was_link_lost) ++rep.link_losses;
-      was_link_lost = cycle.safety().link_lost();
-      sim::SimEvent se;
-      while (cycle.safety().events().pop(se)) {
-        event(static_cast<std::uint8_t>(se.kind), static_cast<std::uint8_t>(se.severity),
-              se.message, se.value);
-      }
-      if (cycles % state_every == 0) publish_state(cycle, cycles, now, link.last_rtt_ms(), ms);
-      if (log) log->row(cycle, now_s - t0_s, link.last_rtt_ms(), last_loop_delay_ms);
+      if (loop_over(s, now)) break;
+      run_cycle(s, now);
       loop.wait();
     }
     status.stop();
-    const double end_s = static_cast<double>(now_ns()) * 1e-9;
-    rep.elapsed_s = end_s - t0_s;
-    rep.session_s = cycle.session_start_s() < 0 ? 0.0 : end_s - cycle.session_start_s();
-    rep.loop_delay_ms = summarize(loop_delay_ms.snapshot());
-    rep.refused = owner.give_up;
-    rep.refused_first = owner.refused_first;
-    rep.waited_for_owner_s = owner.waited_s + (owner.refused ? end_s - owner.refused_at_s : 0.0);
-    rep.driver_silences = cycle.driver_silences();
-    rep.driver_silent_s = cycle.driver_silent_s(end_s);
-    rep.closing_cycles = close_session(cycle, loop, link, t0_s);
-    rep.releases_sent = link.releases_sent();
+    end_loop(s);
   }
 
   /// What the report tells besides the session's figures (client/node/master_report.hpp).

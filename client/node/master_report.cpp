@@ -117,9 +117,9 @@ OrderedJson tuning_fields(const MasterCycle& cycle, const TuningCounts& tuning) 
                           {"slave_stiffness_n_per_m", json_number(v.slave_stiffness_n_per_m)},
                           {"forward_delay_ms", json_number(v.forward_delay_s * 1e3)},
                           {"backward_delay_ms", json_number(v.backward_delay_s * 1e3)}};
-  return {{"accepting", tuning.accepting},     {"received", tuning.received},
+  return {{"accepting", tuning.accepting},       {"received", tuning.received},
           {"applied", cycle.tunings_accepted()}, {"rejected", cycle.tunings_rejected()},
-          {"ignored", tuning.ignored},         {"dropped", tuning.dropped},
+          {"ignored", tuning.ignored},           {"dropped", tuning.dropped},
           {"in_force", std::move(in_force)}};
 }
 
@@ -212,8 +212,7 @@ std::string ownership_text(const SessionReport& rep, std::uint32_t master_sessio
   std::string ownership = own_buf;
   if (rep.issued_before_owning > 0 || rep.refused) {
     ownership += " (" + std::to_string(rep.issued_before_owning) +
-                 " commands sent while refused, " + std::to_string(rep.waited_for_owner_s) +
-                 " s)";
+                 " commands sent while refused, " + std::to_string(rep.waited_for_owner_s) + " s)";
   }
   return ownership;
 }
@@ -270,8 +269,7 @@ std::string binding_lines(const SessionReport& rep, const ReportContext& ctx) {
       "  network thread  commands: %llu replaced by a newer one, %llu refused; states: %llu "
       "replaced; events: %llu dropped; other writes refused: %llu\n",
       binding.bound() ? "bound to" : "never bound, followed", binding.server().c_str(),
-      static_cast<ull>(binding.rebinds()),
-      static_cast<ull>(binding.foreign(ServerBinding::kState)),
+      static_cast<ull>(binding.rebinds()), static_cast<ull>(binding.foreign(ServerBinding::kState)),
       static_cast<ull>(binding.foreign(ServerBinding::kStats)),
       static_cast<ull>(binding.foreign(ServerBinding::kEvent)),
       binding.foreign_total() > 0 ? " (first from " : "",
@@ -304,8 +302,7 @@ std::string driver_line(const MasterCycle& cycle, const SessionReport& rep,
                 "valid reading for over %.0f ms: the slave held, the force faded; not in the "
                 "figures), came back %llu times\n",
                 std::max(0.0, rep.session_s - rep.driver_silent_s), rep.session_s,
-                static_cast<ull>(rep.driver_silences), rep.driver_silent_s,
-                driver_timeout_s * 1e3,
+                static_cast<ull>(rep.driver_silences), rep.driver_silent_s, driver_timeout_s * 1e3,
                 static_cast<ull>(cycle.rehomes(RehomeReason::kDriverBack)));
   return buf;
 }
@@ -360,9 +357,8 @@ HertzReference hertz_for_session(const SceneDescription& scene, const SessionMet
     const LoadingFit& fit = metrics.environment_fit();
     const bool fitted = std::isfinite(metrics.environment_stiffness_n_per_m());
     return hertz_reference(o.youngs_modulus_pa(), o.poisson_ratio(), o.size_m()[0],
-                           scene.tip_radius_m(), o.mass_kg() * gravity,
-                           metrics.max_slave_depth_m(), fitted ? fit.x_min : 0.0,
-                           fitted ? fit.x_max : 0.0);
+                           scene.tip_radius_m(), o.mass_kg() * gravity, metrics.max_slave_depth_m(),
+                           fitted ? fit.x_min : 0.0, fitted ? fit.x_max : 0.0);
   }
   return HertzReference{};
 }
@@ -415,23 +411,23 @@ std::string session_summary_text(const MasterCycle& cycle, const SessionReport& 
   const double driver_timeout_s = ctx.options.driver_timeout_s;
   return nan_as_na(link_lines(cycle, rep, ctx.options) +
                    contact_lines(cycle.metrics(), rep, ctx.scene) +
-                   safety_lines(cycle, rep, ctx.master_session) +
-                   tuning_line(cycle, ctx.tuning) + binding_lines(rep, ctx) +
-                   driver_line(cycle, rep, driver_timeout_s) + server_lines(cycle, rep));
+                   safety_lines(cycle, rep, ctx.master_session) + tuning_line(cycle, ctx.tuning) +
+                   binding_lines(rep, ctx) + driver_line(cycle, rep, driver_timeout_s) +
+                   server_lines(cycle, rep));
 }
 
 CycleLog::CycleLog(const std::string& path, double delay_injected_ms)
-    : csv_(path,
-           std::vector<std::string>{
-               "t_s", "phase", "seq", "xm_x", "xm_y", "xm_z", "xs_x", "xs_y", "xs_z", "fe_x",
-               "fe_y", "fe_z", "fm_x", "fm_y", "fm_z", "rtt_ms", "link_ok", "in_contact",
-               "penetration_m", "energy_j", "safety_scale", "position_error_m", "deformation_m",
-               "loop_delay_ms", "delay_injected_ms", "passivity_observer_j",
-               "passivity_dissipated_j",
-               // the device's own pose: the log is a --device replay file
-               "dev_x", "dev_y", "dev_z", "dev_qw", "dev_qx", "dev_qy", "dev_qz",
-               // the samples of the summary's stiffness fits (docs/control.md, "Transparency")
-               "slave_depth_m", "master_depth_m", "felt_force_n", "loading"}),
+    : csv_(
+          path,
+          std::vector<std::string>{
+              "t_s", "phase", "seq", "xm_x", "xm_y", "xm_z", "xs_x", "xs_y", "xs_z", "fe_x", "fe_y",
+              "fe_z", "fm_x", "fm_y", "fm_z", "rtt_ms", "link_ok", "in_contact", "penetration_m",
+              "energy_j", "safety_scale", "position_error_m", "deformation_m", "loop_delay_ms",
+              "delay_injected_ms", "passivity_observer_j", "passivity_dissipated_j",
+              // the device's own pose: the log is a --device replay file
+              "dev_x", "dev_y", "dev_z", "dev_qw", "dev_qx", "dev_qy", "dev_qz",
+              // the samples of the summary's stiffness fits (docs/control.md, "Transparency")
+              "slave_depth_m", "master_depth_m", "felt_force_n", "loading"}),
       delay_injected_ms_(delay_injected_ms) {}
 
 void CycleLog::row(const MasterCycle& cycle, double t_s, double rtt_ms, double loop_delay_ms) {

@@ -70,8 +70,7 @@ TEST(MasterReport, ThePrintoutHasItsLinesInOrderWithTheSessionsFigures) {
             std::string::npos)
       << text;
   EXPECT_NE(text.find("loop stalls 1 (longest 0.250 s)"), std::string::npos) << text;
-  EXPECT_NE(text.find("  ownership       session 0x00001234: owned the slave\n"),
-            std::string::npos)
+  EXPECT_NE(text.find("  ownership       session 0x00001234: owned the slave\n"), std::string::npos)
       << text;
   EXPECT_NE(text.find("never bound, followed"), std::string::npos) << text;
   EXPECT_EQ(text.find("  tuning "), std::string::npos) << "no tuning line unless accepting";
@@ -79,11 +78,11 @@ TEST(MasterReport, ThePrintoutHasItsLinesInOrderWithTheSessionsFigures) {
   EXPECT_NE(text.find("(no contact: - of the mean contact force)"), std::string::npos) << text;
   EXPECT_EQ(text.find(" nan"), std::string::npos) << text;
   EXPECT_EQ(text.find(" -nan"), std::string::npos) << text;
-  const char* order[] = {"  duration ",   "  commands ",  "  injected delay ", "  round trip ",
-                         "  loop delay ", "  loop jitter ", "  tracking ",     "  force ",
-                         "  transparency ", "  passivity ", "  safety ",       "  ownership ",
-                         "  server binding ", "  network thread ", "  device ", "  server ",
-                         "  verdict "};
+  const char* order[] = {
+      "  duration ",    "  commands ",  "  injected delay ", "  round trip ",     "  loop delay ",
+      "  loop jitter ", "  tracking ",  "  force ",          "  transparency ",   "  passivity ",
+      "  safety ",      "  ownership ", "  server binding ", "  network thread ", "  device ",
+      "  server ",      "  verdict "};
   std::size_t at = 0;
   for (const char* line : order) {
     const std::size_t next = text.find(std::string("\n") + line, at);
