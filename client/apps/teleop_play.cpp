@@ -155,11 +155,11 @@ int play(Flags& f) {
   using namespace teleop;
   record::PlayerOptions& po = f.po;
   const auto opts =
-      dds::resolve_participant_options(f.profile, f.domain, "teleop_play", f.net_flags);
-  dds::profile_file(opts.profile);
+      teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_play", f.net_flags);
+  teleop::dds::profile_file(opts.profile);
   install_stop_signal_handlers();
   { record::RecordingReader check(po.file); }  // a bad file fails before DDS starts
-  dds::Participant p(opts);
+  teleop::dds::Participant p(opts);
   set_progress_mode(progress_mode_from(f.progress, f.no_progress, po.quiet));
   po.progress = progress_stream();
   const auto r = record::play(p, po);

@@ -129,7 +129,7 @@ struct Flags {
   bool quiet = false, progress = false, no_progress = false;
   std::string format;
   double chunk_mb = 1.0, chunk_s = 1.0;
-  dds::NetworkFlags net_flags;
+  teleop::dds::NetworkFlags net_flags;
 };
 
 /// Declares every flag of teleop_record.
@@ -155,7 +155,7 @@ void add_flags(CLI::App& app, Flags& f) {
       ->check(config::integer_in(0.0, 232.0));
   app.add_option("--profile", f.profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
-  dds::add_network_flags(app, f.net_flags, "observer");
+  teleop::dds::add_network_flags(app, f.net_flags, "observer");
   app.add_option("--queue-mb", f.queue_mb, "bound of the in-memory queue [MiB], 1-4096")
       ->check(config::number_in(1.0, 4096.0))
       ->capture_default_str();
@@ -179,10 +179,10 @@ int record_session(Flags& f) {
   prepare_output_file("--out", ro.out);
   if (!f.summary_json.empty()) prepare_output_file("--summary-json", f.summary_json);
   const auto opts =
-      dds::resolve_participant_options(f.profile, f.domain, "teleop_record", f.net_flags);
-  dds::profile_file(opts.profile);
+      teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_record", f.net_flags);
+  teleop::dds::profile_file(opts.profile);
   install_stop_signal_handlers();
-  dds::Participant p(opts);
+  teleop::dds::Participant p(opts);
   record::Recorder recorder(p, ro);
   if (!f.quiet) {
     std::printf("teleop_record: recording %zu topics on domain %d (profile %s) to %s (%s)\n",

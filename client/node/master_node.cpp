@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <functional>
 #include <iostream>
 #include <limits>
@@ -19,7 +18,6 @@
 #include "client/device/external_device.hpp"
 #include "client/device/replay_device.hpp"
 #include "client/device/simulated_device.hpp"
-#include "client/metrics/hertz_reference.hpp"
 #include "client/metrics/link_verdict.hpp"
 #include "client/metrics/session_metrics.hpp"
 #include "client/net/delay_channel.hpp"
@@ -35,14 +33,11 @@
 #include "common/dds/rate_limited_publisher.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
-#include "common/util/csv.hpp"
 #include "common/util/exit_codes.hpp"
 #include "common/util/files.hpp"
-#include "common/util/json.hpp"
 #include "common/util/progress.hpp"
 #include "common/util/rate_loop.hpp"
 #include "common/util/signals.hpp"
-#include "common/util/version.hpp"
 #include "teleop/idl/DevicePubSubTypes.h"
 #include "teleop/idl/TeleopPubSubTypes.h"
 

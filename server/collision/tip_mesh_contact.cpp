@@ -184,44 +184,6 @@ bool TipMeshContact::detect(const Eigen::Matrix3Xd& x, const Eigen::Vector3d& c0
   return false;
 }
 
-TELEOP_TIP_INLINE TipContactResult TipMeshContact::drop_on_fault(bool was_in_contact) {
-  in_contact_ = false;
-  ++faults_;
-  TipContactResult res;
-  res.fault = true;
-  res.ended = was_in_contact;
-  return res;
-}
-
-TELEOP_TIP_INLINE bool TipMeshContact::friction_force(const Eigen::Matrix3Xd& x,
-                                                      const Eigen::Vector3d& c, double r,
-                                                      double pen_rate, double fn_nodes, Proxy& pr,
-                                                      Eigen::Vector3d& ft, TipContactResult& res) {
-  const double k = params_.stiffness_n_per_m;
-  pr.dt_vec = pr.d - pr.d.dot(pr.n) * pr.n;
-  ft = -k * pr.dt_vec;
-  const double mu_s = std::max(0.0, params_.friction_static);
-  const double mu_k = std::clamp(params_.friction_kinetic, 0.0, mu_s);
-  if (ft.norm() > mu_s * pr.fn_eff) {
-    // kinetic friction: the proxy slides along the surface until |F_t| = mu_k F_n
-    res.sliding = true;
-    if (!slide_proxy(x, c, r, pen_rate, fn_nodes, mu_k, pr)) return false;
-    ft = -k * pr.dt_vec;
-    const double ftn = ft.norm();
-    if (ftn > mu_k * pr.fn_eff && ftn > 0.0) ft *= mu_k * pr.fn_eff / ftn;
-  }
-  return true;
-}
-
-TELEOP_TIP_INLINE void TipMeshContact::blend_weights(double fn_nodes, double fn_proxy, double& a,
-                                                     double& s) {
-  const double ratio = fn_proxy > 1e-12 ? fn_nodes / fn_proxy : 2.0;
-  const double u = std::clamp((ratio - 0.25) / 1.5, 0.0, 1.0);
-  a = u * u * (3.0 - 2.0 * u);
-  const double blended_n = a * fn_nodes + (1.0 - a) * fn_proxy;
-  if (blended_n > 1e-12) s = std::max(fn_nodes, fn_proxy) / blended_n;
-}
-
 TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x,
                                         const Eigen::Vector3d& tip_prev_m,
                                         const Eigen::Vector3d& tip_now_m, double tip_radius_m,
@@ -388,6 +350,44 @@ TELEOP_TIP_INLINE void TipMeshContact::set_contact_result(const Eigen::Vector3d&
   res.normal_force_n = f.dot(pr.n);
   res.tangential_force_n = (f - f.dot(pr.n) * pr.n).norm();
   res.triangle = tri_;
+}
+
+TELEOP_TIP_INLINE TipContactResult TipMeshContact::drop_on_fault(bool was_in_contact) {
+  in_contact_ = false;
+  ++faults_;
+  TipContactResult res;
+  res.fault = true;
+  res.ended = was_in_contact;
+  return res;
+}
+
+TELEOP_TIP_INLINE bool TipMeshContact::friction_force(const Eigen::Matrix3Xd& x,
+                                                      const Eigen::Vector3d& c, double r,
+                                                      double pen_rate, double fn_nodes, Proxy& pr,
+                                                      Eigen::Vector3d& ft, TipContactResult& res) {
+  const double k = params_.stiffness_n_per_m;
+  pr.dt_vec = pr.d - pr.d.dot(pr.n) * pr.n;
+  ft = -k * pr.dt_vec;
+  const double mu_s = std::max(0.0, params_.friction_static);
+  const double mu_k = std::clamp(params_.friction_kinetic, 0.0, mu_s);
+  if (ft.norm() > mu_s * pr.fn_eff) {
+    // kinetic friction: the proxy slides along the surface until |F_t| = mu_k F_n
+    res.sliding = true;
+    if (!slide_proxy(x, c, r, pen_rate, fn_nodes, mu_k, pr)) return false;
+    ft = -k * pr.dt_vec;
+    const double ftn = ft.norm();
+    if (ftn > mu_k * pr.fn_eff && ftn > 0.0) ft *= mu_k * pr.fn_eff / ftn;
+  }
+  return true;
+}
+
+TELEOP_TIP_INLINE void TipMeshContact::blend_weights(double fn_nodes, double fn_proxy, double& a,
+                                                     double& s) {
+  const double ratio = fn_proxy > 1e-12 ? fn_nodes / fn_proxy : 2.0;
+  const double u = std::clamp((ratio - 0.25) / 1.5, 0.0, 1.0);
+  a = u * u * (3.0 - 2.0 * u);
+  const double blended_n = a * fn_nodes + (1.0 - a) * fn_proxy;
+  if (blended_n > 1e-12) s = std::max(fn_nodes, fn_proxy) / blended_n;
 }
 
 TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v,
