@@ -23,6 +23,7 @@
 #include "client/net/delay_channel.hpp"
 #include "client/node/dds_slave_link.hpp"
 #include "client/node/experiment_publisher.hpp"
+#include "client/node/loop_delay_meter.hpp"
 #include "client/node/master_report.hpp"
 #include "client/node/server_binding.hpp"
 #include "client/node/server_health.hpp"
@@ -79,9 +80,6 @@ class SessionStatus {
 /// Internal status of Impl::run: make a new participant and wait again.
 constexpr int kReconnect = -2;
 
-/// Commands whose entry time is remembered for the loop-delay measurement.
-constexpr std::uint64_t kEntryRing = 1 << 16;
-
 }  // namespace
 
 /// One driver at a time on teleop/device_state: the first writer is the device until it has been
@@ -119,38 +117,6 @@ struct OwnershipWatch {
   bool refused_first = false;  // refused before it ever owned the slave
   double refused_at_s = 0.0;
   double waited_s = 0.0;
-};
-
-/// The loop delay: from a command's entry into the forward channel to the cycle whose controller
-/// uses its echo. It remembers the entry times of the newest kEntryRing commands and allocates
-/// only when made.
-class LoopDelayMeter {
- public:
-  LoopDelayMeter() : entry_time_s_(kEntryRing, 0.0), window_ms_(1 << 20) {}
-  /// Command `seq` entered the forward channel at `now_s` [s].
-  void entered(std::uint64_t seq, double now_s) { entry_time_s_[seq % kEntryRing] = now_s; }
-  /// The controller used the echo of command `echoed` at `now_s` while `newest` is the newest
-  /// command. Returns true and records the delay (last_ms()) when the echo is newer than the last
-  /// one used and its entry time is still remembered.
-  bool echo_used(std::uint64_t echoed, std::uint64_t newest, double now_s) {
-    if (echoed <= last_used_seq_ || echoed >= newest || echoed + kEntryRing <= newest) {
-      return false;
-    }
-    last_used_seq_ = echoed;
-    last_ms_ = (now_s - entry_time_s_[echoed % kEntryRing]) * 1e3;
-    window_ms_.record(last_ms_);
-    return true;
-  }
-  /// The newest loop delay (NaN before the first) [ms].
-  double last_ms() const { return last_ms_; }
-  /// Over the session (allocates: after the loop).
-  Summary summary() const { return summarize(window_ms_.snapshot()); }
-
- private:
-  std::vector<double> entry_time_s_;
-  SampleWindow window_ms_;
-  std::uint64_t last_used_seq_ = 0;
-  double last_ms_ = std::nan("");
 };
 
 /// The haptic loop's state across its cycles (MasterNode::Impl::run_loop), made before the first
