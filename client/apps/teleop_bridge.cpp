@@ -112,6 +112,21 @@ void check_access(bridge::BridgeOptions& bo, const std::string& token_file, bool
   }
 }
 
+/// The line on stdout once the bridge listens: the channels, the addresses and the page.
+void print_serving(bridge::Bridge& b, const bridge::BridgeOptions& bo,
+                   const teleop::dds::ParticipantOptions& opts) {
+  const bool tls = !bo.access.tls_cert_file.empty();
+  const std::string host =
+      bo.address.find(':') != std::string::npos ? "[" + bo.address + "]" : bo.address;
+  std::printf(
+      "teleop_bridge: serving %zu channels of domain %d (profile %s) on "
+      "%s://%s:%d (foxglove.websocket.v1), the page at %s://%s:%d/%s; read-only\n",
+      b.topics().size(), opts.domain, opts.profile.c_str(), tls ? "wss" : "ws", host.c_str(),
+      b.port(), tls ? "https" : "http", host.c_str(), b.port(),
+      bo.access.token.empty() ? "" : "?token=(the token)");
+  std::fflush(stdout);
+}
+
 /// Serves until SIGINT/SIGTERM or --duration; prints the counts every --stats-s.
 int serve(bridge::Bridge& b, double duration_s, double stats_s, bool quiet) {
   const auto t0 = now_ns();
@@ -204,18 +219,7 @@ int main(int argc, char** argv) {
       std::cerr << "teleop_bridge: --tls-cert/--tls-key: " << e.what() << "\n";
       return 2;
     }
-    if (!quiet) {
-      const bool tls = !bo.access.tls_cert_file.empty();
-      const std::string host =
-          bo.address.find(':') != std::string::npos ? "[" + bo.address + "]" : bo.address;
-      std::printf(
-          "teleop_bridge: serving %zu channels of domain %d (profile %s) on "
-          "%s://%s:%d (foxglove.websocket.v1), the page at %s://%s:%d/%s; read-only\n",
-          b->topics().size(), opts.domain, opts.profile.c_str(), tls ? "wss" : "ws", host.c_str(),
-          b->port(), tls ? "https" : "http", host.c_str(), b->port(),
-          bo.access.token.empty() ? "" : "?token=(the token)");
-      std::fflush(stdout);
-    }
+    if (!quiet) print_serving(*b, bo, opts);
     return serve(*b, duration_s, stats_s, quiet);
   } catch (const config::ConfigError& e) {
     std::cerr << "teleop_bridge: " << e.what() << "\n";

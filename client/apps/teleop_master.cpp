@@ -84,8 +84,8 @@ void add_channel_flags(CLI::App& app, Flags& f) {
       ->check(integer_in(0.0, 9007199254740992.0));
 }
 
-/// Declares every flag of teleop_master.
-void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
+/// The session's length and rate, the DDS flags and the controller's scheme.
+void add_session_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   using teleop::config::integer_in;
   using teleop::config::number_in;
   app.add_option("--duration", o.duration_s,
@@ -113,6 +113,11 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
                "wave-variables: no matching damper at the slave (waves reflect)");
   app.add_option("--tdpa-base", f.tdpa_base, "tdpa: base law")
       ->check(CLI::IsMember({"position-position", "force-position"}));
+}
+
+/// The device, the operator's script, the contact point and the gains.
+void add_device_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
+  using teleop::config::number_in;
   app.add_option("--device", o.device,
                  "haptic device: simulated | replay | external | evdev:/dev/input/eventN | "
                  "vendor[:NAME]")
@@ -154,6 +159,13 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
       ->check(number_in(1e-3, 1e3));
   app.add_option("--max-force", f.max_force, "device force saturation [N], 0-1e4 (0 = the spec's)")
       ->check(number_in(0.0, 1e4));
+}
+
+/// Declares every flag of teleop_master.
+void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
+  using teleop::config::number_in;
+  add_session_flags(app, o, f);
+  add_device_flags(app, o, f);
   add_channel_flags(app, f);
   app.add_option("--homing", o.homing_s, "time to bring the slave to the script start [s], 0-60")
       ->check(number_in(0.0, 60.0))
@@ -219,7 +231,8 @@ void apply_config_file(const CLI::App& app, const Flags& f, teleop::master::Mast
   }
 }
 
-void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOptions& o) {
+/// The DDS options, the ranges of the session's flags, the master's name and the output files.
+void apply_session_flags(const Flags& f, teleop::master::MasterOptions& o) {
   using teleop::config::check_flag;
   o.dds =
       teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_master", f.net_flags);
@@ -252,14 +265,11 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   }
   if (!o.log_csv.empty()) teleop::prepare_output_file("--log", o.log_csv);
   if (!o.summary_json.empty()) teleop::prepare_output_file("--summary-json", o.summary_json);
-  check_flag("--press-depth", o.press_depth_m, 0.0, 0.2);
-  check_flag("--tremor", o.tremor_m, 0.0, 0.01);
-  if (o.device == "replay" && o.replay_file.empty()) {
-    throw teleop::config::ConfigError("command line: --device replay needs --replay FILE.csv");
-  }
-  // the trajectory is checked now, before any wait for a server (it is read again at the start)
-  if (o.device == "replay") teleop::master::load_replay_csv(o.replay_file);
-  apply_config_file(app, f, o);  // YAML first, flags on top
+}
+
+/// The gain and scale flags over the controller's parameters (after --config), then checked.
+void apply_controller_flags(const Flags& f, teleop::master::MasterOptions& o) {
+  using teleop::config::check_flag;
   if (f.kps) o.controller.slave_stiffness_n_per_m = *f.kps;
   if (f.kpm) o.controller.master_stiffness_n_per_m = *f.kpm;
   if (f.bm) o.controller.master_damping_ns_per_m = *f.bm;
@@ -272,6 +282,10 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   if (f.wave_unmatched) o.controller.wave_matched = false;
   if (f.tdpa_base) o.controller.tdpa_base = *f.tdpa_base;
   o.controller.validate();
+}
+
+/// The injected channel's flags over both directions (after --config; backward's seed + 1).
+void apply_delay_flags(const Flags& f, teleop::master::MasterOptions& o) {
   std::vector<std::string> dflags;
   auto add = [&](const char* flag, const std::optional<std::string>& v) {
     if (v) {
@@ -293,10 +307,11 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
     teleop::master::parse_delay_flags(o.backward, dflags);
     o.backward.seed = o.forward.seed + 1;
   }
-  if (f.contact_point) {
-    o.contact_point_m = parse_point("--contact-point", *f.contact_point);
-    o.has_contact_point = true;
-  }
+}
+
+/// --link-timeout and --driver-timeout (the latter with its unit).
+void apply_timeout_flags(const Flags& f, teleop::master::MasterOptions& o) {
+  using teleop::config::check_flag;
   if (f.link_timeout)
     o.safety.link_timeout_s = check_flag("--link-timeout", *f.link_timeout, 0.001, 10.0);
   if (f.driver_timeout) {
@@ -312,6 +327,26 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
                                         "' is out of the allowed range [1ms, 10s]");
     }
   }
+}
+
+void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOptions& o) {
+  using teleop::config::check_flag;
+  apply_session_flags(f, o);
+  check_flag("--press-depth", o.press_depth_m, 0.0, 0.2);
+  check_flag("--tremor", o.tremor_m, 0.0, 0.01);
+  if (o.device == "replay" && o.replay_file.empty()) {
+    throw teleop::config::ConfigError("command line: --device replay needs --replay FILE.csv");
+  }
+  // the trajectory is checked now, before any wait for a server (it is read again at the start)
+  if (o.device == "replay") teleop::master::load_replay_csv(o.replay_file);
+  apply_config_file(app, f, o);  // YAML first, flags on top
+  apply_controller_flags(f, o);
+  apply_delay_flags(f, o);
+  if (f.contact_point) {
+    o.contact_point_m = parse_point("--contact-point", *f.contact_point);
+    o.has_contact_point = true;
+  }
+  apply_timeout_flags(f, o);
   // model-mediated renders from its local model at 4 kHz and sends positions at 1 kHz, unless
   // told otherwise
   if (o.controller.scheme == "model-mediated") {

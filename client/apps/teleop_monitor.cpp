@@ -367,12 +367,17 @@ void wait_until(std::int64_t next, Mode mode, RawKeys& keys) {
   }
 }
 
-int run_monitor(Flags& f) {
-  const Mode mode = f.json    ? Mode::kJson
-                    : f.lines ? Mode::kLines
-                    : f.tui   ? Mode::kTui
-                              : (isatty(STDOUT_FILENO) ? Mode::kTui : Mode::kLines);
-  const double period_s = f.period ? *f.period : (mode == Mode::kTui ? 0.25 : 1.0);
+/// The output mode the flags ask for (none: the screen on a terminal, else lines).
+Mode output_mode(const Flags& f) {
+  return f.json    ? Mode::kJson
+         : f.lines ? Mode::kLines
+         : f.tui   ? Mode::kTui
+                   : (isatty(STDOUT_FILENO) ? Mode::kTui : Mode::kLines);
+}
+
+/// The flags' ranges, then --nice applied.
+/// @throws config::ConfigError naming the flag, the value and the range.
+void check_flags(const Flags& f, double period_s) {
   config::check_flag("--period", period_s, 0.05, 60.0);
   config::check_flag("--duration", f.duration_s, 0.0, 1e7);
   config::check_flag("--stale", f.stale_s, 0.05, 3600.0);
@@ -382,17 +387,27 @@ int run_monitor(Flags& f) {
     std::cerr << "teleop_monitor: warning: cannot lower the priority (--nice " << f.nice << ")\n";
   }
   if (f.reconnect_s != 0.0) config::check_flag("--reconnect", f.reconnect_s, 0.5, 3600.0);
+}
+
+/// SIGINT and SIGTERM stop the monitor; so does SIGHUP (a closed terminal, or tmux kill-server).
+void install_signal_handlers() {
+  install_stop_signal_handlers();
+  struct sigaction hup {};
+  hup.sa_handler = [](int) { request_stop(); };
+  sigemptyset(&hup.sa_mask);
+  sigaction(SIGHUP, &hup, nullptr);
+}
+
+int run_monitor(Flags& f) {
+  const Mode mode = output_mode(f);
+  const double period_s = f.period ? *f.period : (mode == Mode::kTui ? 0.25 : 1.0);
+  check_flags(f, period_s);
   const auto opts = tdds::resolve_participant_options(f.profile, f.domain, "teleop_monitor", f.net);
   tdds::profile_file(opts.profile);
   tdds::ProfileKind kind = tdds::ProfileKind::kUdp;
   (void)tdds::participant_qos(opts, &kind);
   auto p = std::make_unique<tdds::Participant>(opts);
-  install_stop_signal_handlers();
-  // a closed terminal (or tmux kill-server) ends the monitor cleanly too
-  struct sigaction hup {};
-  hup.sa_handler = [](int) { request_stop(); };
-  sigemptyset(&hup.sa_mask);
-  sigaction(SIGHUP, &hup, nullptr);
+  install_signal_handlers();
 
   const auto t0 = now_ns();
   std::mutex m;  // guards snap's values, events and stdout

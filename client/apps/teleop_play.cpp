@@ -44,23 +44,35 @@
 #include "common/util/progress.hpp"
 #include "common/util/signals.hpp"
 
-int main(int argc, char** argv) {
-  CLI::App app{"teleop_play: publish a recorded session back on a DDS domain"};
+namespace {
+
+/// teleop_play's command line.
+struct Flags {
   std::optional<int> domain;
   std::optional<std::string> profile;
   teleop::record::PlayerOptions po;
+  teleop::dds::NetworkFlags net_flags;
+  bool progress = false;
+  bool no_progress = false;
+  std::string export_commands;
+  bool info = false;
+  std::string convert;
+};
+
+/// Declares every flag of teleop_play.
+void add_flags(CLI::App& app, Flags& f) {
+  teleop::record::PlayerOptions& po = f.po;
   app.add_option("file", po.file, "recording made by teleop_record")->required();
   app.add_option("--speed", po.speed, "playback speed, 0.01-100 (1 = as recorded)")
       ->check(teleop::config::number_in(0.01, 100.0))
       ->capture_default_str();
   app.add_option("--seek", po.seek_s, "start this far into the recording [s], 0-length")
       ->check(teleop::config::number_in(0.0, 1e9));
-  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
+  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
       ->check(teleop::config::integer_in(0.0, 232.0));
-  app.add_option("--profile", profile,
+  app.add_option("--profile", f.profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
-  teleop::dds::NetworkFlags net_flags;
-  teleop::dds::add_network_flags(app, net_flags, "observer");
+  teleop::dds::add_network_flags(app, f.net_flags, "observer");
   app.add_option("--exclude", po.exclude, "topic not to publish (repeatable)");
   app.add_option("--wait", po.wait_s, "pause before the first sample, for discovery [s], 0-60")
       ->check(teleop::config::number_in(0.0, 60.0))
@@ -75,71 +87,99 @@ int main(int argc, char** argv) {
       ->check(teleop::config::number_in(0.001, 3600.0))
       ->capture_default_str();
   app.add_flag("--quiet", po.quiet, "print only warnings and errors");
-  bool progress = false, no_progress = false;
-  app.add_flag("--progress", progress,
+  app.add_flag("--progress", f.progress,
                "the progress line on stderr even when it is not a terminal");
-  app.add_flag("--no-progress", no_progress, "no progress line");
-  std::string export_commands;
-  app.add_option("--export-commands", export_commands,
+  app.add_flag("--no-progress", f.no_progress, "no progress line");
+  app.add_option("--export-commands", f.export_commands,
                  "write the recorded master commands to this command stream (CSV) for "
                  "`teleop_experiment resim`, publish nothing");
-  bool info = false;
-  app.add_flag("--info", info,
+  app.add_flag("--info", f.info,
                "read every sample, print what the file holds and how it was read, publish "
                "nothing");
-  std::string convert;
-  app.add_option("--convert", convert,
+  app.add_option("--convert", f.convert,
                  "write the recording to this file in the other format (SQLite for .db, "
                  ".sqlite, .sqlite3, else MCAP), publish nothing");
+}
+
+/// The ranges, the excluded topics, the recording and the output files.
+/// @throws teleop::config::ConfigError naming the flag, the value and what is allowed.
+void check_flags(const Flags& f) {
+  using namespace teleop;
+  const record::PlayerOptions& po = f.po;
+  config::check_flag("--speed", po.speed, 0.01, 100.0);
+  config::check_flag("--seek", po.seek_s, 0.0, 1e9);
+  config::check_flag("--wait", po.wait_s, 0.0, 60.0);
+  config::check_flag("--linger", po.linger_s, 0.0, 3600.0);
+  for (const auto& t : po.exclude) {
+    if (!record::find_topic(t)) {
+      std::string names;
+      for (const auto& e : record::known_topics()) names += (names.empty() ? "" : ", ") + e.name;
+      throw config::ConfigError("command line: --exclude '" + t +
+                                "' is not a known topic (allowed: " + names + ")");
+    }
+  }
+  config::require_regular_file(po.file, "recording");
+  if (!f.convert.empty()) prepare_output_file("--convert", f.convert);
+  if (!f.export_commands.empty()) prepare_output_file("--export-commands", f.export_commands);
+}
+
+/// --info, --convert or --export-commands: the file read and nothing published. Returns the exit
+/// status, or -1 when none of them was asked for.
+int run_offline(const Flags& f) {
+  using namespace teleop;
+  const record::PlayerOptions& po = f.po;
+  if (f.info) {
+    std::cout << record::recording_info(po.file);
+    return 0;
+  }
+  if (!f.convert.empty()) {
+    const auto n =
+        record::convert_recording(po.file, f.convert, record::format_for_path(f.convert));
+    if (!po.quiet) {
+      std::cout << "teleop_play: " << n << " samples -> " << f.convert << " ("
+                << record::format_name(record::format_for_path(f.convert)) << ")\n";
+    }
+    return 0;
+  }
+  if (!f.export_commands.empty()) {
+    const std::size_t n = record::export_command_stream(po.file, f.export_commands);
+    if (!po.quiet)
+      std::cout << "teleop_play: " << n << " commands -> " << f.export_commands << "\n";
+    return 0;
+  }
+  return -1;
+}
+
+/// Publishes the recording on the domain. Returns the exit status.
+int play(Flags& f) {
+  using namespace teleop;
+  record::PlayerOptions& po = f.po;
+  const auto opts =
+      teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_play", f.net_flags);
+  teleop::dds::profile_file(opts.profile);
+  install_stop_signal_handlers();
+  { record::RecordingReader check(po.file); }  // a bad file fails before DDS starts
+  teleop::dds::Participant p(opts);
+  set_progress_mode(progress_mode_from(f.progress, f.no_progress, po.quiet));
+  po.progress = progress_stream();
+  const auto r = record::play(p, po);
+  return r.failures == 0 ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"teleop_play: publish a recorded session back on a DDS domain"};
+  Flags f;
+  add_flags(app, f);
   if (const int status = teleop::config::parse_command_line(app, "teleop_play", argc, argv);
       status >= 0) {
     return status == 2 ? 2 : status;
   }
   try {
-    using namespace teleop;
-    config::check_flag("--speed", po.speed, 0.01, 100.0);
-    config::check_flag("--seek", po.seek_s, 0.0, 1e9);
-    config::check_flag("--wait", po.wait_s, 0.0, 60.0);
-    config::check_flag("--linger", po.linger_s, 0.0, 3600.0);
-    for (const auto& t : po.exclude) {
-      if (!record::find_topic(t)) {
-        std::string names;
-        for (const auto& e : record::known_topics()) names += (names.empty() ? "" : ", ") + e.name;
-        throw config::ConfigError("command line: --exclude '" + t +
-                                  "' is not a known topic (allowed: " + names + ")");
-      }
-    }
-    config::require_regular_file(po.file, "recording");
-    if (!convert.empty()) prepare_output_file("--convert", convert);
-    if (!export_commands.empty()) prepare_output_file("--export-commands", export_commands);
-    if (info) {
-      std::cout << record::recording_info(po.file);
-      return 0;
-    }
-    if (!convert.empty()) {
-      const auto n = record::convert_recording(po.file, convert, record::format_for_path(convert));
-      if (!po.quiet) {
-        std::cout << "teleop_play: " << n << " samples -> " << convert << " ("
-                  << record::format_name(record::format_for_path(convert)) << ")\n";
-      }
-      return 0;
-    }
-    if (!export_commands.empty()) {
-      const std::size_t n = record::export_command_stream(po.file, export_commands);
-      if (!po.quiet)
-        std::cout << "teleop_play: " << n << " commands -> " << export_commands << "\n";
-      return 0;
-    }
-    const auto opts =
-        teleop::dds::resolve_participant_options(profile, domain, "teleop_play", net_flags);
-    teleop::dds::profile_file(opts.profile);
-    install_stop_signal_handlers();
-    { record::RecordingReader check(po.file); }  // a bad file fails before DDS starts
-    teleop::dds::Participant p(opts);
-    set_progress_mode(progress_mode_from(progress, no_progress, po.quiet));
-    po.progress = progress_stream();
-    const auto r = record::play(p, po);
-    return r.failures == 0 ? 0 : 1;
+    check_flags(f);
+    if (const int status = run_offline(f); status >= 0) return status;
+    return play(f);
   } catch (const teleop::config::ConfigError& e) {
     std::cerr << "teleop_play: " << e.what() << "\n";
     return 2;

@@ -118,89 +118,106 @@ int report(const record::Recorder& recorder, const std::string& out, bool quiet,
   return exit_code::kOk;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"teleop_record: record every topic of a teleoperation session"};
+/// teleop_record's command line.
+struct Flags {
   std::optional<int> domain;
   std::optional<std::string> profile;
-  teleop::record::RecorderOptions ro;
+  record::RecorderOptions ro;
   double duration_s = 0.0;
   double queue_mb = 64.0;
   std::string summary_json;
   bool quiet = false, progress = false, no_progress = false;
   std::string format;
   double chunk_mb = 1.0, chunk_s = 1.0;
+  teleop::dds::NetworkFlags net_flags;
+};
+
+/// Declares every flag of teleop_record.
+void add_flags(CLI::App& app, Flags& f) {
+  record::RecorderOptions& ro = f.ro;
   app.add_option("--out", ro.out,
                  "recording file, created or replaced (MCAP; SQLite for .db, .sqlite, .sqlite3)")
       ->required();
-  app.add_option("--format", format,
+  app.add_option("--format", f.format,
                  "mcap or sqlite (default: from the --out extension, mcap for any other name)");
-  app.add_option("--chunk-mb", chunk_mb,
+  app.add_option("--chunk-mb", f.chunk_mb,
                  "MCAP: close a chunk at this many MiB of samples, 0.0625-64")
-      ->check(teleop::config::number_in(0.0625, 64.0))
+      ->check(config::number_in(0.0625, 64.0))
       ->capture_default_str();
-  app.add_option("--chunk-s", chunk_s,
+  app.add_option("--chunk-s", f.chunk_s,
                  "MCAP: close a chunk this long after its first sample [s], 0.05-60 (a recorder "
                  "killed with -9 loses at most this much)")
-      ->check(teleop::config::number_in(0.05, 60.0))
+      ->check(config::number_in(0.05, 60.0))
       ->capture_default_str();
-  app.add_option("--duration", duration_s, "stop after this long [s], 0-1e6; 0 = until SIGINT")
-      ->check(teleop::config::number_in(0.0, 1e6));
-  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
-      ->check(teleop::config::integer_in(0.0, 232.0));
-  app.add_option("--profile", profile,
+  app.add_option("--duration", f.duration_s, "stop after this long [s], 0-1e6; 0 = until SIGINT")
+      ->check(config::number_in(0.0, 1e6));
+  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
+      ->check(config::integer_in(0.0, 232.0));
+  app.add_option("--profile", f.profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
-  teleop::dds::NetworkFlags net_flags;
-  teleop::dds::add_network_flags(app, net_flags, "observer");
-  app.add_option("--queue-mb", queue_mb, "bound of the in-memory queue [MiB], 1-4096")
-      ->check(teleop::config::number_in(1.0, 4096.0))
+  teleop::dds::add_network_flags(app, f.net_flags, "observer");
+  app.add_option("--queue-mb", f.queue_mb, "bound of the in-memory queue [MiB], 1-4096")
+      ->check(config::number_in(1.0, 4096.0))
       ->capture_default_str();
   app.add_option("--exclude", ro.exclude, "topic not to record (repeatable)");
   app.add_option("--batch-ms", ro.batch_ms,
                  "take samples in batches this far apart [ms], 0-50 (0 = wake per sample)")
-      ->check(teleop::config::number_in(0.0, 50.0))
+      ->check(config::number_in(0.0, 50.0))
       ->capture_default_str();
-  app.add_option("--summary-json", summary_json, "write the counts as JSON here at exit");
-  app.add_flag("--quiet", quiet, "print only warnings and errors");
-  app.add_flag("--progress", progress,
+  app.add_option("--summary-json", f.summary_json, "write the counts as JSON here at exit");
+  app.add_flag("--quiet", f.quiet, "print only warnings and errors");
+  app.add_flag("--progress", f.progress,
                "with --duration: the time line on stderr even when it is not a terminal");
-  app.add_flag("--no-progress", no_progress, "no time line on stderr");
+  app.add_flag("--no-progress", f.no_progress, "no time line on stderr");
+}
+
+/// Records until --duration, a stop signal or a failure; returns the exit status (report()).
+int record_session(Flags& f) {
+  record::RecorderOptions& ro = f.ro;
+  config::check_flag("--duration", f.duration_s, 0.0, 1e6);
+  check_options(ro, f.format, f.queue_mb, f.chunk_mb, f.chunk_s);
+  prepare_output_file("--out", ro.out);
+  if (!f.summary_json.empty()) prepare_output_file("--summary-json", f.summary_json);
+  const auto opts =
+      teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_record", f.net_flags);
+  teleop::dds::profile_file(opts.profile);
+  install_stop_signal_handlers();
+  teleop::dds::Participant p(opts);
+  record::Recorder recorder(p, ro);
+  if (!f.quiet) {
+    std::printf("teleop_record: recording %zu topics on domain %d (profile %s) to %s (%s)\n",
+                record::known_topics().size() - ro.exclude.size(), opts.domain,
+                opts.profile.c_str(), ro.out.c_str(), record::format_name(*ro.format));
+    std::fflush(stdout);
+  }
+  set_progress_mode(progress_mode_from(f.progress, f.no_progress, f.quiet));
+  // the time line: only for a recording of known length
+  const double duration_s = f.duration_s;
+  Progress line(duration_s > 0.0 ? progress_stream() : nullptr, "teleop_record", duration_s, "s",
+                1);
+  const auto t0 = now_ns();
+  while (!stop_requested() && !recorder.failed()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    line.set(std::min(duration_s, seconds_between(t0, now_ns())));
+    if (duration_s > 0.0 && seconds_between(t0, now_ns()) >= duration_s) break;
+  }
+  line.finish();
+  recorder.stop();
+  return report(recorder, ro.out, f.quiet, f.summary_json);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"teleop_record: record every topic of a teleoperation session"};
+  Flags f;
+  add_flags(app, f);
   if (const int status = teleop::config::parse_command_line(app, "teleop_record", argc, argv);
       status >= 0) {
     return status == 2 ? 2 : status;
   }
   try {
-    using namespace teleop;
-    config::check_flag("--duration", duration_s, 0.0, 1e6);
-    check_options(ro, format, queue_mb, chunk_mb, chunk_s);
-    prepare_output_file("--out", ro.out);
-    if (!summary_json.empty()) prepare_output_file("--summary-json", summary_json);
-    const auto opts =
-        teleop::dds::resolve_participant_options(profile, domain, "teleop_record", net_flags);
-    teleop::dds::profile_file(opts.profile);
-    install_stop_signal_handlers();
-    teleop::dds::Participant p(opts);
-    record::Recorder recorder(p, ro);
-    if (!quiet) {
-      std::printf("teleop_record: recording %zu topics on domain %d (profile %s) to %s (%s)\n",
-                  record::known_topics().size() - ro.exclude.size(), opts.domain,
-                  opts.profile.c_str(), ro.out.c_str(), record::format_name(*ro.format));
-      std::fflush(stdout);
-    }
-    set_progress_mode(progress_mode_from(progress, no_progress, quiet));
-    // the time line: only for a recording of known length
-    Progress line(duration_s > 0.0 ? progress_stream() : nullptr, "teleop_record", duration_s, "s",
-                  1);
-    const auto t0 = now_ns();
-    while (!stop_requested() && !recorder.failed()) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      line.set(std::min(duration_s, seconds_between(t0, now_ns())));
-      if (duration_s > 0.0 && seconds_between(t0, now_ns()) >= duration_s) break;
-    }
-    line.finish();
-    recorder.stop();
-    return report(recorder, ro.out, quiet, summary_json);
+    return record_session(f);
   } catch (const teleop::config::ConfigError& e) {
     std::cerr << "teleop_record: " << e.what() << "\n";
     return 2;

@@ -840,13 +840,13 @@ class ViewerApp {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  CLI::App app{"teleop_viewer: 3-D observer of a teleoperation session (scene, plots, events)"};
-  Options o;
+namespace {
+
+/// Declares every flag of teleop_viewer.
+void add_flags(CLI::App& app, Options& o, teleop::dds::NetworkFlags& net_flags) {
   app.add_option("--domain", o.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
       ->check(teleop::config::integer_in(0.0, 232.0));
   app.add_option("--profile", o.profile, "Fast DDS profile (default: loopback)");
-  teleop::dds::NetworkFlags net_flags;
   teleop::dds::add_network_flags(app, net_flags);
   app.add_option("--snapshot", o.snapshot,
                  "headless: render offscreen, write this PNG and exit (needs an X display, e.g. "
@@ -902,6 +902,27 @@ int main(int argc, char** argv) {
   app.add_flag("--plain", o.plain_colours,
                "start with meshes in their plain colour instead of coloured by deformation "
                "(key C)");
+}
+
+/// An observer must not take the CPU from the control loops on the same machine. Lowers the
+/// priority (--nice) before any thread starts (the renderer's, DDS's), so they all inherit it;
+/// and keeps Mesa's software rasteriser (llvmpipe) on the render thread instead of one thread per
+/// core, whose helper threads raise the master's loop jitter (docs/viewer.md). A value the user
+/// set wins; other drivers ignore the variable.
+void yield_to_control_loops(const Options& o) {
+  if (o.nice > 0 && setpriority(PRIO_PROCESS, 0, o.nice) != 0) {
+    std::cerr << "teleop_viewer: warning: cannot lower the priority (--nice " << o.nice << ")\n";
+  }
+  setenv("LP_NUM_THREADS", "0", 0);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"teleop_viewer: 3-D observer of a teleoperation session (scene, plots, events)"};
+  Options o;
+  teleop::dds::NetworkFlags net_flags;
+  add_flags(app, o, net_flags);
   if (const int status = teleop::config::parse_command_line(app, "teleop_viewer", argc, argv);
       status >= 0) {
     return status == 2 ? kExitUsage : status;
@@ -911,16 +932,7 @@ int main(int argc, char** argv) {
     if (!o.drive_json.empty()) prepare_output_file("--drive-json", o.drive_json);
     // driving publishes the device and tuning topics: the secure profiles' operator role
     if (o.drive) net_flags.default_identity = "operator";
-    // An observer must not take the CPU from the control loops on the same machine. Lower the
-    // priority before any thread starts (the renderer's, DDS's), so they all inherit it; and
-    // keep Mesa's software rasteriser (llvmpipe) on the render thread instead of one thread per
-    // core: measured on 2 cores, its helper threads raised the master's loop jitter p99 from
-    // ~0.3 ms to ~2 ms at 15 fps, while one thread kept it at ~0.3 ms (docs/viewer.md). A value
-    // the user set wins; other drivers ignore the variable.
-    if (o.nice > 0 && setpriority(PRIO_PROCESS, 0, o.nice) != 0) {
-      std::cerr << "teleop_viewer: warning: cannot lower the priority (--nice " << o.nice << ")\n";
-    }
-    setenv("LP_NUM_THREADS", "0", 0);
+    yield_to_control_loops(o);
     const auto dds_options =
         teleop::dds::resolve_participant_options(o.profile, o.domain, "teleop_viewer", net_flags);
     teleop::dds::profile_file(dds_options.profile);  // fail early with the list of profiles

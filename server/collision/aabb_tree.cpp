@@ -108,6 +108,12 @@ void AabbTree::build_recursive_free(const Eigen::Matrix3Xd& x) {
     build_stack_[static_cast<std::size_t>(sp++)] = {mid, e, idx, d + 1};  // right, later
     build_stack_[static_cast<std::size_t>(sp++)] = {b, mid, -1, d + 1};   // left, next
   }
+  index_leaves(n);
+}
+
+/// After a build of `n` triangles: the leaf and internal node lists for the refit sweeps, the
+/// vertex ids in leaf order and each leaf's distinct vertices.
+void AabbTree::index_leaves(int n) {
   // leaf and internal node lists for the refit sweeps
   leaves_.clear();
   internal_reverse_.clear();

@@ -117,6 +117,7 @@ class AabbTree {
   };
 
   void build_recursive_free(const Eigen::Matrix3Xd& x);
+  void index_leaves(int n);
   void compute_leaf_box(Node& n, const Eigen::Matrix3Xd& x) const;
   static double node_box_distance_sq(const Node& n, const Eigen::Vector3d& p);
 

@@ -352,6 +352,44 @@ TELEOP_TIP_INLINE void TipMeshContact::set_contact_result(const Eigen::Vector3d&
   res.triangle = tri_;
 }
 
+TELEOP_TIP_INLINE TipContactResult TipMeshContact::drop_on_fault(bool was_in_contact) {
+  in_contact_ = false;
+  ++faults_;
+  TipContactResult res;
+  res.fault = true;
+  res.ended = was_in_contact;
+  return res;
+}
+
+TELEOP_TIP_INLINE bool TipMeshContact::friction_force(const Eigen::Matrix3Xd& x,
+                                                      const Eigen::Vector3d& c, double r,
+                                                      double pen_rate, double fn_nodes, Proxy& pr,
+                                                      Eigen::Vector3d& ft, TipContactResult& res) {
+  const double k = params_.stiffness_n_per_m;
+  pr.dt_vec = pr.d - pr.d.dot(pr.n) * pr.n;
+  ft = -k * pr.dt_vec;
+  const double mu_s = std::max(0.0, params_.friction_static);
+  const double mu_k = std::clamp(params_.friction_kinetic, 0.0, mu_s);
+  if (ft.norm() > mu_s * pr.fn_eff) {
+    // kinetic friction: the proxy slides along the surface until |F_t| = mu_k F_n
+    res.sliding = true;
+    if (!slide_proxy(x, c, r, pen_rate, fn_nodes, mu_k, pr)) return false;
+    ft = -k * pr.dt_vec;
+    const double ftn = ft.norm();
+    if (ftn > mu_k * pr.fn_eff && ftn > 0.0) ft *= mu_k * pr.fn_eff / ftn;
+  }
+  return true;
+}
+
+TELEOP_TIP_INLINE void TipMeshContact::blend_weights(double fn_nodes, double fn_proxy, double& a,
+                                                     double& s) {
+  const double ratio = fn_proxy > 1e-12 ? fn_nodes / fn_proxy : 2.0;
+  const double u = std::clamp((ratio - 0.25) / 1.5, 0.0, 1.0);
+  a = u * u * (3.0 - 2.0 * u);
+  const double blended_n = a * fn_nodes + (1.0 - a) * fn_proxy;
+  if (blended_n > 1e-12) s = std::max(fn_nodes, fn_proxy) / blended_n;
+}
+
 TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd* v,
                                         const Eigen::Vector3d& tip_prev_m,
                                         const Eigen::Vector3d& tip_now_m, double tip_radius_m,
@@ -363,16 +401,11 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
   if (!tip_prev_m.allFinite() || !tip_now_m.allFinite() || !tip_velocity_mps.allFinite() ||
       !(tip_radius_m >= 0.0) || !(dt_s > 0.0) || !x.allFinite() ||
       x.cols() != topo_.vertex_count()) {
-    in_contact_ = false;
-    ++faults_;
-    res.fault = true;
-    res.ended = was_in_contact;
-    return res;
+    return drop_on_fault(was_in_contact);
   }
   tree_.rebuild_if_degraded(x);
 
   const double r = tip_radius_m;
-  const double k = params_.stiffness_n_per_m;
   const Eigen::Vector3d& c = tip_now_m;
   Eigen::Vector3d anchor_vel = Eigen::Vector3d::Zero();
   if (v != nullptr && v->cols() != x.cols()) v = nullptr;
@@ -404,22 +437,12 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
   const double fn_nodes = f_nodes_tip.dot(pr.n);
   pr.fn_eff = std::max(pr.fn, fn_nodes);
 
-  pr.dt_vec = pr.d - pr.d.dot(pr.n) * pr.n;
-  Eigen::Vector3d ft = -k * pr.dt_vec;
-  const double mu_s = std::max(0.0, params_.friction_static);
-  const double mu_k = std::clamp(params_.friction_kinetic, 0.0, mu_s);
-  if (ft.norm() > mu_s * pr.fn_eff) {
-    // kinetic friction: the proxy slides along the surface until |F_t| = mu_k F_n
-    res.sliding = true;
-    if (!slide_proxy(x, c, r, pen_rate, fn_nodes, mu_k, pr)) {
-      in_contact_ = false;
-      res.ended = was_in_contact;
-      res.began = false;
-      return res;
-    }
-    ft = -k * pr.dt_vec;
-    const double ftn = ft.norm();
-    if (ftn > mu_k * pr.fn_eff && ftn > 0.0) ft *= mu_k * pr.fn_eff / ftn;
+  Eigen::Vector3d ft;
+  if (!friction_force(x, c, r, pen_rate, fn_nodes, pr, ft, res)) {
+    in_contact_ = false;
+    res.ended = was_in_contact;
+    res.began = false;
+    return res;
   }
 
   // the node penalty (area contact) takes over from the proxy spring (a face touched between
@@ -427,13 +450,7 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
   // 1 - a of the proxy's, a = smoothstep of their ratio over [0.25, 1.75], both scaled by s so
   // that the normal force is still the larger of the two (file comment)
   double a = 0.0, s = 1.0;
-  if (node_contacts_ > 0) {
-    const double ratio = pr.fn > 1e-12 ? fn_nodes / pr.fn : 2.0;
-    const double u = std::clamp((ratio - 0.25) / 1.5, 0.0, 1.0);
-    a = u * u * (3.0 - 2.0 * u);
-    const double blended_n = a * fn_nodes + (1.0 - a) * pr.fn;
-    if (blended_n > 1e-12) s = std::max(fn_nodes, pr.fn) / blended_n;
-  }
+  if (node_contacts_ > 0) blend_weights(fn_nodes, pr.fn, a, s);
   const bool use_nodes = a > 0.0;
   Eigen::Vector3d f = s * (a * f_nodes_tip + (1.0 - a) * pr.fn * pr.n) + ft;
   double scale = 1.0;
@@ -442,14 +459,7 @@ TipContactResult TipMeshContact::update(const Eigen::Matrix3Xd& x, const Eigen::
     if (fm > params_.max_force_n) scale = params_.max_force_n / fm;
     f *= scale;
   }
-  if (!f.allFinite()) {
-    in_contact_ = false;
-    ++faults_;
-    res = TipContactResult{};
-    res.fault = true;
-    res.ended = was_in_contact;
-    return res;
-  }
+  if (!f.allFinite()) return drop_on_fault(was_in_contact);
   apply_reaction(scale * (s * (1.0 - a) * pr.fn * pr.n + ft), scale * s * a, node_forces_n);
   res.node_contacts = use_nodes ? node_contacts_ : 0;
   res.max_node_depth_m = max_node_depth;

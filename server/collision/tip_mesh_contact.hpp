@@ -191,6 +191,18 @@ class TipMeshContact {
                       Eigen::Matrix3Xd& node_forces_n) const;
   /// The in-contact fields of res for force f [N] on the tip at proxy pr.
   void set_contact_result(const Eigen::Vector3d& f, const Proxy& pr, TipContactResult& res) const;
+  /// Non-finite data: the contact dropped, a fault counted; the result says so (no force).
+  TipContactResult drop_on_fault(bool was_in_contact);
+  /// The tangential (friction) force on the tip into ft: the proxy spring's while it sticks
+  /// (|F_t| <= mu_s F_n), else kinetic friction (res.sliding, the proxy slid); false when the tip
+  /// left the surface while sliding.
+  bool friction_force(const Eigen::Matrix3Xd& x, const Eigen::Vector3d& c, double r,
+                      double pen_rate, double fn_nodes, Proxy& pr, Eigen::Vector3d& ft,
+                      TipContactResult& res);
+  /// The node penalty's share a of the response and the scale s (with nodes in contact): a is a
+  /// smoothstep of fn_nodes / fn_proxy over [0.25, 1.75]; s keeps the normal force the larger of
+  /// the two.
+  static void blend_weights(double fn_nodes, double fn_proxy, double& a, double& s);
 
   TipContactParams params_;
   AabbTree tree_;

@@ -53,15 +53,9 @@ Fit fit_laws(const std::vector<double>& x, const std::vector<double>& f) {
   return r;
 }
 
-int run_contact_force_curve(const teleop::CommandArgs& args) {
-  std::filesystem::create_directories(args.out_dir);
-  const double dt = 1e-3;
-  const double tip_r = 0.05;
-  const double target_depth = 0.03;
-  const std::vector<double> speeds =
-      args.quick ? std::vector<double>{0.05, 0.2} : std::vector<double>{0.01, 0.05, 0.2};
-
-  tc::TipContactParams cp;
+/// The contact law's parameters from --stiffness, --damping and --mu; false (with a message)
+/// when one is out of its range.
+bool contact_params(const teleop::CommandArgs& args, tc::TipContactParams& cp) {
   cp.stiffness_n_per_m = std::stod(args.option("--stiffness", "300"));
   cp.damping_ns_per_m = std::stod(args.option("--damping", "1"));
   cp.friction_static = std::stod(args.option("--mu", "0.5"));
@@ -72,8 +66,73 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
     std::cerr << "contact-force-curve: --stiffness must be in (0, 1e6] N/m (got "
               << cp.stiffness_n_per_m << "), --damping in [0, 1e4] N s/m (got "
               << cp.damping_ns_per_m << "), --mu in [0, 10] (got " << cp.friction_static << ")\n";
-    return 2;
+    return false;
   }
+  return true;
+}
+
+/// One press's loading samples (deformation [m], vertical force [N]) and its peak force [N].
+struct PressCurve {
+  std::vector<double> xs, fs;
+  double peak = 0.0;
+};
+
+/// One press at `speed` [m/s] from `tip`: the kinematic tip pressed to target_depth, held
+/// 100 ms and withdrawn; a CSV row for every step from the first contact on.
+PressCurve press_at(const teleop::sim::WorldModel& world, teleop::sim::WorldData& data,
+                    teleop::sim::WorldCommand& cmd, teleop::sim::EventQueue& events,
+                    Eigen::Vector3d tip, double speed, double dt, double tip_r, double target_depth,
+                    teleop::CsvWriter& csv) {
+  double t = 0.0, z_touch = NAN;
+  int phase = 0, hold_steps = 0;
+  PressCurve out;
+  std::vector<double>& xs = out.xs;
+  std::vector<double>& fs = out.fs;
+  double& peak = out.peak;
+  const int max_steps = static_cast<int>(4.0 * (target_depth + 0.02) / (speed * dt)) + 2000;
+  for (int n = 0; n < max_steps; ++n) {
+    // kinematic tip: press, hold 100 ms, withdraw
+    Eigen::Vector3d vel = Eigen::Vector3d::Zero();
+    if (phase == 0) vel.z() = -speed;
+    if (phase == 2) vel.z() = speed;
+    tip += vel * dt;
+    cmd.position_m = tip;
+    cmd.velocity_mps = vel;
+    teleop::sim::world_step(world, data, cmd, dt, events);
+    const tc::TipContactResult& res = data.bodies[0].last;
+    if (res.in_contact && std::isnan(z_touch)) z_touch = res.entry_point_m.z() + tip_r;
+    const double deformation = std::isnan(z_touch) ? 0.0 : std::max(0.0, z_touch - tip.z());
+    const double deflection =
+        res.in_contact ? std::max(0.0, res.entry_point_m.z() - res.contact_point_m.z()) : 0.0;
+    if (res.in_contact || phase > 0 || !std::isnan(z_touch)) {
+      csv.row({speed, static_cast<double>(phase), t, tip.z(), deformation, deflection,
+               res.penetration_m, res.force_on_tip_n.norm(), res.force_on_tip_n.z(),
+               res.in_contact ? 1.0 : 0.0, static_cast<double>(res.node_contacts),
+               static_cast<double>(res.triangle)});
+    }
+    if (phase == 0 && res.in_contact) {
+      xs.push_back(deformation);
+      fs.push_back(res.force_on_tip_n.z());
+    }
+    peak = std::max(peak, res.force_on_tip_n.norm());
+    if (phase == 0 && deformation >= target_depth) phase = 1;
+    if (phase == 1 && ++hold_steps >= 100) phase = 2;
+    t += dt;
+    if (phase == 2 && !res.in_contact && tip.z() > z_touch + 0.005) break;
+  }
+  return out;
+}
+
+int run_contact_force_curve(const teleop::CommandArgs& args) {
+  std::filesystem::create_directories(args.out_dir);
+  const double dt = 1e-3;
+  const double tip_r = 0.05;
+  const double target_depth = 0.03;
+  const std::vector<double> speeds =
+      args.quick ? std::vector<double>{0.05, 0.2} : std::vector<double>{0.01, 0.05, 0.2};
+
+  tc::TipContactParams cp;
+  if (!contact_params(args, cp)) return 2;
 
   teleop::CsvWriter csv(
       (args.out_dir / "contact_force_curve.csv").string(),
@@ -114,41 +173,11 @@ int run_contact_force_curve(const teleop::CommandArgs& args) {
     Eigen::Vector3d tip(0.0, 0.0, top + tip_r + 0.005);
     teleop::sim::place_tool(world, data, tip);
     const tc::TipMeshContact& contact = data.bodies[0].contact;
-    double t = 0.0, z_touch = NAN;
-    int phase = 0, hold_steps = 0;
-    std::vector<double> xs, fs;
-    double peak = 0.0;
-    const int max_steps = static_cast<int>(4.0 * (target_depth + 0.02) / (speed * dt)) + 2000;
-    for (int n = 0; n < max_steps; ++n) {
-      // kinematic tip: press, hold 100 ms, withdraw
-      Eigen::Vector3d vel = Eigen::Vector3d::Zero();
-      if (phase == 0) vel.z() = -speed;
-      if (phase == 2) vel.z() = speed;
-      tip += vel * dt;
-      cmd.position_m = tip;
-      cmd.velocity_mps = vel;
-      teleop::sim::world_step(world, data, cmd, dt, events);
-      const tc::TipContactResult& res = data.bodies[0].last;
-      if (res.in_contact && std::isnan(z_touch)) z_touch = res.entry_point_m.z() + tip_r;
-      const double deformation = std::isnan(z_touch) ? 0.0 : std::max(0.0, z_touch - tip.z());
-      const double deflection =
-          res.in_contact ? std::max(0.0, res.entry_point_m.z() - res.contact_point_m.z()) : 0.0;
-      if (res.in_contact || phase > 0 || !std::isnan(z_touch)) {
-        csv.row({speed, static_cast<double>(phase), t, tip.z(), deformation, deflection,
-                 res.penetration_m, res.force_on_tip_n.norm(), res.force_on_tip_n.z(),
-                 res.in_contact ? 1.0 : 0.0, static_cast<double>(res.node_contacts),
-                 static_cast<double>(res.triangle)});
-      }
-      if (phase == 0 && res.in_contact) {
-        xs.push_back(deformation);
-        fs.push_back(res.force_on_tip_n.z());
-      }
-      peak = std::max(peak, res.force_on_tip_n.norm());
-      if (phase == 0 && deformation >= target_depth) phase = 1;
-      if (phase == 1 && ++hold_steps >= 100) phase = 2;
-      t += dt;
-      if (phase == 2 && !res.in_contact && tip.z() > z_touch + 0.005) break;
-    }
+    const PressCurve curve =
+        press_at(world, data, cmd, events, tip, speed, dt, tip_r, target_depth, csv);
+    const std::vector<double>& xs = curve.xs;
+    const std::vector<double>& fs = curve.fs;
+    const double peak = curve.peak;
     const Fit fit = fit_laws(xs, fs);
     const double estar = fit.c_hertz / ((4.0 / 3.0) * std::sqrt(r_eff));
     fits.row({speed, fit.k_lin, fit.rms_lin, fit.c_hertz, estar, fit.rms_hertz, peak,

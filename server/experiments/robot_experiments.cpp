@@ -169,6 +169,26 @@ void write_summary(const teleop::CommandArgs& args, const RobotModel& model,
   sum.flush();
 }
 
+/// The columns of robot_reach.csv (write_row).
+std::vector<std::string> reach_columns() {
+  return {"t_s",           "segment",       "target_x_m",  "target_y_m", "target_z_m",
+          "tip_x_m",       "tip_y_m",       "tip_z_m",     "error_m",    "orientation_error_rad",
+          "force_x_n",     "force_y_n",     "force_z_n",   "force_n",    "in_contact",
+          "contact_plane", "penetration_m", "sigma_min_m", "q1_rad",     "q2_rad",
+          "q3_rad",        "q4_rad",        "q5_rad",      "q6_rad",     "tau1_nm",
+          "tau2_nm",       "tau3_nm",       "tau4_nm",     "tau5_nm",    "tau6_nm",
+          "link_contacts"};
+}
+
+/// The step's events (plane contacts among them), one row each, the queue emptied.
+void write_events(teleop::sim::EventQueue& events, teleop::CsvWriter& ev_csv) {
+  teleop::sim::SimEvent e;
+  while (events.pop(e)) {
+    ev_csv.row_text({teleop::format_number(e.sim_time_s), std::to_string(static_cast<int>(e.kind)),
+                     teleop::format_number(e.value), std::string("\"") + e.message + "\""});
+  }
+}
+
 int run_robot_reach(const teleop::CommandArgs& args) {
   const std::string scene = args.option("--scene", teleop::sim::robot::default_robot_scene_path());
   const std::string stepper = args.option("--stepper", "step");
@@ -201,15 +221,7 @@ int run_robot_reach(const teleop::CommandArgs& args) {
   const double time_scale = args.quick ? 0.5 : 1.0;
   const std::vector<Waypoint> path = reach_path(sim, model.tip_radius_m);
 
-  teleop::CsvWriter csv(
-      (args.out_dir / "robot_reach.csv").string(),
-      {"t_s",           "segment",       "target_x_m",  "target_y_m", "target_z_m",
-       "tip_x_m",       "tip_y_m",       "tip_z_m",     "error_m",    "orientation_error_rad",
-       "force_x_n",     "force_y_n",     "force_z_n",   "force_n",    "in_contact",
-       "contact_plane", "penetration_m", "sigma_min_m", "q1_rad",     "q2_rad",
-       "q3_rad",        "q4_rad",        "q5_rad",      "q6_rad",     "tau1_nm",
-       "tau2_nm",       "tau3_nm",       "tau4_nm",     "tau5_nm",    "tau6_nm",
-       "link_contacts"});
+  teleop::CsvWriter csv((args.out_dir / "robot_reach.csv").string(), reach_columns());
   teleop::CsvWriter ev_csv((args.out_dir / "robot_reach_events.csv").string(),
                            {"t_s", "kind", "value", "message"});
 
@@ -234,12 +246,7 @@ int run_robot_reach(const teleop::CommandArgs& args) {
       teleop::sim::world_step(world, data, cmd, dt, events);  // plane contact events included
       t += dt;
       record_step(sim, planes, b, in, t, w, stats, csv);
-      teleop::sim::SimEvent e;
-      while (events.pop(e)) {
-        ev_csv.row_text({teleop::format_number(e.sim_time_s),
-                         std::to_string(static_cast<int>(e.kind)), teleop::format_number(e.value),
-                         std::string("\"") + e.message + "\""});
-      }
+      write_events(events, ev_csv);
     }
     progress.add();
   }

@@ -73,20 +73,9 @@ std::vector<Plane> default_robot_planes(double stiffness_n_per_m, double damping
   return {floor, wall};
 }
 
-RobotSim::RobotSim(const RobotModel& model, const std::vector<Plane>& planes,
-                   const RobotSimOptions& options)
-    : model_(model), options_(options), planes_(planes) {
-  if (model_.n < 1 || model_.n > kMaxJoints) {
-    throw std::invalid_argument("RobotSim: the model has " + std::to_string(model_.n) +
-                                " joints; 1 to " + std::to_string(kMaxJoints) + " allowed");
-  }
-  if (planes_.size() > static_cast<std::size_t>(kMaxPlanes)) {
-    throw std::invalid_argument("RobotSim: " + std::to_string(planes_.size()) +
-                                " planes; at most " + std::to_string(kMaxPlanes));
-  }
-  ode_init_once();
-  const int n = model_.n;
-
+/// The ODE world: its own self-threaded step, gravity, the joint ERP/CFM, the solver's
+/// iterations, and a step arena reserved generously up front so that stepping never grows it.
+void RobotSim::make_world() {
   world_ = dWorldCreate();
   // a self-threaded step of its own: worlds stepped on different threads share nothing
   threading_ = dThreadingAllocateSelfThreadedImplementation();
@@ -106,14 +95,12 @@ RobotSim::RobotSim(const RobotModel& model, const std::vector<Plane>& planes,
   reserve.reserve_minimum = 1u << 20;
   dWorldSetStepMemoryReservationPolicy(world_, &reserve);
   contact_group_ = dJointGroupCreate(0);
+}
 
-  // build the chain at the mid-range configuration: hinge angles then read q - q_mid, which
-  // keeps every joint's range inside ODE's (-pi, pi] hinge-angle interval
-  JointVector q_build(n);
-  for (int i = 0; i < n; ++i) q_build(i) = model_.q_mid(i);
-  Frames f;
-  forward_kinematics(model_, q_build, f);
-
+/// One body per link (mass and inertia at its COM, its collision box), and the tip's sphere on
+/// the last link.
+void RobotSim::make_bodies() {
+  const int n = model_.n;
   for (int i = 0; i < n; ++i) {
     const LinkModel& l = model_.links[i];
     dBodyID b = dBodyCreate(world_);
@@ -134,10 +121,12 @@ RobotSim::RobotSim(const RobotModel& model, const std::vector<Plane>& planes,
   dGeomSetBody(tip_geom_, bodies_[n - 1]);
   const Eigen::Vector3d tip_off = model_.tool_offset_m - model_.links[n - 1].com_m;
   dGeomSetOffsetPosition(tip_geom_, tip_off.x(), tip_off.y(), tip_off.z());
+}
 
-  JointVector zero = JointVector::Zero(n);
-  place_bodies(q_build, zero);
-
+/// A hinge per joint at the build configuration `q_build` (frames `f`), with stops where the
+/// range is below a full turn, and a Coulomb friction motor where the link has one.
+void RobotSim::make_joints(const JointVector& q_build, const Frames& f) {
+  const int n = model_.n;
   for (int i = 0; i < n; ++i) {
     const LinkModel& l = model_.links[i];
     dBodyID parent = i == 0 ? nullptr : bodies_[i - 1];
@@ -170,15 +159,11 @@ RobotSim::RobotSim(const RobotModel& model, const std::vector<Plane>& planes,
       coulomb_[i] = a;
     }
   }
+}
 
-  for (std::size_t k = 0; k < planes_.size(); ++k) {
-    const Plane& pl = planes_[k];
-    const Eigen::Vector3d nrm = pl.normal.normalized();
-    plane_geoms_[k] = dCreatePlane(nullptr, nrm.x(), nrm.y(), nrm.z(), pl.offset_m);
-  }
-
-  // grow the contact joint group's arena to its largest size once (it keeps its memory when
-  // emptied), and run one step with every contact so that ODE's step arena is sized too
+/// Grows the contact joint group's arena to its largest size once (it keeps its memory when
+/// emptied), and runs one step with every contact so that ODE's step arena is sized too.
+void RobotSim::reserve_contact_arenas() {
   for (int k = 0; k < kMaxContacts; ++k) {
     dContact c{};
     c.geom.normal[2] = 1.0;
@@ -187,6 +172,45 @@ RobotSim::RobotSim(const RobotModel& model, const std::vector<Plane>& planes,
   dWorldStep(world_, 1e-6);
   dWorldQuickStep(world_, 1e-6);
   dJointGroupEmpty(contact_group_);
+}
+
+RobotSim::RobotSim(const RobotModel& model, const std::vector<Plane>& planes,
+                   const RobotSimOptions& options)
+    : model_(model), options_(options), planes_(planes) {
+  if (model_.n < 1 || model_.n > kMaxJoints) {
+    throw std::invalid_argument("RobotSim: the model has " + std::to_string(model_.n) +
+                                " joints; 1 to " + std::to_string(kMaxJoints) + " allowed");
+  }
+  if (planes_.size() > static_cast<std::size_t>(kMaxPlanes)) {
+    throw std::invalid_argument("RobotSim: " + std::to_string(planes_.size()) +
+                                " planes; at most " + std::to_string(kMaxPlanes));
+  }
+  ode_init_once();
+  const int n = model_.n;
+
+  make_world();
+
+  // build the chain at the mid-range configuration: hinge angles then read q - q_mid, which
+  // keeps every joint's range inside ODE's (-pi, pi] hinge-angle interval
+  JointVector q_build(n);
+  for (int i = 0; i < n; ++i) q_build(i) = model_.q_mid(i);
+  Frames f;
+  forward_kinematics(model_, q_build, f);
+
+  make_bodies();
+
+  JointVector zero = JointVector::Zero(n);
+  place_bodies(q_build, zero);
+
+  make_joints(q_build, f);
+
+  for (std::size_t k = 0; k < planes_.size(); ++k) {
+    const Plane& pl = planes_[k];
+    const Eigen::Vector3d nrm = pl.normal.normalized();
+    plane_geoms_[k] = dCreatePlane(nullptr, nrm.x(), nrm.y(), nrm.z(), pl.offset_m);
+  }
+
+  reserve_contact_arenas();
 
   state_.n = n;
   reset(model_.q_home);

@@ -114,6 +114,10 @@ class RobotSim {
   double last_collision_s() const { return last_collision_s_; }
 
  private:
+  void make_world();
+  void make_bodies();
+  void make_joints(const JointVector& q_build, const Frames& f);
+  void reserve_contact_arenas();
   void read_state();
   void place_bodies(const JointVector& q, const JointVector& qd);
   void collide(double dt_s);

@@ -140,6 +140,33 @@ int tet_count(const df::DeformableModel& m) {
   return m.params.model == df::ModelKind::kFem ? m.fem.tet_count : 0;
 }
 
+// Pins the inner nodes within kHeldRadiusM of the centre (at least the nearest one) where they
+// are.
+void hold_centre(const df::DeformableModel& m, df::DeformableState& s) {
+  double nearest = 1e30;
+  for (int i = m.node_count; i < m.fem.node_count; ++i) {
+    nearest = std::min(nearest, (m.fem.rest.col(i) - m.rest_centre_m).norm());
+  }
+  const double held_r = std::max(kHeldRadiusM, nearest);
+  for (int i = m.node_count; i < m.fem.node_count; ++i) {
+    if ((m.fem.rest.col(i) - m.rest_centre_m).norm() <= held_r) {
+      s.pinned[static_cast<std::size_t>(i)] = 1;
+      s.pin_target.col(i) = s.x.col(i);
+    }
+  }
+}
+
+// The highest surface node above z_top: its height into z_top and its x, y into xy.
+void top_node(const df::DeformableModel& m, const df::DeformableState& s, double& z_top,
+              Eigen::Vector2d& xy) {
+  for (int i = 0; i < m.node_count; ++i) {
+    if (s.x(2, i) > z_top) {
+      z_top = s.x(2, i);
+      xy = s.x.col(i).head<2>();
+    }
+  }
+}
+
 }  // namespace
 
 PressResult press_ball(const df::DeformableParams& params_in, Support support, bool gravity,
@@ -167,18 +194,7 @@ PressResult press_ball(const df::DeformableParams& params_in, Support support, b
   const Eigen::Vector3d c_rest = df::centroid(m, s);
   if (support == Support::kHeldCentre) {
     if (params.model != df::ModelKind::kFem) return out;  // surface models have no inside
-    // the nodes within kHeldRadiusM of the centre (at least the nearest one) are held
-    double nearest = 1e30;
-    for (int i = m.node_count; i < m.fem.node_count; ++i) {
-      nearest = std::min(nearest, (m.fem.rest.col(i) - m.rest_centre_m).norm());
-    }
-    const double held_r = std::max(kHeldRadiusM, nearest);
-    for (int i = m.node_count; i < m.fem.node_count; ++i) {
-      if ((m.fem.rest.col(i) - m.rest_centre_m).norm() <= held_r) {
-        s.pinned[static_cast<std::size_t>(i)] = 1;
-        s.pin_target.col(i) = s.x.col(i);
-      }
-    }
+    hold_centre(m, s);
   }
   int top = 0;
   for (int i = 0; i < m.node_count; ++i) top = s.x(2, i) > s.x(2, top) ? i : top;
@@ -198,12 +214,7 @@ PressResult press_ball(const df::DeformableParams& params_in, Support support, b
   // the tip just above the top node, then straight down
   double z_top = -1e9;
   Eigen::Vector2d xy(0, 0);
-  for (int i = 0; i < m.node_count; ++i) {
-    if (s.x(2, i) > z_top) {
-      z_top = s.x(2, i);
-      xy = s.x.col(i).head<2>();
-    }
-  }
+  top_node(m, s, z_top, xy);
   const double z_touch = z_top + r;
   Eigen::Vector3d tip(xy.x(), xy.y(), z_touch + 0.002);
   place_tool(world, data, tip);

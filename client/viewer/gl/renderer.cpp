@@ -149,6 +149,37 @@ Eigen::Matrix4f along(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float 
   return m.matrix();
 }
 
+/// The scene's planes (into `planes`) and what their patches must cover: the workspace, the
+/// bodies and the robot's base, with a margin.
+Bounds plane_bounds(const SceneDescription& scene, std::vector<Plane>& planes) {
+  Bounds b;
+  b.min = vec3(scene.workspace_min_m());
+  b.max = vec3(scene.workspace_max_m());
+  if (!(b.min.array() < b.max.array()).all() || !b.min.allFinite() || !b.max.allFinite()) {
+    b.min = Eigen::Vector3f::Constant(-1.0f);
+    b.max = Eigen::Vector3f::Constant(1.0f);
+  }
+  for (const auto& o : scene.objects()) {
+    if (o.kind() == OBJECT_PLANE) {
+      const Eigen::Vector3f n = vec3(o.normal());
+      if (n.norm() > 0.5f && n.allFinite()) {
+        planes.push_back(Plane{n.normalized(), static_cast<float>(o.offset_m())});
+      }
+    } else if (o.kind() == OBJECT_DEFORMABLE_MESH ||
+               (o.kind() == OBJECT_ROBOT_LINK && o.id() == scene_objects::kRobotFrameIdBase)) {
+      const Eigen::Vector3f p = vec3(o.position_m());
+      const float r = static_cast<float>(o.size_m()[0]);
+      if (p.allFinite() && std::isfinite(r)) {
+        b.min = b.min.cwiseMin(p - Eigen::Vector3f::Constant(r));
+        b.max = b.max.cwiseMax(p + Eigen::Vector3f::Constant(r));
+      }
+    }
+  }
+  b.min -= Eigen::Vector3f::Constant(0.35f);
+  b.max += Eigen::Vector3f::Constant(0.35f);
+  return b;
+}
+
 }  // namespace
 
 bool SceneRenderer::init(std::string& error) {
@@ -233,33 +264,8 @@ void SceneRenderer::sync_scene(const ViewerView& view) {
   tip_radius_m_ = scene.tip_radius_m() > 0.0 ? static_cast<float>(scene.tip_radius_m()) : 0.05f;
   skeleton_from_scene(scene, skeleton_);
 
-  // what the plane patches must cover: the workspace, the bodies and the robot's base
-  Bounds b;
-  b.min = vec3(scene.workspace_min_m());
-  b.max = vec3(scene.workspace_max_m());
-  if (!(b.min.array() < b.max.array()).all() || !b.min.allFinite() || !b.max.allFinite()) {
-    b.min = Eigen::Vector3f::Constant(-1.0f);
-    b.max = Eigen::Vector3f::Constant(1.0f);
-  }
   std::vector<Plane> planes;
-  for (const auto& o : scene.objects()) {
-    if (o.kind() == OBJECT_PLANE) {
-      const Eigen::Vector3f n = vec3(o.normal());
-      if (n.norm() > 0.5f && n.allFinite()) {
-        planes.push_back(Plane{n.normalized(), static_cast<float>(o.offset_m())});
-      }
-    } else if (o.kind() == OBJECT_DEFORMABLE_MESH ||
-               (o.kind() == OBJECT_ROBOT_LINK && o.id() == scene_objects::kRobotFrameIdBase)) {
-      const Eigen::Vector3f p = vec3(o.position_m());
-      const float r = static_cast<float>(o.size_m()[0]);
-      if (p.allFinite() && std::isfinite(r)) {
-        b.min = b.min.cwiseMin(p - Eigen::Vector3f::Constant(r));
-        b.max = b.max.cwiseMax(p + Eigen::Vector3f::Constant(r));
-      }
-    }
-  }
-  b.min -= Eigen::Vector3f::Constant(0.35f);
-  b.max += Eigen::Vector3f::Constant(0.35f);
+  const Bounds b = plane_bounds(scene, planes);
 
   patches_.clear();
   patch_first_.clear();
@@ -294,6 +300,12 @@ void SceneRenderer::sync_scene(const ViewerView& view) {
     }
     patches_.push_back(std::move(patch));
   }
+  upload_planes(vertices);
+}
+
+/// The planes' vertices (position, normal) into their buffer; the line buffer grown to hold the
+/// grid and a frame's lines.
+void SceneRenderer::upload_planes(const std::vector<float>& vertices) {
   glBindVertexArray(plane_vao_);
   glBindBuffer(GL_ARRAY_BUFFER, plane_vbo_);
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(float)),
@@ -314,6 +326,43 @@ void SceneRenderer::sync_scene(const ViewerView& view) {
   glBindBuffer(GL_ARRAY_BUFFER, 0);
 }
 
+/// A body's buffers made (once) and sized for its vertices, its triangles uploaded; the frame
+/// and the colours' reference start over.
+void SceneRenderer::set_topology(DeformableGpu& g, const MeshSlot& m) {
+  const std::size_t floats = 3u * m.vertex_count;
+  if (!g.vao) {
+    glGenVertexArrays(1, &g.vao);
+    glGenBuffers(1, &g.positions);
+    glGenBuffers(1, &g.normals);
+    glGenBuffers(1, &g.colors);
+    glGenBuffers(1, &g.ebo);
+  }
+  glBindVertexArray(g.vao);
+  const auto bytes = static_cast<GLsizeiptr>(floats * sizeof(float));
+  int location = 0;
+  for (const GLuint buffer : {g.positions, g.normals, g.colors}) {
+    glBindBuffer(GL_ARRAY_BUFFER, buffer);
+    glBufferData(GL_ARRAY_BUFFER, bytes, nullptr, GL_DYNAMIC_DRAW);
+    glEnableVertexAttribArray(static_cast<GLuint>(location));
+    glVertexAttribPointer(static_cast<GLuint>(location), 3, GL_FLOAT, GL_FALSE, 0, byte_offset(0));
+    ++location;
+  }
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(m.triangles.size() * sizeof(std::uint32_t)),
+               m.triangles.data(), GL_STATIC_DRAW);
+  glBindVertexArray(0);
+  g.object_id = m.object_id;
+  g.vertex_count = m.vertex_count;
+  g.count = static_cast<GLsizei>(m.triangles.size());
+  g.topology_version = m.topology_version;
+  g.frame_version = 0;
+  g.normal_scratch.resize(floats);
+  g.color_scratch.resize(floats);
+  g.reference.resize(floats);
+  g.have_reference = false;
+}
+
 void SceneRenderer::upload_deformables(const ViewerView& view, const RenderOptions& options) {
   for (int i = 0; i < view.mesh_count; ++i) {
     const MeshSlot& m = view.meshes[static_cast<std::size_t>(i)];
@@ -328,38 +377,7 @@ void SceneRenderer::upload_deformables(const ViewerView& view, const RenderOptio
     const std::size_t floats = 3u * m.vertex_count;
     if (g.topology_version != m.topology_version || g.object_id != m.object_id ||
         g.vertex_count != m.vertex_count) {
-      if (!g.vao) {
-        glGenVertexArrays(1, &g.vao);
-        glGenBuffers(1, &g.positions);
-        glGenBuffers(1, &g.normals);
-        glGenBuffers(1, &g.colors);
-        glGenBuffers(1, &g.ebo);
-      }
-      glBindVertexArray(g.vao);
-      const auto bytes = static_cast<GLsizeiptr>(floats * sizeof(float));
-      int location = 0;
-      for (const GLuint buffer : {g.positions, g.normals, g.colors}) {
-        glBindBuffer(GL_ARRAY_BUFFER, buffer);
-        glBufferData(GL_ARRAY_BUFFER, bytes, nullptr, GL_DYNAMIC_DRAW);
-        glEnableVertexAttribArray(static_cast<GLuint>(location));
-        glVertexAttribPointer(static_cast<GLuint>(location), 3, GL_FLOAT, GL_FALSE, 0,
-                              byte_offset(0));
-        ++location;
-      }
-      glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
-      glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-                   static_cast<GLsizeiptr>(m.triangles.size() * sizeof(std::uint32_t)),
-                   m.triangles.data(), GL_STATIC_DRAW);
-      glBindVertexArray(0);
-      g.object_id = m.object_id;
-      g.vertex_count = m.vertex_count;
-      g.count = static_cast<GLsizei>(m.triangles.size());
-      g.topology_version = m.topology_version;
-      g.frame_version = 0;
-      g.normal_scratch.resize(floats);
-      g.color_scratch.resize(floats);
-      g.reference.resize(floats);
-      g.have_reference = false;
+      set_topology(g, m);
     }
     const bool recolor =
         options.displacement_colors != g.colored || options.displacement_scale_m != g.color_scale_m;
@@ -498,6 +516,81 @@ void SceneRenderer::draw_robot(const ViewerView& view, const Eigen::Vector3f& ti
   if ((tip - flange).norm() > tip_radius_m_) draw_cylinder(flange, tip, 0.012f, colors::kRobot);
 }
 
+/// The deformable bodies, lit, coloured by their deformation or as wireframe.
+void SceneRenderer::draw_deformables(const ViewerView& view, const RenderOptions& options) {
+  for (int i = 0; i < view.mesh_count; ++i) {
+    const DeformableGpu& g = deformables_[static_cast<std::size_t>(i)];
+    if (g.count == 0) continue;
+    const Eigen::Matrix4f identity = Eigen::Matrix4f::Identity();
+    const Eigen::Matrix3f identity3 = Eigen::Matrix3f::Identity();
+    glUniformMatrix4fv(u_model_, 1, GL_FALSE, identity.data());
+    glUniformMatrix3fv(u_normal_matrix_, 1, GL_FALSE, identity3.data());
+    const Eigen::Vector3f c =
+        options.wireframe ? Eigen::Vector3f(0.55f, 0.78f, 1.0f) : colors::kDeformable;
+    glUniform4f(u_color_, c.x(), c.y(), c.z(), 1.0f);
+    glUniform1i(u_vertex_color_, options.displacement_colors ? 1 : 0);
+    if (options.wireframe) glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+    glBindVertexArray(g.vao);
+    glDrawElements(GL_TRIANGLES, g.count, GL_UNSIGNED_INT, nullptr);
+    if (options.wireframe) glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  }
+}
+
+/// The robot, the tip (see-through in contact) and its shadow and drop line on the floor.
+void SceneRenderer::draw_tip(const ViewerView& view) {
+  const Eigen::Vector3f tip = vec3(view.slave.tip_position_m());
+  if (tip.allFinite()) {
+    draw_robot(view, tip);
+    // in contact the tip is see-through, so the dent under it shows
+    const bool touching = tip_touching(view);
+    if (touching) {
+      glEnable(GL_BLEND);
+      glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+      glDepthMask(GL_FALSE);
+    }
+    draw_sphere(tip, tip_radius_m_, colors::kTip, touching ? 0.45f : 1.0f);
+    if (touching) {
+      glDepthMask(GL_TRUE);
+      glDisable(GL_BLEND);
+    }
+    // shadow and drop line on the floor: where the tip is over the floor
+    if (have_floor_ && tip.z() > floor_z_) {
+      glEnable(GL_BLEND);
+      glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+      glDepthMask(GL_FALSE);
+      Eigen::Affine3f m = Eigen::Affine3f::Identity();
+      m.translate(Eigen::Vector3f(tip.x(), tip.y(), floor_z_ + 0.002f));
+      m.scale(Eigen::Vector3f(tip_radius_m_, tip_radius_m_, 0.0005f));
+      draw_primitive(sphere_, m.matrix(), Eigen::Vector3f::Zero(), 0.35f);
+      frame_lines_.clear();
+      frame_lines_.push_back(Line{tip, Eigen::Vector3f(tip.x(), tip.y(), floor_z_),
+                                  Eigen::Vector4f(1.0f, 1.0f, 1.0f, 0.35f)});
+      draw_lines(frame_lines_);
+      glDepthMask(GL_TRUE);
+      glDisable(GL_BLEND);
+    }
+  }
+}
+
+/// The contact force last, over everything: it starts inside the tool and points into the
+/// tool's shaft when the tip presses down.
+void SceneRenderer::draw_force(const ViewerView& view, const RenderOptions& options) {
+  if (view.have_slave && options.show_force) {
+    const Eigen::Vector3f tip = vec3(view.slave.tip_position_m());
+    const Eigen::Vector3f f = vec3(view.slave.contact_force_n());
+    const float fn = f.norm();
+    if (tip.allFinite() && std::isfinite(fn) && fn > 0.02f) {
+      glClear(GL_DEPTH_BUFFER_BIT);  // within the scissor-free viewport: the arrow wins
+      const Eigen::Vector3f d = f / fn;
+      const float len = std::min(fn * options.force_scale_m_per_n, 0.6f);
+      const Eigen::Vector3f start = tip + d * tip_radius_m_;
+      const float head = std::min(0.05f, 0.4f * len);
+      draw_cylinder(start, start + d * (len - head), 0.012f, colors::kForce);
+      draw_cone(start + d * (len - head), start + d * len, 0.03f, colors::kForce);
+    }
+  }
+}
+
 void SceneRenderer::draw(const ViewerView& view, const OrbitCamera& camera,
                          const RenderOptions& options, int x, int y, int w, int h) {
   glViewport(x, y, w, h);
@@ -534,59 +627,8 @@ void SceneRenderer::draw(const ViewerView& view, const OrbitCamera& camera,
   draw_planes(eye, false);
   glDisable(GL_POLYGON_OFFSET_FILL);
 
-  // deformable meshes
-  for (int i = 0; i < view.mesh_count; ++i) {
-    const DeformableGpu& g = deformables_[static_cast<std::size_t>(i)];
-    if (g.count == 0) continue;
-    const Eigen::Matrix4f identity = Eigen::Matrix4f::Identity();
-    const Eigen::Matrix3f identity3 = Eigen::Matrix3f::Identity();
-    glUniformMatrix4fv(u_model_, 1, GL_FALSE, identity.data());
-    glUniformMatrix3fv(u_normal_matrix_, 1, GL_FALSE, identity3.data());
-    const Eigen::Vector3f c =
-        options.wireframe ? Eigen::Vector3f(0.55f, 0.78f, 1.0f) : colors::kDeformable;
-    glUniform4f(u_color_, c.x(), c.y(), c.z(), 1.0f);
-    glUniform1i(u_vertex_color_, options.displacement_colors ? 1 : 0);
-    if (options.wireframe) glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
-    glBindVertexArray(g.vao);
-    glDrawElements(GL_TRIANGLES, g.count, GL_UNSIGNED_INT, nullptr);
-    if (options.wireframe) glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
-  }
-
-  // robot, tip, force
-  if (view.have_slave) {
-    const Eigen::Vector3f tip = vec3(view.slave.tip_position_m());
-    if (tip.allFinite()) {
-      draw_robot(view, tip);
-      // in contact the tip is see-through, so the dent under it shows
-      const bool touching = tip_touching(view);
-      if (touching) {
-        glEnable(GL_BLEND);
-        glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
-        glDepthMask(GL_FALSE);
-      }
-      draw_sphere(tip, tip_radius_m_, colors::kTip, touching ? 0.45f : 1.0f);
-      if (touching) {
-        glDepthMask(GL_TRUE);
-        glDisable(GL_BLEND);
-      }
-      // shadow and drop line on the floor: where the tip is over the floor
-      if (have_floor_ && tip.z() > floor_z_) {
-        glEnable(GL_BLEND);
-        glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
-        glDepthMask(GL_FALSE);
-        Eigen::Affine3f m = Eigen::Affine3f::Identity();
-        m.translate(Eigen::Vector3f(tip.x(), tip.y(), floor_z_ + 0.002f));
-        m.scale(Eigen::Vector3f(tip_radius_m_, tip_radius_m_, 0.0005f));
-        draw_primitive(sphere_, m.matrix(), Eigen::Vector3f::Zero(), 0.35f);
-        frame_lines_.clear();
-        frame_lines_.push_back(Line{tip, Eigen::Vector3f(tip.x(), tip.y(), floor_z_),
-                                    Eigen::Vector4f(1.0f, 1.0f, 1.0f, 0.35f)});
-        draw_lines(frame_lines_);
-        glDepthMask(GL_TRUE);
-        glDisable(GL_BLEND);
-      }
-    }
-  }
+  draw_deformables(view, options);
+  if (view.have_slave) draw_tip(view);
 
   // see-through walls
   glEnable(GL_BLEND);
@@ -596,22 +638,7 @@ void SceneRenderer::draw(const ViewerView& view, const OrbitCamera& camera,
   glDepthMask(GL_TRUE);
   glDisable(GL_BLEND);
 
-  // the contact force last, over everything: it starts inside the tool and points into the
-  // tool's shaft when the tip presses down
-  if (view.have_slave && options.show_force) {
-    const Eigen::Vector3f tip = vec3(view.slave.tip_position_m());
-    const Eigen::Vector3f f = vec3(view.slave.contact_force_n());
-    const float fn = f.norm();
-    if (tip.allFinite() && std::isfinite(fn) && fn > 0.02f) {
-      glClear(GL_DEPTH_BUFFER_BIT);  // within the scissor-free viewport: the arrow wins
-      const Eigen::Vector3f d = f / fn;
-      const float len = std::min(fn * options.force_scale_m_per_n, 0.6f);
-      const Eigen::Vector3f start = tip + d * tip_radius_m_;
-      const float head = std::min(0.05f, 0.4f * len);
-      draw_cylinder(start, start + d * (len - head), 0.012f, colors::kForce);
-      draw_cone(start + d * (len - head), start + d * len, 0.03f, colors::kForce);
-    }
-  }
+  draw_force(view, options);
   glDisable(GL_DEPTH_TEST);
   glBindVertexArray(0);
   glUseProgram(0);

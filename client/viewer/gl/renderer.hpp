@@ -100,6 +100,11 @@ class SceneRenderer {
   void draw_lines(const std::vector<Line>& lines);
   void draw_planes(const Eigen::Vector3f& eye, bool walls);
   void draw_robot(const ViewerView& view, const Eigen::Vector3f& tip);
+  void draw_deformables(const ViewerView& view, const RenderOptions& options);
+  void draw_tip(const ViewerView& view);
+  void draw_force(const ViewerView& view, const RenderOptions& options);
+  void upload_planes(const std::vector<float>& vertices);
+  void set_topology(DeformableGpu& g, const MeshSlot& m);
 
   GLuint lit_program_ = 0, line_program_ = 0, flat_program_ = 0;
   // lit program uniforms

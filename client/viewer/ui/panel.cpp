@@ -30,10 +30,8 @@ struct PlotLine {
   const char* label;
 };
 
-/// Title row with the newest value of each line, then a plot of the last history_s seconds.
-void plot(const char* title, const char* unit, const PlotLine* lines, int line_count,
-          const PanelInfo& info, float height, bool from_zero) {
-  static std::vector<ImVec2> points;  // render thread only; keeps its capacity
+/// The title row: the plot's name, then the newest value of each line in its colour.
+void plot_title(const char* title, const char* unit, const PlotLine* lines, int line_count) {
   ImGui::TextUnformatted(title);
   for (int i = 0; i < line_count; ++i) {
     const TimeSeries& s = *lines[i].series;
@@ -47,27 +45,34 @@ void plot(const char* title, const char* unit, const PlotLine* lines, int line_c
     ImGui::SameLine();
     ImGui::TextColored(ImGui::ColorConvertU32ToFloat4(lines[i].color), "%s", text);
   }
+}
 
-  const ImVec2 p0 = ImGui::GetCursorScreenPos();
-  const float width = ImGui::GetContentRegionAvail().x;
-  const ImVec2 p1(p0.x + width, p0.y + height);
-  ImGui::Dummy(ImVec2(width, height));
-  ImDrawList* dl = ImGui::GetWindowDrawList();
-  dl->AddRectFilled(p0, p1, kPlotBackground);
+/// A plot's rectangle on the screen and the time and value ranges it shows.
+struct PlotFrame {
+  ImVec2 p0, p1;
+  float width = 0.0f, height = 0.0f;
+  double t_begin = 0.0, history_s = 1.0;
+  double lo = 0.0, hi = 1.0;
+  bool have_data = false;  ///< some line has a bucket in the time range
+  float y(double v) const {
+    return p1.y - static_cast<float>((v - lo) / (hi - lo)) * (height - 2.0f) - 1.0f;
+  }
+  float x(double t) const { return p0.x + static_cast<float>((t - t_begin) / history_s) * width; }
+};
 
-  // vertical range over the visible buckets
-  const double t_begin = info.now_s - info.history_s;
+/// The vertical range over the visible buckets, padded (from_zero: it includes zero).
+void plot_range(const PlotLine* lines, int line_count, bool from_zero, PlotFrame& f) {
   double lo = 1e300, hi = -1e300;
   for (int i = 0; i < line_count; ++i) {
     const TimeSeries& s = *lines[i].series;
     for (std::size_t k = 0; k < s.size(); ++k) {
-      if (s[k].t_s < t_begin) continue;
+      if (s[k].t_s < f.t_begin) continue;
       lo = std::min(lo, static_cast<double>(s[k].min));
       hi = std::max(hi, static_cast<double>(s[k].max));
     }
   }
-  const bool have_data = lo <= hi;
-  if (!have_data) {
+  f.have_data = lo <= hi;
+  if (!f.have_data) {
     lo = 0.0;
     hi = 1.0;
   }
@@ -84,83 +89,92 @@ void plot(const char* title, const char* unit, const PlotLine* lines, int line_c
     if (!(from_zero && lo == 0.0)) lo -= pad;
     hi += pad;
   }
-  const auto y_of = [&](double v) {
-    return p1.y - static_cast<float>((v - lo) / (hi - lo)) * (height - 2.0f) - 1.0f;
-  };
-  const auto x_of = [&](double t) {
-    return p0.x + static_cast<float>((t - t_begin) / info.history_s) * width;
-  };
+  f.lo = lo;
+  f.hi = hi;
+}
 
-  // horizontal grid lines with their values: three, or two on a short plot
-  const int grid_lines = height >= 4.5f * ImGui::GetFontSize() ? 3 : 2;
+/// Horizontal grid lines with their values: three, or two on a short plot.
+void plot_grid(ImDrawList* dl, const PlotFrame& f) {
+  const int grid_lines = f.height >= 4.5f * ImGui::GetFontSize() ? 3 : 2;
   for (int g = 0; g < grid_lines; ++g) {
-    const double v = lo + (hi - lo) * (0.25 + 0.5 * g / (grid_lines - 1));
-    const float y = y_of(v);
-    dl->AddLine(ImVec2(p0.x, y), ImVec2(p1.x, y), kPlotGrid);
+    const double v = f.lo + (f.hi - f.lo) * (0.25 + 0.5 * g / (grid_lines - 1));
+    const float y = f.y(v);
+    dl->AddLine(ImVec2(f.p0.x, y), ImVec2(f.p1.x, y), kPlotGrid);
     char text[32];
     std::snprintf(text, sizeof(text), "%.3g", v);
-    dl->AddText(ImVec2(p0.x + 3.0f, y - 0.5f * ImGui::GetFontSize()), kAxisText, text);
+    dl->AddText(ImVec2(f.p0.x + 3.0f, y - 0.5f * ImGui::GetFontSize()), kAxisText, text);
   }
-  dl->PushClipRect(p0, p1, true);
-  for (int i = 0; i < line_count; ++i) {
-    const TimeSeries& s = *lines[i].series;
-    points.clear();
-    const ImU32 spike = (lines[i].color & 0x00ffffffu) | 0x70000000u;
-    // one point per pixel column (its last value) and, where the column's values span more
-    // than a pixel, a vertical stroke from its minimum to its maximum: a one-sample spike shows
-    int column = -1;
-    float col_x = 0.0f, col_min = 0.0f, col_max = 0.0f, col_last = 0.0f;
-    const auto flush = [&] {
-      if (column < 0) return;
-      const float y_min = y_of(col_min), y_max = y_of(col_max);
-      if (y_min - y_max > 1.0f) dl->AddLine(ImVec2(col_x, y_min), ImVec2(col_x, y_max), spike);
-      points.push_back(ImVec2(col_x, y_of(col_last)));
-    };
-    for (std::size_t k = 0; k < s.size(); ++k) {
-      const auto& b = s[k];
-      if (b.t_s + s.bucket_s() < t_begin) continue;
-      const float x = x_of(b.t_s);
-      const int c = static_cast<int>(std::floor(x));
-      if (c != column) {
-        flush();
-        column = c;
-        col_x = x;
-        col_min = b.min;
-        col_max = b.max;
-      } else {
-        col_min = std::min(col_min, b.min);
-        col_max = std::max(col_max, b.max);
-      }
-      col_last = b.last;
+}
+
+/// One line: one point per pixel column (its last value) and, where the column's values span
+/// more than a pixel, a vertical stroke from its minimum to its maximum: a one-sample spike shows.
+void plot_series(ImDrawList* dl, const PlotFrame& f, const PlotLine& line) {
+  static std::vector<ImVec2> points;  // render thread only; keeps its capacity
+  const TimeSeries& s = *line.series;
+  points.clear();
+  const ImU32 spike = (line.color & 0x00ffffffu) | 0x70000000u;
+  int column = -1;
+  float col_x = 0.0f, col_min = 0.0f, col_max = 0.0f, col_last = 0.0f;
+  const auto flush = [&] {
+    if (column < 0) return;
+    const float y_min = f.y(col_min), y_max = f.y(col_max);
+    if (y_min - y_max > 1.0f) dl->AddLine(ImVec2(col_x, y_min), ImVec2(col_x, y_max), spike);
+    points.push_back(ImVec2(col_x, f.y(col_last)));
+  };
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const auto& b = s[k];
+    if (b.t_s + s.bucket_s() < f.t_begin) continue;
+    const float x = f.x(b.t_s);
+    const int c = static_cast<int>(std::floor(x));
+    if (c != column) {
+      flush();
+      column = c;
+      col_x = x;
+      col_min = b.min;
+      col_max = b.max;
+    } else {
+      col_min = std::min(col_min, b.min);
+      col_max = std::max(col_max, b.max);
     }
-    flush();
-    if (points.size() >= 2) {
-      dl->AddPolyline(points.data(), static_cast<int>(points.size()), lines[i].color, 0, 1.5f);
-    }
+    col_last = b.last;
   }
+  flush();
+  if (points.size() >= 2) {
+    dl->AddPolyline(points.data(), static_cast<int>(points.size()), line.color, 0, 1.5f);
+  }
+}
+
+/// Title row with the newest value of each line, then a plot of the last history_s seconds.
+void plot(const char* title, const char* unit, const PlotLine* lines, int line_count,
+          const PanelInfo& info, float height, bool from_zero) {
+  plot_title(title, unit, lines, line_count);
+  PlotFrame f;
+  f.p0 = ImGui::GetCursorScreenPos();
+  f.width = ImGui::GetContentRegionAvail().x;
+  f.height = height;
+  f.p1 = ImVec2(f.p0.x + f.width, f.p0.y + height);
+  f.t_begin = info.now_s - info.history_s;
+  f.history_s = info.history_s;
+  ImGui::Dummy(ImVec2(f.width, height));
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  dl->AddRectFilled(f.p0, f.p1, kPlotBackground);
+  plot_range(lines, line_count, from_zero, f);
+  plot_grid(dl, f);
+  dl->PushClipRect(f.p0, f.p1, true);
+  for (int i = 0; i < line_count; ++i) plot_series(dl, f, lines[i]);
   dl->PopClipRect();
-  dl->AddRect(p0, p1, kPlotBorder);
-  if (!have_data) {
+  dl->AddRect(f.p0, f.p1, kPlotBorder);
+  if (!f.have_data) {
     const char* empty = "no data";
     const ImVec2 sz = ImGui::CalcTextSize(empty);
-    dl->AddText(ImVec2(0.5f * (p0.x + p1.x - sz.x), 0.5f * (p0.y + p1.y - sz.y)), kAxisText, empty);
+    dl->AddText(ImVec2(0.5f * (f.p0.x + f.p1.x - sz.x), 0.5f * (f.p0.y + f.p1.y - sz.y)), kAxisText,
+                empty);
   }
   ImGui::Spacing();
 }
 
-}  // namespace
-
-void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& layout) {
-  if (layout.panel_width <= 0) return;
-  ImGui::SetNextWindowPos(ImVec2(static_cast<float>(layout.view_width), 0.0f), ImGuiCond_Always);
-  ImGui::SetNextWindowSize(
-      ImVec2(static_cast<float>(layout.panel_width), static_cast<float>(layout.view_height)),
-      ImGuiCond_Always);
-  const ImGuiWindowFlags flags = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
-                                 ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar |
-                                 ImGuiWindowFlags_NoSavedSettings;
-  ImGui::Begin("teleop_viewer##panel", nullptr, flags);
-
+/// The panel's first lines: the domain, the server, the scene, the topics' rates, the render.
+void panel_header(const ViewerView& view, const PanelInfo& info) {
   ImGui::Text("teleop_viewer   domain %d   %s", info.domain, info.profile.c_str());
   if (!info.server.empty()) ImGui::Text("server %s", info.server.c_str());
   if (info.servers > 1) {
@@ -187,8 +201,10 @@ void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& lay
     ImGui::SameLine();
     ImGui::TextColored(ImVec4(1.0f, 0.35f, 0.35f, 1.0f), "  PAUSED");
   }
-  ImGui::Separator();
+}
 
+/// The plots, their height shared out of the window's.
+void panel_plots(const ViewerView& view, const PanelInfo& info, const Layout& layout) {
   const float h =
       std::clamp((static_cast<float>(layout.view_height) - 440.0f) / 6.0f, 32.0f, 110.0f);
   {
@@ -217,8 +233,10 @@ void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& lay
     const PlotLine l[] = {{&view.series[kEnergyJ], kOrange, "E"}};
     plot("master port energy", "J", l, 1, info, h, true);
   }
+}
 
-  ImGui::Separator();
+/// The events, newest last, over the key help (which wraps to the panel's width).
+void panel_events(const ViewerView& view, const PanelInfo& info) {
   ImGui::Text("events (%llu)", static_cast<unsigned long long>(view.counters.events));
   // the key help wraps to the panel's width, so every key shows however narrow the panel is
   char help[160];
@@ -245,6 +263,25 @@ void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& lay
   ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
   ImGui::TextWrapped("%s", help);
   ImGui::PopStyleColor();
+}
+
+}  // namespace
+
+void draw_panel(const ViewerView& view, const PanelInfo& info, const Layout& layout) {
+  if (layout.panel_width <= 0) return;
+  ImGui::SetNextWindowPos(ImVec2(static_cast<float>(layout.view_width), 0.0f), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(
+      ImVec2(static_cast<float>(layout.panel_width), static_cast<float>(layout.view_height)),
+      ImGuiCond_Always);
+  const ImGuiWindowFlags flags = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
+                                 ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoTitleBar |
+                                 ImGuiWindowFlags_NoSavedSettings;
+  ImGui::Begin("teleop_viewer##panel", nullptr, flags);
+  panel_header(view, info);
+  ImGui::Separator();
+  panel_plots(view, info, layout);
+  ImGui::Separator();
+  panel_events(view, info);
   ImGui::End();
 }
 
