@@ -185,7 +185,9 @@ class MultiHost : public ::testing::Test {
     const std::string server_json = temp_path("mh", name + "_server.json");
     std::remove(master_json.c_str());
     std::unique_ptr<Process> ds0, ds1;
-    if (r.discovery) ASSERT_NO_FATAL_FAILURE(start_discovery_servers(name, r, ds0, ds1));
+    if (r.discovery) {
+      ASSERT_NO_FATAL_FAILURE(start_discovery_servers(name, r, ds0, ds1));
+    }
     const std::vector<std::string> delay = delay_flags(name, r);
     std::vector<std::string> sargs = {"--domain",
                                       d,

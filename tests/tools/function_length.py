@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Lists C++ function bodies longer than a limit (no function in server/ or client/ is longer
-than 120 lines, none in common/ or tests/ longer than 80).
+"""Lists C++ function bodies longer than a limit (no function in server/, client/, common/ or
+tests/ is longer than 80 lines).
 
     function_length.py [--limit N] [--list] [--exclude DIR]... DIR...
 

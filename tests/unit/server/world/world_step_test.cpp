@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include "server/world/world.hpp"
@@ -115,7 +116,7 @@ double ringing_m(const WorldModel& m, double kp) {
       hi = std::max(hi, d.out.tip_position_m.z());
     }
   }
-  return std::isfinite(hi - lo) ? hi - lo : INFINITY;
+  return std::isfinite(hi - lo) ? hi - lo : std::numeric_limits<double>::infinity();
 }
 
 TEST(ToolScene, TheLargestKpsFollowsTheStableStepAndHolds) {
