@@ -3,7 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
 #include <thread>
 
 #include "common/config/config.hpp"
@@ -49,6 +53,37 @@ TEST(DdsOptions, UnknownProfileListsTheAvailableOnes) {
     EXPECT_NE(msg.find("lan"), std::string::npos) << msg;
   }
   EXPECT_NE(profile_file("loopback").find("deploy/profiles/loopback.xml"), std::string::npos);
+}
+
+TEST(DdsOptions, AParticipantFastDdsRefusesNamesProfileFileDomainAndFastDdsOwnLine) {
+  // the loopback profile with a send buffer below the transport's largest message: Fast DDS
+  // refuses to register the transport; the error says so without guessing a cause
+  std::ifstream in(profile_file("loopback"));
+  std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string type = "<type>UDPv4</type>";
+  ASSERT_NE(xml.find(type), std::string::npos);
+  xml.replace(xml.find(type), type.size(), type + "<sendBufferSize>16384</sendBufferSize>");
+  const std::string file = testing::TempDir() + "small_buffers.xml";
+  {
+    std::ofstream out(file);
+    out << xml;
+  }
+  ParticipantOptions o;
+  o.profile = file;
+  o.domain = test::domains::kParticipantRefused;
+  std::string message;
+  try {
+    Participant p(o);
+  } catch (const DdsError& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("cannot create a DDS participant with profile 'loopback' from " + file +
+                         " on domain " + std::to_string(o.domain)),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("Fast DDS's own error is printed above"), std::string::npos) << message;
+  EXPECT_EQ(message.find("Security"), std::string::npos) << message;
+  std::remove(file.c_str());
 }
 
 TEST(DdsEndpoints, WriterAndWaitsetReaderExchangeSamples) {
