@@ -179,8 +179,8 @@ class ScaledStiffness {
         ke_(dofs_),
         kr_(dofs_) {
     for (int i = 0; i < n_; ++i) {
-      inv_sqrt_m_.segment<3>(3 * i).setConstant(
-          1.0 / std::sqrt(fem_ ? m.fem.mass_kg(i) : m.mass_kg(i)));
+      inv_sqrt_m_.segment<3>(3 * i).setConstant(1.0 /
+                                                std::sqrt(fem_ ? m.fem.mass_kg(i) : m.mass_kg(i)));
     }
     if (m.has_centre) inv_sqrt_m_.tail<3>().setConstant(1.0 / std::sqrt(m.centre_mass_kg));
   }

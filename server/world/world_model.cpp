@@ -677,9 +677,10 @@ void parse_deformables(const config::Node& root, WorldModel& s) {
       for (const auto& kv : contact.raw()) {
         const std::string key = kv.first.Scalar();
         if (key != "friction_static" && key != "friction_kinetic") {
-          contact.fail(key, "does not apply to a body of model fem, which keeps the tip out "
-                            "with its surface's pressure (body.contact_pressure_stiffness_pa_per_m)"
-                            "; allowed here: friction_static, friction_kinetic");
+          contact.fail(key,
+                       "does not apply to a body of model fem, which keeps the tip out "
+                       "with its surface's pressure (body.contact_pressure_stiffness_pa_per_m)"
+                       "; allowed here: friction_static, friction_kinetic");
         }
       }
     }

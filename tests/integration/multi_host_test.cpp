@@ -107,8 +107,7 @@ class MultiHost : public ::testing::Test {
   std::vector<std::string> delay_flags(const std::string& name, const Roles& r) {
     if (r.delay.empty()) return {};
     if (lab_->add_netem_delay(1, r.delay) && lab_->add_netem_delay(2, r.delay)) {
-      std::printf("multi_host %s: %s one-way delay from tc netem\n", name.c_str(),
-                  r.delay.c_str());
+      std::printf("multi_host %s: %s one-way delay from tc netem\n", name.c_str(), r.delay.c_str());
       return {};
     }
     std::printf(

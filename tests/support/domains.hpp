@@ -83,10 +83,10 @@ inline constexpr int kNodeBridgePage = 200;    // tests/node/run_page_check.sh: 
 inline constexpr int kNodeBridgeAccess = 201;  // tests/node/run_access_check.sh: TLS and the token
 // 202: tests/bench/bridge_clients.sh (1, 10, 50 clients against no bridge)
 // 203: deploy/make_docs.sh (the bridge page's picture); 204-209: reserved for bridge tests
-inline constexpr int kManyObservers = 190;     // many_observers_test: 100 observers find a server
-inline constexpr int kOversizedUnit = 191;     // log_summary_test: oversized samples counted
-inline constexpr int kObserverLimit = 192;     // observer_limit_test: the server counts observers
-inline constexpr int kSecureShortLived = 194;  // security_test: make_security.sh --hours 2
+inline constexpr int kManyObservers = 190;       // many_observers_test: 100 observers find a server
+inline constexpr int kOversizedUnit = 191;       // log_summary_test: oversized samples counted
+inline constexpr int kObserverLimit = 192;       // observer_limit_test: the server counts observers
+inline constexpr int kSecureShortLived = 194;    // security_test: make_security.sh --hours 2
 inline constexpr int kParticipantRefused = 225;  // participant_test: a profile Fast DDS refuses
 // 195-199: reserved for network tests (196: the observers runs of docs/results.md)
 // 215, 216, 217: deploy/make_docs.sh live, live-fifo, live-nice (the live sessions of

@@ -240,9 +240,10 @@ TEST(Fem, TheTipSlidingOverTheBallFeelsCoulombFriction) {
     SCOPED_TRACE(df::to_string(integ));
     const double frictionless = sliding_force_ratio(integ, 0.0, 0.0);
     const double sliding = sliding_force_ratio(integ, 0.3, 0.24);
-    std::printf("%s: tangential / normal force on the sliding tip: %.4f frictionless, %.4f with "
-                "mu_s 0.3, mu_k 0.24\n",
-                df::to_string(integ), frictionless, sliding);
+    std::printf(
+        "%s: tangential / normal force on the sliding tip: %.4f frictionless, %.4f with "
+        "mu_s 0.3, mu_k 0.24\n",
+        df::to_string(integ), frictionless, sliding);
     // frictionless: only the tilt of the contact normal over the curved top (a few degrees)
     EXPECT_LT(std::fabs(frictionless), 0.06);
     // sliding: the kinetic coefficient, never more than the static one

@@ -433,9 +433,10 @@ double fem_probe_friction_ratio(double mu_s, double mu_k) {
 TEST(WorldStepKinematic, AFemBallTakesTheTipFrictionOfItsContactBlock) {
   const double frictionless = fem_probe_friction_ratio(0.0, 0.0);
   const double sliding = fem_probe_friction_ratio(0.3, 0.24);
-  std::printf("fem ball, probe sliding: tangential / normal force %.4f frictionless, %.4f with "
-              "mu_s 0.3, mu_k 0.24\n",
-              frictionless, sliding);
+  std::printf(
+      "fem ball, probe sliding: tangential / normal force %.4f frictionless, %.4f with "
+      "mu_s 0.3, mu_k 0.24\n",
+      frictionless, sliding);
   // the ball is free on the floor: dragged at its top it rolls along, so the tip mostly sticks
   // and the force stays below mu_k (the slide against a held ball: fem_test.cpp); frictionless,
   // only the tilt of the contact normal remains
