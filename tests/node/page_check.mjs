@@ -77,7 +77,8 @@ const browser = spawn(chromium, ["--headless=new", "--no-sandbox", "--use-angle=
 let browserLog = "";
 browser.stderr.on("data", (d) => { browserLog = (browserLog + d).slice(-4000); });
 const portFile = join(profile, "DevToolsActivePort");
-for (let i = 0; i < 100 && !existsSync(portFile); i++) await sleep(100);
+// its start-up, not what is tested: up to 30 s (beyond 10 s seen once beside another test)
+for (let i = 0; i < 300 && !existsSync(portFile); i++) await sleep(100);
 if (!existsSync(portFile)) {
   console.error(`FAIL chromium did not start its DevTools endpoint:\n${browserLog}`);
   browser.kill();
