@@ -135,7 +135,7 @@ struct LoopState {
   std::uint64_t device_seen = 0;
   std::uint64_t cycles = 0;
   std::uint64_t state_every = 1;  // MasterState every this many cycles
-  std::uint64_t faults_seen = 0;  // the server's faults so far in this session
+  std::uint64_t faults_seen = 0;  // the server's faults counted since the master started
   bool was_link_lost = false;
   double prev_cycle_s = -1.0;     // when the previous cycle began [s]; -1 before the first
   double session_length_s = 0.0;  // after homing [s]
