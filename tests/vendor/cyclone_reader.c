@@ -6,9 +6,17 @@
  *
  *   teleop_cyclone_reader DOMAIN TIMEOUT_S MIN_STATES
  *
- * Takes samples until it has MIN_STATES SlaveState samples, the scene, a ServerStats sample
- * and an event, or the timeout. Prints one line per topic: "slave_state N gaps G",
- * "scene NAME objects K", "server_stats N loop_rate_hz R", "events N first KIND MESSAGE".
+ * RTPS keeps domains apart by port numbers only; its discovery messages do not carry the domain
+ * id. Cyclone also reads the ephemeral port of its transmit socket, and a server of another
+ * domain that announces itself to every participant id of its own domain (ports 7410 + 250 d + 2
+ * id) reaches that socket when the port falls in its range: the reader then matches that server
+ * too. So every sample is counted under the participant that wrote it, and the server read is the
+ * one whose "server started" event names DOMAIN; the others are reported as foreign.
+ *
+ * Takes samples until that server has given MIN_STATES SlaveState samples, the scene, a
+ * ServerStats sample and an event, or the timeout. Prints one line per topic for that server:
+ * "slave_state N gaps G", "scene NAME objects K", "server_stats N loop_rate_hz R",
+ * "events N first KIND MESSAGE", then "foreign_participants P samples S" (the others).
  * Exit status 0 when everything arrived, 3 when something did not, 1 on a DDS error. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,6 +27,28 @@
 #include "Teleop.h"
 
 #define MAX_SAMPLES 64
+#define MAX_WRITERS 64
+#define MAX_PARTICIPANTS 16
+
+/* What one publishing participant gave. */
+struct source {
+  unsigned char prefix[12];
+  long n_states, gaps, n_stats, n_events, n_scene;
+  unsigned long long last_seq;
+  char scene_name[65];
+  unsigned scene_objects;
+  double loop_rate;
+  char first_event[300];
+  int started_in_domain; /* an event "server started: ..., domain D, ..." with D ours */
+};
+
+struct sources {
+  struct source list[MAX_PARTICIPANTS];
+  int n;
+  dds_instance_handle_t writer[MAX_WRITERS]; /* publication handle -> list index */
+  int writer_source[MAX_WRITERS];
+  int n_writers;
+};
 
 static dds_entity_t make_reader(dds_entity_t participant, const dds_topic_descriptor_t* desc,
                                 const char* name, int reliable, int transient_local, int depth) {
@@ -50,6 +80,92 @@ static double now_s(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* The source of a sample: its writer's participant (NULL when the tables are full or the writer
+ * is no longer matched; such samples are not counted). */
+static struct source* source_of(struct sources* s, dds_entity_t reader, dds_instance_handle_t w) {
+  for (int i = 0; i < s->n_writers; ++i) {
+    if (s->writer[i] == w) return &s->list[s->writer_source[i]];
+  }
+  if (s->n_writers == MAX_WRITERS) return NULL;
+  dds_builtintopic_endpoint_t* e = dds_get_matched_publication_data(reader, w);
+  if (e == NULL) return NULL;
+  int k = 0;
+  while (k < s->n && memcmp(s->list[k].prefix, e->participant_key.v, 12) != 0) ++k;
+  if (k == s->n) {
+    if (s->n == MAX_PARTICIPANTS) {
+      dds_builtintopic_free_endpoint(e);
+      return NULL;
+    }
+    memset(&s->list[k], 0, sizeof s->list[k]);
+    memcpy(s->list[k].prefix, e->participant_key.v, 12);
+    ++s->n;
+  }
+  dds_builtintopic_free_endpoint(e);
+  s->writer[s->n_writers] = w;
+  s->writer_source[s->n_writers] = k;
+  ++s->n_writers;
+  return &s->list[k];
+}
+
+/* The source whose "server started" event names this domain, or NULL. */
+static struct source* our_server(struct sources* s) {
+  for (int k = 0; k < s->n; ++k) {
+    if (s->list[k].started_in_domain) return &s->list[k];
+  }
+  return NULL;
+}
+
+static void take_all(struct sources* s, const char* domain_tag, dds_entity_t r_state, dds_entity_t r_scene,
+                     dds_entity_t r_stats, dds_entity_t r_events) {
+  void* samples[MAX_SAMPLES];
+  dds_sample_info_t infos[MAX_SAMPLES];
+  int n;
+  memset(samples, 0, sizeof samples);
+  n = dds_take(r_state, samples, infos, MAX_SAMPLES, MAX_SAMPLES);
+  for (int i = 0; i < n; ++i) {
+    struct source* src = source_of(s, r_state, infos[i].publication_handle);
+    if (!infos[i].valid_data || src == NULL) continue;
+    const teleop_SlaveState* st = samples[i];
+    if (src->n_states > 0 && st->seq > src->last_seq + 1) src->gaps += (long)(st->seq - src->last_seq - 1);
+    src->last_seq = st->seq;
+    ++src->n_states;
+  }
+  if (n > 0) dds_return_loan(r_state, samples, n);
+  memset(samples, 0, sizeof samples);
+  n = dds_take(r_scene, samples, infos, MAX_SAMPLES, MAX_SAMPLES);
+  for (int i = 0; i < n; ++i) {
+    struct source* src = source_of(s, r_scene, infos[i].publication_handle);
+    if (!infos[i].valid_data || src == NULL) continue;
+    const teleop_SceneDescription* sc = samples[i];
+    snprintf(src->scene_name, sizeof src->scene_name, "%s", sc->name);
+    src->scene_objects = sc->objects._length;
+    ++src->n_scene;
+  }
+  if (n > 0) dds_return_loan(r_scene, samples, n);
+  memset(samples, 0, sizeof samples);
+  n = dds_take(r_stats, samples, infos, MAX_SAMPLES, MAX_SAMPLES);
+  for (int i = 0; i < n; ++i) {
+    struct source* src = source_of(s, r_stats, infos[i].publication_handle);
+    if (!infos[i].valid_data || src == NULL) continue;
+    src->loop_rate = ((const teleop_ServerStats*)samples[i])->loop_rate_hz;
+    ++src->n_stats;
+  }
+  if (n > 0) dds_return_loan(r_stats, samples, n);
+  memset(samples, 0, sizeof samples);
+  n = dds_take(r_events, samples, infos, MAX_SAMPLES, MAX_SAMPLES);
+  for (int i = 0; i < n; ++i) {
+    struct source* src = source_of(s, r_events, infos[i].publication_handle);
+    if (!infos[i].valid_data || src == NULL) continue;
+    const teleop_Event* e = samples[i];
+    if (src->n_events == 0) snprintf(src->first_event, sizeof src->first_event, "%u %s", e->kind, e->message);
+    if (strncmp(e->message, "server started:", 15) == 0 && strstr(e->message, domain_tag)) {
+      src->started_in_domain = 1;
+    }
+    ++src->n_events;
+  }
+  if (n > 0) dds_return_loan(r_events, samples, n);
+}
+
 int main(int argc, char** argv) {
   if (argc != 4) {
     fprintf(stderr, "usage: %s DOMAIN TIMEOUT_S MIN_STATES\n", argv[0]);
@@ -69,62 +185,31 @@ int main(int argc, char** argv) {
   dds_entity_t r_stats = make_reader(participant, &teleop_ServerStats_desc, "teleop/server_stats", 1, 0, 10);
   dds_entity_t r_events = make_reader(participant, &teleop_Event_desc, "teleop/events", 1, 1, 100);
 
-  void* samples[MAX_SAMPLES];
-  dds_sample_info_t infos[MAX_SAMPLES];
-  long n_states = 0, gaps = 0, n_stats = 0, n_events = 0, n_scene = 0;
-  unsigned long long last_seq = 0;
-  char scene_name[65] = "";
-  unsigned scene_objects = 0;
-  double loop_rate = 0.0;
-  char first_event[300] = "";
+  char domain_tag[32];
+  snprintf(domain_tag, sizeof domain_tag, ", domain %d,", domain);
+  static struct sources all;
+  static const struct source none;
+  const struct source* ours = &none;
   const double end = now_s() + timeout_s;
   while (now_s() < end) {
-    int n;
-    memset(samples, 0, sizeof samples);
-    n = dds_take(r_state, samples, infos, MAX_SAMPLES, MAX_SAMPLES);
-    for (int i = 0; i < n; ++i) {
-      if (!infos[i].valid_data) continue;
-      const teleop_SlaveState* s = samples[i];
-      if (n_states > 0 && s->seq > last_seq + 1) gaps += (long)(s->seq - last_seq - 1);
-      last_seq = s->seq;
-      ++n_states;
-    }
-    if (n > 0) dds_return_loan(r_state, samples, n);
-    memset(samples, 0, sizeof samples);
-    n = dds_take(r_scene, samples, infos, MAX_SAMPLES, MAX_SAMPLES);
-    for (int i = 0; i < n; ++i) {
-      if (!infos[i].valid_data) continue;
-      const teleop_SceneDescription* s = samples[i];
-      snprintf(scene_name, sizeof scene_name, "%s", s->name);
-      scene_objects = s->objects._length;
-      ++n_scene;
-    }
-    if (n > 0) dds_return_loan(r_scene, samples, n);
-    memset(samples, 0, sizeof samples);
-    n = dds_take(r_stats, samples, infos, MAX_SAMPLES, MAX_SAMPLES);
-    for (int i = 0; i < n; ++i) {
-      if (!infos[i].valid_data) continue;
-      loop_rate = ((const teleop_ServerStats*)samples[i])->loop_rate_hz;
-      ++n_stats;
-    }
-    if (n > 0) dds_return_loan(r_stats, samples, n);
-    memset(samples, 0, sizeof samples);
-    n = dds_take(r_events, samples, infos, MAX_SAMPLES, MAX_SAMPLES);
-    for (int i = 0; i < n; ++i) {
-      if (!infos[i].valid_data) continue;
-      const teleop_Event* e = samples[i];
-      if (n_events == 0) snprintf(first_event, sizeof first_event, "%u %s", e->kind, e->message);
-      ++n_events;
-    }
-    if (n > 0) dds_return_loan(r_events, samples, n);
-    if (n_states >= min_states && n_scene > 0 && n_stats > 0 && n_events > 0) break;
+    take_all(&all, domain_tag, r_state, r_scene, r_stats, r_events);
+    const struct source* found = our_server(&all);
+    if (found != NULL) ours = found;
+    if (ours->n_states >= min_states && ours->n_scene > 0 && ours->n_stats > 0 && ours->n_events > 0) break;
     dds_sleepfor(DDS_MSECS(5));
   }
-  printf("slave_state %ld gaps %ld\n", n_states, gaps);
-  printf("scene %s objects %u\n", n_scene ? scene_name : "-", scene_objects);
-  printf("server_stats %ld loop_rate_hz %.1f\n", n_stats, loop_rate);
-  printf("events %ld first %s\n", n_events, n_events ? first_event : "-");
+  long foreign = 0;
+  for (int k = 0; k < all.n; ++k) {
+    if (&all.list[k] != ours) {
+      foreign += all.list[k].n_states + all.list[k].n_scene + all.list[k].n_stats + all.list[k].n_events;
+    }
+  }
+  printf("slave_state %ld gaps %ld\n", ours->n_states, ours->gaps);
+  printf("scene %s objects %u\n", ours->n_scene ? ours->scene_name : "-", ours->scene_objects);
+  printf("server_stats %ld loop_rate_hz %.1f\n", ours->n_stats, ours->loop_rate);
+  printf("events %ld first %s\n", ours->n_events, ours->n_events ? ours->first_event : "-");
+  printf("foreign_participants %d samples %ld\n", all.n - (ours != &none ? 1 : 0), foreign);
   fflush(stdout);
   dds_delete(participant);
-  return (n_states >= min_states && n_scene > 0 && n_stats > 0 && n_events > 0) ? 0 : 3;
+  return (ours->n_states >= min_states && ours->n_scene > 0 && ours->n_stats > 0 && ours->n_events > 0) ? 0 : 3;
 }
