@@ -90,9 +90,9 @@ namespace teleop::server {
 namespace {
 
 TEST(SceneObjects, AFemBallSettledAtLoadIsDescribedByItsSaggedTop) {
-  // ball_fem.yaml: settle_s 3, the foam ball of radius 0.25 m resting on the floor
+  // default.yaml: settle_s 3, the foam ball of radius 0.25 m resting on the floor
   const sim::WorldModel model =
-      sim::load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/ball_fem.yaml");
+      sim::load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
   ASSERT_EQ(model.bodies.size(), 1u);
   EXPECT_GT(model.bodies[0].settle_s, 0.0);
   const sim::WorldData data = sim::make_world_data(model);

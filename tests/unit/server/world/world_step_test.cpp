@@ -399,14 +399,14 @@ TEST(WorldStepKinematic, TheProbeGoesWhereToldAndFeelsOnlyTheBody) {
 }
 
 /// The mean tangential / normal force on a probe that presses 5 mm into the top of the shipped
-/// fem ball (ball_fem.yaml, settled on the floor) and slides along +x at 20 mm/s, with the tip
+/// fem ball (default.yaml, settled on the floor) and slides along +x at 20 mm/s, with the tip
 /// friction (mu_s, mu_k) of the body's contact block; over the last 0.2 s of 0.4 s of sliding.
 double fem_probe_friction_ratio(double mu_s, double mu_k) {
   ToolModel tool = tool_over_floor();
   tool.radius_m = 0.05;
   WorldModel model = tool_world_model(tool, Eigen::Vector3d(0.6, 0.0, 0.6));
   model.bodies =
-      load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/ball_fem.yaml").bodies;
+      load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml").bodies;
   model.bodies[0].contact.friction_static = mu_s;
   model.bodies[0].contact.friction_kinetic = mu_k;
   WorldData world = make_world_data(model);
