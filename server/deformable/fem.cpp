@@ -965,7 +965,11 @@ void fem_scale_masses(DeformableModel& m) {
           number_text(100.0 * added / m.total_mass_kg) +
           " % of the body's mass), and mass_scaling_max_fraction allows " +
           number_text(100.0 * p.mass_scaling_max_fraction) +
-          " %: lower mass_scaling_step_s, raise mass_scaling_max_fraction or use a coarser mesh");
+          " %: lower mass_scaling_step_s, raise mass_scaling_max_fraction, use a coarser mesh, or "
+          "soften what sets the stable step (youngs_modulus_pa " +
+          number_text(p.youngs_modulus_pa) + ", poisson_ratio " + number_text(p.poisson_ratio) +
+          ", stiffness_damping_s " + number_text(p.stiffness_damping_s) + ", mass_damping_per_s " +
+          number_text(p.mass_damping_per_s) + ")");
     }
     hi = lo;
     lo *= 0.5;

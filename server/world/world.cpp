@@ -279,11 +279,19 @@ constexpr double kProbeDepthM = 0.005;
 
 /// DeformableBodyModel::settle_s: steps of dt with the velocities relaxed, until the body is
 /// still (every node slower than 0.1 mm/s) or settle_s has passed; then its clock starts at 0.
+/// The planes are frictionless while it settles: the body comes to the shape it has when laid
+/// down without shear in its contacts, an equilibrium with friction on too. (With friction, the
+/// relaxed velocities leave the tangential forces of the sag stored in the contact patch, and
+/// the released body rolls off them.)
 void settle(const deformable::DeformableModel& m, deformable::DeformableState& s, double dt_s,
             double settle_s) {
+  deformable::DeformableModel frictionless = m;
+  frictionless.params.friction = false;
   const int steps = static_cast<int>(std::ceil(settle_s / dt_s));
   for (int k = 0; k < steps; ++k) {
-    if (deformable::step(m, s, dt_s, nullptr) == deformable::StepStatus::kFaultReset) break;
+    if (deformable::step(frictionless, s, dt_s, nullptr) == deformable::StepStatus::kFaultReset) {
+      break;
+    }
     s.v *= 0.97;
     s.centre_v *= 0.97;
     if (k > 10 && s.v.colwise().squaredNorm().maxCoeff() < 1e-8) break;

@@ -186,7 +186,7 @@ TEST(MonitorTui, JsonLinesForScripts) {
 }
 
 // The scene line says each deformable body's automatic step (docs/deformable.md): the default
-// scene's sphere is stable at 1 ms, one sub-step.
+// scene's FEM ball is stable at 1 ms, one sub-step.
 TEST(MonitorTui, TheSceneLineSaysEachDeformablesStableStep) {
   const std::string d = std::to_string(domains::kMonitorScene);
   Process server(kServerBinary, {"--domain", d, "--quiet"}, "mon_scene_server");
@@ -204,13 +204,9 @@ TEST(MonitorTui, TheSceneLineSaysEachDeformablesStableStep) {
       << line;
   EXPECT_NE(line.find("\"substeps\": 1}]"), std::string::npos) << line;
   EXPECT_GT(json_value(line, "stable_step_s"), 1e-3) << line;
-  // and an info event says what runs the body: the scene names no kernel, so it is the default
-  // one (simd where the CPU has AVX2 and FMA)
-  const std::string kernel = sim::deformable::to_string(sim::deformable::default_kernel(
-      sim::deformable::ModelKind::kMassSpring, sim::deformable::IntegratorKind::kSymplecticEuler));
-  EXPECT_NE(out.find("\"message\": \"deformable 10: mass_spring symplectic_euler, kernel " +
-                     kernel + (kernel == std::string("simd") ? " (AVX2)" : "") +
-                     ", 2562 nodes, 1 sub-step(s) per step\""),
+  // and an info event says what runs the body: the FEM ball, mass-scaled to one step per 1 ms
+  EXPECT_NE(out.find("\"message\": \"deformable 10: fem symplectic_euler, kernel scalar, 885 "
+                     "nodes (477 on the surface), 3835 tetrahedra, 1 sub-step(s) per step\""),
             std::string::npos)
       << out;
 }

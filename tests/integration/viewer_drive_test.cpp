@@ -74,8 +74,8 @@ struct SlaveWatch {
 /// drag sideways, come up, save `picture`, quit.
 void write_drive_script(const std::string& script, const std::string& picture) {
   std::ofstream f(script);
-  f << "# press 2 cm into the sphere, tune, drag sideways, come up\n"
-       "1.0 key pagedown 0.4\n"
+  f << "# press 1 cm into the ball, tune, drag sideways, come up\n"
+       "1.0 key pagedown 0.2\n"
        "2.5 tune force_gain 1.5 ramp_s 0.5\n"
        "3.2 tune force_gain 1000\n"
        "3.6 tune master_stiffness_n_per_m 500\n"
@@ -117,7 +117,7 @@ void expect_viewer_drove(const Process& viewer, const std::string& picture, cons
   EXPECT_GT(static_cast<long>(png.tellg()), 10000L);
   EXPECT_GT(json_value(dj, "states_written"), 3000.0);
   EXPECT_GT(json_value(dj, "commands_received"), 3000.0);
-  EXPECT_GT(json_value(dj, "max_force_n"), 0.5);  // pressed into the sphere: felt it
+  EXPECT_GT(json_value(dj, "max_force_n"), 0.5);  // pressed into the ball: felt it
   EXPECT_LT(json_value(dj, "max_force_n"), 10.0);
   EXPECT_EQ(json_nested(dj, "status", "accepted_count"), 1.0);
   EXPECT_EQ(json_nested(dj, "status", "rejected_count"), 2.0);
@@ -128,7 +128,7 @@ void expect_viewer_drove(const Process& viewer, const std::string& picture, cons
   double x = 0, y = 0, z = 0;
   ASSERT_EQ(std::sscanf(dj.c_str() + fp, "\"final_position_m\": [%lf, %lf, %lf]", &x, &y, &z), 3);
   EXPECT_GT(std::hypot(x, y), 0.01);
-  EXPECT_NEAR(z, 0.02, 0.002);  // 0.4 s down and 0.8 s up at 0.05 m/s
+  EXPECT_NEAR(z, 0.03, 0.002);  // 0.2 s down and 0.8 s up at 0.05 m/s
 }
 
 /// The master: three requests, one applied, two rejected with their reasons, the second
@@ -220,10 +220,10 @@ TEST(ViewerDrive, ScriptedInputDrivesTheSlaveAndTunesTheMasterLive) {
   SCOPED_TRACE(dj);
   ASSERT_NO_FATAL_FAILURE(expect_viewer_drove(viewer, picture, dj));
   expect_master_tuned_and_held(master, master_json);
-  // the slave: it touched the sphere and dented it (measured 4.99-7 mm)
+  // the slave: it touched the ball and dented it
   EXPECT_GT(watch.states.load(), 5000);
   EXPECT_GT(watch.contact_states.load(), 300);
-  EXPECT_GT(watch.deformation(), 0.002);  // about 1 N on the ~150 N/m sphere: 5-7 mm
+  EXPECT_GT(watch.deformation(), 0.002);
 }
 #endif
 

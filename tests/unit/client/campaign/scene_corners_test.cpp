@@ -33,7 +33,7 @@ const std::string kScenes = std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/";
 
 /// One stiffness or gain of a scene: which scene, where in it, and how to set it.
 struct Field {
-  std::string scene;  ///< "default.yaml" (robot) or "tool_only.yaml" (tool)
+  std::string scene;  ///< "default.yaml", "paper_sphere.yaml" (robot) or "tool_only.yaml" (tool)
   std::string name;   ///< as the loader names it (the last key)
   /// Sets the field to `value` in the scene's root and the robot file's root.
   std::function<void(YAML::Node& scene, YAML::Node& robot, double value)> set;
@@ -41,22 +41,29 @@ struct Field {
 
 std::vector<Field> fields() {
   std::vector<Field> out;
-  const auto contact = [&](const std::string& key) {
-    out.push_back({"default.yaml", key, [key](YAML::Node& s, YAML::Node&, double v) {
-                     s["deformables"][0]["contact"][key] = v;
+  const auto body = [&](const std::string& scene, const std::string& key) {
+    out.push_back({scene, key, [key](YAML::Node& s, YAML::Node&, double v) {
+                     s["deformables"][0]["body"][key] = v;
                    }});
   };
+  // the paper's mass-spring sphere: its contact block and its springs
   for (const char* k : {"stiffness_n_per_m", "damping_ns_per_m", "node_stiffness_n_per_m",
                         "node_damping_ns_per_m"}) {
-    contact(k);
+    const std::string key = k;
+    out.push_back({"paper_sphere.yaml", key, [key](YAML::Node& s, YAML::Node&, double v) {
+                     s["deformables"][0]["contact"][key] = v;
+                   }});
   }
   for (const char* k :
        {"youngs_modulus_pa", "radial_stiffness_n_per_m3", "stiffness_damping_s", "radial_damping_s",
         "mass_damping_per_s", "contact_frequency_rad_per_s", "contact_damping_ratio"}) {
-    const std::string key = k;
-    out.push_back({"default.yaml", key, [key](YAML::Node& s, YAML::Node&, double v) {
-                     s["deformables"][0]["body"][key] = v;
-                   }});
+    body("paper_sphere.yaml", k);
+  }
+  // the default scene's FEM ball: its material, damping and contact
+  for (const char* k : {"youngs_modulus_pa", "poisson_ratio", "stiffness_damping_s",
+                        "mass_damping_per_s", "contact_pressure_stiffness_pa_per_m",
+                        "contact_frequency_rad_per_s", "contact_damping_ratio"}) {
+    body("default.yaml", k);
   }
   for (const std::string& scene : {std::string("default.yaml"), std::string("tool_only.yaml")}) {
     for (const char* k : {"stiffness_n_per_m", "damping_ns_per_m"}) {
@@ -206,7 +213,7 @@ TEST_F(SceneCorners, TheControllerGainAtEitherEndRunsWithoutFaults) {
     lo = std::stod(m[1].str());
     hi = std::stod(m[2].str());
   }
-  for (const std::string& scene : {tool, kScenes + "default.yaml"}) {
+  for (const std::string& scene : {tool, kScenes + "default.yaml", kScenes + "paper_sphere.yaml"}) {
     for (const double g : {lo, hi}) {
       std::ostringstream gain;
       gain << g;

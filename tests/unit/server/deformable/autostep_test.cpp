@@ -1,6 +1,6 @@
 // The automatic step and the simd kernel: the highest natural
 // frequency against dense eigenvalues, power iteration and the Gershgorin bound; sub-stepping of
-// stiff bodies under a point load, a held node and a tip press with no fault; the default
+// stiff bodies under a point load, a held node and a tip press with no fault; the paper
 // scene's path untouched; the simd kernel against the general passes.
 #include <gtest/gtest.h>
 
@@ -199,10 +199,11 @@ const char* probe_name(Probe p) {
   return "?";
 }
 
-// The default scene's sphere (level 4, on the floor at x = 0.6 beside the wall) with all its
-// stiffnesses (edges, radial springs, Young's modulus) times `factor`.
+// The paper scene's mass-spring sphere (level 4, on the floor at x = 0.6 beside the wall) with all
+// its stiffnesses (edges, radial springs, Young's modulus) times `factor`.
 DeformableParams paper_sphere(double factor) {
-  const Node root = Node::load_file(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
+  const Node root =
+      Node::load_file(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/paper_sphere.yaml");
   DeformableParams p = load_deformable_params(root.at("deformables").at(std::size_t{0}).at("body"));
   p.edge_stiffness_n_per_m *= factor;
   p.radial_stiffness_n_per_m3 *= factor;
@@ -240,7 +241,7 @@ ProbeRun run_probe(const DeformableModel& m, Probe probe, int steps = 5000) {
   }
   const Eigen::Vector3d top0 = m.mesh.vertices.col(top);
   const double dt = 1e-3;
-  const double tip_r = 0.05, tip_k = 200.0;  // the default scene's tip and node penalty
+  const double tip_r = 0.05, tip_k = 200.0;  // the paper scene's tip and node penalty
   for (int k = 0; k < steps; ++k) {
     const double t = k * dt;
     const bool active = t >= 0.5 && t < 3.0;
@@ -339,24 +340,23 @@ TEST(StiffSphereWithoutSubsteps, BlowsUp) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// the default scene: no sub-step, the same code path as before
+// the shipped scenes: no sub-step; the paper's sphere on the single-step code path
 
 TEST(DefaultScene, DoesNotSubStepAtOneMillisecond) {
-  for (const char* file : {"default.yaml", "sphere_gravity.yaml"}) {
+  for (const char* file : {"default.yaml", "paper_sphere.yaml", "sphere_gravity.yaml"}) {
     const Node root = Node::load_file(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/" + file);
     const Node body = root.has("deformables") ? root.at("deformables").at(std::size_t{0}).at("body")
                                               : root.at("deformable");
     const DeformableParams p = load_deformable_params(body);
-    const DeformableModel m = build(p, paper_planes());
+    const DeformableModel m = make_model(p, paper_planes());  // the mesh the model needs
     EXPECT_GT(m.stable_step_s, 1e-3) << file;
     EXPECT_EQ(m.substeps_for(1e-3), 1) << file;
   }
 }
 
-// step() of the default body at 1 ms is bit for bit detail::step_once (the single step every
-// step() was before the automatic step), through a drop onto the floor, a point load and a
-// held node; no event is pushed.
-TEST(DefaultScene, StepIsBitIdenticalToTheSingleStep) {
+// step() of the paper's sphere at 1 ms is bit for bit detail::step_once (one step, no sub-step),
+// through a drop onto the floor, a point load and a held node; no event is pushed.
+TEST(PaperScene, StepIsBitIdenticalToTheSingleStep) {
   const DeformableModel m = build(paper_sphere(1.0), paper_planes());
   DeformableState a = make_state(m);
   for (int i = 0; i < m.node_count; ++i) a.x(2, i) += 0.02;  // dropped from 2 cm

@@ -413,15 +413,22 @@ TEST(ModelTable, TheAutoSceneLoadsThroughTheWorldLoader) {
   EXPECT_NE(w.bodies[0].auto_summary.find("auto: "), std::string::npos);
   EXPECT_NE(w.bodies[0].auto_report.find("predicted cost"), std::string::npos);
   EXPECT_GT(w.bodies[0].body.node_count, 0);
-  // the default scene fixes its model: no selection, the body it always had
+  // the default and the paper's scenes fix their models: no selection, the bodies they name
   const WorldModel d =
       load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
   EXPECT_TRUE(d.bodies[0].auto_summary.empty());
+  EXPECT_EQ(d.bodies[0].body.params.model, ModelKind::kFem);
   EXPECT_EQ(d.bodies[0].body.params.min_substeps, 1);
+  EXPECT_EQ(d.bodies[0].body.node_count, 477);      // its surface
+  EXPECT_EQ(d.bodies[0].body.fem.node_count, 885);  // all its nodes
+  const WorldModel paper =
+      load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/paper_sphere.yaml");
+  EXPECT_TRUE(paper.bodies[0].auto_summary.empty());
+  EXPECT_EQ(paper.bodies[0].body.params.min_substeps, 1);
   // no `kernel` in it: the default kernel (simd where the CPU has AVX2 and FMA)
-  EXPECT_EQ(d.bodies[0].body.params.kernel,
+  EXPECT_EQ(paper.bodies[0].body.params.kernel,
             default_kernel(ModelKind::kMassSpring, IntegratorKind::kSymplecticEuler));
-  EXPECT_EQ(d.bodies[0].body.node_count, 2562);
+  EXPECT_EQ(paper.bodies[0].body.node_count, 2562);
 }
 
 // ---- the accuracy sub-steps the selection relies on ----

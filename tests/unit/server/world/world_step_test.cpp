@@ -185,6 +185,11 @@ WorldModel default_scene() {
   return load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
 }
 
+/// The paper's scene: the robot over the surface mass-spring sphere.
+WorldModel paper_scene() {
+  return load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/paper_sphere.yaml");
+}
+
 /// Counts the events of `kind` about object `id` (any object when id < 0) and empties the queue.
 struct EventCount {
   int begins = 0, ends = 0, faults = 0;
@@ -264,34 +269,41 @@ TEST(WorldStepRobot, NonFiniteCommandIsAFaultNotAJump) {
   EXPECT_LT((world.out.tip_position_m - before).norm(), 0.01);  // held, not thrown
 }
 
+// The default scene's FEM ball and the paper's mass-spring sphere alike.
 TEST(WorldStepRobotSphere, SphereSleepsAwayFromTheTipAndWakesOnContact) {
-  const WorldModel model = default_scene();
-  ASSERT_EQ(model.bodies.size(), 1u);
-  const int sphere = model.bodies[0].object_id;
-  WorldData world = make_world_data(model);
-  EventQueue events;
-  EventCount c;
-  // the tip stays 0.2 m above the sphere's top: the body settles on the floor and sleeps
-  // (it settles in about 3.5 s from its rest shape under gravity)
-  move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, 0.75), 0.5, 5.0);
-  EXPECT_TRUE(world.bodies[0].state.sleeping);
-  const std::uint64_t asleep = world.bodies[0].state.sleeping_steps;
-  move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, 0.75), 0.0, 0.1);
-  EXPECT_EQ(world.bodies[0].state.sleeping_steps, asleep + 100);  // skipped, not integrated
-  EXPECT_EQ(c.begins, 0);
-  // down into the top (at z = 0.5; tip radius 0.05): contact begins, the body wakes and pushes
-  move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, 0.53), 1.0, 0.5);
-  EXPECT_TRUE(world.out.in_contact);
-  EXPECT_EQ(world.out.contact_object, sphere);
-  EXPECT_FALSE(world.bodies[0].state.sleeping);
-  EXPECT_GT(world.out.contact_force_n.z(), 0.0);
-  EXPECT_GT(world.out.deformation_m, 0.0);
-  EXPECT_EQ(c.begins, 1);
-  // and up again: one end event, no fault
-  move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, 0.75), 1.0, 0.5);
-  EXPECT_FALSE(world.out.in_contact);
-  EXPECT_EQ(c.ends, 1);
-  EXPECT_EQ(c.faults, 0);
+  for (const WorldModel& model : {default_scene(), paper_scene()}) {
+    SCOPED_TRACE(model.name);
+    ASSERT_EQ(model.bodies.size(), 1u);
+    const int sphere = model.bodies[0].object_id;
+    WorldData world = make_world_data(model);
+    EventQueue events;
+    EventCount c;
+    const double top = world.bodies[0].state.x.row(2).maxCoeff();  // as loaded (settled or not)
+    // the tip stays 0.2 m above the sphere's top: the body settles on the floor and sleeps
+    // (it settles in about 3.5 s from its rest shape under gravity)
+    const Eigen::Vector3d centroid = world.bodies[0].state.x.rowwise().mean();
+    move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, 0.75), 0.5, 5.0);
+    EXPECT_TRUE(world.bodies[0].state.sleeping);
+    // at rest where it was put: a body sags straight down, it does not roll off its contact
+    EXPECT_LT((world.bodies[0].state.x.rowwise().mean() - centroid).head<2>().norm(), 2e-4);
+    const std::uint64_t asleep = world.bodies[0].state.sleeping_steps;
+    move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, 0.75), 0.0, 0.1);
+    EXPECT_EQ(world.bodies[0].state.sleeping_steps, asleep + 100);  // skipped, not integrated
+    EXPECT_EQ(c.begins, 0);
+    // 20 mm down into the top (tip radius 0.05): contact begins, the body wakes and pushes
+    move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, top + 0.05 - 0.02), 1.0, 0.5);
+    EXPECT_TRUE(world.out.in_contact);
+    EXPECT_EQ(world.out.contact_object, sphere);
+    EXPECT_FALSE(world.bodies[0].state.sleeping);
+    EXPECT_GT(world.out.contact_force_n.z(), 0.0);
+    EXPECT_GT(world.out.deformation_m, 0.0);
+    EXPECT_EQ(c.begins, 1);
+    // and up again: one end event, no fault
+    move(model, world, events, c, sphere, Eigen::Vector3d(0.6, 0.0, 0.75), 1.0, 0.5);
+    EXPECT_FALSE(world.out.in_contact);
+    EXPECT_EQ(c.ends, 1);
+    EXPECT_EQ(c.faults, 0);
+  }
 }
 
 TEST(WorldStepRobotSphere, ABodyThatBlowsUpIsResetAndReportedNotPropagated) {
@@ -346,13 +358,13 @@ TEST(WorldStepRobotSphere, DeterministicAllocationFreeAndUnchangedByAPrewarmThro
 
 // --- a kinematic tool (prescribed probe, the contact experiments) -----------------------------
 
-/// The default scene's sphere under a tool (radius 0.05 m) over the floor, the tool 0.1 m above
-/// the sphere's top.
+/// The paper scene's mass-spring sphere under a tool (radius 0.05 m) over the floor, the tool
+/// 0.1 m above the sphere's top.
 WorldModel probe_over_sphere() {
   ToolModel tool = tool_over_floor();
   tool.radius_m = 0.05;
   WorldModel m = tool_world_model(tool, Eigen::Vector3d(0.6, 0.0, 0.65));
-  m.bodies = default_scene().bodies;
+  m.bodies = paper_scene().bodies;
   return m;
 }
 
