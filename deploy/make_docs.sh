@@ -8,6 +8,8 @@
 #   deploy/make_docs.sh --check [ROOT]  every file in docs/results has a recipe (or is archived)
 #                                       and every docs/results file the docs link exists
 # RESULTS_OUT=DIR writes the files there instead of docs/results (to compare before replacing).
+# The recipes whose figures the docs give for the paper's scene run it explicitly (paper_scene
+# below), not the default scene (the FEM ball).
 # BUILD_DIR (default build/) must hold the programs: cmake --build build --target teleop_server
 # teleop_master teleop_viewer teleop_experiment teleop_bench teleop_campaign.
 set -euo pipefail
@@ -16,6 +18,7 @@ build="${BUILD_DIR:-$root/build}"
 results="$root/docs/results"
 out="${RESULTS_OUT:-$results}"  # where remade files go (RESULTS_OUT=DIR to compare first)
 py=/usr/bin/python3
+paper_scene="$root/deploy/scenes/paper_sphere.yaml"  # the PUMA 560 over the paper's sphere
 
 # name | cost (quick: under a minute; bench: minutes) | files written into docs/results
 recipes=(
@@ -97,18 +100,31 @@ check() {  # check [ROOT]: ROOT's docs/results and docs (default: this checkout)
   return "$status"
 }
 
+# paper_data_dir DIR: a data folder (TELEOP_DATA_DIR, common/util/data_dir.hpp) whose
+# scenes/default.yaml is the paper's scene and whose other scenes are the shipped ones, for the
+# programs a recipe cannot give a --scene (the sessions the test and bench scripts start); the
+# other data folders (profiles, data, charts) still come from the source tree
+paper_data_dir() {
+  local dir="$1/data" f
+  mkdir -p "$dir/scenes"
+  for f in "$root"/deploy/scenes/*; do ln -s "$f" "$dir/scenes/$(basename "$f")"; done
+  rm "$dir/scenes/default.yaml"
+  cp "$paper_scene" "$dir/scenes/default.yaml"
+  echo "$dir"
+}
+
 need() {  # need PROGRAM...: the build must hold them
   local p
   for p in "$@"; do [ -x "$build/$p" ] || die "$build/$p is missing: build it first (see the header of this script)"; done
 }
 
-# a live server + master session on the default scene, as deploy/run_session.sh runs it
+# a live server + master session, as deploy/run_session.sh runs it, on the paper's scene
 run_session() {  # run_session DIR DOMAIN [master flags...]
   local dir="$1" domain="$2"
   shift 2
   need server/teleop_server client/teleop_master
-  "$build/server/teleop_server" --domain "$domain" --quiet --realtime 20 \
-    --summary-json "$dir/server.json" &
+  "$build/server/teleop_server" --scene "$paper_scene" --domain "$domain" --quiet \
+    --realtime 20 --summary-json "$dir/server.json" &
   local server_pid=$! status=0
   "$build/client/teleop_master" --domain "$domain" --realtime 20 --log "$dir/master.csv" \
     --summary-json "$dir/master.json" --quiet "$@" || status=$?
@@ -125,14 +141,14 @@ run_recipe() {  # run_recipe NAME DIR: writes the recipe's files into DIR
     session)
       run_session "$dir" 57
       "$py" "$root/tests/charts/session.py" "$dir/master.csv" "$dir" \
-        "experiment 3: $(grep -o '"scheme": "[^"]*"' "$dir/master.json" | cut -d'"' -f4), default scene"
+        "experiment 3: $(grep -o '"scheme": "[^"]*"' "$dir/master.json" | cut -d'"' -f4), paper's scene"
       mv "$dir/master.json" "$dir/experiment3_master.json"
       mv "$dir/server.json" "$dir/experiment3_server.json"
       mv "$dir/session.png" "$dir/experiment3_session.png"
       mv "$dir/force_deformation.png" "$dir/experiment3_force_deformation.png" ;;
     viewer)
       need client/teleop_viewer
-      "$build/server/teleop_server" --domain 58 --quiet --duration 40 &
+      "$build/server/teleop_server" --scene "$paper_scene" --domain 58 --quiet --duration 40 &
       local server_pid=$!
       sleep 2
       "$build/client/teleop_master" --domain 58 --script press-slip --quiet >/dev/null &
@@ -144,7 +160,7 @@ run_recipe() {  # run_recipe NAME DIR: writes the recipe's files into DIR
       need client/teleop_viewer
       printf '%s\n' "1.0 key pagedown 0.4" "2.5 tune force_gain 1.5 ramp_s 0.5" \
         "4.0 drag 12 0 0.6" "5.0 snapshot $dir/viewer_drive.png" "6.5 quit" >"$dir/drive.txt"
-      "$build/server/teleop_server" --domain 59 --quiet --duration 60 &
+      "$build/server/teleop_server" --scene "$paper_scene" --domain 59 --quiet --duration 60 &
       local server_pid=$!
       "$build/client/teleop_master" --domain 59 --device external --accept-tuning \
         --duration 20 --quiet >/dev/null &
@@ -155,7 +171,8 @@ run_recipe() {  # run_recipe NAME DIR: writes the recipe's files into DIR
       wait "$master_pid" "$server_pid" 2>/dev/null || true ;;
     bridge-page)
       need client/teleop_bridge
-      bash "$root/tests/node/run_page_check.sh" "$build" 203 "$dir/bridge_page.png" ;;
+      TELEOP_DATA_DIR="$(paper_data_dir "$dir")" \
+        bash "$root/tests/node/run_page_check.sh" "$build" 203 "$dir/bridge_page.png" ;;
     sphere-zero-g | navier-free-vertex | navier-held-vertex | sphere-gravity | robot-reach | \
       contact-force-curve)
       need server/teleop_experiment
@@ -177,34 +194,38 @@ run_recipe() {  # run_recipe NAME DIR: writes the recipe's files into DIR
         cp "$dir/run/stability_map.png" "$dir/campaign_default_scene.png"
         cp "$dir/run/transparency.png" "$dir/campaign_default_scene_transparency.png"
       fi ;;
-    rtt | world | robot | collision | growth | peers-fem)
+    rtt | robot | collision | growth | peers-fem)
       need tests/bench/teleop_bench
       "$bench" "$name" --out "$dir" --no-progress ;;
+    world)
+      need tests/bench/teleop_bench
+      "$bench" world --scene "$paper_scene" --out "$dir" --no-progress ;;
     peers) need tests/bench/teleop_bench; "$bench" peers --out "$dir" --rounds 5 --no-progress ;;
     live)
       need tests/bench/teleop_bench
-      "$bench" observers --live 1 --out "$dir" --counts 0,8 --rounds 3 --duration 6 \
-        --domain 215 --variants normal,spin250,prewarm250+spin250,dma0,pin,fifo20,mlock \
-        --no-progress ;;
+      "$bench" observers --live 1 --scene "$paper_scene" --out "$dir" --counts 0,8 --rounds 3 \
+        --duration 6 --domain 215 --no-progress --variants \
+        normal,spin250,prewarm250+spin250,dma0,pin,fifo20,mlock ;;
     live-fifo)
       need tests/bench/teleop_bench
-      "$bench" observers --live 1 --out "$dir" --counts 0,8 --rounds 3 --duration 6 \
-        --domain 216 --no-progress --variants \
+      "$bench" observers --live 1 --scene "$paper_scene" --out "$dir" --counts 0,8 --rounds 3 \
+        --duration 6 --domain 216 --no-progress --variants \
         prewarm250,fifo20,fifo20+spin250,fifo20+prewarm250+spin250,fifo20+dma0,fifo20+pin,fifo20+mlock
       mv "$dir/live.csv" "$dir/live_fifo.csv" ;;
     live-nice)
       need tests/bench/teleop_bench
-      "$bench" observers --live 1 --out "$dir" --counts 0,8 --rounds 3 --duration 6 \
-        --domain 217 --variants normal,nice-20,fifo20 --no-progress
+      "$bench" observers --live 1 --scene "$paper_scene" --out "$dir" --counts 0,8 --rounds 3 \
+        --duration 6 --domain 217 --variants normal,nice-20,fifo20 --no-progress
       mv "$dir/live.csv" "$dir/live_nice.csv" ;;
     observers)
       need tests/bench/teleop_bench
-      "$bench" observers --out "$dir" --rounds 4 --full-rate-counts 8,16,32 --nice0-counts 32 \
-        --no-progress ;;
+      # without --live the bench has no --scene: its server reads the data folder's default
+      TELEOP_DATA_DIR="$(paper_data_dir "$dir")" "$bench" observers --out "$dir" --rounds 4 \
+        --full-rate-counts 8,16,32 --nice0-counts 32 --no-progress ;;
     observers-per-host)
       need tests/bench/teleop_bench
-      "$bench" observers --out "$dir" --quick --counts 0,8,16,32,64 --rounds 3 --duration 5 \
-        --domain 196 --no-chart
+      TELEOP_DATA_DIR="$(paper_data_dir "$dir")" "$bench" observers --out "$dir" --quick \
+        --counts 0,8,16,32,64 --rounds 3 --duration 5 --domain 196 --no-chart
       mv "$dir/observers.csv" "$dir/observers_per_host.csv"
       mv "$dir/observers_scaling.csv" "$dir/observers_per_host_scaling.csv" ;;
     deformable) need tests/bench/teleop_bench; "$bench" deformable --out "$dir" --no-progress ;;
@@ -275,7 +296,9 @@ for n in "${selected[@]}"; do
   for f in $(recipe_field "$n" 2); do
     mkdir -p "$out"
     cp "$dir/$f" "$out/$f" || { echo "make_docs: cannot write $out/$f" >&2; exit 1; }
-    cited=$(grep -rlF "$f" "$root/docs" "$root/README.md" 2>/dev/null | sed "s|$root/||" | sort -u | tr '\n' ' ')
+    # a file no doc names is not an error (grep's status 1 would end the script under pipefail)
+    cited=$(grep -rlF "$f" "$root/docs" "$root/README.md" 2>/dev/null | sed "s|$root/||" |
+      sort -u | tr '\n' ' ' || true)
     echo "   $f${cited:+ (cited by $cited)}"
   done
   echo "   $(($(date +%s) - start)) s"
