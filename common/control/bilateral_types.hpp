@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "common/control/contact_model.hpp"
+#include "common/control/schemes/tdpa_port.hpp"
 
 namespace teleop {
 
@@ -40,7 +41,7 @@ struct SlaveCommand {
   bool wave_matched = true;              ///< the slave terminates the channel with a damper b
   Eigen::Vector3d wave_u_integral = Eigen::Vector3d::Zero();  ///< sum dt u [sqrt(W) s]
   Eigen::Vector3d wave_u_energy_j = Eigen::Vector3d::Zero();  ///< sum dt u^2/2 per axis [J]
-  double tdpa_energy_in_j = 0.0;  ///< energy into the network at the master port [J]
+  TdpaPort::Command tdpa;  ///< time-domain passivity's port fields
 };
 
 /// Slave -> master, slave frame. Mirrors teleop::SlaveState (the parts the master uses).
@@ -67,10 +68,27 @@ struct SlaveSample {
   std::uint32_t passivity_session = 0;  ///< session the fields below belong to (0: none)
   Eigen::Vector3d wave_v_integral = Eigen::Vector3d::Zero();  ///< sum dt v [sqrt(W) s]
   Eigen::Vector3d wave_v_energy_j = Eigen::Vector3d::Zero();  ///< sum dt v^2/2 per axis [J]
-  double tdpa_energy_in_j = 0.0;        ///< energy into the network at the slave port [J]
-  double tdpa_energy_out_j = 0.0;       ///< energy out of the network into the slave [J]
+  TdpaPort::State tdpa;                 ///< time-domain passivity's port fields
   double passivity_dissipated_j = 0.0;  ///< removed at the slave side [J]
 };
+
+/// The schemes' port fields, registered once: calls `f` with the port struct of each scheme
+/// that has one, taken from every message in `m` (a command-like type: SlaveCommand,
+/// passivity::SlavePortCommand, ...; or a sample-like type: SlaveSample,
+/// passivity::SlavePortReport, ...). The IDL conversion, the validation and the slave port's
+/// report reach each scheme's functions (next to its port struct) only through this.
+template <class F, class... Messages>
+void for_each_port(F&& f, Messages&... m) {
+  f(m.tdpa...);
+}
+
+/// True if every scheme's port fields of `m` are finite.
+template <class Message>
+bool ports_finite(const Message& m) {
+  bool ok = true;
+  for_each_port([&ok](const auto& p) { ok = ok && all_finite(p); }, m);
+  return ok;
+}
 
 /// Master (device) frame <-> slave (world) frame. x_s = offset + s R x_m; f_m = k_f R^T f_s.
 struct WorkspaceMap {

@@ -57,7 +57,7 @@ inline void to_idl(const SlaveCommand& c, std::int64_t send_time_ns, teleop::Mas
   m.wave_matched(c.wave_matched);
   detail::put3(m.wave_u_integral(), c.wave_u_integral);
   detail::put3(m.wave_u_energy_j(), c.wave_u_energy_j);
-  m.tdpa_energy_in_j(c.tdpa_energy_in_j);
+  for_each_port([&m](const auto& p) { to_wire(p, m); }, c);
 }
 
 /// A slave's local contact model into SlaveState (model-mediated scheme).
@@ -90,8 +90,7 @@ inline SlaveSample from_idl(const teleop::SlaveState& m) {
   s.passivity_session = m.passivity_session();
   s.wave_v_integral = detail::get3(m.wave_v_integral());
   s.wave_v_energy_j = detail::get3(m.wave_v_energy_j());
-  s.tdpa_energy_in_j = m.tdpa_energy_in_j();
-  s.tdpa_energy_out_j = m.tdpa_energy_out_j();
+  for_each_port([&m](auto& p) { from_wire(m, p); }, s);
   s.passivity_dissipated_j = m.passivity_dissipated_j();
   s.model.valid = m.model_valid();
   s.model.touched = m.model_touched();
@@ -111,8 +110,7 @@ inline SlaveSample from_idl(const teleop::SlaveState& m) {
   s.valid = s.position_m.allFinite() && s.velocity_mps.allFinite() &&
             s.contact_force_n.allFinite() && std::isfinite(s.penetration_m) &&
             std::isfinite(s.deformation_m) && s.wave_v.allFinite() &&
-            s.wave_v_integral.allFinite() && s.wave_v_energy_j.allFinite() &&
-            std::isfinite(s.tdpa_energy_in_j) && std::isfinite(s.tdpa_energy_out_j) &&
+            s.wave_v_integral.allFinite() && s.wave_v_energy_j.allFinite() && ports_finite(s) &&
             std::isfinite(s.passivity_dissipated_j);
   return s;
 }
@@ -138,7 +136,7 @@ inline SlaveCommand from_idl(const teleop::MasterCommand& m) {
   c.wave_matched = m.wave_matched();
   c.wave_u_integral = detail::get3(m.wave_u_integral());
   c.wave_u_energy_j = detail::get3(m.wave_u_energy_j());
-  c.tdpa_energy_in_j = m.tdpa_energy_in_j();
+  for_each_port([&m](auto& p) { from_wire(m, p); }, c);
   return c;
 }
 

@@ -374,7 +374,7 @@ TEST(WaveVariables, TheInProcessSlaveIsTheSlavePortThenTheToolLaw) {
                                                          0.015 * (std::cos(0.002 * i) - 1.0));
       c.wave_u_integral = tx.integral;
       c.wave_u_energy_j = tx.energy_j;
-      c.tdpa_energy_in_j = 0.02 * i * 1e-3;
+      c.tdpa.energy_in_j = 0.02 * i * 1e-3;
       mine.step(c, 1e-3);
       pv::SlavePortState st{ts.position_m, ts.velocity_mps, ts.contact_force_n};
       const pv::SlavePortTarget t = port.before_step(
@@ -388,12 +388,12 @@ TEST(WaveVariables, TheInProcessSlaveIsTheSlavePortThenTheToolLaw) {
       ASSERT_NEAR((mine.sample().position_m - ts.position_m).norm(), 0.0, 1e-9) << i;
       ASSERT_NEAR((mine.sample().wave_v_integral - port.report().wave_v_integral).norm(), 0.0,
                   1e-9);
-      ASSERT_NEAR(mine.sample().tdpa_energy_out_j, port.report().tdpa_energy_out_j, 1e-12);
+      ASSERT_NEAR(mine.sample().tdpa.energy_out_j, port.report().tdpa.energy_out_j, 1e-12);
       touched |= mine.sample().in_contact;
     }
   }
   EXPECT_TRUE(touched);
-  EXPECT_GT(port.report().tdpa_energy_out_j, 0.0);
+  EXPECT_GT(port.report().tdpa.energy_out_j, 0.0);
 }
 
 // --- configuration --------------------------------------------------------------------------
@@ -501,7 +501,7 @@ TEST(Tdpa, ObserversNeverGoBelowToleranceOnceTheControllerActs) {
       if (std::string(scheme) == "tdpa") {
         w_m_min = std::min(w_m_min, session.controller().passivity_status().observer_j);
         w_s_min = std::min(
-            w_s_min, session.slave_command().tdpa_energy_in_j - slave.sample().tdpa_energy_out_j);
+            w_s_min, session.slave_command().tdpa.energy_in_j - slave.sample().tdpa.energy_out_j);
       }
     }
     SCOPED_TRACE(scheme);
@@ -652,7 +652,7 @@ TEST(Passivity, IdlCarriesTheNewFields) {
   c.wave_matched = false;
   c.wave_u_integral = Vector3d(1, 2, 3);
   c.wave_u_energy_j = Vector3d(4, 5, 6);
-  c.tdpa_energy_in_j = 0.25;
+  c.tdpa.energy_in_j = 0.25;
   teleop::MasterCommand m;
   to_idl(c, 1, m);
   EXPECT_EQ(m.passivity_session(), 77u);
@@ -675,7 +675,7 @@ TEST(Passivity, IdlCarriesTheNewFields) {
   EXPECT_TRUE(s.valid);
   EXPECT_EQ(s.passivity_session, 77u);
   EXPECT_EQ(s.wave_v_energy_j.y(), 0.5);
-  EXPECT_EQ(s.tdpa_energy_out_j, 1.25);
+  EXPECT_EQ(s.tdpa.energy_out_j, 1.25);
   st.wave_v_integral({0.0, std::nan(""), 0.0});
   EXPECT_FALSE(from_idl(st).valid);  // a non-finite backward wave is dropped at the edge
 }
