@@ -4,9 +4,7 @@
 // delay`). No DDS here: the callers convert their command and
 // state types to the plain structs below.
 //
-//   wave variables (SCHEME_WAVE_VARIABLES): the forward wave integral/energy -> WaveSlavePort
-//     (common/control/wave_variables.hpp) with the contact force measured at the last step ->
-//     desired tool position/velocity; the backward wave integral/energy go back.
+//   wave variables (SCHEME_WAVE_VARIABLES): WaveSlaveLaw (common/control/schemes/wave_slave.hpp).
 //   time-domain passivity (SCHEME_TIME_DOMAIN_PASSIVITY): TdpaSlaveLaw
 //     (common/control/schemes/tdpa_slave.hpp).
 //   other schemes: the command passes unchanged.
@@ -19,7 +17,7 @@
 
 #include "common/control/bilateral_types.hpp"
 #include "common/control/schemes/tdpa_slave.hpp"
-#include "common/control/wave_variables.hpp"
+#include "common/control/schemes/wave_slave.hpp"
 
 namespace teleop::passivity {
 
@@ -30,26 +28,15 @@ inline constexpr std::uint8_t kSchemeWaveVariables =
 inline constexpr std::uint8_t kSchemeTimeDomainPassivity =
     static_cast<std::uint8_t>(SchemeId::kTimeDomainPassivity);
 
-/// Allowed range of the wave impedance b [N s/m] on the wire (the master clamps tighter).
-inline constexpr double kMinWaveImpedance = 0.01;
-inline constexpr double kMaxWaveImpedance = 1.0e4;
-/// A reconstructed wave is limited to the wave of a port moving at this speed [m/s] ...
-inline constexpr double kWaveLimitSpeedMps = 2.0;
-/// ... while pushing with this force [N] (only reached when a receiver catches up a gap).
-inline constexpr double kWaveLimitForceN = 200.0;
-
 /// The passivity fields of a command as the slave received it (slave frame, SI).
 struct SlavePortCommand {
-  std::uint8_t scheme = 0;               ///< SCHEME_* constant
-  std::uint32_t session = 0;             ///< master's session id (0: none)
-  bool enabled = false;                  ///< false: the slave holds
-  Vec3 position_m = Vec3::Zero();        ///< master's mapped position [m]
-  Vec3 velocity_mps = Vec3::Zero();      ///< master's mapped velocity [m/s]
-  double wave_impedance_ns_per_m = 0.0;  ///< b [N s/m]
-  bool wave_matched = true;              ///< matched slave termination
-  Vec3 wave_u_integral = Vec3::Zero();   ///< forward wave integral [sqrt(W) s]
-  Vec3 wave_u_energy_j = Vec3::Zero();   ///< forward wave energy per axis [J]
-  TdpaPort::Command tdpa;                ///< time-domain passivity's port fields
+  std::uint8_t scheme = 0;           ///< SCHEME_* constant
+  std::uint32_t session = 0;         ///< master's session id (0: none)
+  bool enabled = false;              ///< false: the slave holds
+  Vec3 position_m = Vec3::Zero();    ///< master's mapped position [m]
+  Vec3 velocity_mps = Vec3::Zero();  ///< master's mapped velocity [m/s]
+  WavePort::Command wave;            ///< wave variables' port fields
+  TdpaPort::Command tdpa;            ///< time-domain passivity's port fields
 };
 
 /// Why a command's passivity fields are unusable (the server counts these as rejections).
@@ -91,12 +78,10 @@ struct SlavePortTarget {
 
 /// What goes back to the master (the passivity fields of the state message).
 struct SlavePortReport {
-  std::uint32_t session = 0;            ///< session these fields belong to (0: none)
-  Vec3 wave_v = Vec3::Zero();           ///< backward wave this step [sqrt(W)]
-  Vec3 wave_v_integral = Vec3::Zero();  ///< [sqrt(W) s]
-  Vec3 wave_v_energy_j = Vec3::Zero();  ///< per axis [J]
-  TdpaPort::State tdpa;                 ///< time-domain passivity's port fields
-  double dissipated_j = 0.0;            ///< slave-side PC / matching damper [J]
+  std::uint32_t session = 0;  ///< session these fields belong to (0: none)
+  WavePort::State wave;       ///< wave variables' port fields
+  TdpaPort::State tdpa;       ///< time-domain passivity's port fields
+  double dissipated_j = 0.0;  ///< slave-side PC / matching damper [J]
 };
 
 /// Parameters of the slave port.
@@ -128,14 +113,14 @@ class SlavePassivityPort {
   std::uint8_t scheme() const { return scheme_; }
   /// Commands refused by before_step() so far.
   std::uint64_t rejected() const { return rejected_; }
-  const WaveSlavePort& wave() const { return wave_; }
+  const WaveSlavePort& wave() const { return wave_.port(); }
   const AdmittancePassivityController& tdpa() const { return tdpa_.controller(); }
 
  private:
   void start(const SlavePortCommand& cmd);
 
   SlavePortParams params_;
-  WaveSlavePort wave_;
+  WaveSlaveLaw wave_;
   TdpaSlaveLaw tdpa_;
   SlavePortReport report_;
   std::uint8_t scheme_ = 0xff;

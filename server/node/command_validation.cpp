@@ -41,9 +41,7 @@ CommandVerdict validate_command(const MasterCommand& cmd, const Eigen::Vector3d&
                                 bool have_last) {
   if (!finite(cmd.position_m()) || !finite(cmd.orientation_wxyz()) ||
       !finite(cmd.linear_velocity_mps()) || !finite(cmd.angular_velocity_radps()) ||
-      !finite(cmd.master_force_n()) || !finite(cmd.wave_u()) ||
-      !std::isfinite(cmd.position_gain_n_per_m()) || !finite(cmd.wave_u_integral()) ||
-      !finite(cmd.wave_u_energy_j()) || !std::isfinite(cmd.wave_impedance_ns_per_m()) ||
+      !finite(cmd.master_force_n()) || !std::isfinite(cmd.position_gain_n_per_m()) ||
       !ports_finite(from_idl(cmd))) {
     return CommandVerdict::kNonFinite;
   }

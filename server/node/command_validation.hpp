@@ -1,8 +1,8 @@
 #pragma once
 // Validation of MasterCommand samples at the network edge: a command with NaN/Inf, a bad
-// quaternion, a position outside the workspace, an old sequence number, or unusable passivity
-// fields (wave impedance out of range, a negative energy, a cumulative energy that went down
-// within a session) is rejected and counted; it never reaches the physics.
+// quaternion, a position outside the workspace, an old sequence number, or unusable port fields
+// of a passivity scheme (a field out of its range, a negative energy, a cumulative energy that
+// went down within a session) is rejected and counted; it never reaches the physics.
 #include <Eigen/Core>
 #include <cstdint>
 

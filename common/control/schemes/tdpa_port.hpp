@@ -6,6 +6,7 @@
 // through for_each_port() (common/control/bilateral_types.hpp), which lists every scheme's
 // port once.
 #include <cmath>
+#include <cstdint>
 
 namespace teleop {
 
@@ -27,6 +28,8 @@ inline bool all_finite(const TdpaPort::Command& c) { return std::isfinite(c.ener
 inline bool all_finite(const TdpaPort::State& s) {
   return std::isfinite(s.energy_in_j) && std::isfinite(s.energy_out_j);
 }
+/// True: tdpa's fields have no range beyond their sign.
+inline bool in_range(const TdpaPort::Command& /*c*/, std::uint8_t /*scheme*/) { return true; }
 /// True if an energy is below zero.
 inline bool any_negative(const TdpaPort::Command& c) { return c.energy_in_j < 0.0; }
 /// True if a cumulative energy of `now` is below that of `last` by more than `tol_j` [J].
