@@ -155,7 +155,7 @@ void MasterCycle::end_homing(double now_s) {
   if (first) {
     session_start_s_ = now_s;
   } else {
-    // a new passivity session: the slave restarts its wave / TDPA state with it
+    // a new passivity session: the slave restarts its port state with it
     if (next_session_id_ != 0) {
       next_session_id_ += 2;
       controller_->set_session_id(next_session_id_);

@@ -453,8 +453,8 @@ struct MasterNode::Impl {
     }
     cc.delivery = ForwardDelivery::kEveryDue;
     cc.driver_timeout_s = options.driver_timeout_s;
-    // a session id the server has not seen from an earlier master (it restarts its wave /
-    // TDPA state when the id changes)
+    // a session id the server has not seen from an earlier master (it restarts its passivity
+    // port state when the id changes)
     cc.session_id = static_cast<std::uint32_t>(now_ns() / 1000) | 1u;
     return cc;
   }

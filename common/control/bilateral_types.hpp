@@ -7,6 +7,8 @@
 #include <cstdint>
 
 #include "common/control/contact_model.hpp"
+#include "common/control/schemes/tdpa_port.hpp"
+#include "common/control/schemes/wave_port.hpp"
 
 namespace teleop {
 
@@ -19,6 +21,8 @@ enum class SchemeId : std::uint8_t {
   kModelMediated = 4,
 };
 
+static_assert(WavePort::kScheme == static_cast<std::uint8_t>(SchemeId::kWaveVariables));
+
 /// Master -> slave, slave frame. Mirrors teleop::MasterCommand.
 struct SlaveCommand {
   std::uint64_t seq = 0;                                            ///< command counter
@@ -29,18 +33,14 @@ struct SlaveCommand {
   Eigen::Vector3d angular_velocity_radps = Eigen::Vector3d::Zero();  ///< [rad/s]
   Eigen::Vector3d master_force_n = Eigen::Vector3d::Zero();  ///< force rendered at the master,
                                                              ///< slave frame [N]
-  Eigen::Vector3d wave_u = Eigen::Vector3d::Zero();          ///< forward wave this cycle [sqrt(W)]
   double position_gain_n_per_m = 0.0;  ///< K_ps requested from the slave (0 = its default)
   SchemeId scheme = SchemeId::kPositionPosition;
   bool enabled = true;   ///< false: the slave holds its pose
   bool release = false;  ///< the master gives the slave up (its last commands; ownership)
   // passivity schemes (see common/control/slave_port.hpp)
-  std::uint32_t passivity_session = 0;   ///< session id of a wave / TDPA run (0: none)
-  double wave_impedance_ns_per_m = 0.0;  ///< b [N s/m] (wave variables)
-  bool wave_matched = true;              ///< the slave terminates the channel with a damper b
-  Eigen::Vector3d wave_u_integral = Eigen::Vector3d::Zero();  ///< sum dt u [sqrt(W) s]
-  Eigen::Vector3d wave_u_energy_j = Eigen::Vector3d::Zero();  ///< sum dt u^2/2 per axis [J]
-  double tdpa_energy_in_j = 0.0;  ///< energy into the network at the master port [J]
+  std::uint32_t passivity_session = 0;  ///< session id of a passivity scheme's run (0: none)
+  WavePort::Command wave;               ///< wave variables' port fields
+  TdpaPort::Command tdpa;               ///< time-domain passivity's port fields
 };
 
 /// Slave -> master, slave frame. Mirrors teleop::SlaveState (the parts the master uses).
@@ -53,7 +53,6 @@ struct SlaveSample {
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();     ///< [m/s]
   Eigen::Vector3d contact_force_n = Eigen::Vector3d::Zero();  ///< environment force on tip [N]
-  Eigen::Vector3d wave_v = Eigen::Vector3d::Zero();           ///< backward wave variable
   double penetration_m = 0.0;                                 ///< deepest penetration [m]
   double deformation_m = 0.0;  ///< indentation of a deformable body since contact began [m]
   bool in_contact = false;     ///< tip touches something
@@ -65,12 +64,29 @@ struct SlaveSample {
   mmt::LocalModel model;
   // passivity schemes (see common/control/slave_port.hpp)
   std::uint32_t passivity_session = 0;  ///< session the fields below belong to (0: none)
-  Eigen::Vector3d wave_v_integral = Eigen::Vector3d::Zero();  ///< sum dt v [sqrt(W) s]
-  Eigen::Vector3d wave_v_energy_j = Eigen::Vector3d::Zero();  ///< sum dt v^2/2 per axis [J]
-  double tdpa_energy_in_j = 0.0;        ///< energy into the network at the slave port [J]
-  double tdpa_energy_out_j = 0.0;       ///< energy out of the network into the slave [J]
+  WavePort::State wave;                 ///< wave variables' port fields
+  TdpaPort::State tdpa;                 ///< time-domain passivity's port fields
   double passivity_dissipated_j = 0.0;  ///< removed at the slave side [J]
 };
+
+/// The schemes' port fields, registered once: calls `f` with the port struct of each scheme
+/// that has one, taken from every message in `m` (a command-like type: SlaveCommand,
+/// passivity::SlavePortCommand, ...; or a sample-like type: SlaveSample,
+/// passivity::SlavePortReport, ...). The IDL conversion, the validation and the slave port's
+/// report reach each scheme's functions (next to its port struct) only through this.
+template <class F, class... Messages>
+void for_each_port(F&& f, Messages&... m) {
+  f(m.wave...);
+  f(m.tdpa...);
+}
+
+/// True if every scheme's port fields of `m` are finite.
+template <class Message>
+bool ports_finite(const Message& m) {
+  bool ok = true;
+  for_each_port([&ok](const auto& p) { ok = ok && all_finite(p); }, m);
+  return ok;
+}
 
 /// Master (device) frame <-> slave (world) frame. x_s = offset + s R x_m; f_m = k_f R^T f_s.
 struct WorkspaceMap {

@@ -21,19 +21,30 @@ const char* to_string(PortCommandCheck c) {
 }
 
 PortCommandCheck check_port_command(const SlavePortCommand& c) {
-  if (!c.wave_u_integral.allFinite() || !c.wave_u_energy_j.allFinite() ||
-      !std::isfinite(c.tdpa_energy_in_j) || !std::isfinite(c.wave_impedance_ns_per_m) ||
-      !c.position_m.allFinite() || !c.velocity_mps.allFinite()) {
+  if (!ports_finite(c) || !c.position_m.allFinite() || !c.velocity_mps.allFinite()) {
     return PortCommandCheck::kNonFinite;
   }
-  if (c.scheme == kSchemeWaveVariables && !(c.wave_impedance_ns_per_m >= kMinWaveImpedance &&
-                                            c.wave_impedance_ns_per_m <= kMaxWaveImpedance)) {
+  bool in = true;
+  for_each_port([&in, &c](const auto& p) { in = in && in_range(p, c.scheme); }, c);
+  if (!in) {
     return PortCommandCheck::kBadImpedance;
   }
-  if ((c.wave_u_energy_j.array() < 0.0).any() || c.tdpa_energy_in_j < 0.0) {
+  bool negative = false;
+  for_each_port([&negative](const auto& p) { negative = negative || any_negative(p); }, c);
+  if (negative) {
     return PortCommandCheck::kNegativeEnergy;
   }
   return PortCommandCheck::kOk;
+}
+
+bool energy_decreased(const SlavePortCommand& now, const SlavePortCommand& last, double tol_j) {
+  bool decreased_energy = false;
+  for_each_port(
+      [&decreased_energy, tol_j](const auto& n, const auto& l) {
+        decreased_energy = decreased_energy || decreased(n, l, tol_j);
+      },
+      now, last);
+  return decreased_energy;
 }
 
 void SlavePassivityPort::reset() {
@@ -44,23 +55,18 @@ void SlavePassivityPort::reset() {
   session_ = 0;
   active_ = false;
   stepped_tdpa_ = false;
-  last_energy_.setZero();
-  last_tdpa_in_j_ = 0.0;
+  last_ = SlavePortCommand{};
 }
 
 void SlavePassivityPort::start(const SlavePortCommand& cmd) {
   scheme_ = cmd.scheme;
   session_ = cmd.session;
   active_ = true;
-  const double b = cmd.wave_impedance_ns_per_m > 0.0 ? cmd.wave_impedance_ns_per_m : 1.0;
-  wave_.configure(b, cmd.wave_matched, wave_limit(b, kWaveLimitSpeedMps, kWaveLimitForceN));
-  wave_.reset();
-  tdpa_.configure(params_.drift_time_constant_s);
-  tdpa_.reset();
+  wave_.start(cmd.wave);
+  tdpa_.start(params_.drift_time_constant_s);
   report_ = SlavePortReport{};
   report_.session = cmd.session;
-  last_energy_.setZero();
-  last_tdpa_in_j_ = 0.0;
+  last_ = SlavePortCommand{};
 }
 
 SlavePortTarget SlavePassivityPort::before_step(const SlavePortCommand& cmd,
@@ -80,42 +86,31 @@ SlavePortTarget SlavePassivityPort::before_step(const SlavePortCommand& cmd,
   t.hold = true;  // until proven usable
   if (check_port_command(cmd) != PortCommandCheck::kOk) {
     ++rejected_;
-    report_.wave_v.setZero();
+    report_.wave.v.setZero();
     return t;
   }
   if (!active_ || cmd.session != session_ || cmd.scheme != scheme_) start(cmd);
   // cumulative energies never decrease within a session: an older one is stale or corrupt
   constexpr double kTol = 1e-12;
-  if ((cmd.wave_u_energy_j.array() < last_energy_.array() - kTol).any() ||
-      cmd.tdpa_energy_in_j < last_tdpa_in_j_ - kTol) {
+  if (energy_decreased(cmd, last_, kTol)) {
     ++rejected_;
-    report_.wave_v.setZero();
+    report_.wave.v.setZero();
     return t;
   }
-  last_energy_ = cmd.wave_u_energy_j;
-  last_tdpa_in_j_ = cmd.tdpa_energy_in_j;
+  last_ = cmd;
   if (!cmd.enabled) {
     // clutch open: the slave holds; waves are not consumed (the receiver catches up later)
-    report_.wave_v.setZero();
-    if (scheme_ == kSchemeTimeDomainPassivity && tdpa_.started()) {
-      Vec3 x, v;
-      tdpa_.hold(x, v);
-    }
+    report_.wave.v.setZero();
+    if (scheme_ == kSchemeTimeDomainPassivity) tdpa_.hold();
     return t;
   }
   t.hold = false;
   if (scheme_ == kSchemeWaveVariables) {
-    wave_.update(cmd.wave_u_integral, cmd.wave_u_energy_j, cmd.position_m, state.contact_force_n,
-                 dt_s);
-    t.position_m = wave_.position_m();
-    t.velocity_mps = wave_.velocity_mps();
-    report_.wave_v = wave_.v();
-    report_.wave_v_integral = wave_.sent().integral;
-    report_.wave_v_energy_j = wave_.sent().energy_j;
-    report_.dissipated_j = wave_.dissipated_j();
+    wave_.before_step(cmd.wave, cmd.position_m, state.contact_force_n, dt_s, t.position_m,
+                      t.velocity_mps, report_.wave, report_.dissipated_j);
   } else {
-    tdpa_.filter(cmd.position_m, cmd.tdpa_energy_in_j, state.position_m, state.velocity_mps,
-                 gains.kp_n_per_m, gains.kd_ns_per_m, dt_s, t.position_m, t.velocity_mps);
+    tdpa_.before_step(cmd.position_m, cmd.tdpa, state.position_m, state.velocity_mps,
+                      gains.kp_n_per_m, gains.kd_ns_per_m, dt_s, t.position_m, t.velocity_mps);
     stepped_tdpa_ = true;
   }
   return t;
@@ -123,10 +118,7 @@ SlavePortTarget SlavePassivityPort::before_step(const SlavePortCommand& cmd,
 
 void SlavePassivityPort::after_step(const Vec3& tracking_force_n, double dt_s) {
   if (!stepped_tdpa_) return;
-  tdpa_.commit(tracking_force_n, dt_s);
-  report_.tdpa_energy_in_j = tdpa_.energy().in_j;
-  report_.tdpa_energy_out_j = tdpa_.energy().out_j;
-  report_.dissipated_j = tdpa_.energy().dissipated_j;
+  tdpa_.after_step(tracking_force_n, dt_s, report_.tdpa, report_.dissipated_j);
   stepped_tdpa_ = false;
 }
 
@@ -137,21 +129,13 @@ SlavePortCommand port_command(const SlaveCommand& c) {
   p.enabled = c.enabled;
   p.position_m = c.position_m;
   p.velocity_mps = c.velocity_mps;
-  p.wave_impedance_ns_per_m = c.wave_impedance_ns_per_m;
-  p.wave_matched = c.wave_matched;
-  p.wave_u_integral = c.wave_u_integral;
-  p.wave_u_energy_j = c.wave_u_energy_j;
-  p.tdpa_energy_in_j = c.tdpa_energy_in_j;
+  for_each_port([](auto& dst, const auto& src) { dst = src; }, p, c);
   return p;
 }
 
 void apply_port_report(const SlavePortReport& r, SlaveSample& s) {
   s.passivity_session = r.session;
-  s.wave_v = r.wave_v;
-  s.wave_v_integral = r.wave_v_integral;
-  s.wave_v_energy_j = r.wave_v_energy_j;
-  s.tdpa_energy_in_j = r.tdpa_energy_in_j;
-  s.tdpa_energy_out_j = r.tdpa_energy_out_j;
+  for_each_port([](auto& dst, const auto& src) { dst = src; }, s, r);
   s.passivity_dissipated_j = r.dissipated_j;
 }
 

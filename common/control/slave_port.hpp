@@ -4,13 +4,9 @@
 // delay`). No DDS here: the callers convert their command and
 // state types to the plain structs below.
 //
-//   wave variables (SCHEME_WAVE_VARIABLES): the forward wave integral/energy -> WaveSlavePort
-//     (common/control/wave_variables.hpp) with the contact force measured at the last step ->
-//     desired tool position/velocity; the backward wave integral/energy go back.
-//   time-domain passivity (SCHEME_TIME_DOMAIN_PASSIVITY): the master's command position and
-//     input energy -> AdmittancePassivityController (common/control/time_domain_passivity.hpp)
-//     -> modified command position/velocity; after the step the tracking force is recorded;
-//     the slave port's input and output energies go back.
+//   wave variables (SCHEME_WAVE_VARIABLES): WaveSlaveLaw (common/control/schemes/wave_slave.hpp).
+//   time-domain passivity (SCHEME_TIME_DOMAIN_PASSIVITY): TdpaSlaveLaw
+//     (common/control/schemes/tdpa_slave.hpp).
 //   other schemes: the command passes unchanged.
 //
 // Per step:  target = port.before_step(cmd, state, gains, dt);  <step the slave to target>;
@@ -20,8 +16,8 @@
 #include <cstdint>
 
 #include "common/control/bilateral_types.hpp"
-#include "common/control/time_domain_passivity.hpp"
-#include "common/control/wave_variables.hpp"
+#include "common/control/schemes/tdpa_slave.hpp"
+#include "common/control/schemes/wave_slave.hpp"
 
 namespace teleop::passivity {
 
@@ -32,26 +28,15 @@ inline constexpr std::uint8_t kSchemeWaveVariables =
 inline constexpr std::uint8_t kSchemeTimeDomainPassivity =
     static_cast<std::uint8_t>(SchemeId::kTimeDomainPassivity);
 
-/// Allowed range of the wave impedance b [N s/m] on the wire (the master clamps tighter).
-inline constexpr double kMinWaveImpedance = 0.01;
-inline constexpr double kMaxWaveImpedance = 1.0e4;
-/// A reconstructed wave is limited to the wave of a port moving at this speed [m/s] ...
-inline constexpr double kWaveLimitSpeedMps = 2.0;
-/// ... while pushing with this force [N] (only reached when a receiver catches up a gap).
-inline constexpr double kWaveLimitForceN = 200.0;
-
 /// The passivity fields of a command as the slave received it (slave frame, SI).
 struct SlavePortCommand {
-  std::uint8_t scheme = 0;               ///< SCHEME_* constant
-  std::uint32_t session = 0;             ///< master's session id (0: none)
-  bool enabled = false;                  ///< false: the slave holds
-  Vec3 position_m = Vec3::Zero();        ///< master's mapped position [m]
-  Vec3 velocity_mps = Vec3::Zero();      ///< master's mapped velocity [m/s]
-  double wave_impedance_ns_per_m = 0.0;  ///< b [N s/m]
-  bool wave_matched = true;              ///< matched slave termination
-  Vec3 wave_u_integral = Vec3::Zero();   ///< forward wave integral [sqrt(W) s]
-  Vec3 wave_u_energy_j = Vec3::Zero();   ///< forward wave energy per axis [J]
-  double tdpa_energy_in_j = 0.0;         ///< master port input energy [J]
+  std::uint8_t scheme = 0;           ///< SCHEME_* constant
+  std::uint32_t session = 0;         ///< master's session id (0: none)
+  bool enabled = false;              ///< false: the slave holds
+  Vec3 position_m = Vec3::Zero();    ///< master's mapped position [m]
+  Vec3 velocity_mps = Vec3::Zero();  ///< master's mapped velocity [m/s]
+  WavePort::Command wave;            ///< wave variables' port fields
+  TdpaPort::Command tdpa;            ///< time-domain passivity's port fields
 };
 
 /// Why a command's passivity fields are unusable (the server counts these as rejections).
@@ -66,6 +51,10 @@ const char* to_string(PortCommandCheck c);
 
 /// Checks the fields of `c` alone (finite, ranges); the port also checks monotonicity.
 PortCommandCheck check_port_command(const SlavePortCommand& c);
+
+/// True if a cumulative energy of `now` is below that of `last` by more than `tol_j` [J]
+/// (within a session energies never decrease: an older command is stale or corrupt).
+bool energy_decreased(const SlavePortCommand& now, const SlavePortCommand& last, double tol_j);
 
 /// The slave's state before a step (slave frame).
 struct SlavePortState {
@@ -89,13 +78,10 @@ struct SlavePortTarget {
 
 /// What goes back to the master (the passivity fields of the state message).
 struct SlavePortReport {
-  std::uint32_t session = 0;            ///< session these fields belong to (0: none)
-  Vec3 wave_v = Vec3::Zero();           ///< backward wave this step [sqrt(W)]
-  Vec3 wave_v_integral = Vec3::Zero();  ///< [sqrt(W) s]
-  Vec3 wave_v_energy_j = Vec3::Zero();  ///< per axis [J]
-  double tdpa_energy_in_j = 0.0;        ///< slave port input energy [J]
-  double tdpa_energy_out_j = 0.0;       ///< slave port output energy [J]
-  double dissipated_j = 0.0;            ///< slave-side PC / matching damper [J]
+  std::uint32_t session = 0;  ///< session these fields belong to (0: none)
+  WavePort::State wave;       ///< wave variables' port fields
+  TdpaPort::State tdpa;       ///< time-domain passivity's port fields
+  double dissipated_j = 0.0;  ///< slave-side PC / matching damper [J]
 };
 
 /// Parameters of the slave port.
@@ -127,22 +113,21 @@ class SlavePassivityPort {
   std::uint8_t scheme() const { return scheme_; }
   /// Commands refused by before_step() so far.
   std::uint64_t rejected() const { return rejected_; }
-  const WaveSlavePort& wave() const { return wave_; }
-  const AdmittancePassivityController& tdpa() const { return tdpa_; }
+  const WaveSlavePort& wave() const { return wave_.port(); }
+  const AdmittancePassivityController& tdpa() const { return tdpa_.controller(); }
 
  private:
   void start(const SlavePortCommand& cmd);
 
   SlavePortParams params_;
-  WaveSlavePort wave_;
-  AdmittancePassivityController tdpa_;
+  WaveSlaveLaw wave_;
+  TdpaSlaveLaw tdpa_;
   SlavePortReport report_;
   std::uint8_t scheme_ = 0xff;
   std::uint32_t session_ = 0;
   bool active_ = false;
   bool stepped_tdpa_ = false;
-  Vec3 last_energy_ = Vec3::Zero();
-  double last_tdpa_in_j_ = 0.0;
+  SlavePortCommand last_;  ///< the newest accepted command's cumulative fields
   std::uint64_t rejected_ = 0;
 };
 

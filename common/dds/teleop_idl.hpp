@@ -48,16 +48,11 @@ inline void to_idl(const SlaveCommand& c, std::int64_t send_time_ns, teleop::Mas
   detail::put3(m.angular_velocity_radps(), c.angular_velocity_radps);
   m.scheme(static_cast<std::uint8_t>(c.scheme));
   detail::put3(m.master_force_n(), c.master_force_n);
-  detail::put3(m.wave_u(), c.wave_u);
   m.position_gain_n_per_m(c.position_gain_n_per_m);
   m.enabled(c.enabled);
   m.release(c.release);
   m.passivity_session(c.passivity_session);
-  m.wave_impedance_ns_per_m(c.wave_impedance_ns_per_m);
-  m.wave_matched(c.wave_matched);
-  detail::put3(m.wave_u_integral(), c.wave_u_integral);
-  detail::put3(m.wave_u_energy_j(), c.wave_u_energy_j);
-  m.tdpa_energy_in_j(c.tdpa_energy_in_j);
+  for_each_port([&m](const auto& p) { to_wire(p, m); }, c);
 }
 
 /// A slave's local contact model into SlaveState (model-mediated scheme).
@@ -83,15 +78,11 @@ inline SlaveSample from_idl(const teleop::SlaveState& m) {
   s.orientation = detail::get_q(m.tip_orientation_wxyz());
   s.velocity_mps = detail::get3(m.tip_linear_velocity_mps());
   s.contact_force_n = detail::get3(m.contact_force_n());
-  s.wave_v = detail::get3(m.wave_v());
   s.penetration_m = m.penetration_m();
   s.deformation_m = m.deformation_m();
   s.in_contact = m.in_contact();
   s.passivity_session = m.passivity_session();
-  s.wave_v_integral = detail::get3(m.wave_v_integral());
-  s.wave_v_energy_j = detail::get3(m.wave_v_energy_j());
-  s.tdpa_energy_in_j = m.tdpa_energy_in_j();
-  s.tdpa_energy_out_j = m.tdpa_energy_out_j();
+  for_each_port([&m](auto& p) { from_wire(m, p); }, s);
   s.passivity_dissipated_j = m.passivity_dissipated_j();
   s.model.valid = m.model_valid();
   s.model.touched = m.model_touched();
@@ -110,9 +101,7 @@ inline SlaveSample from_idl(const teleop::SlaveState& m) {
   }
   s.valid = s.position_m.allFinite() && s.velocity_mps.allFinite() &&
             s.contact_force_n.allFinite() && std::isfinite(s.penetration_m) &&
-            std::isfinite(s.deformation_m) && s.wave_v.allFinite() &&
-            s.wave_v_integral.allFinite() && s.wave_v_energy_j.allFinite() &&
-            std::isfinite(s.tdpa_energy_in_j) && std::isfinite(s.tdpa_energy_out_j) &&
+            std::isfinite(s.deformation_m) && ports_finite(s) &&
             std::isfinite(s.passivity_dissipated_j);
   return s;
 }
@@ -128,17 +117,12 @@ inline SlaveCommand from_idl(const teleop::MasterCommand& m) {
   c.velocity_mps = detail::get3(m.linear_velocity_mps());
   c.angular_velocity_radps = detail::get3(m.angular_velocity_radps());
   c.master_force_n = detail::get3(m.master_force_n());
-  c.wave_u = detail::get3(m.wave_u());
   c.position_gain_n_per_m = m.position_gain_n_per_m();
   c.scheme = static_cast<SchemeId>(m.scheme());
   c.enabled = m.enabled();
   c.release = m.release();
   c.passivity_session = m.passivity_session();
-  c.wave_impedance_ns_per_m = m.wave_impedance_ns_per_m();
-  c.wave_matched = m.wave_matched();
-  c.wave_u_integral = detail::get3(m.wave_u_integral());
-  c.wave_u_energy_j = detail::get3(m.wave_u_energy_j());
-  c.tdpa_energy_in_j = m.tdpa_energy_in_j();
+  for_each_port([&m](auto& p) { from_wire(m, p); }, c);
   return c;
 }
 

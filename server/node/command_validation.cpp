@@ -41,10 +41,8 @@ CommandVerdict validate_command(const MasterCommand& cmd, const Eigen::Vector3d&
                                 bool have_last) {
   if (!finite(cmd.position_m()) || !finite(cmd.orientation_wxyz()) ||
       !finite(cmd.linear_velocity_mps()) || !finite(cmd.angular_velocity_radps()) ||
-      !finite(cmd.master_force_n()) || !finite(cmd.wave_u()) ||
-      !std::isfinite(cmd.position_gain_n_per_m()) || !finite(cmd.wave_u_integral()) ||
-      !finite(cmd.wave_u_energy_j()) || !std::isfinite(cmd.wave_impedance_ns_per_m()) ||
-      !std::isfinite(cmd.tdpa_energy_in_j())) {
+      !finite(cmd.master_force_n()) || !std::isfinite(cmd.position_gain_n_per_m()) ||
+      !ports_finite(from_idl(cmd))) {
     return CommandVerdict::kNonFinite;
   }
   auto norm3 = [](const std::array<double, 3>& a) {
@@ -82,14 +80,12 @@ CommandVerdict validate_passivity(const MasterCommand& cmd, PassivityHistory& hi
   }
   // cumulative energies never decrease within a session: an older value is stale or corrupt
   if (history.have && history.session == p.session &&
-      ((p.wave_u_energy_j.array() < history.wave_u_energy_j.array()).any() ||
-       p.tdpa_energy_in_j < history.tdpa_energy_in_j)) {
+      passivity::energy_decreased(p, history.last, 0.0)) {
     return CommandVerdict::kBadPassivity;
   }
   history.have = true;
   history.session = p.session;
-  history.wave_u_energy_j = p.wave_u_energy_j;
-  history.tdpa_energy_in_j = p.tdpa_energy_in_j;
+  history.last = p;
   return CommandVerdict::kAccepted;
 }
 

@@ -1,8 +1,8 @@
 #pragma once
 // Validation of MasterCommand samples at the network edge: a command with NaN/Inf, a bad
-// quaternion, a position outside the workspace, an old sequence number, or unusable passivity
-// fields (wave impedance out of range, a negative energy, a cumulative energy that went down
-// within a session) is rejected and counted; it never reaches the physics.
+// quaternion, a position outside the workspace, an old sequence number, or unusable port fields
+// of a passivity scheme (a field out of its range, a negative energy, a cumulative energy that
+// went down within a session) is rejected and counted; it never reaches the physics.
 #include <Eigen/Core>
 #include <cstdint>
 
@@ -18,7 +18,7 @@ enum class CommandVerdict {
   kOutsideWorkspace,  ///< position outside the scene's command workspace
   kBadGain,           ///< negative or absurd position gain override
   kStale,             ///< sequence number not newer than the last accepted one
-  kBadPassivity,      ///< wave / TDPA fields out of range (b, negative or decreasing energy)
+  kBadPassivity,      ///< a scheme's port fields out of range (b, negative or decreasing energy)
 };
 
 const char* to_string(CommandVerdict v);
@@ -39,8 +39,7 @@ CommandVerdict validate_command(const MasterCommand& cmd, const Eigen::Vector3d&
 struct PassivityHistory {
   bool have = false;
   std::uint32_t session = 0;
-  Eigen::Vector3d wave_u_energy_j = Eigen::Vector3d::Zero();
-  double tdpa_energy_in_j = 0.0;
+  passivity::SlavePortCommand last;  ///< the newest accepted fields (cumulative energies)
 };
 
 /// Checks the passivity fields of `cmd` (after validate_command() accepted the rest) against

@@ -137,8 +137,8 @@ void ServerCycle::step(std::int64_t t_ns, sim::EventQueue& events) {
   sim::WorldCommand applied = world_cmd_;
   applied.hold = world_cmd_.hold || watchdog_holding_;
 
-  // wave variables / TDPA: the port turns the command into the tool's target, using the
-  // state and contact force of the last step
+  // passivity schemes: the port turns the command into the tool's target, using the state
+  // and contact force of the last step
   const passivity::SlavePortCommand port_cmd = passivity::port_command(command_);
   port_active_ = have_command_ && passivity::SlavePassivityPort::handles(port_cmd.scheme);
   if (port_active_) {

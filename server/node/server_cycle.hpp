@@ -32,7 +32,7 @@ class ServerCycle {
   /// written on the wire [ns, master clock] (echoed unchanged in SlaveState).
   void on_command(const SlaveCommand& c, std::int64_t receive_ns, std::int64_t send_time_ns);
   /// One period at server time t_ns [ns]: watchdog (hold when commands stop, events both ways),
-  /// passivity port (wave variables / TDPA turn the command into the tool's target), world step.
+  /// passivity port (a passivity scheme turns the command into the tool's target), world step.
   void step(std::int64_t t_ns, sim::EventQueue& events);
 
   /// Changes the physics period [s] (an in-process slave stepped at another rate).

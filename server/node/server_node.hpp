@@ -34,7 +34,7 @@ struct CommandCounters {
   std::atomic<std::uint64_t> rejected_nan{0};
   std::atomic<std::uint64_t> rejected_workspace{0};
   std::atomic<std::uint64_t> rejected_stale{0};
-  std::atomic<std::uint64_t> rejected_passivity{0};  ///< wave / TDPA fields unusable
+  std::atomic<std::uint64_t> rejected_passivity{0};  ///< a scheme's port fields unusable
   std::atomic<std::uint64_t> refused_owner{0};       ///< from a master not owning the slave
 };
 

@@ -47,11 +47,7 @@ void pack_slave_state(const ServerCycle& cycle, std::uint64_t commands_received,
   state.commands_received(commands_received);
   const passivity::SlavePortReport& pr = cycle.port().report();
   state.passivity_session(cycle.port_active() ? pr.session : 0);
-  copy3(state.wave_v(), pr.wave_v);
-  copy3(state.wave_v_integral(), pr.wave_v_integral);
-  copy3(state.wave_v_energy_j(), pr.wave_v_energy_j);
-  state.tdpa_energy_in_j(pr.tdpa_energy_in_j);
-  state.tdpa_energy_out_j(pr.tdpa_energy_out_j);
+  for_each_port([&state](const auto& p) { to_wire(p, state); }, pr);
   state.passivity_dissipated_j(pr.dissipated_j);
   state.owner_session(owner.session);
   state.owner_active(owner.active);

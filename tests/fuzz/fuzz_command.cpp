@@ -41,7 +41,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const teleop::SlaveCommand c = teleop::from_idl(cmd);
   check(c.position_m.allFinite() && c.velocity_mps.allFinite() &&
         c.angular_velocity_radps.allFinite() && c.master_force_n.allFinite() &&
-        c.wave_u.allFinite() && std::isfinite(c.position_gain_n_per_m));
+        c.wave.u.allFinite() && std::isfinite(c.position_gain_n_per_m));
   check(std::abs(c.orientation.norm() - 1.0) < 1e-9);
   check((c.position_m.array() >= lo.array()).all() && (c.position_m.array() <= hi.array()).all());
 

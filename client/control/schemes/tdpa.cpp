@@ -23,8 +23,8 @@ void TimeDomainPassivityController::compute(const DeviceReading& master, const S
   // energies travel in the slave frame: P_slave = (alpha / beta) P_master
   const double to_master = w.force_scale / w.position_scale;
   if (slave.valid && slave.passivity_session == session_) {
-    remote_in_j_ = slave.tdpa_energy_in_j * to_master;
-    remote_out_j_ = slave.tdpa_energy_out_j * to_master;
+    remote_in_j_ = slave.tdpa.energy_in_j * to_master;
+    remote_out_j_ = slave.tdpa.energy_out_j * to_master;
   }
   out.force_n = pc_.filter(wanted_n_, master.linear_velocity_mps, remote_in_j_, dt_s);
 }
@@ -36,7 +36,7 @@ void TimeDomainPassivityController::finish(const DeviceReading& master,
   pc_.commit(out.force_n, wanted_n_, master.linear_velocity_mps, dt_s);
   const WorkspaceMap& w = params_.workspace;
   out.command.passivity_session = session_;
-  out.command.tdpa_energy_in_j = pc_.energy().in_j * (w.position_scale / w.force_scale);
+  out.command.tdpa.energy_in_j = pc_.energy().in_j * (w.position_scale / w.force_scale);
 }
 
 BilateralController::PassivityStatus TimeDomainPassivityController::passivity_status() const {

@@ -47,16 +47,16 @@ void WaveVariablesController::compute(const DeviceReading& master, const SlaveSa
   // the channel works in the slave frame: x and xdot of the master mapped there
   const Eigen::Vector3d xdot = w.to_slave_velocity(master.linear_velocity_mps);
   const bool have = slave.valid && slave.passivity_session == session_;
-  if (have) v_energy_rx_ = slave.wave_v_energy_j;
-  port_.update(c.position_m, xdot, slave.wave_v_integral, slave.wave_v_energy_j, have, dt_s);
+  if (have) v_energy_rx_ = slave.wave.v_energy_j;
+  port_.update(c.position_m, xdot, slave.wave.v_integral, slave.wave.v_energy_j, have, dt_s);
   // the operator pushes F_m into the channel; the device renders -F_m (+ local damping)
   out.force_n = -w.to_master_force(port_.force_n()) - b_m_ * master.linear_velocity_mps;
   c.passivity_session = session_;
-  c.wave_impedance_ns_per_m = b_;
-  c.wave_matched = params_.wave_matched;
-  c.wave_u = port_.u();
-  c.wave_u_integral = port_.sent().integral;
-  c.wave_u_energy_j = port_.sent().energy_j;
+  c.wave.impedance_ns_per_m = b_;
+  c.wave.matched = params_.wave_matched;
+  c.wave.u = port_.u();
+  c.wave.u_integral = port_.sent().integral;
+  c.wave.u_energy_j = port_.sent().energy_j;
 }
 
 BilateralController::PassivityStatus WaveVariablesController::passivity_status() const {

@@ -311,12 +311,12 @@ TEST(WaveVariables, BadWaveNeverReachesThePhysicsAndIsCounted) {
   SlaveCommand c;
   c.scheme = SchemeId::kWaveVariables;
   c.passivity_session = 7;
-  c.wave_impedance_ns_per_m = 10.0;
+  c.wave.impedance_ns_per_m = 10.0;
   c.position_m = Vector3d(0, 0, 0.6);
   for (int i = 1; i <= 50; ++i) {
     c.seq = static_cast<std::uint64_t>(i);
-    c.wave_u_integral = Vector3d(0, 0, -1e-3 * i);
-    c.wave_u_energy_j = Vector3d(0, 0, 1e-4 * i);
+    c.wave.u_integral = Vector3d(0, 0, -1e-3 * i);
+    c.wave.u_energy_j = Vector3d(0, 0, 1e-4 * i);
     slave.step(c, 1e-3);
   }
   ASSERT_EQ(slave.port().rejected(), 0u);
@@ -326,28 +326,28 @@ TEST(WaveVariables, BadWaveNeverReachesThePhysicsAndIsCounted) {
   };
   SlaveCommand nan = c;
   nan.seq = 51;
-  nan.wave_u_integral.x() = std::nan("");
+  nan.wave.u_integral.x() = std::nan("");
   hold_steps(nan);
   SlaveCommand negative = c;
   negative.seq = 52;
-  negative.wave_u_energy_j.z() = -1.0;
+  negative.wave.u_energy_j.z() = -1.0;
   hold_steps(negative);
   SlaveCommand bad_b = c;
   bad_b.seq = 53;
-  bad_b.wave_impedance_ns_per_m = 0.0;
+  bad_b.wave.impedance_ns_per_m = 0.0;
   hold_steps(bad_b);
   SlaveCommand stale = c;  // an older cumulative energy within the same session
   stale.seq = 54;
-  stale.wave_u_energy_j = Vector3d(0, 0, 1e-4);
+  stale.wave.u_energy_j = Vector3d(0, 0, 1e-4);
   hold_steps(stale);
   EXPECT_EQ(slave.port().rejected(), 80u);
   EXPECT_TRUE(slave.sample().position_m.allFinite());
   EXPECT_LT((slave.sample().position_m - before).norm(), 2e-3);  // held
-  EXPECT_TRUE(slave.sample().wave_v_integral.allFinite());
+  EXPECT_TRUE(slave.sample().wave.v_integral.allFinite());
   // a good command afterwards is used again
   c.seq = 60;
-  c.wave_u_integral = Vector3d(0, 0, -0.06);
-  c.wave_u_energy_j = Vector3d(0, 0, 0.01);
+  c.wave.u_integral = Vector3d(0, 0, -0.06);
+  c.wave.u_energy_j = Vector3d(0, 0, 0.01);
   slave.step(c, 1e-3);
   EXPECT_EQ(slave.port().rejected(), 80u);
 }
@@ -366,15 +366,15 @@ TEST(WaveVariables, TheInProcessSlaveIsTheSlavePortThenTheToolLaw) {
       c.seq = static_cast<std::uint64_t>(i);
       c.scheme = scheme;
       c.passivity_session = scheme == SchemeId::kWaveVariables ? 1u : 2u;
-      c.wave_impedance_ns_per_m = 10.0;
+      c.wave.impedance_ns_per_m = 10.0;
       const Vector3d vel(0.02 * std::cos(0.004 * i), 0.0, -0.03 * std::sin(0.002 * i));
       tx.add(std::sqrt(20.0) * vel, 1e-3);
       c.velocity_mps = vel;
       c.position_m = Vector3d(0.0, 0.0, 0.56) + Vector3d(0.005 * std::sin(0.004 * i), 0.0,
                                                          0.015 * (std::cos(0.002 * i) - 1.0));
-      c.wave_u_integral = tx.integral;
-      c.wave_u_energy_j = tx.energy_j;
-      c.tdpa_energy_in_j = 0.02 * i * 1e-3;
+      c.wave.u_integral = tx.integral;
+      c.wave.u_energy_j = tx.energy_j;
+      c.tdpa.energy_in_j = 0.02 * i * 1e-3;
       mine.step(c, 1e-3);
       pv::SlavePortState st{ts.position_m, ts.velocity_mps, ts.contact_force_n};
       const pv::SlavePortTarget t = port.before_step(
@@ -386,14 +386,14 @@ TEST(WaveVariables, TheInProcessSlaveIsTheSlavePortThenTheToolLaw) {
       teleop::sim::tool_step(tm, ts, in, 1e-3);
       port.after_step(ts.tracking_force_n, 1e-3);
       ASSERT_NEAR((mine.sample().position_m - ts.position_m).norm(), 0.0, 1e-9) << i;
-      ASSERT_NEAR((mine.sample().wave_v_integral - port.report().wave_v_integral).norm(), 0.0,
+      ASSERT_NEAR((mine.sample().wave.v_integral - port.report().wave.v_integral).norm(), 0.0,
                   1e-9);
-      ASSERT_NEAR(mine.sample().tdpa_energy_out_j, port.report().tdpa_energy_out_j, 1e-12);
+      ASSERT_NEAR(mine.sample().tdpa.energy_out_j, port.report().tdpa.energy_out_j, 1e-12);
       touched |= mine.sample().in_contact;
     }
   }
   EXPECT_TRUE(touched);
-  EXPECT_GT(port.report().tdpa_energy_out_j, 0.0);
+  EXPECT_GT(port.report().tdpa.energy_out_j, 0.0);
 }
 
 // --- configuration --------------------------------------------------------------------------
@@ -501,7 +501,7 @@ TEST(Tdpa, ObserversNeverGoBelowToleranceOnceTheControllerActs) {
       if (std::string(scheme) == "tdpa") {
         w_m_min = std::min(w_m_min, session.controller().passivity_status().observer_j);
         w_s_min = std::min(
-            w_s_min, session.slave_command().tdpa_energy_in_j - slave.sample().tdpa_energy_out_j);
+            w_s_min, session.slave_command().tdpa.energy_in_j - slave.sample().tdpa.energy_out_j);
       }
     }
     SCOPED_TRACE(scheme);
@@ -648,11 +648,11 @@ TEST(Passivity, IdlCarriesTheNewFields) {
   c.seq = 9;
   c.scheme = SchemeId::kWaveVariables;
   c.passivity_session = 77;
-  c.wave_impedance_ns_per_m = 12.5;
-  c.wave_matched = false;
-  c.wave_u_integral = Vector3d(1, 2, 3);
-  c.wave_u_energy_j = Vector3d(4, 5, 6);
-  c.tdpa_energy_in_j = 0.25;
+  c.wave.impedance_ns_per_m = 12.5;
+  c.wave.matched = false;
+  c.wave.u_integral = Vector3d(1, 2, 3);
+  c.wave.u_energy_j = Vector3d(4, 5, 6);
+  c.tdpa.energy_in_j = 0.25;
   teleop::MasterCommand m;
   to_idl(c, 1, m);
   EXPECT_EQ(m.passivity_session(), 77u);
@@ -674,8 +674,8 @@ TEST(Passivity, IdlCarriesTheNewFields) {
   SlaveSample s = from_idl(st);
   EXPECT_TRUE(s.valid);
   EXPECT_EQ(s.passivity_session, 77u);
-  EXPECT_EQ(s.wave_v_energy_j.y(), 0.5);
-  EXPECT_EQ(s.tdpa_energy_out_j, 1.25);
+  EXPECT_EQ(s.wave.v_energy_j.y(), 0.5);
+  EXPECT_EQ(s.tdpa.energy_out_j, 1.25);
   st.wave_v_integral({0.0, std::nan(""), 0.0});
   EXPECT_FALSE(from_idl(st).valid);  // a non-finite backward wave is dropped at the edge
 }

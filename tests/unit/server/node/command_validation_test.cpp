@@ -125,9 +125,9 @@ TEST(CommandValidation, ConvertsThePassivityFields) {
   EXPECT_EQ(p.scheme, SCHEME_WAVE_VARIABLES);
   EXPECT_EQ(p.session, 5u);
   EXPECT_TRUE(p.enabled);
-  EXPECT_EQ(p.wave_impedance_ns_per_m, 10.0);
-  EXPECT_DOUBLE_EQ(p.wave_u_integral.z(), -0.03);
-  EXPECT_EQ(p.wave_u_energy_j.z(), 0.5);
+  EXPECT_EQ(p.wave.impedance_ns_per_m, 10.0);
+  EXPECT_DOUBLE_EQ(p.wave.u_integral.z(), -0.03);
+  EXPECT_EQ(p.wave.u_energy_j.z(), 0.5);
   EXPECT_EQ(p.position_m, Eigen::Vector3d(0.1, 0.2, 0.3));
 }
 
