@@ -362,6 +362,28 @@ double Node::number(const std::string& key, double lo, double hi) const {
   return v;
 }
 
+double Node::positive_number(const std::string& key, double hi) const {
+  const Node c = at(key);
+  std::ostringstream range;
+  range << "(0, " << hi << "]";
+  double v = 0.0;
+  try {
+    v = c.node_.as<double>();
+  } catch (const YAML::Exception&) {
+    fail(key, "value " + scalar_text(c.node_) + " is not a number; allowed range " + range.str());
+  }
+  if (!std::isfinite(v) || v <= 0.0 || v > hi) {
+    fail(key, "value " + scalar_text(c.node_) + " is out of the allowed range " + range.str());
+  }
+  return v;
+}
+
+bool Node::is_text(const std::string& key, const std::string& text) const {
+  if (!has(key)) return false;
+  const YAML::Node c = node_[key];
+  return c.IsScalar() && c.Scalar() == text;
+}
+
 double Node::number_or(const std::string& key, double fallback, double lo, double hi) const {
   return has(key) ? number(key, lo, hi) : fallback;
 }

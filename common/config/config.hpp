@@ -63,6 +63,10 @@ class Node {
 
   /// Required number within [lo, hi].
   double number(const std::string& key, double lo, double hi) const;
+  /// Required number within (0, hi]: above zero, as a step, a tolerance or a budget must be.
+  double positive_number(const std::string& key, double hi) const;
+  /// True if `key` holds the scalar `text` (e.g. "auto" where a number or a name may stand).
+  bool is_text(const std::string& key, const std::string& text) const;
   /// Optional number within [lo, hi]; `fallback` when the key is missing.
   double number_or(const std::string& key, double fallback, double lo, double hi) const;
   /// Required integer within [lo, hi].

@@ -146,25 +146,10 @@ std::vector<std::string> differences_from_table(const DeformableParams& p) {
 /// Reads `key` as a number in (0, hi]; "value V is out of the allowed range (0, hi]".
 double positive_number(const config::Node& n, const std::string& key, double hi) {
   if (!n.has(key)) n.fail(key, "is required with model, integrator, level or kernel: auto");
-  double v = 0.0;
-  bool ok = true;
-  try {
-    v = n.raw()[key].as<double>();
-  } catch (const YAML::Exception&) {
-    ok = false;
-  }
-  const std::string text = n.raw()[key].IsScalar() ? n.raw()[key].Scalar() : "(not a number)";
-  const std::string range = "(0, " + fmtg(hi) + "]";
-  if (!ok) n.fail(key, "value " + text + " is not a number; allowed range " + range);
-  if (!std::isfinite(v) || v <= 0.0 || v > hi) {
-    n.fail(key, "value " + text + " is out of the allowed range " + range);
-  }
-  return v;
+  return n.positive_number(key, hi);
 }
 
-bool is_auto(const config::Node& n, const std::string& key) {
-  return n.has(key) && n.raw()[key].IsScalar() && n.raw()[key].Scalar() == "auto";
-}
+bool is_auto(const config::Node& n, const std::string& key) { return n.is_text(key, "auto"); }
 
 }  // namespace
 

@@ -27,6 +27,23 @@ TEST(Config, OutOfRangeNamesFileFieldValueAndRange) {
   EXPECT_NE(msg.find("[0.01, 10]"), std::string::npos) << msg;
 }
 
+TEST(Config, PositiveNumberRefusesZeroAndNamesTheOpenRange) {
+  const Node n = Node::parse("a: {step_s: 0.001, zero: 0, big: 2e3, text: auto}", "s.yaml");
+  const Node a = n.at("a");
+  EXPECT_DOUBLE_EQ(a.positive_number("step_s", 1.0), 0.001);
+  for (const char* key : {"zero", "big"}) {
+    const std::string msg = error_of([&] { a.positive_number(key, 1e3); });
+    EXPECT_NE(msg.find("s.yaml"), std::string::npos) << msg;
+    EXPECT_NE(msg.find(std::string("a.") + key), std::string::npos) << msg;
+    EXPECT_NE(msg.find("out of the allowed range (0, 1000]"), std::string::npos) << msg;
+  }
+  EXPECT_NE(error_of([&] { a.positive_number("text", 1.0); }).find("'auto' is not a number"),
+            std::string::npos);
+  EXPECT_TRUE(a.is_text("text", "auto"));
+  EXPECT_FALSE(a.is_text("step_s", "auto"));
+  EXPECT_FALSE(a.is_text("missing", "auto"));
+}
+
 TEST(Config, NotANumberIsRejected) {
   const Node n = Node::parse("k: stiff", "a.yaml");
   const std::string msg = error_of([&] { n.number("k", 0, 1e6); });

@@ -328,7 +328,7 @@ TEST_F(AutoBodyYaml, BadValuesAreRefusedNamingFieldValueAndRange) {
   std::string e = error_of(head + "tolerance_pct: 0, budget_us: 100}\n");
   EXPECT_NE(e.find("scene.yaml"), std::string::npos) << e;
   EXPECT_NE(e.find("body.tolerance_pct"), std::string::npos) << e;
-  EXPECT_NE(e.find("value 0 "), std::string::npos) << e;
+  EXPECT_NE(e.find("value '0' "), std::string::npos) << e;
   EXPECT_NE(e.find("(0, 1000]"), std::string::npos) << e;
   e = error_of(head + "tolerance_pct: -1, budget_us: 100}\n");
   EXPECT_NE(e.find("body.tolerance_pct"), std::string::npos) << e;
