@@ -284,27 +284,28 @@ void apply_controller_flags(const Flags& f, teleop::master::MasterOptions& o) {
   o.controller.validate();
 }
 
-/// The injected channel's flags over both directions (after --config; backward's seed + 1).
+/// The injected channel's flags over both directions (after --config; backward's seed + 1):
+/// each value CLI11 read goes to the delay model's one parser of that flag.
 void apply_delay_flags(const Flags& f, teleop::master::MasterOptions& o) {
-  std::vector<std::string> dflags;
-  auto add = [&](const char* flag, const std::optional<std::string>& v) {
-    if (v) {
-      dflags.push_back(flag);
-      dflags.push_back(*v);
-    }
+  bool any = false;
+  auto apply = [&](const char* flag, const std::optional<std::string>& v) {
+    if (!v) return;
+    teleop::master::apply_delay_flag(o.forward, flag, *v);
+    teleop::master::apply_delay_flag(o.backward, flag, *v);
+    any = true;
   };
-  add("--delay", f.delay);
-  add("--jitter", f.jitter);
-  add("--jitter-dist", f.jitter_dist);
-  add("--loss", f.loss);
-  add("--burst-loss", f.burst_loss);
-  add("--delay-spike", f.delay_spike);
-  add("--loss-window", f.loss_window);
-  if (f.seed) add("--seed", std::to_string(*f.seed));
-  if (f.reorder) dflags.push_back("--reorder");
-  if (!dflags.empty()) {
-    teleop::master::parse_delay_flags(o.forward, dflags);
-    teleop::master::parse_delay_flags(o.backward, dflags);
+  apply("--delay", f.delay);
+  apply("--jitter", f.jitter);
+  apply("--jitter-dist", f.jitter_dist);
+  apply("--loss", f.loss);
+  apply("--burst-loss", f.burst_loss);
+  apply("--delay-spike", f.delay_spike);
+  apply("--loss-window", f.loss_window);
+  if (f.seed) apply("--seed", std::to_string(*f.seed));
+  if (f.reorder) apply("--reorder", std::string());
+  if (any) {
+    o.forward.validate();
+    o.backward.validate();
     o.backward.seed = o.forward.seed + 1;
   }
 }
