@@ -12,17 +12,8 @@ namespace teleop::master {
 using config::ConfigError;
 
 namespace {
-std::string number_text(double v) {
-  std::ostringstream o;
-  o << v;
-  return o.str();
-}
-
 void check(const char* field, double v, double lo, double hi) {
-  if (!(v >= lo && v <= hi)) {
-    throw ConfigError(std::string("controller: ") + field + " = " + number_text(v) +
-                      " is out of the allowed range " + config::range_text(lo, hi));
-  }
+  config::check_range("controller", field, v, lo, hi);
 }
 
 std::string joined_names() {

@@ -25,10 +25,7 @@ double PortableRng::normal() {
 
 void DelayConfig::validate() const {
   auto check = [](const char* field, double v, double lo, double hi) {
-    if (!(v >= lo && v <= hi)) {
-      throw ConfigError(std::string("delay channel: ") + field + " = " + std::to_string(v) +
-                        " is out of the allowed range " + config::range_text(lo, hi));
-    }
+    config::check_range("delay channel", field, v, lo, hi);
   };
   check("delay_s", delay_s, 0.0, 10.0);
   check("jitter_s", jitter_s, 0.0, 10.0);

@@ -493,6 +493,17 @@ void Node::reject_unknown_keys(const std::set<std::string>& known) const {
   }
 }
 
+double check_range(const std::string& owner, const std::string& field, double value, double lo,
+                   double hi) {
+  if (!(value >= lo && value <= hi)) {
+    std::ostringstream os;
+    os << owner << ": " << field << " = " << value << " is out of the allowed range "
+       << range_text(lo, hi);
+    throw ConfigError(os.str());
+  }
+  return value;
+}
+
 double check_flag(const std::string& flag, double value, double lo, double hi) {
   if (!std::isfinite(value) || value < lo || value > hi || (lo >= 0.0 && std::signbit(value))) {
     std::ostringstream os;

@@ -103,6 +103,11 @@ class Node {
 /// Formats a range for messages: "[lo, hi]".
 std::string range_text(double lo, double hi);
 
+/// Checks a field of a settings struct already read (from a file, flags or a live request):
+/// throws ConfigError "OWNER: FIELD = VALUE is out of the allowed range [lo, hi]".
+double check_range(const std::string& owner, const std::string& field, double value, double lo,
+                   double hi);
+
 /// Checks a command-line numeric flag; throws ConfigError naming the flag, value and range.
 /// A negative zero is refused where the range starts at 0 or above (`--duration -0`).
 double check_flag(const std::string& flag, double value, double lo, double hi);
