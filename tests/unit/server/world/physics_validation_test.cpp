@@ -293,8 +293,8 @@ namespace {
 // load: the shipped volumetric scene's ball, pressed 5 mm on the floor under its weight, against
 // the independent FEM (CalculiX) and Hertz.
 TEST(FemAgainstPhysics, TheContactStiffnessMeasuredAtLoadIsThePhysicalOne) {
-  const teleop::sim::WorldModel model = teleop::sim::load_world_model(
-      std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
+  const teleop::sim::WorldModel model =
+      teleop::sim::load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/default.yaml");
   const teleop::sim::WorldData d = teleop::sim::make_world_data(model);
   ASSERT_EQ(d.bodies.size(), 1u);
   const double k = d.bodies[0].contact_stiffness_n_per_m;
