@@ -42,6 +42,7 @@ if [ "${TELEOP_SETUP_TESTS:-0}" = "1" ]; then
     chromium  # the bridge page's test: headless Chromium opens it (tests/node/page_check.mjs)
     pybind11-dev python3-dev python3-pytest  # the Python module teleop (client/python), its test
     clang-format
+    clang-tidy  # deploy/tidy.sh: the checks of .clang-tidy, run by deploy/run_tests.sh
     clang libclang-rt-dev  # libFuzzer + sanitizers of the fuzz targets (tests/fuzz, deploy/fuzz.sh)
   )
   if [ "${TELEOP_SETUP_VIEWER:-1}" = "1" ]; then

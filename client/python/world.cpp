@@ -136,8 +136,8 @@ class World {
 
 /// A 3 x N matrix as an N x 3 array.
 py::object rows_of(const Eigen::Matrix3Xd& m) {
-  const Eigen::Matrix3Xd c = m;  // column-major 3 x N: each column is a row of the array
-  return array_of(c.data(), static_cast<std::size_t>(c.cols()), 3);
+  // column-major 3 x N: each column is a row of the array
+  return array_of(m.data(), static_cast<std::size_t>(m.cols()), 3);
 }
 
 /// Facts of a deformable body's model.

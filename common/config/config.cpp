@@ -278,8 +278,8 @@ std::string range_text(double lo, double hi) {
   return os.str();
 }
 
-Node::Node(YAML::Node node, std::string file, std::string path)
-    : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {}
+Node::Node(const YAML::Node& node, std::string file, std::string path)
+    : node_(node), file_(std::move(file)), path_(std::move(path)) {}
 
 Node Node::load_file(const std::string& file) {
   std::error_code ec;

@@ -27,7 +27,7 @@ class ConfigError : public std::runtime_error {
 /// Accessors validate type and range and throw ConfigError naming file, field, value, range.
 class Node {
  public:
-  Node(YAML::Node node, std::string file, std::string path);
+  Node(const YAML::Node& node, std::string file, std::string path);
 
   /// Largest file load_file() reads [bytes].
   static constexpr std::size_t kMaxFileBytes = std::size_t{16} << 20;

@@ -722,7 +722,7 @@ Participant::~Participant() {
 Topic* Participant::topic(const std::string& topic_name, TypeSupport type) {
   auto it = topics_.find(topic_name);
   if (it != topics_.end()) return it->second;
-  const std::string type_name = type.get_type_name();
+  const std::string& type_name = type.get_type_name();
   if (participant_->find_type(type_name).empty()) {
     if (type.register_type(participant_) != ReturnCode_t::RETCODE_OK) {
       throw DdsError("cannot register DDS type " + type_name);

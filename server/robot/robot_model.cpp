@@ -59,7 +59,7 @@ Eigen::Matrix3d inertia(const config::Node& n, const std::string& key) {
     i(1, 2) = i(2, 1) = v[5];
   }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(i);
-  const Eigen::Vector3d p = es.eigenvalues();
+  const Eigen::Vector3d& p = es.eigenvalues();
   const double tol = 1e-12 + 1e-9 * p.cwiseAbs().maxCoeff();
   if (p.minCoeff() <= 0.0) {
     n.fail(key, "principal moments must be > 0 [kg m^2]; the smallest is " +

@@ -182,7 +182,7 @@ int world(const CommandArgs& args) {
                                        std::min(1.0, 2.0 * k / n));
   });
   bench.run("pressing", n, [&](int k) {
-    const double depth = 0.02 * std::min(1.0, 1.0 * k / (n / 3));
+    const double depth = 0.02 * std::min(1.0, 1.0 * k / static_cast<double>(n / 3));
     return Eigen::Vector3d(top + Eigen::Vector3d(0, 0, 0.05 - depth));
   });
   progress.finish();

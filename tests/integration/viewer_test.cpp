@@ -76,6 +76,7 @@ std::string find_on_path(const std::string& name) {
 }
 
 /// xvfb-run's path; the calling test skips when it is missing.
+// NOLINTNEXTLINE(bugprone-macro-parentheses): var is the name the macro declares
 #define REQUIRE_XVFB_RUN(var)                                                \
   const std::string var = find_on_path("xvfb-run");                          \
   if (var.empty())                                                           \

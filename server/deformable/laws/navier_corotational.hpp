@@ -142,14 +142,14 @@ TELEOP_ALWAYS_INLINE void pack_corotational(const DeformableModel& m, Deformable
 
 // Rows a, b, c, d of a 4 x 4 block to its columns.
 TELEOP_ALWAYS_INLINE void transpose4(V4& a, V4& b, V4& c, V4& d) {
-  const V4 t0 = __builtin_shuffle(a, b, V4i{0, 4, 1, 5});
-  const V4 t1 = __builtin_shuffle(a, b, V4i{2, 6, 3, 7});
-  const V4 t2 = __builtin_shuffle(c, d, V4i{0, 4, 1, 5});
-  const V4 t3 = __builtin_shuffle(c, d, V4i{2, 6, 3, 7});
-  a = __builtin_shuffle(t0, t2, V4i{0, 1, 4, 5});
-  b = __builtin_shuffle(t0, t2, V4i{2, 3, 6, 7});
-  c = __builtin_shuffle(t1, t3, V4i{0, 1, 4, 5});
-  d = __builtin_shuffle(t1, t3, V4i{2, 3, 6, 7});
+  const V4 t0 = __builtin_shufflevector(a, b, 0, 4, 1, 5);
+  const V4 t1 = __builtin_shufflevector(a, b, 2, 6, 3, 7);
+  const V4 t2 = __builtin_shufflevector(c, d, 0, 4, 1, 5);
+  const V4 t3 = __builtin_shufflevector(c, d, 2, 6, 3, 7);
+  a = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
+  b = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
+  c = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+  d = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
 }
 
 // Node i's ring matrix A_i as its three columns (x, y, z, 0).

@@ -20,8 +20,6 @@
 
 using namespace teleop::master;
 using namespace teleop;
-using teleop::config::ConfigError;
-using teleop::test::scenario;
 
 namespace {
 

@@ -56,7 +56,7 @@ Feel hold(const std::string& scheme, Environment env, double k_env, double delay
   const double t_end = sc.setup.loop.duration_s;
   while (session.step()) {
     const MetricsSample& m = session.last_sample();
-    const SlaveSample truth = slave.sample();
+    const SlaveSample& truth = slave.sample();
     if (m.time_s > t_end - 0.5) {
       fm += session.device_force_n().z();
       dm += top - m.master_position_m.z();

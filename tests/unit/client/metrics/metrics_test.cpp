@@ -21,7 +21,6 @@
 
 using namespace teleop::master;
 using namespace teleop;
-using teleop::config::ConfigError;
 using teleop::test::scenario;
 using teleop::test::SteadyContact;
 

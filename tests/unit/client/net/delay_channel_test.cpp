@@ -14,7 +14,6 @@
 
 using namespace teleop::master;
 using namespace teleop;
-using teleop::config::ConfigError;
 
 namespace {
 

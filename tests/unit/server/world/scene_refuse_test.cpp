@@ -27,7 +27,8 @@ class SceneDir : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("teleop_refuse_" + std::to_string(getpid()));
     fs::create_directories(dir_);
     write("open.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-    write("garbage.obj", std::string("\x7f\x01garbage\x00\xff not a mesh", 23));
+    const char garbage[] = "\x7f\x01garbage\x00\xff not a mesh";
+    write("garbage.obj", std::string(garbage, sizeof garbage - 1));
     write("empty.obj", "");
     fs::create_directories(dir_ / "meshdir.obj");
     fs::create_directories(dir_ / "incdir.yaml");
