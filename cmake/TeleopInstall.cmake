@@ -1,13 +1,14 @@
 # Installation (GNUInstallDirs), the exported CMake package (find_package(teleop): teleop::idl,
-# teleop::common, teleop::sim, teleop::master and, with the tools, teleop::recording) and the
-# Debian package (cpack -G DEB). Included by the top-level CMakeLists.txt after the targets.
+# teleop::common, teleop::sim, teleop::world_harness, teleop::master and, with the tools,
+# teleop::recording) and the Debian package (cpack -G DEB). Included by the top-level
+# CMakeLists.txt after the targets.
 include(CMakePackageConfigHelpers)
 
 set(TELEOP_INSTALL_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/teleop)
 set(TELEOP_INSTALL_DATA_DIR ${CMAKE_INSTALL_DATADIR}/teleop)
 
 # --- libraries: teleop_<name> is exported as teleop::<name>, like its alias in the build tree
-set(teleop_libraries teleop_idl teleop_common teleop_sim teleop_master)
+set(teleop_libraries teleop_idl teleop_common teleop_sim teleop_world_harness teleop_master)
 if(TARGET teleop_recording)
   list(APPEND teleop_libraries teleop_recording)
 endif()

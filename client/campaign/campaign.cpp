@@ -13,8 +13,8 @@
 #include "client/control/bilateral_controller.hpp"
 #include "client/device/operator_model.hpp"
 #include "client/net/delay_config.hpp"
+#include "common/harness/in_process.hpp"
 #include "common/util/csv.hpp"
-#include "server/world/world_model.hpp"
 
 namespace teleop::campaign {
 
@@ -252,8 +252,7 @@ void load_inputs(const Node& root, Campaign& c) {
                               "') names no scene; model 'world' needs `scene:`");
     }
     if (c.scenes.count(p.scene)) continue;
-    c.scenes[p.scene] =
-        std::make_shared<const sim::WorldModel>(sim::load_world_model(beside(c, p.scene)));
+    c.scenes[p.scene] = harness::load_scene_model(beside(c, p.scene));
   }
 }
 
@@ -373,7 +372,7 @@ std::string campaign_digest(const Campaign& c) {
     << results_header(c) << '\n';
   for (const RunParams& p : c.runs) s << parameter_cells(c, p) << '\n';
   for (const auto& [name, model] : c.scenes) {
-    std::ifstream in(model->file, std::ios::binary);
+    std::ifstream in(harness::scene_file(*model), std::ios::binary);
     s << name << '\n' << in.rdbuf() << '\n';
   }
   for (const auto& [name, samples] : c.trajectories) {

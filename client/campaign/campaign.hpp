@@ -23,8 +23,8 @@
 
 #include "client/device/replay_device.hpp"
 
-namespace teleop::sim {
-struct WorldModel;
+namespace teleop::harness {
+struct SceneModel;  // common/harness/in_process.hpp
 }
 
 namespace teleop::campaign {
@@ -76,7 +76,7 @@ struct Campaign {
   Measures measures;
   std::vector<RunParams> runs;
   /// world: each scene named by a run, loaded once (key: the name as in RunParams::scene).
-  std::map<std::string, std::shared_ptr<const sim::WorldModel>> scenes;
+  std::map<std::string, std::shared_ptr<const harness::SceneModel>> scenes;
   /// Each recorded trajectory named by a run, loaded once (key as in RunParams::trajectory).
   std::map<std::string, std::shared_ptr<const std::vector<master::ReplaySample>>> trajectories;
 };

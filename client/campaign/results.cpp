@@ -9,15 +9,14 @@
 
 #include "client/analysis/press_scenario.hpp"
 #include "common/dds/contact_point.hpp"
+#include "common/harness/in_process.hpp"
 #include "common/util/csv.hpp"
-#include "server/node/scene_objects.hpp"
-#include "server/node/world_slave.hpp"
-#include "server/world/world_model.hpp"
 
 namespace teleop::campaign {
 
 namespace {
 
+using harness::InProcessSlave;
 using master::LoopbackSession;
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
@@ -207,15 +206,15 @@ void put3(std::vector<double>& d, std::size_t i, const Eigen::Vector3d& v) {
   d[3 * i + 2] = v.z();
 }
 
-/// Records the cycle just stepped into row t.size of `t` (nothing past its capacity).
-void record_cycle(const LoopbackSession& session, const server::WorldSlave& slave, RunTraces& t) {
+/// Records the cycle just stepped into row t.size of `t` (nothing past its capacity); `s` is
+/// the slave's sample.
+void record_cycle(const LoopbackSession& session, const SlaveSample& s, RunTraces& t) {
   if (t.size >= t.capacity) {
     ++t.dropped;
     return;
   }
   const std::size_t i = t.size++;
   const master::MetricsSample& m = session.last_sample();
-  const SlaveSample& s = slave.sample();
   auto* d = t.data;
   d[RunTraces::kTime][i] = session.time_s();
   d[RunTraces::kHoming][i] = session.cycle().homing() ? 1.0 : 0.0;
@@ -235,20 +234,21 @@ void record_cycle(const LoopbackSession& session, const server::WorldSlave& slav
 
 /// Steps `session` to its end, keeping the largest force the controller asked for, and
 /// records each cycle into `traces` (when given), sized first for `cycles` cycles.
-void drive(LoopbackSession& session, const server::WorldSlave& slave, Outcome& o, RunTraces* traces,
+void drive(LoopbackSession& session, const InProcessSlave& slave, Outcome& o, RunTraces* traces,
            double session_s, double dt_s) {
   if (traces != nullptr) traces->reserve(static_cast<std::size_t>(std::ceil(session_s / dt_s)) + 8);
   session.start();
+  const SlaveSample& sample = slave.sample();  // the same object for the slave's lifetime
   double max_ctrl = 0.0;
   while (session.step()) {
     max_ctrl = std::max(max_ctrl, session.controller_force_n().norm());
-    if (traces != nullptr) record_cycle(session, slave, *traces);
+    if (traces != nullptr) record_cycle(session, sample, *traces);
   }
   o.max_controller_force_n = max_ctrl;
 }
 
 /// The figures every model shares, from the finished session and its slave.
-void collect(const LoopbackSession& session, const server::WorldSlave& slave, Outcome& o) {
+void collect(const LoopbackSession& session, const InProcessSlave& slave, Outcome& o) {
   const master::SessionMetrics& m = session.metrics();
   o.verdict = master::verdict_name(m.verdict());
   o.verdict_code = static_cast<int>(m.verdict());
@@ -276,7 +276,7 @@ void collect(const LoopbackSession& session, const server::WorldSlave& slave, Ou
   o.safety_cut = session.safety().cut() ? 1 : 0;
   o.nonfinite_samples = static_cast<double>(m.nonfinite_samples());
   o.link_lost_time_s = m.link_lost_time_s();
-  o.watchdog_trips = static_cast<double>(slave.cycle().watchdog_trips());
+  o.watchdog_trips = static_cast<double>(slave.watchdog_trips());
   o.world_faults = static_cast<double>(slave.events_of(sim::EventKind::kFault));
   const master::ChannelReport f = session.forward().report(), b = session.backward().report();
   o.forward_loss = f.loss_fraction;
@@ -310,14 +310,12 @@ Outcome run_point(const Campaign& c, const RunParams& p, RunTraces* traces) {
   // one pass of the script (or the trajectory) plus 3 s, as the press task's default
   setup.loop.duration_s = default_length_s(c, p, setup.device, 3.0, 0.0);
   const std::unique_ptr<master::HapticDevice> device = make_device(c, p, setup.device);
-  server::WorldSlave slave(
-      sim::tool_world_model(setup.slave, setup.loop.controller.workspace.offset_m,
-                            1.0 / setup.loop.dt_s),
-      setup.loop.dt_s);
-  LoopbackSession session(setup.loop, *device, slave);
+  const std::unique_ptr<InProcessSlave> slave = harness::make_tool_slave(
+      setup.slave, setup.loop.controller.workspace.offset_m, setup.loop.dt_s);
+  LoopbackSession session(setup.loop, *device, *slave);
   Outcome o;
-  drive(session, slave, o, traces, setup.loop.homing_s + setup.loop.duration_s, setup.loop.dt_s);
-  collect(session, slave, o);
+  drive(session, *slave, o, traces, setup.loop.homing_s + setup.loop.duration_s, setup.loop.dt_s);
+  collect(session, *slave, o);
   master::PressResult r;
   master::fill_analytic(s, setup, r);
   o.analytic_margin_ms = r.analytic_margin_s * 1e3;
@@ -327,11 +325,10 @@ Outcome run_point(const Campaign& c, const RunParams& p, RunTraces* traces) {
 
 /// The world model: the scene stepped by the server's cycle, the master homing it first.
 Outcome run_world(const Campaign& c, const RunParams& p, RunTraces* traces) {
-  const sim::WorldModel& model = *c.scenes.at(p.scene);
-  const double dt = 1.0 / model.physics_rate_hz;
-  server::WorldSlave slave(model, dt);
-  const SceneDescription scene =
-      server::describe_scene(slave.model(), slave.cycle().data(), model.physics_rate_hz);
+  const harness::SceneModel& model = *c.scenes.at(p.scene);
+  const double dt = 1.0 / harness::scene_physics_rate_hz(model);
+  const std::unique_ptr<InProcessSlave> slave = harness::make_world_slave(model, dt);
+  const SceneDescription scene = slave->describe_scene();
   master::SimulatedDeviceParams dp;
   dp.script = script_of(p);
   if (p.max_force_n > 0.0) dp.spec.max_force_n = p.max_force_n;
@@ -344,7 +341,7 @@ Outcome run_world(const Campaign& c, const RunParams& p, RunTraces* traces) {
     loop.controller.slave_stiffness_n_per_m = p.gain;
     loop.controller.master_stiffness_n_per_m = p.gain;
   }
-  loop.controller.workspace.offset_m = dds::scene_contact_point(&scene, slave.sample().position_m);
+  loop.controller.workspace.offset_m = dds::scene_contact_point(&scene, slave->sample().position_m);
   loop.forward = channel(p, p.seed);
   loop.backward = channel(p, p.seed + 1);
   loop.dt_s = dt;
@@ -352,10 +349,10 @@ Outcome run_world(const Campaign& c, const RunParams& p, RunTraces* traces) {
   // as teleop_master: the script's length plus 1 s after homing, at least 2 s
   loop.duration_s = default_length_s(c, p, dp, 1.0, 2.0);
   const std::unique_ptr<master::HapticDevice> device = make_device(c, p, dp);
-  LoopbackSession session(loop, *device, slave);
+  LoopbackSession session(loop, *device, *slave);
   Outcome o;
-  drive(session, slave, o, traces, loop.homing_s + loop.duration_s, loop.dt_s);
-  collect(session, slave, o);
+  drive(session, *slave, o, traces, loop.homing_s + loop.duration_s, loop.dt_s);
+  collect(session, *slave, o);
   return o;
 }
 

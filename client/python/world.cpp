@@ -12,9 +12,7 @@
 #include <vector>
 
 #include "client/python/bindings.hpp"
-#include "server/node/scene_objects.hpp"
-#include "server/world/world.hpp"
-#include "server/world/world_model.hpp"
+#include "common/harness/in_process.hpp"
 
 namespace py = pybind11;
 
@@ -54,84 +52,60 @@ py::dict object_dict(const SceneObject& o) {
 
 /// A loaded scene: the immutable world model, shared by the worlds made from it.
 struct Scene {
-  std::shared_ptr<const sim::WorldModel> model;
+  std::shared_ptr<const harness::SceneModel> model;
   py::dict description;
 };
 
 Scene load_scene(const std::string& path) {
   Scene s;
-  s.model = std::make_shared<const sim::WorldModel>(sim::load_world_model(path));
-  const sim::WorldData data = sim::make_world_data(*s.model);
-  s.description =
-      scene_description_dict(server::describe_scene(*s.model, data, s.model->physics_rate_hz));
+  s.model = harness::load_scene_model(path);
+  s.description = scene_description_dict(harness::describe_scene(*s.model));
   return s;
 }
 
-/// A world stepped from Python: the model/data pair of server/world with one command.
+/// A world stepped from Python: the server's world (common/harness/in_process.hpp) with one
+/// command, its arguments checked here.
 class World {
  public:
-  explicit World(const Scene& scene)
-      : model_(scene.model),
-        data_(sim::make_world_data(*model_)),
-        dt_s_(1.0 / model_->physics_rate_hz) {
-    command_.position_m = data_.out.tip_position_m;
-  }
+  explicit World(const Scene& scene) : world_(scene.model) {}
 
   void set_tip(const Eigen::Vector3d& position_m, const Eigen::Vector3d& velocity_mps,
                bool kinematic) {
     if (!position_m.allFinite() || !velocity_mps.allFinite()) {
       throw py::value_error("tip: position_m and velocity_mps must be finite");
     }
-    command_.position_m = position_m;
-    command_.velocity_mps = velocity_mps;
-    command_.kinematic = kinematic;
+    world_.set_tip(position_m, velocity_mps, kinematic);
   }
 
-  /// Steps `n` times (without the GIL); returns the events popped, by kind.
+  /// Steps `n` times (without the GIL).
   void step(long long n) {
     if (n < 0) throw py::value_error("n = " + std::to_string(n) + " is negative (allowed >= 0)");
     py::gil_scoped_release release;
-    for (long long i = 0; i < n; ++i) {
-      sim::world_step(*model_, data_, command_, dt_s_, events_);
-      sim::SimEvent e;
-      while (events_.pop(e)) {
-        if (e.kind == sim::EventKind::kFault) ++faults_;
-      }
-    }
+    world_.step(static_cast<std::uint64_t>(n));
   }
 
-  bool place_tool(const Eigen::Vector3d& position_m) {
-    command_.position_m = position_m;
-    return sim::place_tool(*model_, data_, position_m);
-  }
+  bool place_tool(const Eigen::Vector3d& position_m) { return world_.place_tool(position_m); }
 
-  const sim::WorldOutput& out() const { return data_.out; }
-  double dt_s() const { return dt_s_; }
-  std::uint64_t faults() const { return faults_; }
-  std::size_t body_count() const { return data_.bodies.size(); }
+  SlaveSample out() const { return world_.readout(); }
+  double dt_s() const { return world_.dt_s(); }
+  std::uint64_t faults() const { return world_.faults(); }
+  std::size_t body_count() const { return world_.body_count(); }
 
-  const sim::deformable::DeformableModel& body_model(long long i) const {
-    return model_->bodies.at(checked(i)).body;
-  }
-  const sim::deformable::DeformableState& body_state(long long i) const {
-    return data_.bodies.at(checked(i)).state;
-  }
+  harness::BodyInfo body_info(long long i) const { return world_.body_info(checked(i)); }
+  const Eigen::Matrix3Xd& nodes(long long i) const { return world_.nodes(checked(i)); }
+  const Eigen::Matrix3Xd& rest_nodes(long long i) const { return world_.rest_nodes(checked(i)); }
+  const Eigen::Matrix3Xi& triangles(long long i) const { return world_.triangles(checked(i)); }
 
  private:
   std::size_t checked(long long i) const {
-    if (i < 0 || static_cast<std::size_t>(i) >= data_.bodies.size()) {
+    if (i < 0 || static_cast<std::size_t>(i) >= world_.body_count()) {
       throw py::value_error("body = " + std::to_string(i) + " is outside the scene's " +
-                            std::to_string(data_.bodies.size()) + " deformable bodies");
+                            std::to_string(world_.body_count()) + " deformable bodies");
     }
     return static_cast<std::size_t>(i);
   }
 
-  std::shared_ptr<const sim::WorldModel> model_;
-  sim::WorldData data_;
-  sim::WorldCommand command_;
-  sim::EventQueue events_;
-  double dt_s_;
-  std::uint64_t faults_ = 0;
+  harness::World world_;
 };
 
 /// A 3 x N matrix as an N x 3 array.
@@ -141,23 +115,22 @@ py::object rows_of(const Eigen::Matrix3Xd& m) {
 }
 
 /// Facts of a deformable body's model.
-py::dict body_info(const sim::deformable::DeformableModel& b) {
+py::dict body_dict(const harness::BodyInfo& b) {
   py::dict d;
-  d["model"] = sim::deformable::to_string(b.params.model);
-  d["surface_node_count"] = b.node_count;
-  d["node_count"] = b.state_node_count();
-  d["triangle_count"] = b.mesh.triangle_count();
+  d["model"] = b.model;
+  d["surface_node_count"] = b.surface_node_count;
+  d["node_count"] = b.node_count;
+  d["triangle_count"] = b.triangle_count;
   d["total_mass_kg"] = b.total_mass_kg;
   d["volume_m3"] = b.volume_m3;
-  d["youngs_modulus_pa"] = b.params.youngs_modulus_pa;
-  d["poisson_ratio"] = b.params.poisson_ratio;
+  d["youngs_modulus_pa"] = b.youngs_modulus_pa;
+  d["poisson_ratio"] = b.poisson_ratio;
   d["omega_max_rad_per_s"] = b.omega_max_rad_per_s;
   d["stable_step_s"] = b.stable_step_s;
   return d;
 }
 
-py::array_t<int> triangles_of(const sim::deformable::DeformableModel& b) {
-  const Eigen::Matrix3Xi& t = b.mesh.triangles;
+py::array_t<int> triangles_of(const Eigen::Matrix3Xi& t) {
   py::array_t<int> a({static_cast<py::ssize_t>(t.cols()), py::ssize_t{3}});
   auto r = a.mutable_unchecked<2>();
   for (Eigen::Index j = 0; j < t.cols(); ++j) {
@@ -168,10 +141,11 @@ py::array_t<int> triangles_of(const sim::deformable::DeformableModel& b) {
 
 void bind_scene(py::module_& m) {
   py::class_<Scene>(m, "Scene", "A loaded scene file (server/world/world_model.hpp).")
-      .def_property_readonly("file", [](const Scene& s) { return s.model->file; })
-      .def_property_readonly("name", [](const Scene& s) { return s.model->name; })
-      .def_property_readonly("physics_rate_hz",
-                             [](const Scene& s) { return s.model->physics_rate_hz; })
+      .def_property_readonly("file", [](const Scene& s) { return harness::scene_file(*s.model); })
+      .def_property_readonly("name", [](const Scene& s) { return harness::scene_name(*s.model); })
+      .def_property_readonly(
+          "physics_rate_hz",
+          [](const Scene& s) { return harness::scene_physics_rate_hz(*s.model); })
       .def_readonly("description", &Scene::description,
                     "The scene as the server publishes it (teleop/scene), as a dict.");
   m.def("load_scene", &load_scene, py::arg("path"),
@@ -209,9 +183,9 @@ void bind_world(py::module_& m) {
       .def_property_readonly("dt_s", &World::dt_s)
       .def_property_readonly("time_s", [](const World& w) { return w.out().sim_time_s; })
       .def_property_readonly("tip_position_m",
-                             [](const World& w) { return vec3(w.out().tip_position_m); })
+                             [](const World& w) { return vec3(w.out().position_m); })
       .def_property_readonly("tip_velocity_mps",
-                             [](const World& w) { return vec3(w.out().tip_velocity_mps); })
+                             [](const World& w) { return vec3(w.out().velocity_mps); })
       .def_property_readonly("contact_force_n",
                              [](const World& w) { return vec3(w.out().contact_force_n); })
       .def_property_readonly("in_contact", [](const World& w) { return w.out().in_contact; })
@@ -220,22 +194,17 @@ void bind_world(py::module_& m) {
       .def_property_readonly("faults", &World::faults, "Fault events of the world so far.")
       .def_property_readonly("body_count", &World::body_count)
       .def(
-          "nodes", [](const World& w, long long body) { return rows_of(w.body_state(body).x); },
+          "nodes", [](const World& w, long long body) { return rows_of(w.nodes(body)); },
           py::arg("body") = 0, "Node positions of a deformable body, N x 3 [m].")
       .def(
-          "rest_nodes",
-          [](const World& w, long long body) {
-            const sim::deformable::DeformableModel& b = w.body_model(body);
-            return rows_of(b.params.model == sim::deformable::ModelKind::kFem ? b.fem.rest
-                                                                              : b.mesh.vertices);
-          },
+          "rest_nodes", [](const World& w, long long body) { return rows_of(w.rest_nodes(body)); },
           py::arg("body") = 0, "Rest positions of the same nodes, N x 3 [m].")
       .def(
           "triangles",
-          [](const World& w, long long body) { return triangles_of(w.body_model(body)); },
+          [](const World& w, long long body) { return triangles_of(w.triangles(body)); },
           py::arg("body") = 0, "Surface triangles (node indices), M x 3.")
       .def(
-          "body", [](const World& w, long long body) { return body_info(w.body_model(body)); },
+          "body", [](const World& w, long long body) { return body_dict(w.body_info(body)); },
           py::arg("body") = 0, "The deformable body's model: kind, sizes, mass, material.");
 }
 

@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "common/control/slave_port.hpp"
+#include "server/node/scene_objects.hpp"
 
 namespace teleop::server {
 
@@ -33,6 +34,10 @@ void WorldSlave::reset(const Eigen::Vector3d& position_m) {
   sample_.valid = true;
 }
 
+SceneDescription WorldSlave::describe_scene() const {
+  return server::describe_scene(model_, cycle_->data(), model_.physics_rate_hz);
+}
+
 void WorldSlave::step(const SlaveCommand& cmd, double dt_s) {
   if (dt_s != dt_s_) {
     dt_s_ = dt_s;
@@ -54,16 +59,8 @@ void WorldSlave::step(const SlaveCommand& cmd, double dt_s) {
   }
 
   // what the master decodes from the server's SlaveState (server/node/state_message.cpp)
-  const sim::WorldOutput& o = cycle_->output();
   SlaveSample& s = sample_;
-  s.position_m = o.tip_position_m;
-  s.orientation = o.tip_orientation;
-  s.velocity_mps = o.tip_velocity_mps;
-  s.contact_force_n = o.contact_force_n;
-  s.penetration_m = o.penetration_m;
-  s.deformation_m = o.deformation_m;
-  s.in_contact = o.in_contact;
-  s.sim_time_s = o.sim_time_s;
+  copy_tip_state(cycle_->output(), s);
   s.seq = cycle_->steps();
   s.command_seq = cmd.seq;
   s.command_send_time_s = cmd.send_time_s;

@@ -1,5 +1,5 @@
 #pragma once
-// The server's physics period as an in-process slave (common/control/slave_simulator.hpp):
+// The server's physics period as an in-process slave (common/harness/in_process.hpp):
 // the ServerCycle teleop_server runs (command watchdog, passivity port, world_step, contact
 // estimate) and the SlaveSample the master would decode from its SlaveState, without DDS.
 // LoopbackSession steps it for the delay sweep, the press scenarios and the master-side tests,
@@ -15,12 +15,26 @@
 #include <cstdint>
 #include <optional>
 
-#include "common/control/slave_simulator.hpp"
+#include "common/harness/in_process.hpp"
 #include "server/node/server_cycle.hpp"
 
 namespace teleop::server {
 
-class WorldSlave final : public SlaveSimulator {
+/// Copies the tip's state after a world step into `s`: position, orientation, velocity, contact
+/// force, penetration, deformation, in_contact and the simulated time (the other fields of `s`
+/// are left as they are).
+inline void copy_tip_state(const sim::WorldOutput& o, SlaveSample& s) {
+  s.position_m = o.tip_position_m;
+  s.orientation = o.tip_orientation;
+  s.velocity_mps = o.tip_velocity_mps;
+  s.contact_force_n = o.contact_force_n;
+  s.penetration_m = o.penetration_m;
+  s.deformation_m = o.deformation_m;
+  s.in_contact = o.in_contact;
+  s.sim_time_s = o.sim_time_s;
+}
+
+class WorldSlave final : public harness::InProcessSlave {
  public:
   /// `model` is copied; dt_s: the physics period [s]; command_timeout_s: the watchdog's
   /// timeout [s] (negative: the model's command_timeout_s, as the server uses). The world
@@ -33,6 +47,8 @@ class WorldSlave final : public SlaveSimulator {
   void reset(const Eigen::Vector3d& position_m) override;
   void step(const SlaveCommand& command, double dt_s) override;
   const SlaveSample& sample() const override { return sample_; }
+  /// The scene as the server publishes it, for this world now (server/node/scene_objects.hpp).
+  SceneDescription describe_scene() const override;
 
   const sim::WorldModel& model() const { return model_; }
   const ServerCycle& cycle() const { return *cycle_; }
@@ -40,8 +56,9 @@ class WorldSlave final : public SlaveSimulator {
   const passivity::SlavePassivityPort& port() const { return cycle_->port(); }
   /// Force of the slave's tracking controller in the last step [N].
   const Eigen::Vector3d& tracking_force_n() const { return cycle_->output().tracking_force_n; }
+  std::uint64_t watchdog_trips() const override { return cycle_->watchdog_trips(); }
   /// Events the world and the watchdog raised since the last reset, by kind, and in all.
-  std::uint64_t events_of(sim::EventKind kind) const {
+  std::uint64_t events_of(sim::EventKind kind) const override {
     return event_counts_[static_cast<std::size_t>(kind)];
   }
   std::uint64_t events_total() const { return events_total_; }
