@@ -39,12 +39,9 @@ void add_link_fields(OrderedJson& out, const SessionReport& rep, const ServerBin
   out["received"] = rep.received;
   out["in_flight"] = rep.in_flight;
   out["lost"] = lost_commands(link_counts(rep));
-  out["server"] = {{"faults", rep.server_faults},
-                   {"watchdog_trips", rep.server_watchdog_trips},
-                   {"overruns", rep.server_overruns},
-                   {"rejected", rep.server_rejected},
-                   {"restarts", rep.server_restarts},
-                   {"gain_clamped", rep.server_gain_clamp}};
+  out["server"] = {{"faults", rep.server_faults},     {"watchdog_trips", rep.server_watchdog_trips},
+                   {"overruns", rep.server_overruns}, {"rejected", rep.server_rejected},
+                   {"restarts", rep.server_restarts}, {"gain_clamped", rep.server_gain_clamp}};
   // which server this master believed, and what it ignored from other participants
   out["server_binding"] = {{"server", binding.server()},
                            {"bound", binding.bound()},

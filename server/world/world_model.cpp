@@ -106,8 +106,7 @@ std::vector<ToolContact> tool_contacts(const WorldModel& s) {
   }
   for (int i = 0; i < s.tool.obstacle_count; ++i) {
     const Obstacle& o = s.tool.obstacles[static_cast<std::size_t>(i)];
-    out.push_back({o.stiffness_n_per_m, o.damping_ns_per_m,
-                   "tool obstacle " + std::to_string(i)});
+    out.push_back({o.stiffness_n_per_m, o.damping_ns_per_m, "tool obstacle " + std::to_string(i)});
   }
   return out;
 }
@@ -150,14 +149,16 @@ double tool_limit_step_s(const WorldModel& s, std::string* why) {
   for (const ToolContact& k : tool_contacts(s)) {
     const double stiffness = t.kp_n_per_m + k.stiffness_n_per_m;
     const double damping = c + k.damping_ns_per_m;
-    const double hc = (std::sqrt(damping * damping + 4.0 * stiffness * t.mass_kg) - damping) /
-                      stiffness;
+    const double hc =
+        (std::sqrt(damping * damping + 4.0 * stiffness * t.mass_kg) - damping) / stiffness;
     if (hc < h) {
       h = hc;
       *why = "in contact, its PD plus " + k.field + " (" + num(k.stiffness_n_per_m) + " N/m, " +
-             num(k.damping_ns_per_m) + " N s/m), both applied explicitly, is stable for h^2 (kp + "
-             "k_contact) / m + 2 h (c + c_contact) / m <= 4 (tool.mass_kg " + num(t.mass_kg) +
-             ", c = tool.kd_ns_per_m + tool.linear_damping_ns_per_m " + num(c) + " N s/m)";
+             num(k.damping_ns_per_m) +
+             " N s/m), both applied explicitly, is stable for h^2 (kp + "
+             "k_contact) / m + 2 h (c + c_contact) / m <= 4 (tool.mass_kg " +
+             num(t.mass_kg) + ", c = tool.kd_ns_per_m + tool.linear_damping_ns_per_m " + num(c) +
+             " N s/m)";
     }
   }
   return h;
@@ -323,8 +324,8 @@ double max_position_gain_n_per_m(const WorldModel& s, double rate_hz) {
   // h^2 (kp + k_c) / m + 2 h (c + c_c) / m <= 4
   double kp = (4.0 * t.mass_kg - 2.0 * h * c) / (h * h);
   for (const ToolContact& k : tool_contacts(s)) {
-    kp = std::min(kp, (4.0 * t.mass_kg - 2.0 * h * (c + k.damping_ns_per_m)) / (h * h) -
-                          k.stiffness_n_per_m);
+    kp = std::min(
+        kp, (4.0 * t.mass_kg - 2.0 * h * (c + k.damping_ns_per_m)) / (h * h) - k.stiffness_n_per_m);
   }
   return std::clamp(kp, 0.0, kMaxPositionGainNPerM);
 }

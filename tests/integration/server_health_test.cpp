@@ -83,8 +83,8 @@ TEST(ServerHealth, AKpsTheSlaveCannotHoldIsClampedAndNamedInTheMastersSummary) {
                   "--summary-json", server_json},
                  "gain_server");
   Process master(kMasterBinary,
-                 {"--domain", d, "--duration", "1", "--homing", "0.5", "--script", "hold",
-                  "--kps", "8e5", "--summary-json", master_json, "--quiet"},
+                 {"--domain", d, "--duration", "1", "--homing", "0.5", "--script", "hold", "--kps",
+                  "8e5", "--summary-json", master_json, "--quiet"},
                  "gain_master");
   const std::string m = wait_text(master_json, master, 60.0);
   server.signal(SIGTERM);

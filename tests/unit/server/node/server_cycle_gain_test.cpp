@@ -55,9 +55,9 @@ TEST(ServerCycleGain, AKpsTheSlaveCannotHoldIsClampedCountedAndReported) {
 /// `kps` requested: the target comes down at 0.5 m/s with its velocity from the start and
 /// holds; 3 s at 1 kHz.
 struct PressResult {
-  double mean_n = 0.0;         ///< mean normal contact force over the last 0.5 s [N]
-  double peak_to_peak_n = 0.0; ///< its peak-to-peak over the last 0.5 s [N]
-  std::uint64_t clamped = 0;   ///< commands whose K_ps the cycle clamped
+  double mean_n = 0.0;          ///< mean normal contact force over the last 0.5 s [N]
+  double peak_to_peak_n = 0.0;  ///< its peak-to-peak over the last 0.5 s [N]
+  std::uint64_t clamped = 0;    ///< commands whose K_ps the cycle clamped
   double max_gain_n_per_m = 0.0;
 };
 
