@@ -184,9 +184,11 @@ struct MasterNode::Impl {
   std::atomic<std::uint64_t> server_fault_events{0};
   ServerHealth health;
   std::uint64_t stats_seen = 0;
-  // ownership: the newest server event about this master's session
+  // ownership: the newest server event about this master's session; the server's word that it
+  // clamped the K_ps this session asked for (its limit event, "" none)
   std::mutex owner_event_mutex;
   std::string owner_event;
+  std::string gain_clamp_event;
   bool second_server_reported = false;
 
   std::unique_ptr<TuningEndpoint> tuning;  // live tuning (teleop/tuning, teleop/tuning_status)
@@ -250,6 +252,14 @@ struct MasterNode::Impl {
               e.kind() == static_cast<std::uint8_t>(sim::EventKind::kFault) &&
               now_ns() >= session_start_ns.load()) {
             server_fault_events.fetch_add(1);
+          }
+          // the server clamped a K_ps (position_gain_n_per_m) of this session's commands
+          if (e.source() == "server" &&
+              e.kind() == static_cast<std::uint8_t>(sim::EventKind::kLimit) &&
+              std::strstr(e.message().c_str(), "position_gain_n_per_m") != nullptr &&
+              now_ns() >= session_start_ns.load()) {
+            std::lock_guard<std::mutex> lock(owner_event_mutex);
+            gain_clamp_event = e.message().c_str();
           }
           // the server's word on this master's ownership (it names the session in hex)
           char mine[16];
@@ -426,6 +436,7 @@ struct MasterNode::Impl {
     {
       std::lock_guard<std::mutex> lock(owner_event_mutex);
       rep.owner_message = owner_event;
+      rep.server_gain_clamp = gain_clamp_event;
     }
   }
 

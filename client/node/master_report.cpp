@@ -39,11 +39,9 @@ void add_link_fields(OrderedJson& out, const SessionReport& rep, const ServerBin
   out["received"] = rep.received;
   out["in_flight"] = rep.in_flight;
   out["lost"] = lost_commands(link_counts(rep));
-  out["server"] = {{"faults", rep.server_faults},
-                   {"watchdog_trips", rep.server_watchdog_trips},
-                   {"overruns", rep.server_overruns},
-                   {"rejected", rep.server_rejected},
-                   {"restarts", rep.server_restarts}};
+  out["server"] = {{"faults", rep.server_faults},     {"watchdog_trips", rep.server_watchdog_trips},
+                   {"overruns", rep.server_overruns}, {"rejected", rep.server_rejected},
+                   {"restarts", rep.server_restarts}, {"gain_clamped", rep.server_gain_clamp}};
   // which server this master believed, and what it ignored from other participants
   out["server_binding"] = {{"server", binding.server()},
                            {"bound", binding.bound()},
@@ -321,7 +319,8 @@ std::string server_lines(const MasterCycle& cycle, const SessionReport& rep) {
                 static_cast<ull>(rep.server_overruns), static_cast<ull>(rep.server_rejected),
                 static_cast<ull>(rep.server_restarts), verdict.name.c_str(),
                 reason.empty() ? "" : " - ", reason.c_str());
-  return text;
+  if (rep.server_gain_clamp.empty()) return text;
+  return "  slave gain      " + rep.server_gain_clamp + "\n" + text;
 }
 
 }  // namespace

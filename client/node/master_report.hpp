@@ -47,6 +47,7 @@ struct SessionReport {
   std::uint64_t server_overruns = 0;
   std::uint64_t server_rejected = 0;
   std::uint64_t server_restarts = 0;
+  std::string server_gain_clamp;  // the server's limit event: it clamped this session's K_ps
   // ownership of the slave (docs/topics.md, "Ownership")
   std::uint64_t issued_before_owning = 0;  // commands sent while another master owned the slave
   bool refused = false;                    // refused the slave and never got it (exit status 4)

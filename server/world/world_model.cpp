@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 #include <sstream>
+#include <vector>
 
 namespace teleop::sim {
 
@@ -82,6 +83,34 @@ std::string body_shape(const deformable::DeformableModel& m) {
                                     : "for mesh '" + m.params.mesh_file + "'";
 }
 
+/// A penalty contact the tool meets: its spring k and damper b and the scene field naming it.
+struct ToolContact {
+  double stiffness_n_per_m = 0.0;
+  double damping_ns_per_m = 0.0;
+  std::string field;
+};
+
+/// Every contact of the tool slave: the planes, the deformable bodies' tip contacts and the
+/// obstacles of a tool built in code. Each pushes with max(0, k d - b v_n): the damper acts on
+/// both the approach and the separation velocity while the force is positive, and the step
+/// applies the spring and the damper explicitly, so both enter the stable step with the PD's.
+std::vector<ToolContact> tool_contacts(const WorldModel& s) {
+  std::vector<ToolContact> out;
+  for (std::size_t i = 0; i < s.planes.size(); ++i) {
+    out.push_back({s.planes[i].stiffness_n_per_m, s.planes[i].damping_ns_per_m,
+                   "planes[" + std::to_string(i) + "]"});
+  }
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    out.push_back({s.bodies[i].contact.stiffness_n_per_m, s.bodies[i].contact.damping_ns_per_m,
+                   "deformables[" + std::to_string(i) + "].contact"});
+  }
+  for (int i = 0; i < s.tool.obstacle_count; ++i) {
+    const Obstacle& o = s.tool.obstacles[static_cast<std::size_t>(i)];
+    out.push_back({o.stiffness_n_per_m, o.damping_ns_per_m, "tool obstacle " + std::to_string(i)});
+  }
+  return out;
+}
+
 /// Largest stable step of the tool slave's law [s] (see physics_rate_problem); `why` says which
 /// mode limits it.
 double tool_limit_step_s(const WorldModel& s, std::string* why) {
@@ -116,28 +145,20 @@ double tool_limit_step_s(const WorldModel& s, std::string* why) {
              ") is stable for h w <= 2 (sqrt(1 + zeta^2) - zeta)";
     }
   }
-  double kc = 0.0;
-  std::string contact;
-  for (std::size_t i = 0; i < s.planes.size(); ++i) {
-    if (s.planes[i].stiffness_n_per_m > kc) {
-      kc = s.planes[i].stiffness_n_per_m;
-      contact = "planes[" + std::to_string(i) + "].stiffness_n_per_m";
-    }
-  }
-  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
-    if (s.bodies[i].contact.stiffness_n_per_m > kc) {
-      kc = s.bodies[i].contact.stiffness_n_per_m;
-      contact = "deformables[" + std::to_string(i) + "].contact.stiffness_n_per_m";
-    }
-  }
-  if (kc > 0.0) {
-    const double w = std::sqrt((t.kp_n_per_m + kc) / t.mass_kg);
-    const double hc = 2.0 / w;
+  // in contact: the PD plus each contact's spring and damper (see ToolContact)
+  for (const ToolContact& k : tool_contacts(s)) {
+    const double stiffness = t.kp_n_per_m + k.stiffness_n_per_m;
+    const double damping = c + k.damping_ns_per_m;
+    const double hc =
+        (std::sqrt(damping * damping + 4.0 * stiffness * t.mass_kg) - damping) / stiffness;
     if (hc < h) {
       h = hc;
-      *why = "in contact, its PD plus the stiffest contact (" + contact + " " + num(kc) +
-             " N/m, tool.mass_kg " + num(t.mass_kg) + ": w " + num(w) +
-             " rad/s) is stable for h w <= 2";
+      *why = "in contact, its PD plus " + k.field + " (" + num(k.stiffness_n_per_m) + " N/m, " +
+             num(k.damping_ns_per_m) +
+             " N s/m), both applied explicitly, is stable for h^2 (kp + "
+             "k_contact) / m + 2 h (c + c_contact) / m <= 4 (tool.mass_kg " +
+             num(t.mass_kg) + ", c = tool.kd_ns_per_m + tool.linear_damping_ns_per_m " + num(c) +
+             " N s/m)";
     }
   }
   return h;
@@ -299,15 +320,14 @@ double max_position_gain_n_per_m(const WorldModel& s, double rate_hz) {
   const ToolModel& t = s.tool;
   const double h = 1.0 / (rate_hz * kRateSafety);
   const double c = t.kd_ns_per_m + t.linear_damping_ns_per_m;
-  double kc = 0.0;
-  for (const Plane& p : s.planes) kc = std::max(kc, p.stiffness_n_per_m);
-  for (const DeformableBodyModel& b : s.bodies) kc = std::max(kc, b.contact.stiffness_n_per_m);
-  for (int i = 0; i < t.obstacle_count; ++i) {
-    kc = std::max(kc, t.obstacles[static_cast<std::size_t>(i)].stiffness_n_per_m);
+  // free: h^2 kp / m + 2 h c / m <= 4; in each contact (k_c, c_c):
+  // h^2 (kp + k_c) / m + 2 h (c + c_c) / m <= 4
+  double kp = (4.0 * t.mass_kg - 2.0 * h * c) / (h * h);
+  for (const ToolContact& k : tool_contacts(s)) {
+    kp = std::min(
+        kp, (4.0 * t.mass_kg - 2.0 * h * (c + k.damping_ns_per_m)) / (h * h) - k.stiffness_n_per_m);
   }
-  const double free_kp = (4.0 * t.mass_kg - 2.0 * h * c) / (h * h);
-  const double contact_kp = 4.0 * t.mass_kg / (h * h) - kc;
-  return std::clamp(std::min(free_kp, contact_kp), 0.0, kMaxPositionGainNPerM);
+  return std::clamp(kp, 0.0, kMaxPositionGainNPerM);
 }
 
 std::string physics_rate_problem(const WorldModel& s, double rate_hz) {

@@ -100,9 +100,11 @@ WorldModel tool_world_model(const ToolModel& tool, const Eigen::Vector3d& start_
 constexpr double kRateSafety = 0.95;
 
 /// Why the scene cannot run at `rate_hz` (dt = 1 / rate_hz), or "" when it can:
-///  - tool slave: its PD and the stiffest contact it meets, integrated by semi-implicit Euler,
-///    are stable iff h w <= 2 (sqrt(1 + zeta^2) - zeta) for w^2 = kp / m (damped by kd) and
-///    h w <= 2 for w^2 = (kp + k_contact) / m (contact damping is compression-only);
+///  - tool slave: its PD (kp, c = kd + linear damping) and each contact it meets (a spring k_c
+///    and a damper c_c, both applied explicitly: the damper acts while the contact pushes,
+///    approaching or leaving), integrated by semi-implicit Euler, are stable iff
+///    h^2 K / m + 2 h C / m <= 4 (h w <= 2 (sqrt(1 + zeta^2) - zeta), w^2 = K / m), with
+///    K = kp, C = c free and K = kp + k_c, C = c + c_c in contact;
 ///  - robot slave: the resolved-rate IK integrates its task error as e <- (1 - h g) e, which
 ///    diverges for h g > 2 (g = robot.ik.gain_per_s); the joint PD is implicit in ODE;
 ///  - each deformable body: the sub-steps its automatic step needs (dt / largest stable step)
@@ -110,11 +112,12 @@ constexpr double kRateSafety = 0.95;
 /// Each limit is taken with the factor kRateSafety.
 std::string physics_rate_problem(const WorldModel& model, double rate_hz);
 /// The largest slave position gain K_ps [N/m] a command may request (WorldCommand::
-/// kp_override_n_per_m) at `rate_hz`. Tool slave: the largest kp at which both of
+/// kp_override_n_per_m) at `rate_hz`. Tool slave: the largest kp at which
 /// physics_rate_problem()'s limits of its PD still hold with the factor kRateSafety, i.e. with
-/// h = dt / kRateSafety, m its mass, c its damping and k_c the stiffest contact it meets:
-///   free:       h^2 kp / m + 2 h c / m <= 4   (h w <= 2 (sqrt(1 + zeta^2) - zeta))
-///   in contact: h^2 (kp + k_c) / m <= 4       (h w <= 2)
+/// h = dt / kRateSafety, m its mass, c its damping and each contact's spring k_c and damper c_c
+/// (the planes, the deformable bodies' tip contacts, the obstacles of a tool built in code):
+///   free:       h^2 kp / m + 2 h c / m <= 4
+///   in contact: h^2 (kp + k_c) / m + 2 h (c + c_c) / m <= 4
 /// at most kMaxPositionGainNPerM, at least 0. Robot slave (its tracking does not use K_ps):
 /// kMaxPositionGainNPerM.
 double max_position_gain_n_per_m(const WorldModel& model, double rate_hz);

@@ -1,7 +1,8 @@
 // The master's summary and verdict account for the server's side of the session: a fault on
 // the server (a ball that blows up while pressed) makes the verdict unstable and is counted; a
 // server killed and restarted mid-session is counted as a restart, and the commands it received are
-// summed over both server lives.
+// summed over both server lives; a K_ps the slave cannot hold, clamped by the server, is named in
+// the master's summary.
 #include <gtest/gtest.h>
 
 #include <csignal>
@@ -68,6 +69,35 @@ TEST(ServerHealth, AFaultOnTheServerMakesTheVerdictUnstableAndIsCounted) {
   EXPECT_NE(m.find("the slave faulted on the server"), std::string::npos) << m;
   EXPECT_GE(json_nested(m, "server", "faults"), 1.0) << m;
   EXPECT_GE(json_value(m, "received"), 0.99 * json_value(m, "issued")) << m;
+  EXPECT_NE(m.find("\"gain_clamped\": \"\""), std::string::npos) << m;  // K_ps 400: held
+}
+
+TEST(ServerHealth, AKpsTheSlaveCannotHoldIsClampedAndNamedInTheMastersSummary) {
+  const std::string d = std::to_string(domains::kServerGainClamp);
+  const std::string master_json = tmp("gain_master.json");
+  const std::string server_json = tmp("gain_server.json");
+  std::remove(master_json.c_str());
+  std::remove(server_json.c_str());
+  Process server(kServerBinary,
+                 {"--domain", d, "--duration", "60", "--quiet", "--scene", kToolScene,
+                  "--summary-json", server_json},
+                 "gain_server");
+  Process master(kMasterBinary,
+                 {"--domain", d, "--duration", "1", "--homing", "0.5", "--script", "hold", "--kps",
+                  "8e5", "--summary-json", master_json, "--quiet"},
+                 "gain_master");
+  const std::string m = wait_text(master_json, master, 60.0);
+  server.signal(SIGTERM);
+  server.wait_for(20.0);
+  ASSERT_FALSE(m.empty()) << master.err();
+  const std::string s = Process::slurp(server_json);
+  ASSERT_FALSE(s.empty()) << "the server wrote no summary";
+  // tool_only.yaml at 1 kHz holds up to 5.83e5 N/m (docs/configuration.md, the rate check)
+  EXPECT_EQ(json_value(s, "max_position_gain_n_per_m"), 583250.0) << s;
+  EXPECT_GT(json_value(s, "commands_gain_clamped"), 0.0) << s;
+  EXPECT_NE(m.find("position_gain_n_per_m 800000 N/m clamped: the slave holds 0-583250 N/m"),
+            std::string::npos)
+      << m;
 }
 
 TEST(ServerHealth, CountsAreRightAcrossAServerRestart) {

@@ -51,6 +51,7 @@ inline constexpr int kMultiHostSecureLanUnicast = 113;  // multi_host_test, secu
 inline constexpr int kMultiHostSecureWanTcp = 114;      // multi_host_test, secure_wan_tcp_*
 inline constexpr int kServerFaultVerdict = 130;         // server_health_test: a fault on the server
 inline constexpr int kServerRestart = 131;              // server_health_test: kill -9 and restart
+inline constexpr int kServerGainClamp = 226;            // server_health_test: K_ps clamped
 inline constexpr int kFaultDelaySpike = 133;  // fault_suite_test: a 1 s delay spike mid-contact
 inline constexpr int kFaultLossWindow = 134;  // fault_suite_test: 50 % loss for 1 s mid-contact
 inline constexpr int kFaultNanFlood =

@@ -123,13 +123,18 @@ TEST(ToolScene, TheLargestKpsFollowsTheStableStepAndHolds) {
   const WorldModel m =
       load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/tool_only.yaml");
   const double bound = max_position_gain_n_per_m(m, 1000.0);
-  // free: h^2 kp / m + 2 h c / m <= 4 with h = dt / 0.95, m 0.2 kg, c 12 + 0.5 N s/m
+  // on the floor: h^2 (kp + k_c) / m + 2 h (c + c_c) / m <= 4 with h = dt / 0.95, m 0.2 kg,
+  // c 12 + 0.5 N s/m, k_c 2e4 N/m, c_c 50 N s/m (below the free limit, c_c = k_c = 0)
   const double h = 1e-3 / kRateSafety;
-  EXPECT_NEAR(bound, (4.0 * 0.2 - 2.0 * h * 12.5) / (h * h), 1.0);
+  EXPECT_NEAR(bound, (4.0 * 0.2 - 2.0 * h * 62.5) / (h * h) - 2e4, 1.0);
+  EXPECT_LT(bound, (4.0 * 0.2 - 2.0 * h * 12.5) / (h * h));
   EXPECT_GT(bound, m.tool.kp_n_per_m);
   EXPECT_LT(bound, kMaxPositionGainNPerM);
-  // the bound grows as the rate squared, up to the wire's 1e6; a robot slave does not use K_ps
-  EXPECT_NEAR(max_position_gain_n_per_m(m, 1100.0) / bound, 1.1 * 1.1, 0.02);
+  // the bound grows with the rate (the same limit at h = 1 / (1100 Hz x 0.95)), up to the
+  // wire's 1e6; a robot slave does not use K_ps
+  const double h11 = 1.0 / (1100.0 * kRateSafety);
+  EXPECT_NEAR(max_position_gain_n_per_m(m, 1100.0),
+              (4.0 * 0.2 - 2.0 * h11 * 62.5) / (h11 * h11) - 2e4, 1.0);
   EXPECT_EQ(max_position_gain_n_per_m(m, 2000.0), kMaxPositionGainNPerM);
   WorldModel robot = m;
   robot.slave = SlaveKind::kRobot;
@@ -139,6 +144,47 @@ TEST(ToolScene, TheLargestKpsFollowsTheStableStepAndHolds) {
   const double unsafe = 1.2 * (4.0 * 0.2 - 2.0 * 1e-3 * 12.5) / 1e-6;
   EXPECT_LT(unsafe, kMaxPositionGainNPerM);  // a command may carry it: the server clamps it
   EXPECT_GT(ringing_m(m, unsafe), 1e-5);
+}
+
+/// Peak-to-peak of the floor's force on the tool over the last 500 of 3000 steps with K_ps
+/// `kp`, its target coming down at 0.5 m/s to 2 mm below the surface (below the PD's force
+/// limit) and holding there, relative to the force's mean there.
+double contact_ringing(const WorldModel& m, double kp) {
+  WorldData d = make_world_data(m);
+  EventQueue q;
+  SimEvent e;
+  WorldCommand cmd;
+  cmd.kp_override_n_per_m = kp;
+  const double bottom_m = m.tool.radius_m - 2e-3;
+  double lo = INFINITY, hi = -INFINITY, sum = 0.0;
+  for (int i = 0; i < 3000; ++i) {
+    const double z = m.tool_start_m.z() - 0.5e-3 * (i + 1);
+    cmd.position_m = m.tool_start_m;
+    cmd.position_m.z() = std::max(z, bottom_m);
+    cmd.velocity_mps = Eigen::Vector3d(0, 0, z > bottom_m ? -0.5 : 0.0);
+    world_step(m, d, cmd, 1e-3, q);
+    while (q.pop(e)) {
+    }
+    if (i >= 2500) {
+      lo = std::min(lo, d.out.contact_force_n.z());
+      hi = std::max(hi, d.out.contact_force_n.z());
+      sum += d.out.contact_force_n.z();
+    }
+  }
+  return (hi - lo) / (sum / 500.0);
+}
+
+// In contact the explicit step applies the floor's damper as well as its spring: the tool's PD
+// on tool_only.yaml's floor is stable up to h^2 (kp + k_c) / m + 2 h (c + c_c) / m = 4 at
+// h = 1 ms (655000 N/m), not up to h^2 (kp + k_c) / m = 4 (780000 N/m): 3 % below it the force
+// settles, 3 % above it rings between zero and the PD's force limit.
+TEST(ToolScene, InContactTheStableStepCountsTheContactDamper) {
+  const WorldModel m =
+      load_world_model(std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/tool_only.yaml");
+  const double limit = (4.0 * 0.2 - 2.0 * 1e-3 * 62.5) / 1e-6 - 2e4;
+  EXPECT_LT(contact_ringing(m, 0.97 * limit), 1e-6);
+  EXPECT_GT(contact_ringing(m, 1.03 * limit), 1.0);
+  EXPECT_LT(max_position_gain_n_per_m(m, 1000.0), 0.97 * limit);
 }
 
 TEST(WorldStepToolOnly, NonFiniteCommandIsReportedAndTheStateStaysFinite) {
