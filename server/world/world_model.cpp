@@ -83,11 +83,14 @@ std::string body_shape(const deformable::DeformableModel& m) {
                                     : "for mesh '" + m.params.mesh_file + "'";
 }
 
-/// A penalty contact the tool meets: its spring k and damper b and the scene field naming it.
+/// A penalty contact the tool meets: its spring k and damper b and the scene fields naming them
+/// (`field` + ".stiffness_n_per_m" / ".damping_ns_per_m"; a tool obstacle built in code has no
+/// scene field and names itself).
 struct ToolContact {
   double stiffness_n_per_m = 0.0;
   double damping_ns_per_m = 0.0;
   std::string field;
+  bool scene_field = true;
 };
 
 /// Every contact of the tool slave: the planes, the deformable bodies' tip contacts and the
@@ -106,7 +109,8 @@ std::vector<ToolContact> tool_contacts(const WorldModel& s) {
   }
   for (int i = 0; i < s.tool.obstacle_count; ++i) {
     const Obstacle& o = s.tool.obstacles[static_cast<std::size_t>(i)];
-    out.push_back({o.stiffness_n_per_m, o.damping_ns_per_m, "tool obstacle " + std::to_string(i)});
+    out.push_back(
+        {o.stiffness_n_per_m, o.damping_ns_per_m, "tool obstacle " + std::to_string(i), false});
   }
   return out;
 }
@@ -153,9 +157,12 @@ double tool_limit_step_s(const WorldModel& s, std::string* why) {
         (std::sqrt(damping * damping + 4.0 * stiffness * t.mass_kg) - damping) / stiffness;
     if (hc < h) {
       h = hc;
-      *why = "in contact, its PD plus " + k.field + " (" + num(k.stiffness_n_per_m) + " N/m, " +
+      const std::string k_name = k.scene_field ? k.field + ".stiffness_n_per_m" : k.field + " k";
+      const std::string c_name = k.scene_field ? k.field + ".damping_ns_per_m" : k.field + " c";
+      *why = "in contact, its PD (tool.kp_n_per_m " + num(t.kp_n_per_m) + " N/m) plus " + k_name +
+             " " + num(k.stiffness_n_per_m) + " N/m and " + c_name + " " +
              num(k.damping_ns_per_m) +
-             " N s/m), both applied explicitly, is stable for h^2 (kp + "
+             " N s/m, both applied explicitly, is stable for h^2 (kp + "
              "k_contact) / m + 2 h (c + c_contact) / m <= 4 (tool.mass_kg " +
              num(t.mass_kg) + ", c = tool.kd_ns_per_m + tool.linear_damping_ns_per_m " + num(c) +
              " N s/m)";

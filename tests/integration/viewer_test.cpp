@@ -76,12 +76,13 @@ std::string find_on_path(const std::string& name) {
 }
 
 /// xvfb-run's path; the calling test skips when it is missing.
-// NOLINTNEXTLINE(bugprone-macro-parentheses): var is the name the macro declares
+// NOLINTBEGIN(bugprone-macro-parentheses): var is the name the macro declares
 #define REQUIRE_XVFB_RUN(var)                                                \
   const std::string var = find_on_path("xvfb-run");                          \
   if (var.empty())                                                           \
   GTEST_SKIP() << "xvfb-run not found (apt-get install xvfb xauth): cannot " \
                   "run the viewer without a display"
+// NOLINTEND(bugprone-macro-parentheses)
 
 /// The viewer under its own Xvfb. -n gives each test its own first display number to try, so
 /// parallel tests do not race for the same one.
