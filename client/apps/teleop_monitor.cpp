@@ -192,19 +192,19 @@ class Readers {
         snap_(snap),
         table_(table),
         slave_(
-            p, topics.slave_state.name, topics.slave_state.qos,
+            p, topics.slave_state,
             [this, count_commands = !topics.master_command](const SlaveState& s, const Info& info) {
               note_server(info, true);
               on_slave(s, count_commands);
             }),
-        master_(p, topics.master_state.name, topics.master_state.qos,
+        master_(p, topics.master_state,
                 [this](const MasterState& s, const Info&) {
                   std::lock_guard<std::mutex> l(m_);
                   snap_.master = s;
                   snap_.have_master = true;
                   table_["master_state"].hit();
                 }),
-        stats_(p, tdds::topics::kServerStats, tdds::TopicQos::kReliableStream,
+        stats_(p, tdds::topics::kServerStats,
                [this](const ServerStats& s, const Info& info) {
                  note_server(info, false);
                  std::lock_guard<std::mutex> l(m_);
@@ -212,15 +212,14 @@ class Readers {
                  snap_.have_stats = true;
                  table_["server_stats"].hit();
                }),
-        scene_(p, tdds::topics::kScene, tdds::TopicQos::kLatched,
+        scene_(p, tdds::topics::kScene,
                [this](const SceneDescription& s, const Info&) { on_scene(s); }),
-        topology_(p, tdds::topics::kMeshTopology, tdds::TopicQos::kLatched,
+        topology_(p, tdds::topics::kMeshTopology,
                   [this](const MeshTopology&, const Info&) { table_["mesh_topology"].hit(); }),
-        frames_(p, topics.mesh_frame.name, topics.mesh_frame.qos,
+        frames_(p, topics.mesh_frame,
                 [this](const MeshFrame&, const Info&) { table_["mesh_frame"].hit(); }),
-        events_(p, tdds::topics::kEvents, tdds::TopicQos::kEventLog,
-                [this](const Event& e, const Info&) { on_event(e); }),
-        experiment_(p, tdds::topics::kExperiment, tdds::TopicQos::kLatched,
+        events_(p, tdds::topics::kEvents, [this](const Event& e, const Info&) { on_event(e); }),
+        experiment_(p, tdds::topics::kExperiment,
                     [this](const ExperimentDescription& e, const Info&) {
                       std::lock_guard<std::mutex> l(m_);
                       snap_.experiment = e;
@@ -228,9 +227,9 @@ class Readers {
                       table_["experiment"].hit();
                     }) {
     if (topics.master_command) {
-      command_.emplace(
-          p, tdds::topics::kMasterCommand, tdds::TopicQos::kStream,
-          [this](const MasterCommand&, const Info&) { table_["master_command"].hit(); });
+      command_.emplace(p, tdds::topics::kMasterCommand, [this](const MasterCommand&, const Info&) {
+        table_["master_command"].hit();
+      });
     }
   }
 

@@ -247,36 +247,34 @@ class ViewerApp {
     participant_ = std::make_unique<teleop::dds::Participant>(dds_options_);
     auto& p = *participant_;
     r_scene_ = std::make_unique<teleop::dds::Reader<SceneDescriptionPubSubType>>(
-        p, teleop::dds::topics::kScene, teleop::dds::TopicQos::kLatched,
+        p, teleop::dds::topics::kScene,
         [this](const SceneDescription& s, const SampleInfo&) { data_.on_scene(s); });
     r_topology_ = std::make_unique<teleop::dds::Reader<MeshTopologyPubSubType>>(
-        p, teleop::dds::topics::kMeshTopology, teleop::dds::TopicQos::kLatched,
+        p, teleop::dds::topics::kMeshTopology,
         [this](const MeshTopology& t, const SampleInfo&) { data_.on_topology(t); });
     const teleop::dds::ObserverTopics topics =
         teleop::dds::observer_topics(teleop::dds::ObserverKind::kView, options_.full_rate);
     r_frames_ = std::make_unique<teleop::dds::Reader<MeshFramePubSubType>>(
-        p, topics.mesh_frame.name, topics.mesh_frame.qos,
+        p, topics.mesh_frame,
         [this](const MeshFrame& f, const SampleInfo&) { data_.on_mesh_frame(f); });
     r_slave_ = std::make_unique<teleop::dds::Reader<SlaveStatePubSubType>>(
-        p, topics.slave_state.name, topics.slave_state.qos,
-        [this](const SlaveState& s, const SampleInfo& info) {
+        p, topics.slave_state, [this](const SlaveState& s, const SampleInfo& info) {
           note_server(info, true);
           data_.on_slave_state(s, now_ns());
         });
     r_master_ = std::make_unique<teleop::dds::Reader<MasterStatePubSubType>>(
-        p, topics.master_state.name, topics.master_state.qos,
+        p, topics.master_state,
         [this](const MasterState& s, const SampleInfo&) { data_.on_master_state(s, now_ns()); });
     r_stats_ = std::make_unique<teleop::dds::Reader<ServerStatsPubSubType>>(
-        p, teleop::dds::topics::kServerStats, teleop::dds::TopicQos::kReliableStream,
-        [this](const ServerStats& s, const SampleInfo& info) {
+        p, teleop::dds::topics::kServerStats, [this](const ServerStats& s, const SampleInfo& info) {
           note_server(info, false);
           data_.on_server_stats(s, now_ns());
         });
     r_events_ = std::make_unique<teleop::dds::Reader<EventPubSubType>>(
-        p, teleop::dds::topics::kEvents, teleop::dds::TopicQos::kEventLog,
+        p, teleop::dds::topics::kEvents,
         [this](const Event& e, const SampleInfo&) { data_.on_event(e, now_ns()); });
     r_experiment_ = std::make_unique<teleop::dds::Reader<ExperimentDescriptionPubSubType>>(
-        p, teleop::dds::topics::kExperiment, teleop::dds::TopicQos::kLatched,
+        p, teleop::dds::topics::kExperiment,
         [this](const ExperimentDescription& e, const SampleInfo&) { data_.on_experiment(e); });
     if (options_.drive) {
       viewer::HandDriveParams hp;

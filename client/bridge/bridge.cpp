@@ -45,12 +45,13 @@ constexpr std::size_t kEventsKept = 64;
 
 bool full_rate_only(const std::string& topic) {
   namespace t = dds::topics;
-  return topic == t::kMasterCommand || topic == t::kSlaveState || topic == t::kMasterState ||
-         topic == "teleop/device_state" || topic == "teleop/device_command";
+  return topic == t::kMasterCommand.name || topic == t::kSlaveState.name ||
+         topic == t::kMasterState.name || topic == t::kDeviceState.name ||
+         topic == t::kDeviceCommand.name;
 }
 
 bool is_bulk(const std::string& topic) {
-  return topic == dds::topics::kMeshFrame || topic == dds::topics::kMeshFrameMonitor;
+  return topic == dds::topics::kMeshFrame.name || topic == dds::topics::kMeshFrameMonitor.name;
 }
 
 /// The channels the bridge makes itself (JSON, scene_json.hpp), after the topics' channels.
@@ -60,12 +61,12 @@ enum class Feeds { kNothing, kScene, kTopology, kMesh, kSlave, kMaster, kEvents 
 
 Feeds feeds_of(const std::string& topic) {
   namespace t = dds::topics;
-  if (topic == t::kScene) return Feeds::kScene;
-  if (topic == t::kMeshTopology) return Feeds::kTopology;
-  if (topic == t::kMeshFrame) return Feeds::kMesh;
-  if (topic == t::kSlaveStateView) return Feeds::kSlave;
-  if (topic == t::kMasterStateView) return Feeds::kMaster;
-  if (topic == t::kEvents) return Feeds::kEvents;
+  if (topic == t::kScene.name) return Feeds::kScene;
+  if (topic == t::kMeshTopology.name) return Feeds::kTopology;
+  if (topic == t::kMeshFrame.name) return Feeds::kMesh;
+  if (topic == t::kSlaveStateView.name) return Feeds::kSlave;
+  if (topic == t::kMasterStateView.name) return Feeds::kMaster;
+  if (topic == t::kEvents.name) return Feeds::kEvents;
   return Feeds::kNothing;
 }
 

@@ -30,8 +30,7 @@ std::uint8_t device_kind(const std::string& device) {
 }
 
 ExperimentPublisher::ExperimentPublisher(dds::Participant& participant, double period_s)
-    : writer_(participant, dds::topics::kExperiment, dds::TopicQos::kLatched),
-      period_s_(period_s) {}
+    : writer_(participant, dds::topics::kExperiment), period_s_(period_s) {}
 
 void ExperimentPublisher::begin(const MasterCycle& cycle, std::uint32_t master_session,
                                 const std::string& name, const std::string& device,

@@ -199,9 +199,9 @@ struct MasterNode::Impl {
   explicit Impl(const MasterOptions& o)
       : options(o),
         participant(o.dds),
-        command_writer(participant, dds::topics::kMasterCommand, dds::TopicQos::kStream),
-        state_writer(participant, dds::topics::kMasterState, dds::TopicQos::kStream),
-        event_writer(participant, dds::topics::kEvents, dds::TopicQos::kEventLog),
+        command_writer(participant, dds::topics::kMasterCommand),
+        state_writer(participant, dds::topics::kMasterState),
+        event_writer(participant, dds::topics::kEvents),
         state_views(participant,
                     {{dds::topics::kMasterStateView, dds::topics::kViewRateHz},
                      {dds::topics::kMasterStateMonitor, dds::topics::kMonitorRateHz}}) {
@@ -215,7 +215,7 @@ struct MasterNode::Impl {
     event_writer.prime(event_prototype);
 
     state_reader = std::make_unique<dds::Reader<SlaveStatePubSubType>>(
-        participant, dds::topics::kSlaveState, dds::TopicQos::kStream,
+        participant, dds::topics::kSlaveState,
         [this](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo& info) {
           if (!binding.accept_state(info.sample_identity.writer_guid().guidPrefix,
                                     s.owner_session(), s.owner_active(), now_ns())) {
@@ -225,12 +225,12 @@ struct MasterNode::Impl {
           mailbox.put(ReceivedState{s, now_ns()});
         });
     scene_reader = std::make_unique<dds::Reader<SceneDescriptionPubSubType>>(
-        participant, dds::topics::kScene, dds::TopicQos::kLatched,
+        participant, dds::topics::kScene,
         [this](const SceneDescription& s, const eprosima::fastdds::dds::SampleInfo&) {
           scene_box.put(s);
         });
     stats_reader = std::make_unique<dds::Reader<ServerStatsPubSubType>>(
-        participant, dds::topics::kServerStats, dds::TopicQos::kReliableStream,
+        participant, dds::topics::kServerStats,
         [this](const ServerStats& s, const eprosima::fastdds::dds::SampleInfo& info) {
           if (binding.accept(ServerBinding::kStats,
                              info.sample_identity.writer_guid().guidPrefix)) {
@@ -238,7 +238,7 @@ struct MasterNode::Impl {
           }
         });
     events_reader = std::make_unique<dds::Reader<EventPubSubType>>(
-        participant, dds::topics::kEvents, dds::TopicQos::kEventLog,
+        participant, dds::topics::kEvents,
         [this](const Event& e, const eprosima::fastdds::dds::SampleInfo& info) {
           // the server's events only from the server this master is bound to
           if (e.source() == "server" &&
@@ -275,9 +275,9 @@ struct MasterNode::Impl {
     experiment = std::make_unique<ExperimentPublisher>(participant);
     if (o.device == "external") {
       device_command_writer = std::make_unique<dds::LatestWriter<DeviceCommandPubSubType>>(
-          participant, "teleop/device_command", dds::TopicQos::kStream);
+          participant, dds::topics::kDeviceCommand);
       device_state_reader = std::make_unique<dds::Reader<DeviceStatePubSubType>>(
-          participant, "teleop/device_state", dds::TopicQos::kStream,
+          participant, dds::topics::kDeviceState,
           [this](const DeviceState& s, const eprosima::fastdds::dds::SampleInfo& info) {
             if (device_driver.accept(info.publication_handle, now_ns())) device_box.put(s);
           });

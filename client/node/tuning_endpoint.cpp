@@ -16,7 +16,7 @@ TuningEndpoint::TuningEndpoint(dds::Participant& participant, std::uint32_t mast
                                bool accepting)
     : master_session_(master_session),
       accepting_(accepting),
-      status_writer_(participant, dds::topics::kTuningStatus, dds::TopicQos::kLatched) {
+      status_writer_(participant, dds::topics::kTuningStatus) {
   TuningStatus prototype;  // the strings' capacity, so that the loop's copies do not allocate
   prototype.scheme(std::string(32, ' '));
   prototype.request_source(std::string(32, ' '));
@@ -24,7 +24,7 @@ TuningEndpoint::TuningEndpoint(dds::Participant& participant, std::uint32_t mast
   status_writer_.prime(prototype);
   if (!accepting_) return;
   reader_ = std::make_unique<dds::Reader<TuningRequestPubSubType>>(
-      participant, dds::topics::kTuning, dds::TopicQos::kReliableStream,
+      participant, dds::topics::kTuning,
       [this](const TuningRequest& r, const eprosima::fastdds::dds::SampleInfo&) { on_request(r); });
 }
 

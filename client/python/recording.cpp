@@ -324,8 +324,8 @@ std::size_t write_recording(const std::string& path, const py::dict& traces,
     const record::TopicEntry* e = record::find_topic(name);
     return w.add_topic(name, e->type, record::qos_name(e->qos));
   };
-  const int slave_topic = topic(dds::topics::kSlaveState),
-            master_topic = topic(dds::topics::kMasterState);
+  const int slave_topic = topic(dds::topics::kSlaveState.name),
+            master_topic = topic(dds::topics::kMasterState.name);
   w.set_meta("source", "teleop.write_recording (an in-process session)");
   std::vector<record::RecordedSample> batch;
   for (std::size_t i = 0; i < n; ++i) {

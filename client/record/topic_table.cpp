@@ -3,9 +3,6 @@
 #include <memory>
 #include <stdexcept>
 
-#include "teleop/idl/DevicePubSubTypes.h"
-#include "teleop/idl/TeleopPubSubTypes.h"
-
 namespace teleop::record {
 
 namespace {
@@ -16,32 +13,19 @@ eprosima::fastdds::dds::TopicDataType* make() {
 }  // namespace
 
 const std::vector<TopicEntry>& known_topics() {
-  using dds::TopicQos;
-  namespace t = dds::topics;
-  static const std::vector<TopicEntry> table = {
-      {t::kMasterCommand, "", TopicQos::kStream, &make<MasterCommandPubSubType>},
-      {t::kSlaveState, "", TopicQos::kStream, &make<SlaveStatePubSubType>},
-      {t::kMasterState, "", TopicQos::kStream, &make<MasterStatePubSubType>},
-      {t::kScene, "", TopicQos::kLatched, &make<SceneDescriptionPubSubType>},
-      {t::kMeshTopology, "", TopicQos::kLatched, &make<MeshTopologyPubSubType>},
-      {t::kMeshFrame, "", TopicQos::kStream, &make<MeshFramePubSubType>},
-      {t::kEvents, "", TopicQos::kEventLog, &make<EventPubSubType>},
-      {t::kServerStats, "", TopicQos::kReliableStream, &make<ServerStatsPubSubType>},
-      // the master's answers to live tuning (what was applied, when); the requests themselves
-      // are not recorded, so that playing a recording can never retune a running master
-      {t::kTuningStatus, "", TopicQos::kLatched, &make<TuningStatusPubSubType>},
-      // what the session is (scheme, gains, injected delays, loop delay, device)
-      {t::kExperiment, "", TopicQos::kLatched, &make<ExperimentDescriptionPubSubType>},
-      // the observers' rate-limited copies: recorded too, so that a played session reaches
-      // monitors and viewers on their default (rate-limited) topics
-      {t::kSlaveStateView, "", TopicQos::kLatest, &make<SlaveStatePubSubType>},
-      {t::kSlaveStateMonitor, "", TopicQos::kLatest, &make<SlaveStatePubSubType>},
-      {t::kMasterStateView, "", TopicQos::kLatest, &make<MasterStatePubSubType>},
-      {t::kMasterStateMonitor, "", TopicQos::kLatest, &make<MasterStatePubSubType>},
-      {t::kMeshFrameMonitor, "", TopicQos::kLatest, &make<MeshFramePubSubType>},
-      {"teleop/device_state", "", TopicQos::kStream, &make<DeviceStatePubSubType>},
-      {"teleop/device_command", "", TopicQos::kStream, &make<DeviceCommandPubSubType>},
-  };
+  // every topic of the table (common/dds/topics.hpp), with the QoS class its live writers use.
+  // The observers' rate-limited copies are recorded too, so that a played session reaches
+  // monitors and viewers on their default topics. The master's answers to live tuning are
+  // recorded, the requests themselves (teleop/tuning) are not, so that playing a recording can
+  // never retune a running master.
+  static const std::vector<TopicEntry> table = [] {
+    std::vector<TopicEntry> out;
+    dds::topics::for_each([&out](const auto& t) {
+      if (std::string(t.name) == dds::topics::kTuning.name) return;
+      out.push_back({t.name, "", t.qos, &make<dds::PubSubOf<decltype(t)>>});
+    });
+    return out;
+  }();
   static const std::vector<TopicEntry> named = [] {
     std::vector<TopicEntry> out = table;
     for (auto& e : out) {

@@ -1,12 +1,11 @@
 #pragma once
-// The topics a recorder records and a player plays: every teleop/* topic of common/dds
-// (the design's topic table) and the external device's pair (idl/Device.idl), each with the
-// QoS class its live writers use.
+// The topics a recorder records and a player plays: every topic of the topic table
+// (common/dds/topics.hpp) but the tuning requests, each with the QoS class its live writers use.
 #include <fastdds/dds/topic/TopicDataType.hpp>
 #include <string>
 #include <vector>
 
-#include "common/dds/participant.hpp"
+#include "common/dds/topics.hpp"
 
 namespace teleop::record {
 

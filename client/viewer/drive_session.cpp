@@ -14,19 +14,14 @@
 
 namespace teleop::viewer {
 
-namespace {
-constexpr const char* kDeviceState = "teleop/device_state";
-constexpr const char* kDeviceCommand = "teleop/device_command";
-}  // namespace
-
 DriveSession::DriveSession(dds::Participant& participant, const HandDriveParams& params,
                            double peak_force_n)
     : peak_force_n_(peak_force_n),
-      state_writer_(participant, kDeviceState, dds::TopicQos::kStream),
-      tuning_writer_(participant, dds::topics::kTuning, dds::TopicQos::kReliableStream),
+      state_writer_(participant, dds::topics::kDeviceState),
+      tuning_writer_(participant, dds::topics::kTuning),
       drive_(params) {
   command_reader_ = std::make_unique<dds::Reader<DeviceCommandPubSubType>>(
-      participant, kDeviceCommand, dds::TopicQos::kStream,
+      participant, dds::topics::kDeviceCommand,
       [this](const DeviceCommand& c, const eprosima::fastdds::dds::SampleInfo&) {
         const Eigen::Vector3d f(c.force_n()[0], c.force_n()[1], c.force_n()[2]);
         std::lock_guard<std::mutex> lock(mutex_);
@@ -37,7 +32,7 @@ DriveSession::DriveSession(dds::Participant& participant, const HandDriveParams&
         if (c.enable() && f.allFinite()) view_.max_force_n = std::max(view_.max_force_n, f.norm());
       });
   status_reader_ = std::make_unique<dds::Reader<TuningStatusPubSubType>>(
-      participant, dds::topics::kTuningStatus, dds::TopicQos::kLatched,
+      participant, dds::topics::kTuningStatus,
       [this](const TuningStatus& s, const eprosima::fastdds::dds::SampleInfo&) {
         std::lock_guard<std::mutex> lock(mutex_);
         view_.status = s;

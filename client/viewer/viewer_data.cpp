@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "common/dds/topics.hpp"
+
 namespace teleop::viewer {
 namespace {
 
@@ -46,14 +48,14 @@ std::string ViewerView::missing() const {
     if (!out.empty()) out += ", ";
     out += what;
   };
-  if (!have_scene()) add("teleop/scene");
-  if (!have_slave) add("teleop/slave_state");
+  if (!have_scene()) add(dds::topics::kScene.name);
+  if (!have_slave) add(dds::topics::kSlaveState.name);
   if (have_scene()) {
     for (const auto& o : scene.objects()) {
       if (o.kind() != OBJECT_DEFORMABLE_MESH) continue;
       const MeshSlot* m = mesh(o.id());
-      if (m == nullptr || !m->has_topology()) add("teleop/mesh_topology");
-      if (m == nullptr || !m->drawable()) add("teleop/mesh_frame");
+      if (m == nullptr || !m->has_topology()) add(dds::topics::kMeshTopology.name);
+      if (m == nullptr || !m->drawable()) add(dds::topics::kMeshFrame.name);
     }
   }
   return out;

@@ -1,8 +1,7 @@
 #pragma once
 // Writers whose write() never waits on the network, for the 1 kHz loops.
 //
-//   dds::LatestWriter<MasterCommandPubSubType> commands(participant, topics::kMasterCommand,
-//                                                       dds::TopicQos::kStream);
+//   dds::LatestWriter<MasterCommandPubSubType> commands(participant, topics::kMasterCommand);
 //   commands.prime(prototype);      // before the loop: sizes every buffer (no allocation later)
 //   ... in the loop:  commands.write(command);   // a copy and an atomic exchange, never a wait
 //
@@ -135,8 +134,7 @@ class LatestWriter {
  public:
   using Sample = typename PubSub::type;
 
-  LatestWriter(Participant& participant, const std::string& topic, TopicQos qos)
-      : writer_(participant, topic, qos) {
+  LatestWriter(Participant& participant, const Topic<PubSub>& topic) : writer_(participant, topic) {
     thread_.start([this] { drain(); });
   }
   ~LatestWriter() { thread_.stop(); }
@@ -195,8 +193,8 @@ class QueuedWriter {
  public:
   using Sample = typename PubSub::type;
 
-  QueuedWriter(Participant& participant, const std::string& topic, TopicQos qos)
-      : writer_(participant, topic, qos), ring_(std::make_unique<std::array<Sample, N>>()) {
+  QueuedWriter(Participant& participant, const Topic<PubSub>& topic)
+      : writer_(participant, topic), ring_(std::make_unique<std::array<Sample, N>>()) {
     thread_.start([this] { drain(); });
   }
   ~QueuedWriter() { thread_.stop(); }

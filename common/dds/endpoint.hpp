@@ -2,10 +2,11 @@
 // Typed DDS writer and waitset-driven reader helpers.
 //
 //   dds::Participant p(options);
-//   dds::Writer<teleop::MasterCommandPubSubType> w(p, dds::topics::kMasterCommand,
-//   dds::TopicQos::kStream); dds::Reader<teleop::SlaveStatePubSubType> r(p,
-//   dds::topics::kSlaveState, dds::TopicQos::kStream,
+//   dds::Writer<teleop::MasterCommandPubSubType> w(p, dds::topics::kMasterCommand);
+//   dds::Reader<teleop::SlaveStatePubSubType> r(p, dds::topics::kSlaveState,
 //       [&](const teleop::SlaveState& s, const SampleInfo&) { mailbox.put(s); });
+//
+// Both take a Topic of the topic table (common/dds/topics.hpp): its name and QoS class.
 //
 // A Reader takes samples on its own thread, which waits on a WaitSet (data available or a
 // stop guard) and calls the callback for each valid sample. Callbacks must be short.
@@ -26,6 +27,7 @@
 
 #include "common/dds/checked_type.hpp"
 #include "common/dds/participant.hpp"
+#include "common/dds/topics.hpp"
 
 namespace teleop::dds {
 
@@ -34,13 +36,12 @@ class Writer {
  public:
   using Sample = typename PubSub::type;
 
-  Writer(Participant& participant, const std::string& topic_name, TopicQos qos)
-      : participant_(participant) {
-    auto* topic = participant.topic(topic_name,
-                                    eprosima::fastdds::dds::TypeSupport(new CheckedType<PubSub>()));
-    writer_ =
-        participant.publisher()->create_datawriter(topic, writer_qos(participant.publisher(), qos));
-    if (!writer_) throw DdsError("cannot create a DataWriter on " + topic_name);
+  Writer(Participant& participant, const Topic<PubSub>& t) : participant_(participant) {
+    auto* topic =
+        participant.topic(t.name, eprosima::fastdds::dds::TypeSupport(new CheckedType<PubSub>()));
+    writer_ = participant.publisher()->create_datawriter(
+        topic, writer_qos(participant.publisher(), t.qos));
+    if (!writer_) throw DdsError(std::string("cannot create a DataWriter on ") + t.name);
   }
   ~Writer() {
     if (writer_) participant_.publisher()->delete_datawriter(writer_);
@@ -81,13 +82,13 @@ class Reader {
   using Sample = typename PubSub::type;
   using Callback = std::function<void(const Sample&, const eprosima::fastdds::dds::SampleInfo&)>;
 
-  Reader(Participant& participant, const std::string& topic_name, TopicQos qos, Callback cb)
+  Reader(Participant& participant, const Topic<PubSub>& t, Callback cb)
       : participant_(participant), callback_(std::move(cb)) {
-    auto* topic = participant.topic(topic_name,
-                                    eprosima::fastdds::dds::TypeSupport(new CheckedType<PubSub>()));
+    auto* topic =
+        participant.topic(t.name, eprosima::fastdds::dds::TypeSupport(new CheckedType<PubSub>()));
     reader_ = participant.subscriber()->create_datareader(
-        topic, reader_qos(participant.subscriber(), qos));
-    if (!reader_) throw DdsError("cannot create a DataReader on " + topic_name);
+        topic, reader_qos(participant.subscriber(), t.qos));
+    if (!reader_) throw DdsError(std::string("cannot create a DataReader on ") + t.name);
     reader_->get_statuscondition().set_enabled_statuses(
         eprosima::fastdds::dds::StatusMask::data_available());
     thread_ = std::thread([this] { run(); });

@@ -155,7 +155,7 @@ bool is_secure(const eprosima::fastdds::dds::DomainParticipantQos& qos);
 eprosima::fastdds::dds::DomainParticipantQos participant_qos(const ParticipantOptions& options,
                                                              ProfileKind* kind = nullptr);
 
-/// Quality of service of each topic of the design's topic table.
+/// Quality-of-service classes of the topics (the topic table: common/dds/topics.hpp).
 enum class TopicQos {
   kStream,          ///< best effort, keep last 1, volatile: hot state and commands
   kLatched,         ///< reliable, transient local, keep last 1: scene, mesh topology
@@ -197,30 +197,5 @@ eprosima::fastdds::dds::DataWriterQos writer_qos(eprosima::fastdds::dds::Publish
 /// DataReader QoS for a TopicQos class.
 eprosima::fastdds::dds::DataReaderQos reader_qos(eprosima::fastdds::dds::Subscriber* sub,
                                                  TopicQos qos);
-
-/// Topic names of the design's topic table.
-namespace topics {
-inline constexpr const char* kMasterCommand = "teleop/master_command";
-inline constexpr const char* kSlaveState = "teleop/slave_state";
-inline constexpr const char* kMasterState = "teleop/master_state";
-inline constexpr const char* kScene = "teleop/scene";
-inline constexpr const char* kMeshTopology = "teleop/mesh_topology";
-inline constexpr const char* kMeshFrame = "teleop/mesh_frame";
-inline constexpr const char* kEvents = "teleop/events";
-inline constexpr const char* kServerStats = "teleop/server_stats";
-inline constexpr const char* kTuning = "teleop/tuning";               ///< tools -> master
-inline constexpr const char* kTuningStatus = "teleop/tuning_status";  ///< master -> tools
-inline constexpr const char* kExperiment = "teleop/experiment";       ///< master -> all, latched
-// Rate-limited copies for observers (docs/topics.md): written off the loops' threads, so the
-// number of observers does not load the 1 kHz path. `_view` at kViewRateHz for windows,
-// `_monitor` at kMonitorRateHz for terminals and services.
-inline constexpr const char* kSlaveStateView = "teleop/slave_state_view";
-inline constexpr const char* kSlaveStateMonitor = "teleop/slave_state_monitor";
-inline constexpr const char* kMasterStateView = "teleop/master_state_view";
-inline constexpr const char* kMasterStateMonitor = "teleop/master_state_monitor";
-inline constexpr const char* kMeshFrameMonitor = "teleop/mesh_frame_monitor";
-inline constexpr double kViewRateHz = 60.0;     ///< rate of the `_view` topics [Hz]
-inline constexpr double kMonitorRateHz = 10.0;  ///< rate of the `_monitor` topics [Hz]
-}  // namespace topics
 
 }  // namespace teleop::dds

@@ -55,22 +55,22 @@ class RateLimitedPublisher {
  public:
   using Sample = typename PubSub::type;
 
-  /// One rate-limited topic.
+  /// One rate-limited topic (its QoS class is the topic table's).
   struct Output {
-    std::string topic;
+    Topic<PubSub> topic;
     double rate_hz = 0.0;  ///< [Hz], (0, 1e4]; 0: every offered sample (offer with wake)
   };
 
   RateLimitedPublisher(Participant& participant, const std::vector<Output>& outputs,
-                       TopicQos qos = TopicQos::kLatest, int thread_nice = 10)
+                       int thread_nice = 10)
       : thread_nice_(thread_nice) {
     for (const Output& o : outputs) {
       if (!(o.rate_hz >= 0.0 && o.rate_hz <= 1e4)) {
-        throw DdsError("rate of " + o.topic + " must be in [0, 1e4] Hz, got " +
+        throw DdsError(std::string("rate of ") + o.topic.name + " must be in [0, 1e4] Hz, got " +
                        std::to_string(o.rate_hz));
       }
       Out out;
-      out.writer = std::make_unique<Writer<PubSub>>(participant, o.topic, qos);
+      out.writer = std::make_unique<Writer<PubSub>>(participant, o.topic);
       out.period_ns = o.rate_hz > 0.0 ? static_cast<std::int64_t>(1e9 / o.rate_hz) : 0;
       outs_.push_back(std::move(out));
     }

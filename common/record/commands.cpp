@@ -14,10 +14,10 @@ std::vector<StreamedCommand> recorded_commands(const std::string& recording, dou
   RecordingReader reader(recording);
   int topic = -1;
   for (const TopicRecord& t : reader.topics()) {
-    if (t.name == dds::topics::kMasterCommand) topic = t.id;
+    if (t.name == dds::topics::kMasterCommand.name) topic = t.id;
   }
   if (topic < 0) {
-    throw RecordingError(recording + ": has no " + std::string(dds::topics::kMasterCommand) +
+    throw RecordingError(recording + ": has no " + std::string(dds::topics::kMasterCommand.name) +
                          " samples (was the recorder told to --exclude it?)");
   }
   const double length_s = static_cast<double>(reader.last_ns() - reader.first_ns()) * 1e-9;
@@ -44,7 +44,7 @@ std::vector<StreamedCommand> recorded_commands(const std::string& recording, dou
     rows.push_back(std::move(c));
   }
   if (rows.empty()) {
-    throw RecordingError(recording + ": " + std::string(dds::topics::kMasterCommand) +
+    throw RecordingError(recording + ": " + std::string(dds::topics::kMasterCommand.name) +
                          " holds no samples" +
                          (from_s > 0.0 || to_s > 0.0 ? " in the window asked for" : ""));
   }

@@ -112,16 +112,15 @@ struct ServerNode::Impl {
         model(m),
         cycle(m, 1.0 / o.rate_hz, o.command_timeout_s),
         participant(o.dds),
-        state_writer(participant, dds::topics::kSlaveState, dds::TopicQos::kStream),
-        scene_writer(participant, dds::topics::kScene, dds::TopicQos::kLatched),
-        event_writer(participant, dds::topics::kEvents, dds::TopicQos::kEventLog),
-        topology_writer(participant, dds::topics::kMeshTopology, dds::TopicQos::kLatched),
-        frame_writer(participant, dds::topics::kMeshFrame, dds::TopicQos::kStream),
-        frame_monitor_writer(participant, dds::topics::kMeshFrameMonitor, dds::TopicQos::kLatest),
+        state_writer(participant, dds::topics::kSlaveState),
+        scene_writer(participant, dds::topics::kScene),
+        event_writer(participant, dds::topics::kEvents),
+        topology_writer(participant, dds::topics::kMeshTopology),
+        frame_writer(participant, dds::topics::kMeshFrame),
+        frame_monitor_writer(participant, dds::topics::kMeshFrameMonitor),
         state_views(participant, {{dds::topics::kSlaveStateView, dds::topics::kViewRateHz},
                                   {dds::topics::kSlaveStateMonitor, dds::topics::kMonitorRateHz}}),
-        stats_publisher(participant, {{dds::topics::kServerStats, 0.0}},
-                        dds::TopicQos::kReliableStream),
+        stats_publisher(participant, {{dds::topics::kServerStats, 0.0}}),
         gate(m.workspace_min_m, m.workspace_max_m,
              static_cast<std::int64_t>(std::llround(o.owner_timeout_s * 1e9))) {
     scratch.reserve(step_us.capacity());
@@ -135,7 +134,7 @@ struct ServerNode::Impl {
     event_prototype.message(std::string(256, ' '));
     event_writer.prime(event_prototype);
     command_reader = std::make_unique<dds::Reader<MasterCommandPubSubType>>(
-        participant, dds::topics::kMasterCommand, dds::TopicQos::kStream,
+        participant, dds::topics::kMasterCommand,
         [this](const MasterCommand& c, const eprosima::fastdds::dds::SampleInfo& info) {
           on_command(c, info);
         });

@@ -103,35 +103,30 @@ int observer_probe(const CommandArgs& args) {
   MasterState last_master;
   MeshFrame last_frame;
   dds::Reader<SceneDescriptionPubSubType> r_scene(
-      p, dds::topics::kScene, dds::TopicQos::kLatched,
-      [&](const SceneDescription&, const Info&) { scene.fetch_add(1); });
+      p, dds::topics::kScene, [&](const SceneDescription&, const Info&) { scene.fetch_add(1); });
   dds::Reader<MeshTopologyPubSubType> r_topology(p, dds::topics::kMeshTopology,
-                                                 dds::TopicQos::kLatched,
                                                  [&](const MeshTopology&, const Info&) {});
-  dds::Reader<MeshFramePubSubType> r_frames(p, t.mesh_frame.name, t.mesh_frame.qos,
-                                            [&](const MeshFrame& f, const Info&) {
-                                              last_frame = f;
-                                              frames.fetch_add(1);
-                                            });
-  dds::Reader<SlaveStatePubSubType> r_slave(p, t.slave_state.name, t.slave_state.qos,
+  dds::Reader<MeshFramePubSubType> r_frames(p, t.mesh_frame, [&](const MeshFrame& f, const Info&) {
+    last_frame = f;
+    frames.fetch_add(1);
+  });
+  dds::Reader<SlaveStatePubSubType> r_slave(p, t.slave_state,
                                             [&](const SlaveState& s, const Info&) {
                                               last_slave = s;
                                               slave.fetch_add(1);
                                             });
-  dds::Reader<MasterStatePubSubType> r_master(p, t.master_state.name, t.master_state.qos,
+  dds::Reader<MasterStatePubSubType> r_master(p, t.master_state,
                                               [&](const MasterState& s, const Info&) {
                                                 last_master = s;
                                                 master.fetch_add(1);
                                               });
   dds::Reader<ServerStatsPubSubType> r_stats(
-      p, dds::topics::kServerStats, dds::TopicQos::kReliableStream,
-      [&](const ServerStats&, const Info&) { stats.fetch_add(1); });
-  dds::Reader<EventPubSubType> r_events(p, dds::topics::kEvents, dds::TopicQos::kEventLog,
-                                        [&](const Event&, const Info&) {});
+      p, dds::topics::kServerStats, [&](const ServerStats&, const Info&) { stats.fetch_add(1); });
+  dds::Reader<EventPubSubType> r_events(p, dds::topics::kEvents, [&](const Event&, const Info&) {});
   std::unique_ptr<dds::Reader<MasterCommandPubSubType>> r_cmd;
   if (t.master_command) {
     r_cmd = std::make_unique<dds::Reader<MasterCommandPubSubType>>(
-        p, dds::topics::kMasterCommand, dds::TopicQos::kStream,
+        p, dds::topics::kMasterCommand,
         [&](const MasterCommand&, const Info&) { commands.fetch_add(1); });
   }
   const auto t0 = now_ns();

@@ -33,8 +33,9 @@
 namespace teleop::bench {
 namespace {
 
-constexpr const char* kPing = "bench/ping";
-constexpr const char* kPong = "bench/pong";
+// the benchmark's own pair of topics: mesh frames (a size like the real ones), stream QoS
+constexpr dds::Topic<MeshFramePubSubType> kPing{"bench/ping", dds::TopicQos::kStream};
+constexpr dds::Topic<MeshFramePubSubType> kPong{"bench/pong", dds::TopicQos::kStream};
 constexpr std::uint64_t kStopFrame = ~0ULL;
 
 /// Options of a bench participant: a secure profile uses the identity "bench" of --security-dir.
@@ -64,11 +65,10 @@ int rtt_echo(const CommandArgs& args) {
   const int domain = std::stoi(args.option("--domain", "100"));
   const std::string profile = args.option("--profile", "loopback");
   dds::Participant p(bench_options(profile, domain, "rtt-echo", args.option("--security-dir", "")));
-  dds::Writer<MeshFramePubSubType> pong(p, kPong, dds::TopicQos::kStream);
+  dds::Writer<MeshFramePubSubType> pong(p, kPong);
   std::atomic<bool> stop{false};
   dds::Reader<MeshFramePubSubType> ping(
-      p, kPing, dds::TopicQos::kStream,
-      [&](const MeshFrame& f, const eprosima::fastdds::dds::SampleInfo&) {
+      p, kPing, [&](const MeshFrame& f, const eprosima::fastdds::dds::SampleInfo&) {
         if (f.frame() == kStopFrame) {
           stop = true;
           return;
@@ -144,13 +144,12 @@ int rtt(const CommandArgs& args) {
     }
     teleop::test::Process echo(self, echo_args, "rtt_echo");
     dds::Participant p(bench_options(profile, domain, "rtt-ping", security_dir));
-    dds::Writer<MeshFramePubSubType> ping(p, kPing, dds::TopicQos::kStream);
+    dds::Writer<MeshFramePubSubType> ping(p, kPing);
     std::mutex m;
     std::condition_variable cv;
     std::uint64_t last_pong = 0;
     dds::Reader<MeshFramePubSubType> pong(
-        p, kPong, dds::TopicQos::kStream,
-        [&](const MeshFrame& f, const eprosima::fastdds::dds::SampleInfo&) {
+        p, kPong, [&](const MeshFrame& f, const eprosima::fastdds::dds::SampleInfo&) {
           {
             std::lock_guard<std::mutex> lock(m);
             last_pong = std::max(last_pong, f.frame());

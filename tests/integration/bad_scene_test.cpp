@@ -159,15 +159,15 @@ TEST(BadScene, MalformedCommandPayloadIsDroppedAndTheServerRuns) {
                   "--command-timeout", "5", "--scene", scene_file("tool_only.yaml")},
                  "malformed_server");
   dds::Participant participant(dds::ParticipantOptions{"loopback", domain, "hostile"});
-  auto* topic = participant.topic(dds::topics::kMasterCommand,
+  auto* topic = participant.topic(dds::topics::kMasterCommand.name,
                                   eprosima::fastdds::dds::TypeSupport(new RawCommandType()));
   auto* writer = participant.publisher()->create_datawriter(
-      topic, dds::writer_qos(participant.publisher(), dds::TopicQos::kStream));
+      topic, dds::writer_qos(participant.publisher(), dds::topics::kMasterCommand.qos));
   ASSERT_NE(writer, nullptr);
   std::atomic<int> states{0};
   std::atomic<double> last_x{0.0};
   dds::Reader<SlaveStatePubSubType> reader(
-      participant, dds::topics::kSlaveState, dds::TopicQos::kStream,
+      participant, dds::topics::kSlaveState,
       [&](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo&) {
         ++states;
         last_x = s.tip_position_m()[0];

@@ -158,10 +158,10 @@ TEST(DriverSilence, TheMasterHoldsFadesTheForceReportsItAndObserversSeeTheExperi
       {"--domain", d, "--duration", "120", "--quiet", "--scene", scene_file("tool_only.yaml")},
       "silence_server");
   dds::Participant p(dds::ParticipantOptions{"loopback", domain, "silent-driver"});
-  dds::Writer<DeviceStatePubSubType> states(p, "teleop/device_state", dds::TopicQos::kStream);
+  dds::Writer<DeviceStatePubSubType> states(p, dds::topics::kDeviceState);
   ExperimentWatch early, late;
   dds::Reader<ExperimentDescriptionPubSubType> early_reader(
-      p, dds::topics::kExperiment, dds::TopicQos::kLatched,
+      p, dds::topics::kExperiment,
       [&](const ExperimentDescription& e, const eprosima::fastdds::dds::SampleInfo&) {
         early.add(e);
       });
@@ -181,7 +181,7 @@ TEST(DriverSilence, TheMasterHoldsFadesTheForceReportsItAndObserversSeeTheExperi
   dds::Participant lp(dds::ParticipantOptions{"loopback", domain, "late-observer"});
   const std::int64_t joined_ns = now_ns();
   dds::Reader<ExperimentDescriptionPubSubType> late_reader(
-      lp, dds::topics::kExperiment, dds::TopicQos::kLatched,
+      lp, dds::topics::kExperiment,
       [&](const ExperimentDescription& e, const eprosima::fastdds::dds::SampleInfo&) {
         late.add(e);
       });

@@ -111,11 +111,11 @@ TEST(ExternalDevice, ADriverProcessTakesPartThroughTheDeviceTopics) {
                  {"--domain", d, "--duration", "120", "--scene", scene_file("tool_only.yaml")},
                  "ext_server");
   dds::Participant p(dds::ParticipantOptions{"loopback", domain, "fake-driver"});
-  dds::Writer<DeviceStatePubSubType> states(p, "teleop/device_state", dds::TopicQos::kStream);
+  dds::Writer<DeviceStatePubSubType> states(p, dds::topics::kDeviceState);
   std::atomic<int> commands{0}, enabled{0};
   std::atomic<double> max_fz{0.0};
   dds::Reader<DeviceCommandPubSubType> cmds(
-      p, "teleop/device_command", dds::TopicQos::kStream,
+      p, dds::topics::kDeviceCommand,
       [&](const DeviceCommand& c, const eprosima::fastdds::dds::SampleInfo&) {
         ++commands;
         if (c.enable()) ++enabled;

@@ -148,7 +148,7 @@ TEST(FaultSuite, NanFloodFromAThirdParticipantIsRejectedAndCounted) {
   int flooded = 0;
   const FaultRun r = session(domain, "nanflood", {}, [&] {
     dds::Participant p(dds::ParticipantOptions{"loopback", domain, "nan_flood"});
-    dds::Writer<MasterCommandPubSubType> w(p, dds::topics::kMasterCommand, dds::TopicQos::kStream);
+    dds::Writer<MasterCommandPubSubType> w(p, dds::topics::kMasterCommand);
     std::this_thread::sleep_for(std::chrono::milliseconds(2500));
     MasterCommand c;
     for (int k = 0; k < 3000; ++k) {

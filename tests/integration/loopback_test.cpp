@@ -115,8 +115,8 @@ class CommandInjector {
  public:
   explicit CommandInjector(int domain)
       : participant_(dds::ParticipantOptions{"loopback", domain, "injector"}),
-        writer_(participant_, dds::topics::kMasterCommand, dds::TopicQos::kStream),
-        reader_(participant_, dds::topics::kSlaveState, dds::TopicQos::kStream,
+        writer_(participant_, dds::topics::kMasterCommand),
+        reader_(participant_, dds::topics::kSlaveState,
                 [this](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo&) {
                   holding_ = s.holding();
                   ++states_;

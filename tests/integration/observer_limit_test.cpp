@@ -25,7 +25,7 @@ using Info = eprosima::fastdds::dds::SampleInfo;
 struct Observer {
   explicit Observer(int domain)
       : participant(dds::ParticipantOptions{"loopback", domain, "limit-observer"}),
-        reader(participant, dds::topics::kSlaveStateMonitor, dds::TopicQos::kLatest,
+        reader(participant, dds::topics::kSlaveStateMonitor,
                [](const SlaveState&, const Info&) {}) {}
   dds::Participant participant;
   dds::Reader<SlaveStatePubSubType> reader;
@@ -46,20 +46,17 @@ TEST(ObserverLimit, TheServerCountsObserversAndWarnsPastItsLimit) {
   long most_observers = -1, limit = -1;
   std::vector<std::string> warnings;
   dds::Reader<ServerStatsPubSubType> stats(
-      p, dds::topics::kServerStats, dds::TopicQos::kReliableStream,
-      [&](const ServerStats& s, const Info&) {
+      p, dds::topics::kServerStats, [&](const ServerStats& s, const Info&) {
         std::lock_guard<std::mutex> lock(m);
         most_observers = std::max<long>(most_observers, s.observers());
         limit = s.max_observers();
       });
-  dds::Reader<EventPubSubType> events(p, dds::topics::kEvents, dds::TopicQos::kEventLog,
-                                      [&](const Event& e, const Info&) {
-                                        const std::string text = e.message().to_string();
-                                        if (text.find("above --max-observers") == std::string::npos)
-                                          return;
-                                        std::lock_guard<std::mutex> lock(m);
-                                        warnings.push_back(text);
-                                      });
+  dds::Reader<EventPubSubType> events(p, dds::topics::kEvents, [&](const Event& e, const Info&) {
+    const std::string text = e.message().to_string();
+    if (text.find("above --max-observers") == std::string::npos) return;
+    std::lock_guard<std::mutex> lock(m);
+    warnings.push_back(text);
+  });
   const auto t0 = now_ns();
   auto done = [&] {
     std::lock_guard<std::mutex> lock(m);

@@ -60,18 +60,17 @@ class ViewProbe {
   explicit ViewProbe(int domain)
       : topics_(dds::observer_topics(dds::ObserverKind::kView, false)),
         participant_(dds::ParticipantOptions{"loopback", domain, "view-probe"}),
-        scene_(participant_, dds::topics::kScene, dds::TopicQos::kLatched,
+        scene_(participant_, dds::topics::kScene,
                [this](const SceneDescription&, const Info&) { mark(scene_ns_); }),
-        slave_(participant_, topics_.slave_state.name, topics_.slave_state.qos,
+        slave_(participant_, topics_.slave_state,
                [this](const SlaveState&, const Info&) {
                  mark(slave_ns_);
                  slave_count_.fetch_add(1);
                }),
-        master_(participant_, topics_.master_state.name, topics_.master_state.qos,
-                [this](const MasterState&, const Info&) {
-                  mark(master_ns_);
-                  master_count_.fetch_add(1);
-                }) {}
+        master_(participant_, topics_.master_state, [this](const MasterState&, const Info&) {
+          mark(master_ns_);
+          master_count_.fetch_add(1);
+        }) {}
 
   using Info = eprosima::fastdds::dds::SampleInfo;
   std::int64_t created_ns() const { return created_ns_; }

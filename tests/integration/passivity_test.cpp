@@ -103,13 +103,12 @@ TEST(Passivity, ServerRejectsUnusableWaveCommandsAndCountsThem) {
                   "--command-timeout", "5", "--scene", kToolScene},
                  "badwave_server");
   dds::Participant participant(dds::ParticipantOptions{"loopback", domain, "wave_injector"});
-  dds::Writer<MasterCommandPubSubType> writer(participant, dds::topics::kMasterCommand,
-                                              dds::TopicQos::kStream);
+  dds::Writer<MasterCommandPubSubType> writer(participant, dds::topics::kMasterCommand);
   std::atomic<int> states{0};
   std::atomic<double> last_z{0.0};
   std::atomic<bool> finite{true};
   dds::Reader<SlaveStatePubSubType> reader(
-      participant, dds::topics::kSlaveState, dds::TopicQos::kStream,
+      participant, dds::topics::kSlaveState,
       [&](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo&) {
         ++states;
         last_z = s.tip_position_m()[2];

@@ -71,13 +71,13 @@ void expect_played_back(const std::string& rec_file, double st, double cmd) {
   dds::Participant p(dds::ParticipantOptions{"loopback", pd, "playback-subscriber"});
   std::atomic<std::uint64_t> states{0}, scenes{0}, commands{0};
   dds::Reader<SlaveStatePubSubType> r_state(
-      p, dds::topics::kSlaveState, dds::TopicQos::kStream,
+      p, dds::topics::kSlaveState,
       [&](const SlaveState&, const eprosima::fastdds::dds::SampleInfo&) { ++states; });
   dds::Reader<MasterCommandPubSubType> r_cmd(
-      p, dds::topics::kMasterCommand, dds::TopicQos::kStream,
+      p, dds::topics::kMasterCommand,
       [&](const MasterCommand&, const eprosima::fastdds::dds::SampleInfo&) { ++commands; });
   dds::Reader<SceneDescriptionPubSubType> r_scene(
-      p, dds::topics::kScene, dds::TopicQos::kLatched,
+      p, dds::topics::kScene,
       [&](const SceneDescription& sd, const eprosima::fastdds::dds::SampleInfo&) {
         if (sd.name() == "tool-only") ++scenes;
       });
@@ -321,10 +321,10 @@ void expect_mcap_played_back(const std::string& full) {
   dds::Participant p(dds::ParticipantOptions{"loopback", pd, "mcap-playback-subscriber"});
   std::atomic<std::uint64_t> states{0}, scenes{0};
   dds::Reader<SlaveStatePubSubType> r_state(
-      p, dds::topics::kSlaveState, dds::TopicQos::kStream,
+      p, dds::topics::kSlaveState,
       [&](const SlaveState&, const eprosima::fastdds::dds::SampleInfo&) { ++states; });
   dds::Reader<SceneDescriptionPubSubType> r_scene(
-      p, dds::topics::kScene, dds::TopicQos::kLatched,
+      p, dds::topics::kScene,
       [&](const SceneDescription&, const eprosima::fastdds::dds::SampleInfo&) { ++scenes; });
   Process player(kPlayBinary,
                  {full, "--domain", std::to_string(pd), "--speed", "4", "--wait", "1", "--linger",

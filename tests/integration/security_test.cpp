@@ -69,13 +69,13 @@ class Listener {
  public:
   explicit Listener(const dds::ParticipantOptions& o)
       : participant_(o),
-        state_(participant_, dds::topics::kSlaveState, dds::TopicQos::kStream,
+        state_(participant_, dds::topics::kSlaveState,
                [this](const SlaveState&, const SampleInfo&) { ++states; }),
-        scene_(participant_, dds::topics::kScene, dds::TopicQos::kLatched,
+        scene_(participant_, dds::topics::kScene,
                [this](const SceneDescription&, const SampleInfo&) { ++scenes; }),
-        stats_(participant_, dds::topics::kServerStats, dds::TopicQos::kReliableStream,
+        stats_(participant_, dds::topics::kServerStats,
                [this](const ServerStats&, const SampleInfo&) { ++stats; }),
-        events_(participant_, dds::topics::kEvents, dds::TopicQos::kEventLog,
+        events_(participant_, dds::topics::kEvents,
                 [this](const Event&, const SampleInfo&) { ++events; }) {}
 
   dds::Participant& participant() { return participant_; }
@@ -98,7 +98,7 @@ class Listener {
 class Outsider : public Listener {
  public:
   explicit Outsider(const dds::ParticipantOptions& o)
-      : Listener(o), writer_(participant(), dds::topics::kMasterCommand, dds::TopicQos::kStream) {}
+      : Listener(o), writer_(participant(), dds::topics::kMasterCommand) {}
   void send(std::uint64_t seq) {
     auto c = command(seq, 0.5);
     writer_.write(c);
@@ -192,41 +192,29 @@ TEST_F(Security, ObserverReadsStateButCannotWriteCommands) {
   EXPECT_GT(observer.events, 0);  // the server's start-up events (transient local)
 
   auto& p = observer.participant();
-  EXPECT_THROW(
-      dds::Writer<MasterCommandPubSubType>(p, dds::topics::kMasterCommand, dds::TopicQos::kStream),
-      dds::DdsError);
-  EXPECT_THROW(
-      dds::Writer<SlaveStatePubSubType>(p, dds::topics::kSlaveState, dds::TopicQos::kStream),
-      dds::DdsError);
+  EXPECT_THROW(dds::Writer<MasterCommandPubSubType>(p, dds::topics::kMasterCommand), dds::DdsError);
+  EXPECT_THROW(dds::Writer<SlaveStatePubSubType>(p, dds::topics::kSlaveState), dds::DdsError);
   // nor retune a master: live tuning is the operator role's (and the master's answers its own)
-  EXPECT_THROW(
-      dds::Writer<TuningRequestPubSubType>(p, dds::topics::kTuning, dds::TopicQos::kReliableStream),
-      dds::DdsError);
-  EXPECT_THROW(
-      dds::Writer<TuningStatusPubSubType>(p, dds::topics::kTuningStatus, dds::TopicQos::kLatched),
-      dds::DdsError);
+  EXPECT_THROW(dds::Writer<TuningRequestPubSubType>(p, dds::topics::kTuning), dds::DdsError);
+  EXPECT_THROW(dds::Writer<TuningStatusPubSubType>(p, dds::topics::kTuningStatus), dds::DdsError);
   // nor pose as a master describing its experiment
-  EXPECT_THROW(dds::Writer<ExperimentDescriptionPubSubType>(p, dds::topics::kExperiment,
-                                                            dds::TopicQos::kLatched),
+  EXPECT_THROW(dds::Writer<ExperimentDescriptionPubSubType>(p, dds::topics::kExperiment),
                dds::DdsError);
   {
     // an operator (a device driver, teleop_viewer --drive) may write the device state and
     // tuning requests, and still not commands
     Listener op(secure_options(domain, dir_, "operator", "sec_operator"));
     auto& po = op.participant();
-    EXPECT_NO_THROW(dds::Writer<TuningRequestPubSubType>(po, dds::topics::kTuning,
-                                                         dds::TopicQos::kReliableStream));
-    EXPECT_NO_THROW(
-        dds::Writer<DeviceStatePubSubType>(po, "teleop/device_state", dds::TopicQos::kStream));
-    EXPECT_THROW(dds::Writer<MasterCommandPubSubType>(po, dds::topics::kMasterCommand,
-                                                      dds::TopicQos::kStream),
+    EXPECT_NO_THROW(dds::Writer<TuningRequestPubSubType>(po, dds::topics::kTuning));
+    EXPECT_NO_THROW(dds::Writer<DeviceStatePubSubType>(po, dds::topics::kDeviceState));
+    EXPECT_THROW(dds::Writer<MasterCommandPubSubType>(po, dds::topics::kMasterCommand),
                  dds::DdsError);
   }
   // the same through the raw API: access control refuses the DataWriter
-  auto* topic = p.topic(dds::topics::kMasterCommand,
+  auto* topic = p.topic(dds::topics::kMasterCommand.name,
                         eprosima::fastdds::dds::TypeSupport(new MasterCommandPubSubType()));
   EXPECT_EQ(p.publisher()->create_datawriter(
-                topic, dds::writer_qos(p.publisher(), dds::TopicQos::kStream)),
+                topic, dds::writer_qos(p.publisher(), dds::topics::kMasterCommand.qos)),
             nullptr);
 
   std::this_thread::sleep_for(std::chrono::milliseconds(500));

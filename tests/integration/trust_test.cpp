@@ -142,14 +142,13 @@ void rogue(int domain, Forged& forged) {
   dds::Participant p(dds::ParticipantOptions{"loopback", domain, "rogue"});
   std::atomic<std::uint32_t> session{0};
   dds::Reader<MasterCommandPubSubType> commands(
-      p, dds::topics::kMasterCommand, dds::TopicQos::kStream,
+      p, dds::topics::kMasterCommand,
       [&](const MasterCommand& c, const eprosima::fastdds::dds::SampleInfo&) {
         session.store(c.master_session());
       });
-  dds::Writer<SlaveStatePubSubType> states(p, dds::topics::kSlaveState, dds::TopicQos::kStream);
-  dds::Writer<ServerStatsPubSubType> stats(p, dds::topics::kServerStats,
-                                           dds::TopicQos::kReliableStream);
-  dds::Writer<EventPubSubType> events(p, dds::topics::kEvents, dds::TopicQos::kEventLog);
+  dds::Writer<SlaveStatePubSubType> states(p, dds::topics::kSlaveState);
+  dds::Writer<ServerStatsPubSubType> stats(p, dds::topics::kServerStats);
+  dds::Writer<EventPubSubType> events(p, dds::topics::kEvents);
   // into the session: the master pressing the sphere
   std::this_thread::sleep_for(std::chrono::milliseconds(2500));
   SlaveState s;

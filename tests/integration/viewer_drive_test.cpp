@@ -51,7 +51,7 @@ std::string find_xvfb_run() {
 struct SlaveWatch {
   explicit SlaveWatch(int domain)
       : participant(dds::ParticipantOptions{"loopback", domain, "drive-test"}),
-        reader(participant, dds::topics::kSlaveState, dds::TopicQos::kStream,
+        reader(participant, dds::topics::kSlaveState,
                [this](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo&) {
                  ++states;
                  if (s.in_contact()) ++contact_states;
@@ -91,7 +91,7 @@ void write_drive_script(const std::string& script, const std::string& picture) {
 /// viewer has become the driver, or until `stop`.
 void run_rogue_driver(int domain, const std::atomic<bool>& stop) {
   dds::Participant rp(dds::ParticipantOptions{"loopback", domain, "rogue-driver"});
-  dds::Writer<DeviceStatePubSubType> w(rp, "teleop/device_state", dds::TopicQos::kStream);
+  dds::Writer<DeviceStatePubSubType> w(rp, dds::topics::kDeviceState);
   const auto t0 = now_ns();
   DeviceState s;
   s.position_m()[2] = 0.1;
@@ -235,14 +235,13 @@ TEST(ViewerDrive, AMasterWithoutAcceptTuningAppliesNoRequestAndSaysSo) {
   std::mutex m;
   bool have_status = false, accepting = true;
   dds::Reader<TuningStatusPubSubType> status(
-      p, dds::topics::kTuningStatus, dds::TopicQos::kLatched,
+      p, dds::topics::kTuningStatus,
       [&](const TuningStatus& s, const eprosima::fastdds::dds::SampleInfo&) {
         std::lock_guard<std::mutex> l(m);
         have_status = true;
         accepting = s.accepting();
       });
-  dds::Writer<TuningRequestPubSubType> writer(p, dds::topics::kTuning,
-                                              dds::TopicQos::kReliableStream);
+  dds::Writer<TuningRequestPubSubType> writer(p, dds::topics::kTuning);
   const std::string master_json = tmp("refusing_master.json");
   Process master(
       kMasterBinary,

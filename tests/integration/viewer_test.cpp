@@ -98,13 +98,13 @@ class SceneObserver {
  public:
   explicit SceneObserver(int domain)
       : participant_(dds::ParticipantOptions{"loopback", domain, "viewer-test"}),
-        scene_reader_(participant_, dds::topics::kScene, dds::TopicQos::kLatched,
+        scene_reader_(participant_, dds::topics::kScene,
                       [this](const SceneDescription& s, const eprosima::fastdds::dds::SampleInfo&) {
                         std::lock_guard<std::mutex> l(m_);
                         scene_ = s;
                         have_scene_ = true;
                       }),
-        slave_reader_(participant_, dds::topics::kSlaveState, dds::TopicQos::kStream,
+        slave_reader_(participant_, dds::topics::kSlaveState,
                       [this](const SlaveState& s, const eprosima::fastdds::dds::SampleInfo&) {
                         std::lock_guard<std::mutex> l(m_);
                         const auto& p = s.tip_position_m();

@@ -40,11 +40,11 @@ TEST(LatestWriter, WritesNeverAllocateAndEverySampleIsWrittenOrCountedAsReplaced
   Participant p(ParticipantOptions{"loopback", test::domains::kAsyncWriterUnit, "async"});
   std::atomic<std::uint64_t> newest{0};
   Reader<MasterCommandPubSubType> reader(
-      p, topics::kMasterCommand, TopicQos::kStream,
+      p, topics::kMasterCommand,
       [&](const MasterCommand& c, const eprosima::fastdds::dds::SampleInfo&) {
         newest.store(c.seq());
       });
-  LatestWriter<MasterCommandPubSubType> writer(p, topics::kMasterCommand, TopicQos::kStream);
+  LatestWriter<MasterCommandPubSubType> writer(p, topics::kMasterCommand);
   MasterCommand c;
   c.master_name(std::string(40, 'n'));  // beyond the small-string buffer: would allocate
   writer.prime(c);
@@ -74,12 +74,12 @@ TEST(QueuedWriter, SamplesGoOutInOrderAndTheNewestIsNeverTheOneDropped) {
   std::mutex m;
   std::vector<std::uint64_t> seen;
   Reader<MasterCommandPubSubType> reader(
-      p, topics::kMasterCommand, TopicQos::kStream,
+      p, topics::kMasterCommand,
       [&](const MasterCommand& c, const eprosima::fastdds::dds::SampleInfo&) {
         std::lock_guard<std::mutex> lock(m);
         seen.push_back(c.seq());
       });
-  QueuedWriter<MasterCommandPubSubType, 4> writer(p, topics::kMasterCommand, TopicQos::kStream);
+  QueuedWriter<MasterCommandPubSubType, 4> writer(p, topics::kMasterCommand);
   MasterCommand c;
   c.master_name(std::string(40, 'n'));
   writer.prime(c);
@@ -113,7 +113,7 @@ TEST(QueuedWriter, SamplesGoOutInOrderAndTheNewestIsNeverTheOneDropped) {
 
 TEST(QueuedWriter, EveryEventGoesOutWhenTheThreadKeepsUp) {
   Participant p(ParticipantOptions{"loopback", test::domains::kAsyncWriterUnit + 1, "events"});
-  QueuedWriter<EventPubSubType, 8> writer(p, topics::kEvents, TopicQos::kEventLog);
+  QueuedWriter<EventPubSubType, 8> writer(p, topics::kEvents);
   Event e;
   e.source(std::string(32, 's'));
   e.message(std::string(256, 'm'));

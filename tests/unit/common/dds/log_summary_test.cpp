@@ -78,7 +78,7 @@ TEST(LogSummary, OversizedSamplesAreCounted) {
   Participant p(ParticipantOptions{"loopback", domain, "oversized"});
   std::atomic<int> received{0};
   Reader<MasterCommandPubSubType> reader(
-      p, "test/oversized", TopicQos::kStream,
+      p, Topic<MasterCommandPubSubType>{"test/oversized", TopicQos::kStream},
       [&](const MasterCommand&, const eprosima::fastdds::dds::SampleInfo&) { ++received; });
   Participant hostile(ParticipantOptions{"loopback", domain, "hostile"});
   auto* topic =
@@ -116,7 +116,7 @@ TEST(LogSummary, MalformedSamplesAreCountedByTheReader) {
   Participant p(ParticipantOptions{"loopback", domain, "malformed"});
   std::atomic<int> received{0};
   Reader<MasterCommandPubSubType> reader(
-      p, "test/malformed", TopicQos::kStream,
+      p, Topic<MasterCommandPubSubType>{"test/malformed", TopicQos::kStream},
       [&](const MasterCommand&, const eprosima::fastdds::dds::SampleInfo&) { ++received; });
   Participant hostile(ParticipantOptions{"loopback", domain, "hostile"});
   auto* topic =

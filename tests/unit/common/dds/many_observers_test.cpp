@@ -28,7 +28,7 @@ using Info = eprosima::fastdds::dds::SampleInfo;
 struct Observer {
   explicit Observer(int domain)
       : participant(ParticipantOptions{"loopback", domain, "many-observers"}),
-        reader(participant, topics::kSlaveStateMonitor, TopicQos::kLatest,
+        reader(participant, topics::kSlaveStateMonitor,
                [this](const SlaveState&, const Info&) { received.fetch_add(1); }) {}
   Participant participant;
   std::atomic<int> received{0};
@@ -50,7 +50,7 @@ int observers_served_by_a_late_server(int domain) {
   ParticipantOptions server_options{"loopback", domain, "many-observers-server"};
   server_options.announce_to_whole_domain = true;  // as teleop_server and teleop_master
   Participant server(server_options);
-  Writer<SlaveStatePubSubType> writer(server, topics::kSlaveStateMonitor, TopicQos::kLatest);
+  Writer<SlaveStatePubSubType> writer(server, topics::kSlaveStateMonitor);
   SlaveState s;
   const auto t0 = now_ns();
   // generous: discovery of 101 participants on a busy 2-core machine takes a few seconds

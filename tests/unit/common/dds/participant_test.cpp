@@ -19,6 +19,10 @@
 namespace teleop::dds {
 namespace {
 
+// a reliable topic of commands of the test's own: no sample of the exchange may be lost
+constexpr Topic<MasterCommandPubSubType> kReliableCommands{"test/commands",
+                                                           TopicQos::kReliableStream};
+
 TEST(DdsOptions, FlagsWinOverEnvironmentWhichWinsOverDefaults) {
   unsetenv("TELEOP_PROFILE");
   unsetenv("TELEOP_DOMAIN");
@@ -92,12 +96,12 @@ TEST(DdsEndpoints, WriterAndWaitsetReaderExchangeSamples) {
   std::atomic<int> got{0};
   std::atomic<std::uint64_t> last{0};
   Reader<MasterCommandPubSubType> reader(
-      sub, topics::kMasterCommand, TopicQos::kReliableStream,
+      sub, kReliableCommands,
       [&](const MasterCommand& c, const eprosima::fastdds::dds::SampleInfo&) {
         ++got;
         last = c.seq();
       });
-  Writer<MasterCommandPubSubType> writer(pub, topics::kMasterCommand, TopicQos::kReliableStream);
+  Writer<MasterCommandPubSubType> writer(pub, kReliableCommands);
   const auto t0 = now_ns();
   while ((writer.matched() < 1 || reader.matched() < 1) && seconds_between(t0, now_ns()) < 10) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));

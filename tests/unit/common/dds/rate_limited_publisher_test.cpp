@@ -18,6 +18,11 @@ namespace {
 
 using Info = eprosima::fastdds::dds::SampleInfo;
 
+// the tests' own topics, with the QoS class of the observer copies and of the stats
+constexpr Topic<SlaveStatePubSubType> kStateFast{"test/state_fast", TopicQos::kLatest};
+constexpr Topic<SlaveStatePubSubType> kStateSlow{"test/state_slow", TopicQos::kLatest};
+constexpr Topic<ServerStatsPubSubType> kStats{"test/stats", TopicQos::kReliableStream};
+
 SlaveState robot_state(std::uint64_t seq) {
   SlaveState s;
   s.seq(seq);
@@ -29,16 +34,14 @@ SlaveState robot_state(std::uint64_t seq) {
 
 TEST(RateLimitedPublisher, OfferAllocatesNothingAndCopiesComeAtTheirRate) {
   Participant p(ParticipantOptions{"loopback", test::domains::kRateLimitedUnit, "rlp"});
-  RateLimitedPublisher<SlaveStatePubSubType> pub(
-      p, {{"test/state_fast", 50.0}, {"test/state_slow", 5.0}});
+  RateLimitedPublisher<SlaveStatePubSubType> pub(p, {{kStateFast, 50.0}, {kStateSlow, 5.0}});
   std::atomic<std::uint64_t> fast{0}, slow{0}, newest_slow{0};
-  Reader<SlaveStatePubSubType> r_fast(p, "test/state_fast", TopicQos::kLatest,
+  Reader<SlaveStatePubSubType> r_fast(p, kStateFast,
                                       [&](const SlaveState&, const Info&) { fast.fetch_add(1); });
-  Reader<SlaveStatePubSubType> r_slow(p, "test/state_slow", TopicQos::kLatest,
-                                      [&](const SlaveState& s, const Info&) {
-                                        slow.fetch_add(1);
-                                        newest_slow.store(s.seq());
-                                      });
+  Reader<SlaveStatePubSubType> r_slow(p, kStateSlow, [&](const SlaveState& s, const Info&) {
+    slow.fetch_add(1);
+    newest_slow.store(s.seq());
+  });
   SlaveState s = robot_state(1);
   pub.offer(s);  // warm-up: the slot's sequences get their size
   const auto t0 = now_ns();
@@ -75,8 +78,7 @@ TEST(RateLimitedPublisher, OfferAllocatesNothingAndCopiesComeAtTheirRate) {
   // volatile); it gets the next copy within one period once the loop offers again
   std::atomic<std::uint64_t> late_seq{0};
   Reader<SlaveStatePubSubType> late(
-      p, "test/state_slow", TopicQos::kLatest,
-      [&](const SlaveState& x, const Info&) { late_seq.store(x.seq()); });
+      p, kStateSlow, [&](const SlaveState& x, const Info&) { late_seq.store(x.seq()); });
   const auto t_match = now_ns();
   while (seconds_between(t_match, now_ns()) < 10.0 && pub.matched(1) < 2) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -94,14 +96,12 @@ TEST(RateLimitedPublisher, OfferAllocatesNothingAndCopiesComeAtTheirRate) {
 
 TEST(RateLimitedPublisher, RateZeroWritesWhatIsOfferedWithWake) {
   Participant p(ParticipantOptions{"loopback", test::domains::kRateLimitedUnit + 1, "rlp0"});
-  RateLimitedPublisher<ServerStatsPubSubType> pub(p, {{"test/stats", 0.0}},
-                                                  TopicQos::kReliableStream);
+  RateLimitedPublisher<ServerStatsPubSubType> pub(p, {{kStats, 0.0}});
   std::atomic<std::uint64_t> got{0}, last_steps{0};
-  Reader<ServerStatsPubSubType> r(p, "test/stats", TopicQos::kReliableStream,
-                                  [&](const ServerStats& st, const Info&) {
-                                    got.fetch_add(1);
-                                    last_steps.store(st.steps());
-                                  });
+  Reader<ServerStatsPubSubType> r(p, kStats, [&](const ServerStats& st, const Info&) {
+    got.fetch_add(1);
+    last_steps.store(st.steps());
+  });
   const auto t0 = now_ns();
   while (seconds_between(t0, now_ns()) < 10.0 && pub.matched(0) < 1) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -123,7 +123,7 @@ TEST(RateLimitedPublisher, RateZeroWritesWhatIsOfferedWithWake) {
 TEST(RateLimitedPublisher, RejectsANegativeRate) {
   Participant p(ParticipantOptions{"loopback", test::domains::kRateLimitedUnit + 2, "rlpbad"});
   try {
-    RateLimitedPublisher<SlaveStatePubSubType> pub(p, {{"test/bad", -1.0}});
+    RateLimitedPublisher<SlaveStatePubSubType> pub(p, {{{"test/bad", TopicQos::kLatest}, -1.0}});
     FAIL() << "no error";
   } catch (const DdsError& e) {
     EXPECT_NE(std::string(e.what()).find("test/bad"), std::string::npos) << e.what();
