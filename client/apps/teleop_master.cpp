@@ -22,6 +22,7 @@
 #include <sstream>
 #include <thread>
 
+#include "client/control/controller_flags.hpp"
 #include "client/device/device_factory.hpp"
 #include "client/device/replay_device.hpp"
 #include "client/node/master_node.hpp"
@@ -51,17 +52,15 @@ struct Flags {
   std::optional<std::string> profile;
   std::string config_file;
   std::optional<std::string> contact_point;
-  std::optional<double> kps, kpm, bm, kf, alpha, beta, max_force;
   std::optional<std::string> delay, jitter, jitter_dist, loss, burst_loss, delay_spike, loss_window;
   std::optional<std::uint64_t> seed;
   bool reorder = false;
   std::optional<double> link_timeout;
   std::optional<std::string> driver_timeout;
-  std::optional<double> wave_b;
-  std::optional<std::string> tdpa_base;
-  bool wave_unmatched = false;
+  teleop::master::ControllerFlags controller;  ///< --scheme, --kps, ...: the parameter table's
   teleop::dds::NetworkFlags net_flags;
   bool progress = false, no_progress = false;
+  bool print_parameters = false;
 };
 
 /// The injected channel's flags (both directions).
@@ -84,7 +83,7 @@ void add_channel_flags(CLI::App& app, Flags& f) {
       ->check(integer_in(0.0, 9007199254740992.0));
 }
 
-/// The session's length and rate, the DDS flags and the controller's scheme.
+/// The session's length and rate, the DDS flags and the controller's flags.
 void add_session_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   using teleop::config::integer_in;
   using teleop::config::number_in;
@@ -103,19 +102,14 @@ void add_session_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f
   teleop::dds::add_network_flags(app, f.net_flags, "master");
   app.add_option("--config", f.config_file,
                  "YAML with `controller:`, `delay:` (both directions) mappings; flags win");
-  app.add_option("--scheme", o.controller.scheme, "bilateral control scheme")
-      ->check(CLI::IsMember(teleop::master::controller_names()))
-      ->capture_default_str();
-  app.add_option("--wave-impedance", f.wave_b,
-                 "wave-variables: wave impedance b [N s/m], 0-1e4 (0 = K_ps * 0.025 s)")
-      ->check(number_in(0.0, 1e4));
-  app.add_flag("--wave-unmatched", f.wave_unmatched,
-               "wave-variables: no matching damper at the slave (waves reflect)");
-  app.add_option("--tdpa-base", f.tdpa_base, "tdpa: base law")
-      ->check(CLI::IsMember({"position-position", "force-position"}));
+  // the controller's parameters with a flag (client/control/controller_params.hpp)
+  teleop::master::add_controller_flags(app, f.controller);
+  app.add_flag("--print-parameters", f.print_parameters,
+               "print the controller's parameter table (markdown) and exit")
+      ->group("");
 }
 
-/// The device, the operator's script, the contact point and the gains.
+/// The device, the operator's script and the contact point.
 void add_device_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   using teleop::config::number_in;
   app.add_option("--device", o.device,
@@ -146,19 +140,6 @@ void add_device_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f)
                  "slave point 'x,y,z' [m] of the master origin (default: top of the first "
                  "deformable body, else the floor under the tip); each within +-100")
       ->check(teleop::config::non_empty());
-  app.add_option("--kps", f.kps, "slave position gain K_ps [N/m], 0-1e6")
-      ->check(number_in(0.0, 1e6));
-  app.add_option("--kpm", f.kpm, "master position gain K_pm [N/m], 0-1e6 (0 = transparent choice)")
-      ->check(number_in(0.0, 1e6));
-  app.add_option("--bm", f.bm, "master damping B_m [N s/m], 0-1e4")->check(number_in(0.0, 1e4));
-  app.add_option("--force-gain", f.kf, "force-position reflection gain K_f [-], 0-100")
-      ->check(number_in(0.0, 100.0));
-  app.add_option("--position-scale", f.alpha, "slave metres per master metre [-], 0.001-1000")
-      ->check(number_in(1e-3, 1e3));
-  app.add_option("--force-scale", f.beta, "master newtons per slave newton [-], 0.001-1000")
-      ->check(number_in(1e-3, 1e3));
-  app.add_option("--max-force", f.max_force, "device force saturation [N], 0-1e4 (0 = the spec's)")
-      ->check(number_in(0.0, 1e4));
 }
 
 /// Declares every flag of teleop_master.
@@ -207,17 +188,14 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
 
 /// Validates the flags and folds the YAML config (if any) and the flags into `o`.
 /// @throws teleop::config::ConfigError naming the flag or file, the value and the range.
-/// --config FILE: the controller and the injected delays from YAML (flags then go on top; an
-/// explicit --scheme wins over the file's).
-void apply_config_file(const CLI::App& app, const Flags& f, teleop::master::MasterOptions& o) {
+/// --config FILE: the controller and the injected delays from YAML (flags then go on top).
+void apply_config_file(const Flags& f, teleop::master::MasterOptions& o) {
   if (f.config_file.empty()) return;
   const auto root = teleop::config::Node::load_file(f.config_file);
   root.reject_unknown_keys({"controller", "delay", "forward_delay", "backward_delay"});
-  const std::string scheme = o.controller.scheme;
   if (root.has("controller")) {
     o.controller = teleop::master::controller_params_from_yaml(root.at("controller"));
   }
-  if (app.count("--scheme")) o.controller.scheme = scheme;
   if (root.has("delay")) {
     o.forward = teleop::master::delay_config_from_yaml(root.at("delay"));
     o.backward = o.forward;
@@ -265,23 +243,6 @@ void apply_session_flags(const Flags& f, teleop::master::MasterOptions& o) {
   }
   if (!o.log_csv.empty()) teleop::prepare_output_file("--log", o.log_csv);
   if (!o.summary_json.empty()) teleop::prepare_output_file("--summary-json", o.summary_json);
-}
-
-/// The gain and scale flags over the controller's parameters (after --config), then checked.
-void apply_controller_flags(const Flags& f, teleop::master::MasterOptions& o) {
-  using teleop::config::check_flag;
-  if (f.kps) o.controller.slave_stiffness_n_per_m = *f.kps;
-  if (f.kpm) o.controller.master_stiffness_n_per_m = *f.kpm;
-  if (f.bm) o.controller.master_damping_ns_per_m = *f.bm;
-  if (f.kf) o.controller.force_gain = *f.kf;
-  if (f.alpha) o.controller.workspace.position_scale = *f.alpha;
-  if (f.beta) o.controller.workspace.force_scale = *f.beta;
-  if (f.max_force) o.controller.max_force_n = *f.max_force;
-  if (f.wave_b)
-    o.controller.wave_impedance_ns_per_m = check_flag("--wave-impedance", *f.wave_b, 0.0, 1e4);
-  if (f.wave_unmatched) o.controller.wave_matched = false;
-  if (f.tdpa_base) o.controller.tdpa_base = *f.tdpa_base;
-  o.controller.validate();
 }
 
 /// The injected channel's flags over both directions (after --config; backward's seed + 1):
@@ -340,8 +301,8 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   }
   // the trajectory is checked now, before any wait for a server (it is read again at the start)
   if (o.device == "replay") teleop::master::load_replay_csv(o.replay_file);
-  apply_config_file(app, f, o);  // YAML first, flags on top
-  apply_controller_flags(f, o);
+  apply_config_file(f, o);  // YAML first, flags on top
+  teleop::master::apply_controller_flags(f.controller, o.controller);
   apply_delay_flags(f, o);
   if (f.contact_point) {
     o.contact_point_m = parse_point("--contact-point", *f.contact_point);
@@ -368,6 +329,10 @@ int main(int argc, char** argv) {
   if (const int status = teleop::config::parse_command_line(app, "teleop_master", argc, argv);
       status >= 0) {
     return status;
+  }
+  if (f.print_parameters) {
+    std::cout << teleop::master::controller_params_markdown();
+    return 0;
   }
   try {
     apply_flags(app, f, o);

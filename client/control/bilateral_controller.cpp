@@ -3,98 +3,16 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <sstream>
-
-#include "common/control/slave_port.hpp"
 
 namespace teleop::master {
 
-using config::ConfigError;
-
 namespace {
-void check(const char* field, double v, double lo, double hi) {
-  config::check_range("controller", field, v, lo, hi);
-}
-
-std::string joined_names() {
-  std::string s;
-  for (const auto& n : controller_names()) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
-
 std::atomic<std::uint32_t> g_session_counter{0};
 }  // namespace
 
-void ControllerParams::validate() const {
-  const auto& names = controller_names();
-  if (std::find(names.begin(), names.end(), scheme) == names.end()) {
-    throw ConfigError("controller: scheme '" + scheme + "' is unknown (allowed: " + joined_names() +
-                      ")");
-  }
-  if (tdpa_base != "position-position" && tdpa_base != "force-position") {
-    throw ConfigError("controller: tdpa_base '" + tdpa_base +
-                      "' is unknown (allowed: position-position, force-position)");
-  }
-  check("wave_impedance_ns_per_m", wave_impedance_ns_per_m, 0.0, passivity::kMaxWaveImpedance);
-  check("mmt_blend_s", mmt_blend_s, 1e-4, 1.0);
-  check("contact_damping_ramp_s", contact_damping_ramp_s, 1e-4, 10.0);
-  check("mmt_energy_rate_w", mmt_energy_rate_w, 0.0, 10.0);
-  check("mmt_energy_burst_j", mmt_energy_burst_j, 0.0, 1.0);
-  check("wave_time_constant_s", wave_time_constant_s, 1e-4, 1.0);
-  check("wave_filter_hz", wave_filter_hz, 0.0, 1000.0);
-  check("slave_stiffness_n_per_m", slave_stiffness_n_per_m, 0.0, 1e6);
-  check("master_stiffness_n_per_m", master_stiffness_n_per_m, 0.0, 1e6);
-  check("master_damping_ns_per_m", master_damping_ns_per_m, 0.0, 1e4);
-  check("force_gain", force_gain, 0.0, 100.0);
-  check("max_force_n", max_force_n, 0.0, 1e4);
-  check("workspace.position_scale", workspace.position_scale, 1e-3, 1e3);
-  check("workspace.force_scale", workspace.force_scale, 1e-3, 1e3);
-  if (!workspace.offset_m.allFinite())
-    throw ConfigError("controller: workspace.offset_m not finite");
-}
-
-ControllerParams controller_params_from_yaml(const config::Node& node) {
-  ControllerParams p;
-  if (!node.defined()) return p;
-  node.reject_unknown_keys({"scheme", "workspace", "slave_stiffness_n_per_m",
-                            "master_stiffness_n_per_m", "master_damping_ns_per_m", "force_gain",
-                            "max_force_n", "send_velocity", "wave_impedance_ns_per_m",
-                            "wave_time_constant_s", "wave_matched", "wave_filter_hz", "tdpa_base",
-                            "mmt_blend_s", "mmt_energy_rate_w", "mmt_energy_burst_j",
-                            "contact_damping_ramp_s"});
-  p.scheme = node.choice_or("scheme", p.scheme, controller_names());
-  p.slave_stiffness_n_per_m =
-      node.number_or("slave_stiffness_n_per_m", p.slave_stiffness_n_per_m, 0.0, 1e6);
-  p.master_stiffness_n_per_m =
-      node.number_or("master_stiffness_n_per_m", p.master_stiffness_n_per_m, 0.0, 1e6);
-  p.master_damping_ns_per_m =
-      node.number_or("master_damping_ns_per_m", p.master_damping_ns_per_m, 0.0, 1e4);
-  p.force_gain = node.number_or("force_gain", p.force_gain, 0.0, 100.0);
-  p.max_force_n = node.number_or("max_force_n", p.max_force_n, 0.0, 1e4);
-  p.send_velocity = node.boolean_or("send_velocity", p.send_velocity);
-  p.wave_impedance_ns_per_m = node.number_or("wave_impedance_ns_per_m", p.wave_impedance_ns_per_m,
-                                             0.0, passivity::kMaxWaveImpedance);
-  p.wave_time_constant_s =
-      node.number_or("wave_time_constant_s", p.wave_time_constant_s, 1e-4, 1.0);
-  p.wave_matched = node.boolean_or("wave_matched", p.wave_matched);
-  p.wave_filter_hz = node.number_or("wave_filter_hz", p.wave_filter_hz, 0.0, 1000.0);
-  p.tdpa_base = node.choice_or("tdpa_base", p.tdpa_base, {"position-position", "force-position"});
-  p.mmt_blend_s = node.number_or("mmt_blend_s", p.mmt_blend_s, 1e-4, 1.0);
-  p.contact_damping_ramp_s =
-      node.number_or("contact_damping_ramp_s", p.contact_damping_ramp_s, 1e-4, 10.0);
-  p.mmt_energy_rate_w = node.number_or("mmt_energy_rate_w", p.mmt_energy_rate_w, 0.0, 10.0);
-  p.mmt_energy_burst_j = node.number_or("mmt_energy_burst_j", p.mmt_energy_burst_j, 0.0, 1.0);
-  if (node.has("workspace")) {
-    const config::Node w = node.at("workspace");
-    w.reject_unknown_keys({"offset_m", "position_scale", "force_scale"});
-    const auto off = w.numbers_or("offset_m", {0.0, 0.0, 0.0}, -1e3, 1e3);
-    if (off.size() != 3) w.fail("offset_m", "must be a list of 3 numbers [x, y, z]");
-    p.workspace.offset_m = Eigen::Vector3d(off[0], off[1], off[2]);
-    p.workspace.position_scale = w.number_or("position_scale", 1.0, 1e-3, 1e3);
-    p.workspace.force_scale = w.number_or("force_scale", 1.0, 1e-3, 1e3);
-  }
-  p.validate();
-  return p;
+const std::vector<ControllerParam>& BilateralController::parameters() {
+  static const std::vector<ControllerParam> none;
+  return none;
 }
 
 void BilateralController::configure(const ControllerParams& params, const DeviceSpec& spec) {

@@ -1,7 +1,8 @@
 #pragma once
-// Bilateral control schemes of the master side, chosen by name: the base class and its
-// parameters here; each scheme's law in client/control/schemes/ (one file each), the table of
-// names in client/control/schemes/registry.cpp.
+// Bilateral control schemes of the master side, chosen by name: the base class here, its
+// parameters in client/control/controller_params.hpp; each scheme's law (and its own
+// parameters) in client/control/schemes/ (one file each), the table of names in
+// client/control/schemes/registry.cpp.
 //
 // Lifecycle: configure(params, spec) validates and clamps gains against the DeviceSpec
 // (CHAI3D style: K <= max stiffness, B <= max damping); activate(reading) latches the start;
@@ -15,53 +16,12 @@
 #include <string>
 #include <vector>
 
+#include "client/control/controller_params.hpp"
 #include "client/device/haptic_device.hpp"
 #include "common/config/config.hpp"
 #include "common/control/bilateral_types.hpp"
 
 namespace teleop::master {
-
-/// Parameters of a bilateral controller. Defaults with units; 0 means "derive" where noted.
-struct ControllerParams {
-  /// "force-position" (the default: the design card's loop) | "position-position" |
-  /// "wave-variables" | "tdpa" | "model-mediated"
-  std::string scheme = "force-position";
-  WorkspaceMap workspace;                  ///< master -> slave map and force scaling
-  double slave_stiffness_n_per_m = 400.0;  ///< K_ps requested from the slave [N/m]
-  /// K_pm [N/m]; 0 = transparent choice alpha * beta * K_ps (felt force = beta * contact force
-  /// in steady contact). Clamped to the spec's max stiffness.
-  double master_stiffness_n_per_m = 0.0;
-  double master_damping_ns_per_m = 2.0;  ///< B_m [N s/m]; clamped to the spec's max damping
-  double force_gain = 1.0;               ///< K_f of force-position [-] (soft/hard contact feel)
-  double max_force_n = 0.0;              ///< output saturation [N]; 0 = spec.max_force_n
-  bool send_velocity = true;             ///< command the mapped master velocity too
-  /// Wave impedance b [N s/m] of wave-variables; 0 = derive K_ps * wave_time_constant_s.
-  /// Clamped so that the damping the device renders, alpha beta b, stays within the spec's
-  /// max damping.
-  double wave_impedance_ns_per_m = 0.0;
-  double wave_time_constant_s = 0.025;  ///< tau_b of the derived b = K_ps tau_b [s]
-  bool wave_matched = true;  ///< the slave terminates the channel with a damper b (no echo)
-  /// Cutoff of the first-order low-pass on the backward wave at the master [Hz] (0: off).
-  /// Passive (it never puts out more wave energy than it receives); it removes the echo a
-  /// stiff contact sends back and forth between the device and the slave.
-  double wave_filter_hz = 10.0;
-  /// Base law of tdpa: "position-position" | "force-position".
-  std::string tdpa_base = "position-position";
-  /// model-mediated: time constant of the blend toward each new model [s].
-  double mmt_blend_s = 0.02;
-  /// force-position and model-mediated: time to ramp B_m in at contact and out after it [s].
-  double contact_damping_ramp_s = 0.02;
-  /// model-mediated: energy model updates may add at the master per second [W], and at once [J].
-  double mmt_energy_rate_w = 0.05;
-  double mmt_energy_burst_j = 2e-4;
-
-  /// Throws ConfigError naming the field if a value is out of range.
-  void validate() const;
-};
-
-/// Reads controller parameters from a YAML mapping (keys as the field names; workspace as
-/// {offset_m: [x,y,z], position_scale, force_scale}). @throws ConfigError.
-ControllerParams controller_params_from_yaml(const config::Node& node);
 
 /// One controller cycle's result.
 struct ControlOutput {
@@ -95,6 +55,9 @@ class BilateralController {
 
   /// Scheme name ("position-position", ...).
   virtual const char* name() const = 0;
+  /// The scheme's own parameters (none here; a scheme with some declares its own parameters()
+  /// in its file, and the registry reads it).
+  static const std::vector<ControllerParam>& parameters();
   /// Scheme id (SCHEME_* constant).
   virtual SchemeId scheme() const = 0;
 

@@ -7,6 +7,29 @@
 
 namespace teleop::master {
 
+const std::vector<ControllerParam>& ModelMediatedController::parameters() {
+  using P = ControllerParams;
+  static const std::vector<ControllerParam> table = {
+      {.key = "mmt_blend_s",
+       .unit = "s",
+       .help = "time constant of the blend toward each new model",
+       .field = &P::mmt_blend_s,
+       .lo = 1e-4,
+       .hi = 1.0},
+      {.key = "mmt_energy_rate_w",
+       .unit = "W",
+       .help = "energy model updates may add at the master per second",
+       .field = &P::mmt_energy_rate_w,
+       .hi = 10.0},
+      {.key = "mmt_energy_burst_j",
+       .unit = "J",
+       .help = "energy model updates may add at the master at once",
+       .field = &P::mmt_energy_burst_j,
+       .hi = 1.0},
+  };
+  return table;
+}
+
 void ModelMediatedController::on_activate(const DeviceReading& /*master*/) {
   status_ = ModelStatus{};
   status_.budget_j = params_.mmt_energy_burst_j;

@@ -20,6 +20,8 @@ class ModelMediatedController final : public BilateralController {
  public:
   const char* name() const override { return "model-mediated"; }
   SchemeId scheme() const override { return SchemeId::kModelMediated; }
+  /// Its own parameters (client/control/controller_params.hpp), declared in its .cpp.
+  static const std::vector<ControllerParam>& parameters();
   /// The model rendered now (slave frame), and the energy bookkeeping of model updates.
   struct ModelStatus {
     mmt::LocalModel rendered;

@@ -1,5 +1,7 @@
-// The table of the master-side schemes: a name and a constructor each. A new scheme is a
-// file pair in this folder and one line here (docs/control.md, "Adding a scheme").
+// The table of the master-side schemes: a name, a constructor and the scheme's own parameters
+// each. A new scheme is a file pair in this folder and one line here (docs/control.md, "Adding
+// a scheme"). The controller's parameter table joins the common parameters and each scheme's.
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -27,6 +29,8 @@ static_assert(same_id(SchemeId::kModelMediated, SCHEME_MODEL_MEDIATED));
 struct Scheme {
   const char* name;
   std::unique_ptr<BilateralController> (*make)();
+  /// The scheme's own parameters (the class's static parameters()).
+  const std::vector<ControllerParam>& (*parameters)();
 };
 
 template <class Controller>
@@ -35,12 +39,20 @@ std::unique_ptr<BilateralController> make() {
 }
 
 constexpr Scheme kSchemes[] = {
-    {"position-position", &make<PositionPositionController>},
-    {"force-position", &make<ForcePositionController>},
-    {"wave-variables", &make<WaveVariablesController>},
-    {"tdpa", &make<TimeDomainPassivityController>},
-    {"model-mediated", &make<ModelMediatedController>},
+    {"position-position", &make<PositionPositionController>,
+     &PositionPositionController::parameters},
+    {"force-position", &make<ForcePositionController>, &ForcePositionController::parameters},
+    {"wave-variables", &make<WaveVariablesController>, &WaveVariablesController::parameters},
+    {"tdpa", &make<TimeDomainPassivityController>, &TimeDomainPassivityController::parameters},
+    {"model-mediated", &make<ModelMediatedController>, &ModelMediatedController::parameters},
 };
+
+[[noreturn]] void refuse_scheme(const std::string& scheme) {
+  std::string allowed;
+  for (const Scheme& s : kSchemes) allowed += (allowed.empty() ? "" : ", ") + std::string(s.name);
+  throw config::ConfigError("controller: scheme '" + scheme + "' is unknown (allowed: " + allowed +
+                            ")");
+}
 
 }  // namespace
 
@@ -51,6 +63,30 @@ const std::vector<std::string>& controller_names() {
     return n;
   }();
   return names;
+}
+
+const std::vector<ControllerParam>& controller_param_table() {
+  static const std::vector<ControllerParam> table = [] {
+    std::vector<ControllerParam> all = common_controller_params();
+    for (const Scheme& s : kSchemes) {
+      for (ControllerParam d : s.parameters()) {
+        d.scheme = s.name;
+        all.push_back(std::move(d));
+      }
+    }
+    return all;
+  }();
+  return table;
+}
+
+std::vector<ControllerParam> scheme_params(const std::string& scheme) {
+  const std::vector<std::string>& names = controller_names();
+  if (std::find(names.begin(), names.end(), scheme) == names.end()) refuse_scheme(scheme);
+  std::vector<ControllerParam> own;
+  for (const ControllerParam& d : controller_param_table()) {
+    if (d.scheme == scheme) own.push_back(d);
+  }
+  return own;
 }
 
 std::unique_ptr<BilateralController> make_controller(const std::string& scheme) {
@@ -64,10 +100,7 @@ std::unique_ptr<BilateralController> make_controller(const std::string& scheme) 
       return controller;
     }
   }
-  std::string allowed;
-  for (const Scheme& s : kSchemes) allowed += (allowed.empty() ? "" : ", ") + std::string(s.name);
-  throw config::ConfigError("controller: scheme '" + scheme + "' is unknown (allowed: " + allowed +
-                            ")");
+  refuse_scheme(scheme);
 }
 
 }  // namespace teleop::master

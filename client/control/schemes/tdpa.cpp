@@ -4,6 +4,17 @@
 
 namespace teleop::master {
 
+const std::vector<ControllerParam>& TimeDomainPassivityController::parameters() {
+  static const std::vector<ControllerParam> table = {
+      {.key = "tdpa_base",
+       .flag = "--tdpa-base",
+       .help = "base law",
+       .field = &ControllerParams::tdpa_base,
+       .choices = {"position-position", "force-position"}},
+  };
+  return table;
+}
+
 void TimeDomainPassivityController::on_configure() {
   force_position_ = params_.tdpa_base == "force-position";
 }

@@ -16,6 +16,8 @@ class TimeDomainPassivityController final : public BilateralController {
  public:
   const char* name() const override { return "tdpa"; }
   SchemeId scheme() const override { return SchemeId::kTimeDomainPassivity; }
+  /// Its own parameters (client/control/controller_params.hpp), declared in its .cpp.
+  static const std::vector<ControllerParam>& parameters();
   double environment_force_gain() const override {
     return force_position_ ? params_.force_gain : 1.0;
   }

@@ -15,6 +15,37 @@ std::string number_text(double v) {
 }
 }  // namespace
 
+const std::vector<ControllerParam>& WaveVariablesController::parameters() {
+  using P = ControllerParams;
+  static const std::vector<ControllerParam> table = {
+      {.key = "wave_impedance_ns_per_m",
+       .flag = "--wave-impedance",
+       .unit = "N s/m",
+       .help = "wave impedance b (0 = K_ps * wave_time_constant_s; clamped so that the damping "
+               "the device renders, alpha beta b, stays within its max damping)",
+       .field = &P::wave_impedance_ns_per_m,
+       .hi = passivity::kMaxWaveImpedance},
+      {.key = "wave_time_constant_s",
+       .unit = "s",
+       .help = "tau_b of the derived b = K_ps tau_b",
+       .field = &P::wave_time_constant_s,
+       .lo = 1e-4,
+       .hi = 1.0},
+      {.key = "wave_matched",
+       .flag = "--wave-unmatched",
+       .help = "the slave terminates the channel with a matching damper b (no echo)",
+       .field = &P::wave_matched,
+       .switch_sets = false,
+       .switch_help = "no matching damper at the slave (waves reflect)"},
+      {.key = "wave_filter_hz",
+       .unit = "Hz",
+       .help = "cutoff of the passive low-pass on the backward wave at the master (0 = off)",
+       .field = &P::wave_filter_hz,
+       .hi = 1000.0},
+  };
+  return table;
+}
+
 void WaveVariablesController::on_configure() {
   const WorkspaceMap& w = params_.workspace;
   const double derived = params_.slave_stiffness_n_per_m * params_.wave_time_constant_s;

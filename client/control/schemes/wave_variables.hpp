@@ -16,6 +16,8 @@ class WaveVariablesController final : public BilateralController {
  public:
   const char* name() const override { return "wave-variables"; }
   SchemeId scheme() const override { return SchemeId::kWaveVariables; }
+  /// Its own parameters (client/control/controller_params.hpp), declared in its .cpp.
+  static const std::vector<ControllerParam>& parameters();
   /// Effective wave impedance b after derivation and clamping [N s/m].
   double wave_impedance_ns_per_m() const override { return b_; }
   /// The master port (waves, integrals, energies).
