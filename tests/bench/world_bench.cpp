@@ -181,8 +181,9 @@ int world(const CommandArgs& args) {
     return Eigen::Vector3d(above + (top + Eigen::Vector3d(0, 0, 0.05) - above) *
                                        std::min(1.0, 2.0 * k / n));
   });
+  const int press_steps = n / 3;  // the press reaches its depth in the first third
   bench.run("pressing", n, [&](int k) {
-    const double depth = 0.02 * std::min(1.0, 1.0 * k / static_cast<double>(n / 3));
+    const double depth = 0.02 * std::min(1.0, 1.0 * k / static_cast<double>(press_steps));
     return Eigen::Vector3d(top + Eigen::Vector3d(0, 0, 0.05 - depth));
   });
   progress.finish();
