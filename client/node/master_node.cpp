@@ -31,6 +31,7 @@
 #include "common/dds/async_writer.hpp"
 #include "common/dds/contact_point.hpp"
 #include "common/dds/endpoint.hpp"
+#include "common/dds/event_publisher.hpp"
 #include "common/dds/rate_limited_publisher.hpp"
 #include "common/dds/teleop_idl.hpp"
 #include "common/util/clock.hpp"
@@ -158,7 +159,7 @@ struct MasterNode::Impl {
   // network (a TCP link that is cut or congested blocks the DataWriter, not the loop)
   DdsSlaveLink::CommandWriter command_writer;
   dds::LatestWriter<MasterStatePubSubType> state_writer;
-  dds::QueuedWriter<EventPubSubType, 64> event_writer;
+  dds::EventPublisher event_publisher;
   // observers' rate-limited copies of MasterState, written from their own thread: the haptic
   // loop's cost does not grow with the number of observers (docs/topics.md)
   dds::RateLimitedPublisher<MasterStatePubSubType> state_views;
@@ -174,7 +175,6 @@ struct MasterNode::Impl {
   dds::Mailbox<DeviceState> device_box;
   DeviceDriverLatch device_driver;  // one driver at a time on teleop/device_state
   bool device_foreign_reported = false;
-  std::uint64_t event_seq = 0;
   std::unique_ptr<CycleLog> log;
   // the server's health: ServerStats counters and fault events received during the session
   std::unique_ptr<dds::Reader<ServerStatsPubSubType>> stats_reader;
@@ -201,18 +201,13 @@ struct MasterNode::Impl {
         participant(o.dds),
         command_writer(participant, dds::topics::kMasterCommand),
         state_writer(participant, dds::topics::kMasterState),
-        event_writer(participant, dds::topics::kEvents),
+        event_publisher(participant, "master"),
         state_views(participant,
                     {{dds::topics::kMasterStateView, dds::topics::kViewRateHz},
                      {dds::topics::kMasterStateMonitor, dds::topics::kMonitorRateHz}}) {
     dds::ProfileKind kind = dds::ProfileKind::kUdp;
     (void)dds::participant_qos(o.dds, &kind);
     tcp_client = kind == dds::ProfileKind::kTcp;
-    Event
-        event_prototype;  // the strings' capacity: the loop's copies into the ring do not allocate
-    event_prototype.source(std::string(32, ' '));
-    event_prototype.message(std::string(256, ' '));
-    event_writer.prime(event_prototype);
 
     state_reader = std::make_unique<dds::Reader<SlaveStatePubSubType>>(
         participant, dds::topics::kSlaveState,
@@ -254,19 +249,16 @@ struct MasterNode::Impl {
             server_fault_events.fetch_add(1);
           }
           // the server clamped a K_ps (position_gain_n_per_m) of this session's commands
-          if (e.source() == "server" &&
-              e.kind() == static_cast<std::uint8_t>(sim::EventKind::kLimit) &&
-              std::strstr(e.message().c_str(), "position_gain_n_per_m") != nullptr &&
+          if (e.source() == "server" && e.kind() == EVENT_LIMIT &&
+              e.subject() == EVENT_SUBJECT_POSITION_GAIN && e.session() == master_session &&
               now_ns() >= session_start_ns.load()) {
             std::lock_guard<std::mutex> lock(owner_event_mutex);
             gain_clamp_event = e.message().c_str();
           }
-          // the server's word on this master's ownership (it names the session in hex)
-          char mine[16];
-          std::snprintf(mine, sizeof(mine), "0x%08x", master_session);
-          if (e.source() == "server" &&
-              e.kind() == static_cast<std::uint8_t>(sim::EventKind::kOwnership) &&
-              std::strstr(e.message().c_str(), mine) != nullptr) {
+          // the server's word on this master's ownership: a decision about it, or one that
+          // took the slave from it or refused another master because it holds the slave
+          if (e.source() == "server" && e.kind() == EVENT_OWNERSHIP &&
+              (e.session() == master_session || e.other_session() == master_session)) {
             std::lock_guard<std::mutex> lock(owner_event_mutex);
             owner_event = e.message().c_str();
           }
@@ -284,16 +276,13 @@ struct MasterNode::Impl {
     }
   }
 
+  /// Publishes one of this master's events (about its own session) and prints a warning or an
+  /// error unless quiet.
   void event(std::uint8_t kind, std::uint8_t severity, const std::string& msg, double value) {
-    Event e;
-    e.seq(++event_seq);
-    e.time_ns(now_ns());
-    e.source("master");
-    e.kind(kind);
-    e.severity(severity);
-    e.message(msg);
-    e.value(value);
-    event_writer.write(e);
+    sim::EventTags tags;
+    tags.session = master_session;
+    event_publisher.publish(static_cast<sim::EventKind>(kind), static_cast<sim::Severity>(severity),
+                            msg.c_str(), value, tags);
     if (!options.quiet && severity > 0) std::cerr << "teleop_master: " << msg << "\n";
   }
 
@@ -606,11 +595,11 @@ struct MasterNode::Impl {
     rep.commands_dropped = command_writer.dropped();
     rep.command_write_failures = command_writer.failures();
     rep.states_replaced = state_writer.replaced();
-    event_writer.flush(0.5);
-    rep.events_dropped = event_writer.dropped();
+    event_publisher.flush(0.5);
+    rep.events_dropped = event_publisher.dropped();
     experiment->flush(0.5);
     rep.experiment_writes = experiment->written();
-    rep.write_failures = state_writer.failures() + event_writer.failures() +
+    rep.write_failures = state_writer.failures() + event_publisher.failures() +
                          (device_command_writer ? device_command_writer->failures() : 0) +
                          tuning->write_failures() + experiment->failures();
   }

@@ -1,7 +1,8 @@
 #pragma once
-// The event kinds of teleop/events once: the physics loop's sim::EventKind is checked here,
-// value by value, against the EVENT_* constants of idl/Teleop.idl, and event_kind_name() is
-// the one word for each kind that every observer (monitor, viewer, bridge, recordings) shows.
+// The event kinds of teleop/events once: the physics loop's sim::EventKind (and EventSubject) is
+// checked here, value by value, against the EVENT_* constants of idl/Teleop.idl, and
+// event_kind_name() is the one word for each kind that every observer (monitor, viewer, bridge,
+// recordings) shows.
 // Header-only.
 #include <cstdint>
 
@@ -27,6 +28,9 @@ static_assert(detail::same_kind(sim::EventKind::kLimit, EVENT_LIMIT));
 static_assert(detail::same_kind(sim::EventKind::kSafety, EVENT_SAFETY));
 static_assert(detail::same_kind(sim::EventKind::kOwnership, EVENT_OWNERSHIP));
 static_assert(detail::same_kind(sim::EventKind::kTuning, EVENT_TUNING));
+static_assert(static_cast<std::uint8_t>(sim::EventSubject::kNone) == EVENT_SUBJECT_NONE);
+static_assert(static_cast<std::uint8_t>(sim::EventSubject::kPositionGain) ==
+              EVENT_SUBJECT_POSITION_GAIN);
 
 /// The word observers show for an event kind ("info" for an unknown one).
 constexpr const char* event_kind_name(std::uint8_t kind) {

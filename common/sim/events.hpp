@@ -26,11 +26,25 @@ enum class EventKind : std::uint8_t {
 
 enum class Severity : std::uint8_t { kInfo = 0, kWarning = 1, kError = 2 };
 
+/// What within its kind an event is about, for the events a program acts on (EVENT_SUBJECT_*).
+enum class EventSubject : std::uint8_t {
+  kNone = 0,
+  kPositionGain = 1,  ///< kLimit: a command's K_ps was clamped to what the slave holds
+};
+
+/// Who and what an event is about: the fields a program matches instead of the message text.
+struct EventTags {
+  std::uint32_t session = 0;        ///< the master session it is about (0: none)
+  std::uint32_t other_session = 0;  ///< ownership: the other master of the decision (0: none)
+  EventSubject subject = EventSubject::kNone;
+};
+
 struct SimEvent {
   EventKind kind = EventKind::kInfo;
   Severity severity = Severity::kInfo;
   double value = 0.0;       ///< kind-specific number
   double sim_time_s = 0.0;  ///< when it happened [s]
+  EventTags tags;
   char message[128] = {};
 };
 
@@ -40,8 +54,8 @@ class EventQueue {
  public:
   static constexpr std::size_t kCapacity = 256;
 
-  void push(EventKind kind, Severity severity, double sim_time_s, double value,
-            const char* message) {
+  void push(EventKind kind, Severity severity, double sim_time_s, double value, const char* message,
+            EventTags tags = {}) {
     SimEvent& e = ring_[(head_ + count_) % kCapacity];
     if (count_ == kCapacity) {
       head_ = (head_ + 1) % kCapacity;
@@ -53,6 +67,7 @@ class EventQueue {
     e.severity = severity;
     e.value = value;
     e.sim_time_s = sim_time_s;
+    e.tags = tags;
     std::snprintf(e.message, sizeof(e.message), "%s", message);
   }
 

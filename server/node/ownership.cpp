@@ -62,6 +62,7 @@ bool Ownership::first_refusal_of(const WriterId& writer) {
 Admit Ownership::admit(const WriterId& writer, std::uint32_t session, const char* name,
                        std::uint64_t seq, bool release, std::int64_t now_ns) {
   notable_ = false;
+  tags_ = {};
   if (owned_ && writer == owner_) {
     last_ns_ = now_ns;
     if (!release) {
@@ -70,6 +71,7 @@ Admit Ownership::admit(const WriterId& writer, std::uint32_t session, const char
     }
     owned_ = false;
     notable_ = true;
+    tags_.session = session_;
     std::snprintf(message_.data(), message_.size(),
                   "master '%s' (session 0x%08x) released the slave after %llu commands",
                   owner_name_.data(), session_, static_cast<unsigned long long>(owner_received_));
@@ -79,6 +81,7 @@ Admit Ownership::admit(const WriterId& writer, std::uint32_t session, const char
   if (!owned_) {
     take(writer, session, name, seq, now_ns);
     notable_ = true;
+    tags_.session = session_;
     std::snprintf(message_.data(), message_.size(), "master '%s' (session 0x%08x) owns the slave",
                   owner_name_.data(), session_);
     return Admit::kAcquired;
@@ -90,6 +93,8 @@ Admit Ownership::admit(const WriterId& writer, std::uint32_t session, const char
     const std::uint32_t previous_session = session_;
     take(writer, session, name, seq, now_ns);
     notable_ = true;
+    tags_.session = session_;
+    tags_.other_session = previous_session;
     std::snprintf(message_.data(), message_.size(),
                   "master '%s' (session 0x%08x) took the slave over from '%s' (session 0x%08x), "
                   "silent for %.0f ms",
@@ -100,6 +105,8 @@ Admit Ownership::admit(const WriterId& writer, std::uint32_t session, const char
   ++refused_;
   if (first_refusal_of(writer)) {
     notable_ = true;
+    tags_.session = session;
+    tags_.other_session = session_;
     std::snprintf(message_.data(), message_.size(),
                   "refused commands from master '%s' (session 0x%08x): the slave is owned by "
                   "'%s' (session 0x%08x)",

@@ -13,6 +13,8 @@
 #include <array>
 #include <cstdint>
 
+#include "common/sim/events.hpp"
+
 namespace teleop::server {
 
 /// A command writer: the DDS publication handle (16 bytes, the writer's GUID).
@@ -47,6 +49,9 @@ class Ownership {
   /// the first refusal of a writer); message() then says it.
   bool notable() const { return notable_; }
   const char* message() const { return message_.data(); }
+  /// Whom the notable decision is about: `session` the master that took, released, took over or
+  /// was refused the slave; `other_session` the owner it was taken from or that holds it.
+  const sim::EventTags& tags() const { return tags_; }
 
   /// Session of the owner, 0 when nobody owns the slave or the owner fell silent past the
   /// watchdog at `now_ns` (the slave is then free to take).
@@ -87,6 +92,7 @@ class Ownership {
   std::size_t refused_count_ = 0;
   bool notable_ = false;
   std::array<char, 256> message_{};
+  sim::EventTags tags_;
 };
 
 }  // namespace teleop::server

@@ -6,17 +6,6 @@
 
 namespace teleop::server {
 
-sim::WorldCommand to_world_command(const SlaveCommand& c) {
-  sim::WorldCommand w;
-  w.position_m = c.position_m;
-  w.orientation = c.orientation;
-  w.velocity_mps = c.velocity_mps;
-  w.angular_velocity_radps = c.angular_velocity_radps;
-  w.kp_override_n_per_m = c.position_gain_n_per_m;
-  w.hold = !c.enabled;
-  return w;
-}
-
 ServerCycle::ServerCycle(const sim::WorldModel& model, double dt_s, double command_timeout_s)
     : model_(model),
       data_(sim::make_world_data(model)),
@@ -90,7 +79,7 @@ void ServerCycle::on_command(const SlaveCommand& c, std::int64_t receive_ns,
                              std::int64_t send_time_ns) {
   send_time_ns_ = send_time_ns;
   command_ = c;
-  world_cmd_ = to_world_command(c);
+  world_cmd_ = sim::to_world_command(c);
   // a K_ps the slave cannot hold at its rate is clamped to the largest it can, and counted
   const bool clamp = world_cmd_.kp_override_n_per_m > max_gain_n_per_m_;
   if (clamp) {
@@ -117,8 +106,10 @@ void ServerCycle::step(std::int64_t t_ns, sim::EventQueue& events) {
                   "command position_gain_n_per_m %.6g N/m clamped: the slave holds 0-%.6g N/m "
                   "at its rate",
                   command_.position_gain_n_per_m, max_gain_n_per_m_);
+    sim::EventTags tags;
+    tags.subject = sim::EventSubject::kPositionGain;
     events.push(sim::EventKind::kLimit, sim::Severity::kWarning, sim_time_s,
-                command_.position_gain_n_per_m, text);
+                command_.position_gain_n_per_m, text, tags);
   }
   // watchdog: hold the slave when commands stop arriving
   const bool stale = !have_command_ || (t_ns - receive_ns_) > timeout_ns_;

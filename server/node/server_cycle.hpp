@@ -19,9 +19,6 @@
 
 namespace teleop::server {
 
-/// The world's input for a slave command (hold when it is disabled).
-sim::WorldCommand to_world_command(const SlaveCommand& c);
-
 class ServerCycle {
  public:
   /// `model` must outlive the cycle. dt_s: physics period [s]; command_timeout_s: hold the

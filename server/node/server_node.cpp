@@ -10,6 +10,7 @@
 
 #include "common/dds/async_writer.hpp"
 #include "common/dds/endpoint.hpp"
+#include "common/dds/event_publisher.hpp"
 #include "common/dds/guid_text.hpp"
 #include "common/dds/log_summary.hpp"
 #include "common/dds/rate_limited_publisher.hpp"
@@ -51,6 +52,7 @@ struct OwnerMailbox {
   std::array<std::array<char, 256>, kMessages> messages{};
   std::array<double, kMessages> values{};
   std::array<sim::Severity, kMessages> severities{};
+  std::array<sim::EventTags, kMessages> tags{};
   std::size_t pending = 0;
 };
 
@@ -70,7 +72,7 @@ struct ServerNode::Impl {
   // the step loop's writes go through network threads: the loop never waits on the network
   dds::QueuedWriter<SlaveStatePubSubType, 64> state_writer;
   dds::Writer<SceneDescriptionPubSubType> scene_writer;
-  dds::QueuedWriter<EventPubSubType, 128> event_writer;
+  dds::EventPublisher event_publisher;
   dds::Writer<MeshTopologyPubSubType> topology_writer;
   dds::Writer<MeshFramePubSubType> frame_writer;
   dds::Writer<MeshFramePubSubType> frame_monitor_writer;
@@ -91,7 +93,7 @@ struct ServerNode::Impl {
   std::unique_ptr<dds::Reader<MasterCommandPubSubType>> command_reader;
   // loop state
   sim::EventQueue events;
-  std::uint64_t event_seq = 0;
+  std::uint32_t command_session = 0;  // MasterCommand.master_session of the newest command fed
   std::uint64_t faults = 0;
   SampleWindow step_us{1 << 16};
   SampleWindow step_us_all{1 << 20};
@@ -114,7 +116,7 @@ struct ServerNode::Impl {
         participant(o.dds),
         state_writer(participant, dds::topics::kSlaveState),
         scene_writer(participant, dds::topics::kScene),
-        event_writer(participant, dds::topics::kEvents),
+        event_publisher(participant, "server"),
         topology_writer(participant, dds::topics::kMeshTopology),
         frame_writer(participant, dds::topics::kMeshFrame),
         frame_monitor_writer(participant, dds::topics::kMeshFrameMonitor),
@@ -129,10 +131,6 @@ struct ServerNode::Impl {
     state_prototype.joint_velocity_radps().assign(16, 0.0);
     state_prototype.joint_torque_nm().assign(16, 0.0);
     state_writer.prime(state_prototype);
-    Event event_prototype;
-    event_prototype.source(std::string(32, ' '));
-    event_prototype.message(std::string(256, ' '));
-    event_writer.prime(event_prototype);
     command_reader = std::make_unique<dds::Reader<MasterCommandPubSubType>>(
         participant, dds::topics::kMasterCommand,
         [this](const MasterCommand& c, const eprosima::fastdds::dds::SampleInfo& info) {
@@ -167,6 +165,7 @@ struct ServerNode::Impl {
       if (gate.ownership().notable() && owner_box.pending < OwnerMailbox::kMessages) {
         std::snprintf(owner_box.messages[owner_box.pending].data(), 256, "%s", own.message());
         owner_box.values[owner_box.pending] = static_cast<double>(own.changes());
+        owner_box.tags[owner_box.pending] = own.tags();
         owner_box.severities[owner_box.pending] =
             gate.admit() == Admit::kRefused || gate.admit() == Admit::kTakenOver
                 ? sim::Severity::kWarning
@@ -184,15 +183,7 @@ struct ServerNode::Impl {
   }
 
   void publish_event(const sim::SimEvent& e) {
-    Event ev;
-    ev.seq(++event_seq);
-    ev.time_ns(now_ns());
-    ev.source("server");
-    ev.kind(static_cast<std::uint8_t>(e.kind));
-    ev.severity(static_cast<std::uint8_t>(e.severity));
-    ev.message(e.message);
-    ev.value(e.value);
-    event_writer.write(ev);
+    event_publisher.publish(e);
     if (!options.quiet && e.severity != sim::Severity::kInfo) {
       std::cerr << "teleop_server: event: " << e.message << "\n";
     }
@@ -253,7 +244,7 @@ struct ServerNode::Impl {
       ownership_changes = owner_box.changes;
       for (std::size_t i = 0; i < owner_box.pending; ++i) {
         events.push(sim::EventKind::kOwnership, owner_box.severities[i], cycle.output().sim_time_s,
-                    owner_box.values[i], owner_box.messages[i].data());
+                    owner_box.values[i], owner_box.messages[i].data(), owner_box.tags[i]);
       }
       owner_box.pending = 0;
     }
@@ -283,6 +274,8 @@ struct ServerNode::Impl {
     sim::SimEvent ev;
     while (events.pop(ev)) {
       if (ev.kind == sim::EventKind::kFault) ++faults;
+      // the cycle clamps the newest command's K_ps: that command's master is who it is about
+      if (ev.tags.subject == sim::EventSubject::kPositionGain) ev.tags.session = command_session;
       publish_event(ev);
     }
   }
@@ -375,6 +368,7 @@ struct ServerNode::Impl {
       if (options.duration_s > 0 && seconds_between(t_start, t0) >= options.duration_s) break;
       if (mailbox.take_if_newer(rc, seen)) {
         cycle.on_command(from_idl(rc.cmd), rc.receive_ns, rc.cmd.send_time_ns());
+        command_session = rc.cmd.master_session();
       }
       take_owner(t0);
       cycle.step(t0, events);
@@ -401,7 +395,7 @@ struct ServerNode::Impl {
     }
     command_reader->stop();
     state_writer.flush(0.5);  // what the loop handed over goes out before the summary
-    event_writer.flush(0.5);
+    event_publisher.flush(0.5);
     finish(loop, seconds_between(t_start, now_ns()));
     return 0;
   }
@@ -478,9 +472,10 @@ struct ServerNode::Impl {
     f["watchdog_trips"] = cycle.watchdog_trips();
     f["commands_gain_clamped"] = cycle.gains_clamped();
     f["max_position_gain_n_per_m"] = json_number(cycle.max_gain_n_per_m());
-    f["network_threads"] = {{"states_dropped", state_writer.dropped()},
-                            {"events_dropped", event_writer.dropped()},
-                            {"write_failures", state_writer.failures() + event_writer.failures()}};
+    f["network_threads"] = {
+        {"states_dropped", state_writer.dropped()},
+        {"events_dropped", event_publisher.dropped()},
+        {"write_failures", state_writer.failures() + event_publisher.failures()}};
     f["faults"] = faults;
     write_text_file(options.summary_json, json_document(f));
   }

@@ -9,18 +9,6 @@ namespace teleop::sim {
 
 namespace {
 
-ToolInput tool_input(const WorldCommand& cmd, const Eigen::Vector3d& external_force_n) {
-  ToolInput in;
-  in.target_position_m = cmd.position_m;
-  in.target_orientation = cmd.orientation;
-  in.target_velocity_mps = cmd.velocity_mps;
-  in.target_angular_velocity_radps = cmd.angular_velocity_radps;
-  in.kp_override_n_per_m = cmd.kp_override_n_per_m;
-  in.hold = cmd.hold;
-  in.external_force_n = external_force_n;
-  return in;
-}
-
 /// The slave's own state into the output (tip, planes' contact, joints).
 void read_slave(const WorldData& d, WorldOutput& out) {
   if (d.robot) {

@@ -31,25 +31,12 @@
 
 #include "common/sim/events.hpp"
 #include "server/robot/robot_sim.hpp"
+#include "server/world/world_command.hpp"
 #include "server/world/world_model.hpp"
 
 namespace teleop::sim {
 
 constexpr int kMaxJoints = 8;
-
-/// One validated command, in the slave (world) frame.
-struct WorldCommand {
-  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< relative to home
-  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
-  Eigen::Vector3d angular_velocity_radps = Eigen::Vector3d::Zero();
-  double kp_override_n_per_m = 0.0;  ///< >0 overrides the slave's position gain [N/m]
-  bool hold = false;                 ///< hold the current pose (watchdog, clutch)
-  /// Tool slave only (experiments; never from the network): a prescribed probe. The tip is
-  /// put at position_m with velocity_mps first, then the contacts are resolved along its path
-  /// and the bodies step; its planes do not act on it, the bodies' reaction is its force.
-  bool kinematic = false;
-};
 
 /// State of the slave after a step.
 struct WorldOutput {

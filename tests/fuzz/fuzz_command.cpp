@@ -1,7 +1,8 @@
 // libFuzzer target: a MasterCommand as the server receives it, from arbitrary bytes: the DDS
 // payload (encapsulation + CDR) deserialized by the type the server's reader registers
 // (dds::CheckedType<MasterCommandPubSubType>), then the server's validation
-// (validate_command, validate_passivity) and from_idl(). Properties checked:
+// (validate_command, validate_passivity), from_idl() and the server's conversions on to the tool
+// slave (server/world/world_command.hpp). Properties checked:
 //   - deserialization of any bytes returns (true or false) and never throws;
 //   - a command validate_command() accepts converts to a SlaveCommand whose every field is
 //     finite, whose quaternion is a unit quaternion, and whose position lies in the workspace;
@@ -16,6 +17,7 @@
 #include "common/dds/teleop_idl.hpp"
 #include "common/sim/tool.hpp"
 #include "server/node/command_validation.hpp"
+#include "server/world/world_command.hpp"
 #include "teleop/idl/TeleopPubSubTypes.h"
 
 namespace {
@@ -48,13 +50,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   teleop::sim::ToolModel tool;
   tool.gravity_mps2 = Eigen::Vector3d(0, 0, -9.81);
   teleop::sim::ToolState state = teleop::sim::tool_state_at(Eigen::Vector3d(0.6, 0.0, 0.7));
-  teleop::sim::ToolInput in;
-  in.target_position_m = c.position_m;
-  in.target_orientation = c.orientation;
-  in.target_velocity_mps = c.velocity_mps;
-  in.target_angular_velocity_radps = c.angular_velocity_radps;
-  in.kp_override_n_per_m = c.position_gain_n_per_m;
-  in.hold = !c.enabled;
+  // the server's conversions: command -> world command -> the tool's input
+  const teleop::sim::ToolInput in =
+      teleop::sim::tool_input(teleop::sim::to_world_command(c), Eigen::Vector3d::Zero());
   teleop::sim::tool_step(tool, state, in, 1e-3);
   check(state.position_m.allFinite() && state.velocity_mps.allFinite() &&
         state.orientation.coeffs().allFinite() && state.angular_velocity_radps.allFinite());

@@ -113,6 +113,13 @@ std::uint64_t le(const std::uint8_t* p, int n) {
   return v;
 }
 
+/// A status answering a client's request. On a loaded machine a client may also be told, once a
+/// second, that it reads too slowly (frames dropped): that is not an answer.
+bool answers_a_request(const Json::Value& s) {
+  return s["op"].asString() == "status" &&
+         s["message"].asString().find("reads too slowly") == std::string::npos;
+}
+
 TEST(Bridge, ServesEveryTopicAsCdrWithOmgidlSchemas) {
   const std::string d = std::to_string(domains::kBridgeSession);
   Process server(kServerBinary, {"--domain", d, "--duration", "60", "--quiet"}, "bridge_srv");
@@ -148,7 +155,7 @@ TEST(Bridge, ServesEveryTopicAsCdrWithOmgidlSchemas) {
     ASSERT_TRUE(f) << "the bridge stopped sending";
     if (f->opcode == 1) {
       const Json::Value s = parse(f->text());
-      if (s["op"].asString() == "status") statuses.push_back(f->text());
+      if (answers_a_request(s)) statuses.push_back(f->text());
       continue;
     }
     ASSERT_EQ(f->opcode, 2);

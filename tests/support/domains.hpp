@@ -89,6 +89,7 @@ inline constexpr int kOversizedUnit = 191;       // log_summary_test: oversized 
 inline constexpr int kObserverLimit = 192;       // observer_limit_test: the server counts observers
 inline constexpr int kSecureShortLived = 194;    // security_test: make_security.sh --hours 2
 inline constexpr int kParticipantRefused = 225;  // participant_test: a profile Fast DDS refuses
+inline constexpr int kEventPublisherUnit = 227;  // event_publisher_test: an event round trip
 // 195-199: reserved for network tests (196: the observers runs of docs/results.md)
 // 215, 216, 217: deploy/make_docs.sh live, live-fifo, live-nice (the live sessions of
 // docs/results.md, "Live session: the loops on real machines"); 218-219: reserved for them

@@ -66,7 +66,7 @@ TEST(CommandValidation, ConvertsToAWorldCommand) {
   auto c = valid(1);
   c.orientation_wxyz() = {2, 0, 0, 0};  // not unit: normalised
   c.enabled(false);
-  const auto w = to_world_command(from_idl(c));
+  const auto w = sim::to_world_command(from_idl(c));
   EXPECT_DOUBLE_EQ(w.orientation.norm(), 1.0);
   EXPECT_TRUE(w.hold);
   EXPECT_EQ(w.position_m, Eigen::Vector3d(0.1, 0.2, 0.3));

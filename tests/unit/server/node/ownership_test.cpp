@@ -86,6 +86,28 @@ TEST(Ownership, ASilentOwnerIsTakenOverOnlyAfterTheWatchdog) {
   EXPECT_EQ(p.admit(writer(1), 0xa, "A", 2, false, 5000 * kMs), Admit::kOwner);
 }
 
+// Each notable decision names its masters in fields (what a master matches on, never the text):
+// the one it is about, and the other one of a takeover or a refusal.
+TEST(Ownership, EachDecisionNamesTheSessionsItIsAbout) {
+  Ownership o(500 * kMs);
+  o.admit(writer(1), 0xa, "A", 1, false, 0);
+  EXPECT_EQ(o.tags().session, 0xau);
+  EXPECT_EQ(o.tags().other_session, 0u);
+  o.admit(writer(1), 0xa, "A", 2, false, 1 * kMs);  // not notable: no one named
+  EXPECT_FALSE(o.notable());
+  EXPECT_EQ(o.tags().session, 0u);
+  o.admit(writer(2), 0xb, "B", 1, false, 2 * kMs);  // refused: B, held by A
+  EXPECT_EQ(o.tags().session, 0xbu);
+  EXPECT_EQ(o.tags().other_session, 0xau);
+  o.admit(writer(2), 0xb, "B", 2, false, 600 * kMs);  // A silent: B takes over from A
+  EXPECT_EQ(o.tags().session, 0xbu);
+  EXPECT_EQ(o.tags().other_session, 0xau);
+  o.admit(writer(2), 0xb, "B", 3, true, 601 * kMs);  // B releases
+  EXPECT_EQ(o.tags().session, 0xbu);
+  EXPECT_EQ(o.tags().other_session, 0u);
+  EXPECT_EQ(o.tags().subject, sim::EventSubject::kNone);
+}
+
 MasterCommand command(std::uint64_t seq, std::uint32_t session) {
   MasterCommand c;
   c.seq(seq);

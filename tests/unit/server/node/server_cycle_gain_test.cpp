@@ -38,6 +38,8 @@ TEST(ServerCycleGain, AKpsTheSlaveCannotHoldIsClampedCountedAndReported) {
       if (e.kind == sim::EventKind::kLimit) {
         ++limit_events;
         EXPECT_NE(std::string(e.message).find("position_gain_n_per_m"), std::string::npos);
+        // what a master matches on: the subject (the server node adds the command's session)
+        EXPECT_EQ(e.tags.subject, sim::EventSubject::kPositionGain);
       }
     }
     if (i >= 2800) {
