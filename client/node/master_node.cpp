@@ -27,6 +27,7 @@
 #include "client/node/master_report.hpp"
 #include "client/node/server_binding.hpp"
 #include "client/node/server_health.hpp"
+#include "client/node/server_word.hpp"
 #include "client/node/tuning_endpoint.hpp"
 #include "common/dds/async_writer.hpp"
 #include "common/dds/contact_point.hpp"
@@ -180,15 +181,9 @@ struct MasterNode::Impl {
   std::unique_ptr<dds::Reader<ServerStatsPubSubType>> stats_reader;
   std::unique_ptr<dds::Reader<EventPubSubType>> events_reader;
   dds::Mailbox<ServerStats> stats_box;
-  std::atomic<std::int64_t> session_start_ns{std::numeric_limits<std::int64_t>::max()};
-  std::atomic<std::uint64_t> server_fault_events{0};
+  ServerWord server_word{master_session};  // faults, ownership and clamps the server reported
   ServerHealth health;
   std::uint64_t stats_seen = 0;
-  // ownership: the newest server event about this master's session; the server's word that it
-  // clamped the K_ps this session asked for (its limit event, "" none)
-  std::mutex owner_event_mutex;
-  std::string owner_event;
-  std::string gain_clamp_event;
   bool second_server_reported = false;
 
   std::unique_ptr<TuningEndpoint> tuning;  // live tuning (teleop/tuning, teleop/tuning_status)
@@ -241,27 +236,7 @@ struct MasterNode::Impl {
                               info.sample_identity.writer_guid().guidPrefix)) {
             return;
           }
-          // a fault on the server during this session (the event log's history from before
-          // the session arrives earlier and is not counted)
-          if (e.source() == "server" &&
-              e.kind() == static_cast<std::uint8_t>(sim::EventKind::kFault) &&
-              now_ns() >= session_start_ns.load()) {
-            server_fault_events.fetch_add(1);
-          }
-          // the server clamped a K_ps (position_gain_n_per_m) of this session's commands
-          if (e.source() == "server" && e.kind() == EVENT_LIMIT &&
-              e.subject() == EVENT_SUBJECT_POSITION_GAIN && e.session() == master_session &&
-              now_ns() >= session_start_ns.load()) {
-            std::lock_guard<std::mutex> lock(owner_event_mutex);
-            gain_clamp_event = e.message().c_str();
-          }
-          // the server's word on this master's ownership: a decision about it, or one that
-          // took the slave from it or refused another master because it holds the slave
-          if (e.source() == "server" && e.kind() == EVENT_OWNERSHIP &&
-              (e.session() == master_session || e.other_session() == master_session)) {
-            std::lock_guard<std::mutex> lock(owner_event_mutex);
-            owner_event = e.message().c_str();
-          }
+          server_word.on_event(e, now_ns());
         });
     tuning = std::make_unique<TuningEndpoint>(participant, master_session, o.accept_tuning);
     experiment = std::make_unique<ExperimentPublisher>(participant);
@@ -422,11 +397,8 @@ struct MasterNode::Impl {
     rep.rtt_ms = summarize(link.rtt().rtt_ms().snapshot());
     count_network_threads(rep);
     rep.jitter_us = summarize(loop.lateness_us().snapshot());
-    {
-      std::lock_guard<std::mutex> lock(owner_event_mutex);
-      rep.owner_message = owner_event;
-      rep.server_gain_clamp = gain_clamp_event;
-    }
+    rep.owner_message = server_word.ownership();
+    rep.server_gain_clamp = server_word.gain_clamp();
   }
 
   /// The scene as the session begins into scene_at_start; false when none came.
@@ -675,7 +647,7 @@ struct MasterNode::Impl {
                   st.commands_rejected_nan() + st.commands_rejected_workspace() +
                       st.commands_rejected_stale() + st.commands_rejected_passivity());
     }
-    return std::max<std::uint64_t>(health.faults.total(), server_fault_events.load());
+    return std::max<std::uint64_t>(health.faults.total(), server_word.faults());
   }
 
   /// Before the first cycle: the loop's pace and length, the thread's scheduling, the server's
@@ -704,7 +676,7 @@ struct MasterNode::Impl {
       }
     }
     update_health();  // the baseline: the server's counts from before this session
-    session_start_ns.store(s.t0);
+    server_word.start_session(s.t0);
     s.cycle.start_homing(s.t0_s, tip0, options.homing_s);
     tuning->publish_status(s.cycle, s.t0);
     experiment->begin(s.cycle, master_session, options.name, options.device, options.rate_hz);
