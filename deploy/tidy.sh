@@ -102,8 +102,14 @@ if headers:
     cc = json.load(open(os.path.join(build, "compile_commands.json")))
     obj_to_src = {}
     for e in cc:
-        if "output" in e:
-            obj_to_src[os.path.normpath(e["output"])] = os.path.realpath(
+        # the object file: the "output" key where CMake writes it, else the command's -o
+        out = e.get("output")
+        if out is None:
+            words = e.get("command", "").split()
+            if "-o" in words[:-1]:
+                out = words[words.index("-o") + 1]
+        if out:
+            obj_to_src[os.path.normpath(out)] = os.path.realpath(
                 os.path.join(e["directory"], e["file"]))
     includers = {}
     src = None

@@ -79,9 +79,11 @@ class Summary {
   std::map<std::string, Tally> tallies_;
 };
 
+/// The one summary, never destroyed: Fast DDS's logging thread may hand it an entry while the
+/// program's statics are being destroyed at exit (a function-local static would be gone by then).
 Summary& summary() {
-  static Summary s;
-  return s;
+  static Summary* s = new Summary();  // intentionally never deleted
+  return *s;
 }
 
 class SummaryConsumer : public eprosima::fastdds::dds::LogConsumer {
