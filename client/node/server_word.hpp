@@ -2,7 +2,7 @@
 // What the server this master is bound to said about it on teleop/events during its session,
 // read from the events' fields (Event.kind, subject, session, other_session), never from their
 // text: the faults it reported, its newest word on this master's ownership, and a clamp of the
-// K_ps this session asked for. The events reader feeds it (after the binding dropped other
+// K_ps the master's session asked for. The events reader feeds it (after the binding dropped other
 // participants' events); the loop and the report read it. Thread-safe.
 #include <atomic>
 #include <cstdint>
@@ -19,7 +19,7 @@ class ServerWord {
   explicit ServerWord(std::uint32_t master_session) : session_(master_session) {}
 
   /// The session begins at `t_ns`: faults and clamps from before (the event log's history of
-  /// the server, kept for late joiners) are not this session's.
+  /// the server, kept for late joiners) are not the session's.
   void start_session(std::int64_t t_ns) { start_ns_.store(t_ns); }
 
   /// One event of the bound server's participant, received at `now_ns`. A master's event
@@ -48,7 +48,7 @@ class ServerWord {
     std::lock_guard<std::mutex> lock(mutex_);
     return ownership_;
   }
-  /// The server's message that it clamped this session's K_ps ("" none).
+  /// The server's message that it clamped the session's K_ps ("" none).
   std::string gain_clamp() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return gain_clamp_;

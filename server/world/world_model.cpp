@@ -160,8 +160,7 @@ double tool_limit_step_s(const WorldModel& s, std::string* why) {
       const std::string k_name = k.scene_field ? k.field + ".stiffness_n_per_m" : k.field + " k";
       const std::string c_name = k.scene_field ? k.field + ".damping_ns_per_m" : k.field + " c";
       *why = "in contact, its PD (tool.kp_n_per_m " + num(t.kp_n_per_m) + " N/m) plus " + k_name +
-             " " + num(k.stiffness_n_per_m) + " N/m and " + c_name + " " +
-             num(k.damping_ns_per_m) +
+             " " + num(k.stiffness_n_per_m) + " N/m and " + c_name + " " + num(k.damping_ns_per_m) +
              " N s/m, both applied explicitly, is stable for h^2 (kp + "
              "k_contact) / m + 2 h (c + c_contact) / m <= 4 (tool.mass_kg " +
              num(t.mass_kg) + ", c = tool.kd_ns_per_m + tool.linear_damping_ns_per_m " + num(c) +

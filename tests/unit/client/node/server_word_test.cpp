@@ -1,5 +1,5 @@
 // What a master takes from its server's events (client/node/server_word.hpp): by field only,
-// this session's faults and K_ps clamp, and every ownership decision that names it.
+// the session's faults and K_ps clamp, and every ownership decision that names the master.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -44,7 +44,7 @@ TEST(ServerWord, FaultsAndClampsCountFromTheSessionsStartAndOnlyItsOwn) {
 
 TEST(ServerWord, OwnershipDecisionsThatNameThisMasterEitherWay) {
   ServerWord w(kMine);
-  // the text names this session in hex, the fields do not: not about it
+  // the text names the master's session in hex, the fields do not: not about it
   w.on_event(event("server", EVENT_OWNERSHIP, "master 'x' (session 0x00001234) owns", 0x5u), 1);
   EXPECT_EQ(w.ownership(), "");
   w.on_event(event("server", EVENT_OWNERSHIP, "owns", kMine), 2);  // before the session too
