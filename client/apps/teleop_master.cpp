@@ -6,7 +6,8 @@
 //                 [--wave-impedance B --wave-unmatched] [--tdpa-base position-position|...]
 //                 [--script press-slip]
 //                 [--delay 50ms --jitter 5ms --jitter-dist uniform|normal --reorder
-//                  --loss 1% --burst-loss P_GB,P_BG --seed N] [--config master.yaml]
+//                  --loss 1% --burst-loss P_GB,P_BG --delay-spike AT,DUR,EXTRA
+//                  --loss-window AT,DUR,P --seed N --channel-capacity N] [--config master.yaml]
 //                 [--duration S] [--samples N] [--domain D] [--profile P]
 //                 [--log FILE.csv] [--summary-json FILE]
 //
@@ -25,6 +26,7 @@
 #include "client/control/controller_flags.hpp"
 #include "client/device/device_factory.hpp"
 #include "client/device/replay_device.hpp"
+#include "client/net/delay_flags.hpp"
 #include "client/node/master_node.hpp"
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
@@ -52,36 +54,15 @@ struct Flags {
   std::optional<std::string> profile;
   std::string config_file;
   std::optional<std::string> contact_point;
-  std::optional<std::string> delay, jitter, jitter_dist, loss, burst_loss, delay_spike, loss_window;
-  std::optional<std::uint64_t> seed;
-  bool reorder = false;
+  teleop::master::DelayFlags delay;  ///< --delay, --jitter, ...: the channel's parameter table
   std::optional<double> link_timeout;
   std::optional<std::string> driver_timeout;
   teleop::master::ControllerFlags controller;  ///< --scheme, --kps, ...: the parameter table's
   teleop::dds::NetworkFlags net_flags;
   bool progress = false, no_progress = false;
   bool print_parameters = false;
+  bool print_delay_parameters = false;
 };
-
-/// The injected channel's flags (both directions).
-void add_channel_flags(CLI::App& app, Flags& f) {
-  using teleop::config::integer_in;
-  app.add_option("--delay", f.delay,
-                 "one-way injected delay, each direction, with its unit (e.g. 50ms)");
-  app.add_option("--jitter", f.jitter, "jitter scale, with its unit (e.g. 5ms)");
-  app.add_option("--jitter-dist", f.jitter_dist, "uniform | normal");
-  app.add_flag("--reorder", f.reorder, "let jittered samples overtake each other");
-  app.add_option("--loss", f.loss, "Bernoulli loss probability (e.g. 1%)");
-  app.add_option("--burst-loss", f.burst_loss, "Gilbert-Elliott P_GB,P_BG (e.g. 0.01,0.2)");
-  app.add_option("--delay-spike", f.delay_spike,
-                 "AT,DURATION,EXTRA: samples sent in [AT, AT+DURATION) after the first get EXTRA "
-                 "more delay, both directions (e.g. 3s,1s,1s)");
-  app.add_option("--loss-window", f.loss_window,
-                 "AT,DURATION,P: samples sent in [AT, AT+DURATION) after the first are lost with "
-                 "probability P, both directions (e.g. 3s,1s,50%)");
-  app.add_option("--seed", f.seed, "random seed of the channels (backward uses seed + 1), 0-2^53")
-      ->check(integer_in(0.0, 9007199254740992.0));
-}
 
 /// The session's length and rate, the DDS flags and the controller's flags.
 void add_session_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
@@ -106,6 +87,9 @@ void add_session_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f
   teleop::master::add_controller_flags(app, f.controller);
   app.add_flag("--print-parameters", f.print_parameters,
                "print the controller's parameter table (markdown) and exit")
+      ->group("");
+  app.add_flag("--print-delay-parameters", f.print_delay_parameters,
+               "print the injected channel's parameter table (markdown) and exit")
       ->group("");
 }
 
@@ -147,7 +131,7 @@ void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
   using teleop::config::number_in;
   add_session_flags(app, o, f);
   add_device_flags(app, o, f);
-  add_channel_flags(app, f);
+  teleop::master::add_delay_flags(app, f.delay, "both directions");
   app.add_option("--homing", o.homing_s, "time to bring the slave to the script start [s], 0-60")
       ->check(number_in(0.0, 60.0))
       ->capture_default_str();
@@ -245,30 +229,12 @@ void apply_session_flags(const Flags& f, teleop::master::MasterOptions& o) {
   if (!o.summary_json.empty()) teleop::prepare_output_file("--summary-json", o.summary_json);
 }
 
-/// The injected channel's flags over both directions (after --config; backward's seed + 1):
-/// each value CLI11 read goes to the delay model's one parser of that flag.
-void apply_delay_flags(const Flags& f, teleop::master::MasterOptions& o) {
-  bool any = false;
-  auto apply = [&](const char* flag, const std::optional<std::string>& v) {
-    if (!v) return;
-    teleop::master::apply_delay_flag(o.forward, flag, *v);
-    teleop::master::apply_delay_flag(o.backward, flag, *v);
-    any = true;
-  };
-  apply("--delay", f.delay);
-  apply("--jitter", f.jitter);
-  apply("--jitter-dist", f.jitter_dist);
-  apply("--loss", f.loss);
-  apply("--burst-loss", f.burst_loss);
-  apply("--delay-spike", f.delay_spike);
-  apply("--loss-window", f.loss_window);
-  if (f.seed) apply("--seed", std::to_string(*f.seed));
-  if (f.reorder) apply("--reorder", std::string());
-  if (any) {
-    o.forward.validate();
-    o.backward.validate();
-    o.backward.seed = o.forward.seed + 1;
-  }
+/// The injected channel's flags over both directions (after --config; backward's seed + 1).
+void apply_channel_flags(const Flags& f, teleop::master::MasterOptions& o) {
+  if (!f.delay.any()) return;
+  teleop::master::apply_delay_flags(f.delay, o.forward);
+  teleop::master::apply_delay_flags(f.delay, o.backward);
+  o.backward.seed = o.forward.seed + 1;
 }
 
 /// --link-timeout and --driver-timeout (the latter with its unit).
@@ -303,7 +269,7 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
   if (o.device == "replay") teleop::master::load_replay_csv(o.replay_file);
   apply_config_file(f, o);  // YAML first, flags on top
   teleop::master::apply_controller_flags(f.controller, o.controller);
-  apply_delay_flags(f, o);
+  apply_channel_flags(f, o);
   if (f.contact_point) {
     o.contact_point_m = parse_point("--contact-point", *f.contact_point);
     o.has_contact_point = true;
@@ -332,6 +298,10 @@ int main(int argc, char** argv) {
   }
   if (f.print_parameters) {
     std::cout << teleop::master::controller_params_markdown();
+    return 0;
+  }
+  if (f.print_delay_parameters) {
+    std::cout << teleop::master::delay_params_markdown();
     return 0;
   }
   try {

@@ -13,6 +13,7 @@
 #include "client/control/bilateral_controller.hpp"
 #include "client/device/operator_model.hpp"
 #include "client/net/delay_config.hpp"
+#include "client/net/delay_params.hpp"
 #include "common/harness/in_process.hpp"
 #include "common/util/csv.hpp"
 
@@ -49,6 +50,15 @@ Axis number_axis(const char* key, double lo, double hi, bool point, bool world,
   return a;
 }
 
+/// An axis of a channel parameter's number `part` (client/net/delay_params.hpp): the table's
+/// range times `scale` (1e3: an axis in ms); where the table excludes its lower end, the run's
+/// check refuses it (check_run).
+Axis channel_axis(const char* key, const char* param, std::size_t part, double scale,
+                  double RunParams::*field) {
+  const master::DelayPart& p = master::delay_param(param).parts.at(part);
+  return number_axis(key, p.lo * scale, p.hi * scale, true, true, field);
+}
+
 Axis text_axis(const char* key, std::vector<std::string> allowed, bool point, bool world,
                std::string RunParams::*field) {
   Axis a{key, Axis::Kind::kText, 0.0, 0.0, std::move(allowed), point, world};
@@ -72,14 +82,15 @@ const std::vector<Axis>& axes() {
         number_axis("tremor_m", 0.0, 0.01, true, true, &P::tremor_m),
         text_axis("scheme", scheme_labels(), true, true, &P::scheme),
         number_axis("gain", 0.0, 1e5, true, true, &P::gain),
-        number_axis("delay_ms", 0.0, 10000.0, true, true, &P::delay_ms),
-        number_axis("jitter_ms", 0.0, 1000.0, true, true, &P::jitter_ms),
-        number_axis("loss", 0.0, 1.0, true, true, &P::loss),
-        number_axis("burst_p_gb", 0.0, 1.0, true, true, &P::burst_p_gb),
-        number_axis("burst_p_bg", 1e-6, 1.0, true, true, &P::burst_p_bg),
+        channel_axis("delay_ms", "delay", 0, 1e3, &P::delay_ms),
+        channel_axis("jitter_ms", "jitter", 0, 1e3, &P::jitter_ms),
+        channel_axis("loss", "loss", 0, 1.0, &P::loss),
+        channel_axis("burst_p_gb", "burst_loss", 0, 1.0, &P::burst_p_gb),
+        channel_axis("burst_p_bg", "burst_loss", 1, 1.0, &P::burst_p_bg),
         number_axis("max_force_n", 0.0, 1000.0, true, true, &P::max_force_n),
     };
-    Axis seed{"seed", Axis::Kind::kInteger, 0.0, 9007199254740992.0, {}, true, true};
+    const master::DelayParam& seed_param = master::delay_param("seed");
+    Axis seed{"seed", Axis::Kind::kInteger, seed_param.lo, seed_param.hi, {}, true, true};
     seed.integer = &P::seed;
     v.push_back(seed);
     return v;

@@ -67,22 +67,6 @@ std::set<std::string> names_in(const std::vector<ControllerParam>& table,
 
 }  // namespace
 
-std::string param_number_text(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%g", v);
-  std::string s = buf;
-  const auto e = s.find('e');
-  if (e == std::string::npos) return s;
-  std::string exponent = s.substr(e + 1);
-  std::string sign;
-  if (!exponent.empty() && (exponent[0] == '+' || exponent[0] == '-')) {
-    if (exponent[0] == '-') sign = "-";
-    exponent.erase(0, 1);
-  }
-  exponent.erase(0, std::min(exponent.find_first_not_of('0'), exponent.size() - 1));
-  return s.substr(0, e) + "e" + sign + exponent;
-}
-
 ParamKind ControllerParam::kind() const {
   return std::visit(
       [](auto member) {

@@ -134,8 +134,7 @@ ControllerParams controller_params_from_yaml(const config::Node& node);
 /// holds between `<!-- controller-parameters -->` and `<!-- /controller-parameters -->`.
 std::string controller_params_markdown();
 
-/// A number as the table writes it: shortest of %g, exponent without "+" or leading zeros
-/// ("1e6", "0.001", "1e-4" as "0.0001").
-std::string param_number_text(double v);
+/// A number as the table writes it (common/config/config.hpp).
+using config::param_number_text;
 
 }  // namespace teleop::master

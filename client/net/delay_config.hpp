@@ -1,12 +1,14 @@
 #pragma once
 // Configuration of an injected network impairment (one direction): constant delay, jitter,
-// reordering, Bernoulli loss and Gilbert-Elliott burst loss, with a seed. Parsed from
-// command-line flags or a YAML mapping, validated at the edge (teleop::config::ConfigError).
+// reordering, Bernoulli loss and Gilbert-Elliott burst loss, scheduled faults, with a seed.
+// Each parameter (YAML key, flag, unit, range, help) is declared once in the table of
+// client/net/delay_params.hpp, which validate(), the flag parser and the YAML loader read:
 //
-// Flags:   --delay 50ms --jitter 5ms --jitter-dist uniform|normal --reorder
-//          --loss 1% --burst-loss p_gb,p_bg --seed N --channel-capacity N
+// Flags:   --delay 50ms --jitter 5ms --jitter-dist uniform|normal --reorder --loss 1%
+//          --burst-loss p_gb,p_bg --delay-spike at,duration,extra --loss-window at,duration,loss
+//          --seed N --channel-capacity N
 // YAML:    {delay: 50ms, jitter: 5ms, jitter_dist: normal, reorder: false, loss: 1%,
-//           burst_loss: [0.01, 0.3], seed: 7, capacity: 4096}
+//           burst_loss: [0.01, 0.3], delay_spike: [3s, 1s, 1s], seed: 7, capacity: 4096}
 // A duration flag needs its unit (s, ms, us, ns; "--delay 5" is refused, "0" alone is
 // allowed); in YAML a plain number is seconds. Probabilities may be plain numbers in [0, 1].
 #include <cstddef>
@@ -43,7 +45,8 @@ struct DelayConfig {
   double spike_at_s = 0.0, spike_duration_s = 0.0, spike_extra_s = 0.0;
   double window_at_s = 0.0, window_duration_s = 0.0, window_loss = 0.0;
 
-  /// Throws ConfigError if a field is out of range.
+  /// Checks every field against delay_param_table(). @throws ConfigError naming the parameter,
+  /// the value and the allowed range.
   void validate() const;
   /// One-line human-readable summary ("delay 50 ms, jitter 5 ms uniform, loss 1 %, ...").
   std::string describe() const;

@@ -100,6 +100,10 @@ class Node {
   std::string path_;
 };
 
+/// A number as the parameter tables write it: shortest of %g, exponent without "+" or leading
+/// zeros ("1e6", "0.001", "1e-4" as "0.0001").
+std::string param_number_text(double v);
+
 /// Formats a range for messages: "[lo, hi]".
 std::string range_text(double lo, double hi);
 
