@@ -66,6 +66,27 @@ inline void to_idl(const mmt::LocalModel& l, teleop::SlaveState& m) {
   m.model_damping_ns_per_m(l.damping_ns_per_m);
 }
 
+/// SlaveSample -> the fields of teleop::SlaveState the master reads back with from_idl (its
+/// inverse); `command_send_time_ns` is the echoed command's stamp as it arrived [ns]. The fields
+/// SlaveSample does not hold (joints, server clock, ownership, ...) are the caller's.
+inline void to_idl(const SlaveSample& s, std::int64_t command_send_time_ns, teleop::SlaveState& m) {
+  m.seq(s.seq);
+  m.command_seq(s.command_seq);
+  m.command_send_time_ns(command_send_time_ns);
+  m.sim_time_s(s.sim_time_s);
+  detail::put3(m.tip_position_m(), s.position_m);
+  detail::put_q(m.tip_orientation_wxyz(), s.orientation);
+  detail::put3(m.tip_linear_velocity_mps(), s.velocity_mps);
+  detail::put3(m.contact_force_n(), s.contact_force_n);
+  m.penetration_m(s.penetration_m);
+  m.deformation_m(s.deformation_m);
+  m.in_contact(s.in_contact);
+  m.passivity_session(s.passivity_session);
+  for_each_port([&m](const auto& p) { to_wire(p, m); }, s);
+  m.passivity_dissipated_j(s.passivity_dissipated_j);
+  to_idl(s.model, m);
+}
+
 /// teleop::SlaveState -> SlaveSample (valid = true). Non-finite fields make it invalid: the
 /// node should then drop it (and count a fault) rather than hand it to the channel.
 inline SlaveSample from_idl(const teleop::SlaveState& m) {

@@ -3,7 +3,6 @@
 #include <cmath>
 #include <utility>
 
-#include "common/control/slave_port.hpp"
 #include "server/node/scene_objects.hpp"
 
 namespace teleop::server {
@@ -58,16 +57,7 @@ void WorldSlave::step(const SlaveCommand& cmd, double dt_s) {
     ++events_total_;
   }
 
-  // what the master decodes from the server's SlaveState (server/node/state_message.cpp)
-  SlaveSample& s = sample_;
-  copy_tip_state(cycle_->output(), s);
-  s.seq = cycle_->steps();
-  s.command_seq = cmd.seq;
-  s.command_send_time_s = cmd.send_time_s;
-  s.valid = true;
-  passivity::apply_port_report(cycle_->port().report(), s);
-  if (!cycle_->port_active()) s.passivity_session = 0;
-  s.model = cycle_->local_model();
+  slave_sample(*cycle_, sample_);  // what the master decodes from the server's SlaveState
 }
 
 }  // namespace teleop::server

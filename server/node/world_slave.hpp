@@ -17,22 +17,9 @@
 
 #include "common/harness/in_process.hpp"
 #include "server/node/server_cycle.hpp"
+#include "server/node/slave_sample.hpp"
 
 namespace teleop::server {
-
-/// Copies the tip's state after a world step into `s`: position, orientation, velocity, contact
-/// force, penetration, deformation, in_contact and the simulated time (the other fields of `s`
-/// are left as they are).
-inline void copy_tip_state(const sim::WorldOutput& o, SlaveSample& s) {
-  s.position_m = o.tip_position_m;
-  s.orientation = o.tip_orientation;
-  s.velocity_mps = o.tip_velocity_mps;
-  s.contact_force_n = o.contact_force_n;
-  s.penetration_m = o.penetration_m;
-  s.deformation_m = o.deformation_m;
-  s.in_contact = o.in_contact;
-  s.sim_time_s = o.sim_time_s;
-}
 
 class WorldSlave final : public harness::InProcessSlave {
  public:

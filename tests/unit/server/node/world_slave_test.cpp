@@ -93,6 +93,9 @@ TEST(WorldSlave, ItsSampleIsWhatTheMasterDecodesFromSlaveState) {
     ASSERT_EQ(mine.seq, wire.seq);
     ASSERT_EQ(mine.command_seq, wire.command_seq);
     ASSERT_NEAR(mine.command_send_time_s, wire.command_send_time_s, 1e-9);
+    ASSERT_NEAR(mine.orientation.angularDistance(wire.orientation), 0.0, 1e-12);
+    ASSERT_EQ(mine.deformation_m, wire.deformation_m);
+    ASSERT_EQ(mine.passivity_dissipated_j, wire.passivity_dissipated_j);
     ASSERT_EQ(mine.position_m, wire.position_m);
     ASSERT_EQ(mine.velocity_mps, wire.velocity_mps);
     ASSERT_EQ(mine.contact_force_n, wire.contact_force_n);
