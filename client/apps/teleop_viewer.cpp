@@ -16,16 +16,18 @@
 // teleop/master_state_view, written off the loops' threads) and the mesh frames (60 Hz), so any
 // number of viewers costs the 1 kHz loops nothing; --full-rate reads the 1 kHz topics.
 //
-// Threads: one DDS reader thread per topic copies each sample into ViewerData (short mutex, no
-// allocation after warm-up); the render loop copies what changed once per frame and draws at the
-// display rate (vsync) or --fps.
+// Threads: one DDS reader thread per topic (viewer::ViewerLink) copies each sample into the
+// ViewerSession's data store (short mutex, no allocation after warm-up); the render loop here
+// copies what changed once per frame and draws at the display rate (vsync) or --fps
+// (viewer::FramePacer). Everything but the window, OpenGL and Dear ImGui lives in the viewer
+// library (client/viewer/), unit-tested without a display.
 //
 // Drive (--drive, docs/tools.md "Drive it by hand"): the viewer is also the master's haptic
 // device (teleop/device_state at 1 kHz from a 1 kHz thread; teleop_master --device external)
 // and its tuning tool (teleop/tuning; teleop_master --accept-tuning). Drag the ring at the
 // master's hand with the left button, or hold the arrows and PgUp/PgDn; the force the master
 // renders is drawn as an arrow from the ring and as a bar. --input-script FILE plays the same
-// input from a file (client/viewer/input_script.hpp), through the same handlers.
+// input from a file (client/viewer/input_script.hpp) through the same viewer::DriveInput.
 //
 // Exit status: 0 done, 1 runtime failure (no display, OpenGL, DDS, file), 2 bad command line,
 // 3 snapshot: the data never became complete within --timeout.
@@ -35,16 +37,15 @@
 #include <algorithm>
 #include <cfloat>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
-#include <filesystem>
 #include <iostream>
 #include <memory>
-#include <mutex>
-#include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "client/viewer/gl/gl_api.hpp"
@@ -55,115 +56,42 @@
 #include <imgui.h>
 
 #include "client/viewer/camera.hpp"
-#include "client/viewer/drive_session.hpp"
+#include "client/viewer/drive_input.hpp"
+#include "client/viewer/frame_timing.hpp"
 #include "client/viewer/gl/offscreen.hpp"
 #include "client/viewer/gl/renderer.hpp"
 #include "client/viewer/input_script.hpp"
 #include "client/viewer/png.hpp"
+#include "client/viewer/script_player.hpp"
 #include "client/viewer/ui/drive_panel.hpp"
 #include "client/viewer/ui/panel.hpp"
 #include "client/viewer/viewer_data.hpp"
+#include "client/viewer/viewer_link.hpp"
+#include "client/viewer/viewer_options.hpp"
+#include "client/viewer/viewer_session.hpp"
 #include "common/config/config.hpp"
 #include "common/config/flags.hpp"
-#include "common/dds/endpoint.hpp"
-#include "common/dds/guid_text.hpp"
 #include "common/dds/network_flags.hpp"
-#include "common/dds/observer_topics.hpp"
 #include "common/util/clock.hpp"
 #include "common/util/files.hpp"
 #include "common/util/signals.hpp"
-#include "common/util/stats.hpp"
-#include "teleop/idl/TeleopPubSubTypes.h"
 
 namespace {
 
 using namespace teleop;
-using viewer::ViewerData;
-using viewer::ViewerView;
+using viewer::ViewerOptions;
 
 constexpr int kExitRuntime = 1;
 constexpr int kExitUsage = 2;
 constexpr int kExitNoData = 3;
 
-struct Options {
-  std::optional<int> domain;
-  std::optional<std::string> profile;
-  std::string snapshot;  ///< headless: write this PNG and exit
-  double after_s = 2.0;
-  double timeout_s = 30.0;
-  int width = 1280;
-  int height = 720;
-  double fps = 0.0;  ///< 0: the display rate (vsync)
-  double history_s = 10.0;
-  double duration_s = 0.0;
-  std::optional<int> msaa;  ///< default: 4, or 0 in a window on a software renderer
-  double force_scale_m_per_n = 0.25;
-  double displacement_scale_m = 0.003;
-  int nice = 19;  ///< scheduling priority of every viewer thread (0 normal, 19 lowest)
-  bool hide_panel = false;
-  bool wireframe = false;
-  bool plain_colours = false;  ///< start without the displacement colours (key C)
-  bool full_rate = false;      ///< read the 1 kHz topics instead of the 60 Hz *_view copies
-  // drive
-  bool drive = false;                ///< be the master's device and tuning tool
-  std::string input_script;          ///< scripted input (needs --drive)
-  std::string drive_json;            ///< write the drive summary here at exit
-  double drive_scale = 1.0;          ///< slave metres per device metre (the master's alpha)
-  double drive_peak_force_n = 10.0;  ///< declared peak force of the device [N]
-};
-
-/// Checks the flags that CLI11 cannot; throws config::ConfigError naming flag, value and range.
-void validate(const Options& o) {
-  using config::check_flag;
-  check_flag("--after", o.after_s, 0.0, 3600.0);
-  check_flag("--timeout", o.timeout_s, 0.1, 3600.0);
-  check_flag("--width", o.width, 320, 7680);
-  check_flag("--height", o.height, 240, 4320);
-  check_flag("--fps", o.fps, 0.0, 1000.0);
-  check_flag("--history", o.history_s, 1.0, 600.0);
-  check_flag("--duration", o.duration_s, 0.0, 1e7);
-  if (o.msaa) check_flag("--msaa", *o.msaa, 0, 16);
-  check_flag("--nice", o.nice, 0, 19);
-  check_flag("--force-scale", o.force_scale_m_per_n, 1e-4, 10.0);
-  check_flag("--displacement-scale", o.displacement_scale_m, 1e-5, 1.0);
-  check_flag("--drive-scale", o.drive_scale, 1e-3, 1e3);
-  check_flag("--drive-peak-force", o.drive_peak_force_n, 0.1, 1000.0);
-  if (!o.drive && (!o.input_script.empty() || !o.drive_json.empty())) {
-    throw config::ConfigError("command line: --input-script and --drive-json need --drive");
-  }
-  if (o.drive && !o.snapshot.empty()) {
-    throw config::ConfigError("command line: --drive needs a window; it cannot go with --snapshot");
-  }
-  if (!o.snapshot.empty()) {
-    const std::filesystem::path p(o.snapshot);
-    std::string ext = p.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    if (ext != ".png") {
-      throw config::ConfigError("command line: --snapshot " + o.snapshot +
-                                ": the file name must end in .png");
-    }
-    const std::filesystem::path dir = p.has_parent_path() ? p.parent_path() : ".";
-    if (!std::filesystem::is_directory(dir)) {
-      throw config::ConfigError("command line: --snapshot " + o.snapshot + ": the directory " +
-                                dir.string() + " does not exist");
-    }
-  }
-}
-
-double ms_between(std::int64_t a_ns, std::int64_t b_ns) {
-  return static_cast<double>(b_ns - a_ns) * 1e-6;
-}
-
 class ViewerApp {
  public:
-  ViewerApp(const Options& options, const teleop::dds::ParticipantOptions& dds_options)
+  ViewerApp(const ViewerOptions& options, const teleop::dds::ParticipantOptions& dds_options)
       : options_(options),
         dds_options_(dds_options),
         headless_(!options.snapshot.empty()),
-        t0_ns_(now_ns()),
-        data_(options.history_s, t0_ns_),
-        frame_ms_(1 << 14) {
+        session_(options.history_s, now_ns()) {
     render_options_.wireframe = options.wireframe;
     render_options_.displacement_colors = !options.plain_colours;
     render_options_.displacement_scale_m = static_cast<float>(options.displacement_scale_m);
@@ -173,7 +101,6 @@ class ViewerApp {
     panel_info_.profile =
         dds_options.profile + (dds_options.insecure ? " INSECURE (no DDS Security)" : "");
     panel_info_.history_s = options.history_s;
-    frame_scratch_.reserve(frame_ms_.capacity());
   }
 
   ~ViewerApp() { shutdown(); }
@@ -218,7 +145,86 @@ class ViewerApp {
                 renderer_name_.find("softpipe") != std::string::npos ||
                 renderer_name_.find("swrast") != std::string::npos;
     msaa_ = options_.msaa.value_or(headless_ || !software_ ? 4 : 0);
+    return init_ui();
+  }
 
+  /// The participant, its readers and, with --drive, the drive and the input script.
+  void init_dds(std::vector<viewer::ScriptAction> script) {
+    link_ = std::make_unique<viewer::ViewerLink>(dds_options_, options_, session_);
+    if (link_->drive() == nullptr) return;
+    drive_input_ = std::make_unique<viewer::DriveInput>(*link_->drive());
+    if (!script.empty()) {
+      script_ = std::make_unique<viewer::ScriptPlayer>(std::move(script), std::cerr);
+    }
+  }
+
+  /// The render loop. Returns the exit status.
+  int run() {
+    viewer::FramePacer pacer(options_.fps, headless_, software_, now_ns());
+    viewer::SnapshotGate gate(options_.after_s, options_.timeout_s);
+    std::int64_t first_frame_ns = 0;
+    while (true) {
+      glfwPollEvents();
+      if (stop_requested() || glfwWindowShouldClose(window_)) break;
+      const std::int64_t frame_start = now_ns();
+      if (first_frame_ns == 0) first_frame_ns = frame_start;
+      const double elapsed_s = seconds_between(session_.t0_ns(), frame_start);
+      if (options_.duration_s > 0.0 && elapsed_s >= options_.duration_s) break;
+      if (!update(frame_start)) break;
+
+      // headless: wait until the data is complete, then --after seconds more
+      bool snapshot_now = false;
+      if (headless_) {
+        const viewer::SnapshotFrame s = gate.frame(view_.complete(), frame_start, elapsed_s);
+        if (s.became_complete) {
+          std::cerr << "teleop_viewer: data complete after " << elapsed_s << " s (scene '"
+                    << view_.scene.name() << "'), snapshot in " << options_.after_s << " s\n";
+        }
+        if (s.give_up) {
+          std::cerr << "teleop_viewer: no complete data on domain " << dds_options_.domain
+                    << " within --timeout " << options_.timeout_s
+                    << " s (missing: " << view_.missing()
+                    << "). Is a teleop_server running on this domain and profile?\n";
+          return kExitNoData;
+        }
+        snapshot_now = s.shoot;
+      }
+
+      // headless: the frames before the snapshot only lay the UI out; only the last one is drawn
+      const int status = draw_frame(!headless_ || snapshot_now, snapshot_now);
+      if (status >= 0) return status;
+      const std::int64_t frame_end = now_ns();
+      session_.record_frame(frame_start, frame_end);
+      pace(pacer, first_frame_ns, frame_end);
+    }
+    return 0;
+  }
+
+  /// Prints the frame statistics of a window (headless frames only lay the UI out).
+  void print_summary() const {
+    if (headless_) return;
+    const viewer::RenderSetup setup{target_.width(), target_.height(), msaa_, renderer_name_};
+    const std::string line = session_.frame_summary(setup, now_ns(), viewer::process_cpu_s());
+    if (line.empty()) return;
+    std::printf("%s\n", line.c_str());
+    std::fflush(stdout);
+  }
+
+  /// The drive summary: printed, and written to --drive-json.
+  void finish_drive() const {
+    const viewer::DriveSession* drive = link_ ? link_->drive() : nullptr;
+    if (drive == nullptr) return;
+    const std::string json = drive->summary_json();
+    std::printf("teleop_viewer: drive %s\n", json.c_str());
+    std::fflush(stdout);
+    if (!options_.drive_json.empty()) {
+      teleop::write_text_file(options_.drive_json, json + "\n");  // throws naming the file
+    }
+  }
+
+ private:
+  /// Dear ImGui on the window, and the renderer. Returns an exit status, or 0 on success.
+  int init_ui() {
     IMGUI_CHECKVERSION();
     ImGui::CreateContext();
     ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini next to the user's files
@@ -241,148 +247,57 @@ class ViewerApp {
     return 0;
   }
 
-  /// Creates the participant and one reader per topic.
-  void init_dds() {
-    using eprosima::fastdds::dds::SampleInfo;
-    participant_ = std::make_unique<teleop::dds::Participant>(dds_options_);
-    auto& p = *participant_;
-    r_scene_ = std::make_unique<teleop::dds::Reader<SceneDescriptionPubSubType>>(
-        p, teleop::dds::topics::kScene,
-        [this](const SceneDescription& s, const SampleInfo&) { data_.on_scene(s); });
-    r_topology_ = std::make_unique<teleop::dds::Reader<MeshTopologyPubSubType>>(
-        p, teleop::dds::topics::kMeshTopology,
-        [this](const MeshTopology& t, const SampleInfo&) { data_.on_topology(t); });
-    const teleop::dds::ObserverTopics topics =
-        teleop::dds::observer_topics(teleop::dds::ObserverKind::kView, options_.full_rate);
-    r_frames_ = std::make_unique<teleop::dds::Reader<MeshFramePubSubType>>(
-        p, topics.mesh_frame,
-        [this](const MeshFrame& f, const SampleInfo&) { data_.on_mesh_frame(f); });
-    r_slave_ = std::make_unique<teleop::dds::Reader<SlaveStatePubSubType>>(
-        p, topics.slave_state, [this](const SlaveState& s, const SampleInfo& info) {
-          note_server(info, true);
-          data_.on_slave_state(s, now_ns());
-        });
-    r_master_ = std::make_unique<teleop::dds::Reader<MasterStatePubSubType>>(
-        p, topics.master_state,
-        [this](const MasterState& s, const SampleInfo&) { data_.on_master_state(s, now_ns()); });
-    r_stats_ = std::make_unique<teleop::dds::Reader<ServerStatsPubSubType>>(
-        p, teleop::dds::topics::kServerStats, [this](const ServerStats& s, const SampleInfo& info) {
-          note_server(info, false);
-          data_.on_server_stats(s, now_ns());
-        });
-    r_events_ = std::make_unique<teleop::dds::Reader<EventPubSubType>>(
-        p, teleop::dds::topics::kEvents,
-        [this](const Event& e, const SampleInfo&) { data_.on_event(e, now_ns()); });
-    r_experiment_ = std::make_unique<teleop::dds::Reader<ExperimentDescriptionPubSubType>>(
-        p, teleop::dds::topics::kExperiment,
-        [this](const ExperimentDescription& e, const SampleInfo&) { data_.on_experiment(e); });
-    if (options_.drive) {
-      viewer::HandDriveParams hp;
-      hp.position_scale = options_.drive_scale;
-      drive_ = std::make_unique<viewer::DriveSession>(p, hp, options_.drive_peak_force_n);
-    }
+  /// The frame's data: the view (unless paused), the renderer's scene and meshes, the panel's
+  /// rates, the input script. Returns false when the script quits.
+  bool update(std::int64_t frame_start) {
+    if (!paused_) session_.data().update(view_);
+    renderer_.sync_scene(view_);
+    if (view_.have_scene()) renderer_.upload_deformables(view_, render_options_);
+    if (session_.update_rates(frame_start)) show_status(session_.status());
+    return !script_ || play_script(frame_start);
   }
 
-  void set_script(std::vector<viewer::ScriptAction> script) { script_ = std::move(script); }
+  void show_status(const viewer::ReceiveStatus& s) {
+    panel_info_.server = s.server;
+    panel_info_.servers = s.servers;
+    panel_info_.slave_hz = s.slave_hz;
+    panel_info_.master_hz = s.master_hz;
+    panel_info_.mesh_hz = s.mesh_hz;
+    panel_info_.stats_hz = s.stats_hz;
+    panel_info_.fps = s.fps;
+    panel_info_.frame_ms_p50 = s.frame_ms_p50;
+    panel_info_.frame_ms_p99 = s.frame_ms_p99;
+  }
 
-  /// The render loop. Returns the exit status.
-  int run() {
-    // --fps, else the display's vsync. A software renderer is slow enough at 1280x720 that a
-    // low frame rate leaves the CPU to the control loops (docs/viewer.md, "Measured"). Headless
-    // runs only lay out the UI until the snapshot: 30 fps.
-    double period_s = options_.fps > 0.0 ? 1.0 / options_.fps
-                      : headless_        ? 1.0 / 30.0
-                      : software_        ? 1.0 / 15.0
-                                         : 0.0;
-    std::int64_t next_frame_ns = now_ns();
-    std::int64_t ready_ns = 0;
-    int frames_since_ready = 0;
-    std::int64_t first_frame_ns = 0;
-    while (true) {
-      glfwPollEvents();
-      if (stop_requested() || glfwWindowShouldClose(window_)) break;
-      const std::int64_t frame_start = now_ns();
-      if (first_frame_ns == 0) first_frame_ns = frame_start;
-      const double elapsed_s = seconds_between(t0_ns_, frame_start);
-      if (options_.duration_s > 0.0 && elapsed_s >= options_.duration_s) break;
+  /// Plays the input script's due actions; the pointer moves in the layout of the requested
+  /// window size. Returns false when the script quits.
+  bool play_script(std::int64_t now) {
+    const viewer::Layout layout = viewer::layout_for(options_.width, options_.height, show_panel_);
+    viewer::ScriptStep step = script_->step(now, view_, camera_, layout, *drive_input_);
+    if (step.save) {
+      save_path_ = std::move(step.save_path);  // written after the next frame is drawn
+      save_requested_ = true;
+    }
+    return !step.quit;
+  }
 
-      if (!paused_) data_.update(view_);
-      renderer_.sync_scene(view_);
-      if (view_.have_scene()) renderer_.upload_deformables(view_, render_options_);
-      update_rates(frame_start);
-      if (drive_ && !run_script(frame_start)) break;
-
-      // headless: wait until the data is complete, then --after seconds more
-      bool snapshot_now = false;
-      if (headless_) {
-        if (ready_ns == 0 && view_.complete()) {
-          ready_ns = frame_start;
-          std::cerr << "teleop_viewer: data complete after " << elapsed_s << " s (scene '"
-                    << view_.scene.name() << "'), snapshot in " << options_.after_s << " s\n";
-        }
-        if (ready_ns != 0) {
-          ++frames_since_ready;
-          snapshot_now = seconds_between(ready_ns, frame_start) >= options_.after_s &&
-                         frames_since_ready >= 3;  // ImGui lays windows out over a frame or two
-        } else if (elapsed_s > options_.timeout_s) {
-          std::cerr << "teleop_viewer: no complete data on domain " << dds_options_.domain
-                    << " within --timeout " << options_.timeout_s
-                    << " s (missing: " << view_.missing()
-                    << "). Is a teleop_server running on this domain and "
-                    << "profile?\n";
-          return kExitNoData;
-        }
-      }
-
-      // headless: the frames before the snapshot only lay the UI out; only the last one is drawn
-      const int status = draw_frame(!headless_ || snapshot_now, snapshot_now);
-      if (status >= 0) return status;
-
-      const std::int64_t frame_end = now_ns();
-      frame_ms_.record(ms_between(frame_start, frame_end));
-      ++frames_;
-      // vsync requested but the display does not throttle: pace at its refresh rate ourselves
-      if (period_s == 0.0 && frames_ == 120) {
-        const double measured_hz = 119.0 / seconds_between(first_frame_ns, frame_end);
-        const double display_hz = display_refresh_hz();
-        if (measured_hz > 1.25 * display_hz) {
-          period_s = 1.0 / display_hz;
-          std::cerr << "teleop_viewer: the display does not throttle (" << measured_hz
-                    << " fps; no vsync, e.g. Xvfb or a remote X server): pacing at " << display_hz
-                    << " fps (--fps to choose)\n";
-        }
-      }
-      if (period_s > 0.0) {
-        next_frame_ns += static_cast<std::int64_t>(period_s * 1e9);
-        if (next_frame_ns < frame_end) next_frame_ns = frame_end;  // late: do not catch up
-        std::this_thread::sleep_for(std::chrono::nanoseconds(next_frame_ns - now_ns()));
+  /// Sleeps until the next frame is due; after the first frames under vsync, paces at the
+  /// display's rate when the display does not throttle.
+  void pace(viewer::FramePacer& pacer, std::int64_t first_frame_ns, std::int64_t frame_end) {
+    if (pacer.vsync_check_due(session_.frames())) {
+      const double measured_hz = static_cast<double>(viewer::FramePacer::kVsyncCheckFrames - 1) /
+                                 seconds_between(first_frame_ns, frame_end);
+      const double display_hz = display_refresh_hz();
+      if (pacer.pace_if_unthrottled(measured_hz, display_hz)) {
+        std::cerr << "teleop_viewer: the display does not throttle (" << measured_hz
+                  << " fps; no vsync, e.g. Xvfb or a remote X server): pacing at " << display_hz
+                  << " fps (--fps to choose)\n";
       }
     }
-    return 0;
+    const std::int64_t sleep = pacer.sleep_ns(frame_end, now_ns());
+    if (sleep > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(sleep));
   }
 
-  /// Prints the frame statistics.
-  void print_summary() const {
-    if (frames_ == 0 || headless_) return;  // headless frames only lay out the UI
-    std::vector<double> ms = frame_ms_.snapshot();
-    const Summary s = summarize(ms);
-    const double span_s = seconds_between(t0_ns_, now_ns());
-    rusage usage{};
-    getrusage(RUSAGE_SELF, &usage);
-    const double cpu_s =
-        static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-        1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-    std::printf(
-        "teleop_viewer: %llu frames in %.1f s (%.1f fps); frame time (update + draw + swap) "
-        "p50 %.2f ms, p99 %.2f ms, max %.2f ms; CPU %.1f ms per frame (all threads, %.0f%% of a "
-        "core); %dx%d, %dx MSAA, %s\n",
-        static_cast<unsigned long long>(frames_), span_s, static_cast<double>(frames_) / span_s,
-        s.p50, s.p99, s.max, 1e3 * cpu_s / static_cast<double>(frames_), 100.0 * cpu_s / span_s,
-        target_.width(), target_.height(), msaa_, renderer_name_.c_str());
-    std::fflush(stdout);
-  }
-
- private:
   /// Refresh rate of the primary monitor [Hz], 60 when unknown.
   static double display_refresh_hz() {
     GLFWmonitor* monitor = glfwGetPrimaryMonitor();
@@ -410,19 +325,7 @@ class ViewerApp {
     const viewer::Layout layout =
         viewer::layout_for(std::max(win_w, 1), std::max(win_h, 1), show_panel_);
     if (!headless_ && !minimised) handle_input(layout);
-    panel_info_.now_s = seconds_between(t0_ns_, now_ns());
-    panel_info_.paused = paused_;
-    panel_info_.wireframe = render_options_.wireframe;
-    panel_info_.displacement_colors = render_options_.displacement_colors;
-    panel_info_.robot_status = robot_status();
-    panel_info_.max_displacement_m = renderer_.max_displacement_m();
-    panel_info_.headless = headless_;
-    panel_info_.width = fb_w;
-    panel_info_.height = fb_h;
-    panel_info_.msaa = msaa_;
-    viewer::draw_panel(view_, panel_info_, layout);
-    viewer::draw_overlay(view_, panel_info_);
-    if (drive_) draw_drive(layout);
+    draw_ui(layout, fb_w, fb_h);
     ImGui::Render();
     if (!render || minimised) return -1;
 
@@ -453,6 +356,23 @@ class ViewerApp {
     return -1;
   }
 
+  /// The panel, the overlay and the drive window, for a framebuffer of fb_w x fb_h.
+  void draw_ui(const viewer::Layout& layout, int fb_w, int fb_h) {
+    panel_info_.now_s = seconds_between(session_.t0_ns(), now_ns());
+    panel_info_.paused = paused_;
+    panel_info_.wireframe = render_options_.wireframe;
+    panel_info_.displacement_colors = render_options_.displacement_colors;
+    panel_info_.robot_status = viewer::robot_status(view_, renderer_.skeleton().joints);
+    panel_info_.max_displacement_m = renderer_.max_displacement_m();
+    panel_info_.headless = headless_;
+    panel_info_.width = fb_w;
+    panel_info_.height = fb_h;
+    panel_info_.msaa = msaa_;
+    viewer::draw_panel(view_, panel_info_, layout);
+    viewer::draw_overlay(view_, panel_info_);
+    if (drive_input_) draw_drive(layout);
+  }
+
   int write_snapshot() {
     viewer::Image image;
     target_.read(image);
@@ -481,47 +401,11 @@ class ViewerApp {
     std::cerr << "teleop_viewer: " << panel_info_.note << "\n";
   }
 
+  /// Keys, then the pointer: the drive's first (--drive), else the camera's.
   void handle_input(const viewer::Layout& layout) {
     const ImGuiIO& io = ImGui::GetIO();
-    if (!io.WantCaptureKeyboard) {
-      if (ImGui::IsKeyPressed(GLFW_KEY_R, false)) camera_ = viewer::OrbitCamera{};
-      if (ImGui::IsKeyPressed(GLFW_KEY_W, false)) {
-        render_options_.wireframe = !render_options_.wireframe;
-      }
-      if (ImGui::IsKeyPressed(GLFW_KEY_C, false)) {
-        render_options_.displacement_colors = !render_options_.displacement_colors;
-      }
-      if (ImGui::IsKeyPressed(GLFW_KEY_F, false)) {
-        render_options_.show_force = !render_options_.show_force;
-      }
-      if (ImGui::IsKeyPressed(GLFW_KEY_H, false)) show_panel_ = !show_panel_;
-      if (ImGui::IsKeyPressed(GLFW_KEY_P, false) || ImGui::IsKeyPressed(GLFW_KEY_SPACE, false)) {
-        paused_ = !paused_;
-      }
-      if (ImGui::IsKeyPressed(GLFW_KEY_S, false)) save_requested_ = true;
-      if (ImGui::IsKeyPressed(GLFW_KEY_Q, false) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) {
-        glfwSetWindowShouldClose(window_, GLFW_TRUE);
-      }
-    }
-    if (drive_) {
-      drive_keys(io.DeltaTime);
-      const Eigen::Vector2f mouse(io.MousePos.x, io.MousePos.y);
-      if (mouse_dragging_) {
-        if (ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
-          drive_move(mouse, layout);
-        } else {
-          drive_->release();
-          mouse_dragging_ = false;
-        }
-        return;
-      }
-      if (!io.WantCaptureMouse && !script_dragging_ &&
-          ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !io.KeyShift &&
-          drive_press(mouse, layout)) {
-        mouse_dragging_ = true;
-        return;
-      }
-    }
+    if (!io.WantCaptureKeyboard) handle_keys();
+    if (drive_input_ && drive_pointer(layout)) return;
     if (io.WantCaptureMouse || io.MousePos.x >= static_cast<float>(layout.view_width)) return;
     const bool pan = ImGui::IsMouseDown(ImGuiMouseButton_Right) ||
                      ImGui::IsMouseDown(ImGuiMouseButton_Middle) ||
@@ -534,223 +418,74 @@ class ViewerApp {
     if (io.MouseWheel != 0.0f) camera_.zoom(io.MouseWheel);
   }
 
+  /// The view's keys: R camera, W wireframe, C colours, F force, H panel, P/space pause,
+  /// S save, Q/Esc quit.
+  void handle_keys() {
+    if (ImGui::IsKeyPressed(GLFW_KEY_R, false)) camera_ = viewer::OrbitCamera{};
+    if (ImGui::IsKeyPressed(GLFW_KEY_W, false)) {
+      render_options_.wireframe = !render_options_.wireframe;
+    }
+    if (ImGui::IsKeyPressed(GLFW_KEY_C, false)) {
+      render_options_.displacement_colors = !render_options_.displacement_colors;
+    }
+    if (ImGui::IsKeyPressed(GLFW_KEY_F, false)) {
+      render_options_.show_force = !render_options_.show_force;
+    }
+    if (ImGui::IsKeyPressed(GLFW_KEY_H, false)) show_panel_ = !show_panel_;
+    if (ImGui::IsKeyPressed(GLFW_KEY_P, false) || ImGui::IsKeyPressed(GLFW_KEY_SPACE, false)) {
+      paused_ = !paused_;
+    }
+    if (ImGui::IsKeyPressed(GLFW_KEY_S, false)) save_requested_ = true;
+    if (ImGui::IsKeyPressed(GLFW_KEY_Q, false) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) {
+      glfwSetWindowShouldClose(window_, GLFW_TRUE);
+    }
+  }
+
   // ---- drive (--drive) ----
 
-  /// The master's hand in the slave world (MasterState.command_position_m); false until known.
-  bool hand_world(Eigen::Vector3d& hand) const {
-    if (!view_.have_master) return false;
-    const auto& p = view_.master.command_position_m();
-    hand = Eigen::Vector3d(p[0], p[1], p[2]);
-    return hand.allFinite() && hand.squaredNorm() > 0.0;
-  }
-
-  void pixel_ray(const Eigen::Vector2f& px, const viewer::Layout& layout, Eigen::Vector3d& o,
-                 Eigen::Vector3d& d) const {
-    Eigen::Vector3f of, df;
-    camera_.ray(px, static_cast<float>(layout.view_width), static_cast<float>(layout.view_height),
-                of, df);
-    o = of.cast<double>();
-    d = df.cast<double>();
-  }
-
-  /// A left press at `px`: grabs the hand when the press is within 30 px of its ring.
-  bool drive_press(const Eigen::Vector2f& px, const viewer::Layout& layout) {
-    Eigen::Vector3d hand;
-    if (!hand_world(hand)) return false;
-    Eigen::Vector2f at;
-    if (!camera_.project(hand.cast<float>(), static_cast<float>(layout.view_width),
-                         static_cast<float>(layout.view_height), at) ||
-        (at - px).norm() > 30.0f) {
-      return false;
+  /// Held arrows and PgUp/PgDn, and the pointer, to the drive. Returns true when the drive
+  /// took the pointer (the camera stays).
+  bool drive_pointer(const viewer::Layout& layout) {
+    const ImGuiIO& io = ImGui::GetIO();
+    if (!io.WantCaptureKeyboard) {
+      viewer::DriveKeys k;
+      k.right = ImGui::IsKeyDown(ImGuiKey_RightArrow);
+      k.left = ImGui::IsKeyDown(ImGuiKey_LeftArrow);
+      k.up = ImGui::IsKeyDown(ImGuiKey_UpArrow);
+      k.down = ImGui::IsKeyDown(ImGuiKey_DownArrow);
+      k.page_up = ImGui::IsKeyDown(ImGuiKey_PageUp);
+      k.page_down = ImGui::IsKeyDown(ImGuiKey_PageDown);
+      drive_input_->keys(viewer::key_direction(k), io.DeltaTime);
     }
-    Eigen::Vector3d o, d;
-    pixel_ray(px, layout, o, d);
-    drive_->grab(hand, camera_.forward().cast<double>(), o, d);
-    return drive_->dragging();
-  }
-
-  void drive_move(const Eigen::Vector2f& px, const viewer::Layout& layout) {
-    Eigen::Vector3d o, d;
-    pixel_ray(px, layout, o, d);
-    drive_->drag(o, d);
-  }
-
-  /// Held arrows and PgUp/PgDn move the hand along the world axes.
-  void drive_keys(float dt_s) {
-    if (ImGui::GetIO().WantCaptureKeyboard) return;
-    Eigen::Vector3d dir = Eigen::Vector3d::Zero();
-    if (ImGui::IsKeyDown(ImGuiKey_RightArrow)) dir.x() += 1.0;
-    if (ImGui::IsKeyDown(ImGuiKey_LeftArrow)) dir.x() -= 1.0;
-    if (ImGui::IsKeyDown(ImGuiKey_UpArrow)) dir.y() += 1.0;
-    if (ImGui::IsKeyDown(ImGuiKey_DownArrow)) dir.y() -= 1.0;
-    if (ImGui::IsKeyDown(ImGuiKey_PageUp)) dir.z() += 1.0;
-    if (ImGui::IsKeyDown(ImGuiKey_PageDown)) dir.z() -= 1.0;
-    drive_->nudge(dir, dt_s);
-  }
-
-  void send_tuning(std::uint32_t fields) {
-    drive_->send_tuning(viewer::make_tuning_request(tuning_form_, fields));
+    viewer::PointerInput p;
+    p.position_px = Eigen::Vector2f(io.MousePos.x, io.MousePos.y);
+    p.left_down = ImGui::IsMouseDown(ImGuiMouseButton_Left);
+    p.left_clicked = ImGui::IsMouseClicked(ImGuiMouseButton_Left);
+    p.shift = io.KeyShift;
+    p.ui_wants_mouse = io.WantCaptureMouse;
+    const bool script_drags = script_ && script_->dragging();
+    return drive_input_->pointer(p, script_drags, view_, camera_, layout);
   }
 
   void draw_drive(const viewer::Layout& layout) {
-    const viewer::DriveView v = drive_->view();
+    const viewer::DriveSession& drive = *link_->drive();
+    const viewer::DriveView v = drive.view();
     Eigen::Vector3d hand;
-    if (hand_world(hand)) {
+    if (viewer::hand_world(view_, hand)) {
       viewer::draw_drive_overlay(camera_, static_cast<float>(layout.view_width),
                                  static_cast<float>(layout.view_height), hand, v,
-                                 options_.force_scale_m_per_n, drive_->dragging());
+                                 options_.force_scale_m_per_n, drive.dragging());
     }
-    const std::uint32_t fields = viewer::draw_drive_window(v, drive_->peak_force_n(), tuning_form_,
-                                                           static_cast<float>(layout.view_height));
-    if (fields != 0) send_tuning(fields);
-  }
-
-  /// Plays --input-script through the handlers above. Returns false to close the viewer.
-  bool run_script(std::int64_t now) {
-    if (script_.empty() && !script_dragging_ && script_key_until_s_ < 0.0) return true;
-    Eigen::Vector3d hand;
-    if (script_t0_ns_ == 0) {
-      if (!hand_world(hand)) return true;  // times count from when the hand is known
-      script_t0_ns_ = now;
-      std::cerr << "teleop_viewer: input script starts (the master's hand is known)\n";
-    }
-    const double t = seconds_between(script_t0_ns_, now);
-    const viewer::Layout layout = viewer::layout_for(options_.width, options_.height, show_panel_);
-    // a drag under way: the pointer moves linearly from its press point
-    if (script_dragging_) {
-      const double s = std::clamp((t - script_drag_.at_s) / script_drag_.duration_s, 0.0, 1.0);
-      drive_move(script_press_px_ + static_cast<float>(s) *
-                                        Eigen::Vector2f(static_cast<float>(script_drag_.dx_px),
-                                                        static_cast<float>(script_drag_.dy_px)),
-                 layout);
-      if (s >= 1.0) {
-        drive_->release();
-        script_dragging_ = false;
-      }
-    }
-    if (script_key_until_s_ >= 0.0) {
-      const double dt = std::min(t, script_key_until_s_) - script_key_last_s_;
-      drive_->nudge(script_key_dir_, dt);
-      script_key_last_s_ = std::min(t, script_key_until_s_);
-      if (t >= script_key_until_s_) script_key_until_s_ = -1.0;
-    }
-    while (!script_.empty() && script_.front().at_s <= t) {
-      const viewer::ScriptAction a = script_.front();
-      script_.erase(script_.begin());
-      std::cerr << "teleop_viewer: script t=" << t << " s:" << a.text << "\n";
-      switch (a.kind) {
-        case viewer::ScriptAction::Kind::kDrag: {
-          Eigen::Vector2f at;
-          if (hand_world(hand) &&
-              camera_.project(hand.cast<float>(), static_cast<float>(layout.view_width),
-                              static_cast<float>(layout.view_height), at) &&
-              drive_press(at, layout)) {
-            script_press_px_ = at;
-            script_drag_ = a;
-            script_dragging_ = true;
-          } else {
-            std::cerr
-                << "teleop_viewer: script: the master's hand is not on screen; drag skipped\n";
-          }
-          break;
-        }
-        case viewer::ScriptAction::Kind::kKey:
-          script_key_dir_ = a.key_direction;
-          script_key_last_s_ = a.at_s;
-          script_key_until_s_ = a.at_s + a.duration_s;
-          break;
-        case viewer::ScriptAction::Kind::kTune:
-          // type the script's fields into the form, then press Apply with those fields
-          if (a.fields & TUNE_MASTER_STIFFNESS) {
-            tuning_form_.master_stiffness_n_per_m = a.master_stiffness_n_per_m;
-          }
-          if (a.fields & TUNE_MASTER_DAMPING) {
-            tuning_form_.master_damping_ns_per_m = a.master_damping_ns_per_m;
-          }
-          if (a.fields & TUNE_FORCE_GAIN) tuning_form_.force_gain = a.force_gain;
-          if (a.fields & TUNE_SLAVE_STIFFNESS) {
-            tuning_form_.slave_stiffness_n_per_m = a.slave_stiffness_n_per_m;
-          }
-          if (a.fields & TUNE_FORWARD_DELAY) tuning_form_.forward_delay_ms = a.forward_delay_ms;
-          if (a.fields & TUNE_BACKWARD_DELAY) tuning_form_.backward_delay_ms = a.backward_delay_ms;
-          tuning_form_.ramp_s = a.ramp_s;
-          send_tuning(a.fields);
-          break;
-        case viewer::ScriptAction::Kind::kSnapshot:
-          save_path_ = a.path;  // written after the next frame is drawn
-          save_requested_ = true;
-          break;
-        case viewer::ScriptAction::Kind::kQuit:
-          return false;
-      }
-    }
-    return true;
-  }
-
- public:
-  /// The drive summary: printed, and written to --drive-json.
-  void finish_drive() const {
-    if (!drive_) return;
-    const std::string json = drive_->summary_json();
-    std::printf("teleop_viewer: drive %s\n", json.c_str());
-    std::fflush(stdout);
-    if (!options_.drive_json.empty()) {
-      teleop::write_text_file(options_.drive_json, json + "\n");  // throws naming the file
-    }
-  }
-
- private:
-  /// Receive rates and frame-time percentiles, refreshed once a second.
-  void update_rates(std::int64_t now) {
-    if (rates_ns_ == 0) {
-      rates_ns_ = now;
-      last_counters_ = data_.counters();
-      return;
-    }
-    const double dt = seconds_between(rates_ns_, now);
-    if (dt < 1.0) return;
-    const viewer::Counters c = data_.counters();
-    panel_info_.slave_hz = static_cast<double>(c.slave_states - last_counters_.slave_states) / dt;
-    {
-      std::lock_guard<std::mutex> lock(server_mutex_);
-      panel_info_.server = server_;
-      panel_info_.servers = static_cast<int>(server_writers_.size());
-    }
-    panel_info_.master_hz =
-        static_cast<double>(c.master_states - last_counters_.master_states) / dt;
-    panel_info_.mesh_hz = static_cast<double>(c.frames - last_counters_.frames) / dt;
-    panel_info_.stats_hz = static_cast<double>(c.server_stats - last_counters_.server_stats) / dt;
-    panel_info_.fps = static_cast<double>(frames_ - last_frames_) / dt;
-    last_frames_ = frames_;
-    last_counters_ = c;
-    rates_ns_ = now;
-    frame_ms_.snapshot_into(frame_scratch_);
-    if (!frame_scratch_.empty()) {
-      const Summary s = summarize_in_place(frame_scratch_);
-      panel_info_.frame_ms_p50 = s.p50;
-      panel_info_.frame_ms_p99 = s.p99;
-    }
-  }
-
-  std::string robot_status() const {
-    if (!view_.have_scene()) return "robot: -";
-    if (view_.scene.joint_count() == 0) return "no robot: a free tool (orange)";
-    if (renderer_.skeleton().joints > 0) return "robot: skeleton from the scene's frames";
-    return "robot: tip only (no link frames in the scene)";
+    const std::uint32_t fields = viewer::draw_drive_window(
+        v, drive.peak_force_n(), drive_input_->form(), static_cast<float>(layout.view_height));
+    if (fields != 0) drive_input_->send_tuning(fields);
   }
 
   void shutdown() {
-    drive_.reset();
-    // readers first: their callbacks write into data_
-    r_experiment_.reset();
-    r_events_.reset();
-    r_stats_.reset();
-    r_master_.reset();
-    r_slave_.reset();
-    r_frames_.reset();
-    r_topology_.reset();
-    r_scene_.reset();
-    participant_.reset();
+    // the DDS side first: its reader callbacks write into session_
+    script_.reset();
+    drive_input_.reset();
+    link_.reset();
     if (window_) {
       glfwMakeContextCurrent(window_);
       target_.release();
@@ -768,37 +503,14 @@ class ViewerApp {
     glfw_ready_ = false;
   }
 
-  Options options_;
+  ViewerOptions options_;
   teleop::dds::ParticipantOptions dds_options_;
   bool headless_;
-  std::int64_t t0_ns_;
-  ViewerData data_;
-  ViewerView view_;
-  std::unique_ptr<teleop::dds::Participant> participant_;
-  // which server the viewer watches (the participant writing slave_state), and every participant
-  // that wrote the server's topics (reader threads)
-  std::mutex server_mutex_;
-  std::string server_;
-  std::vector<eprosima::fastrtps::rtps::GuidPrefix_t> server_writers_;
-
-  void note_server(const eprosima::fastdds::dds::SampleInfo& info, bool state) {
-    const auto& prefix = info.sample_identity.writer_guid().guidPrefix;
-    std::lock_guard<std::mutex> lock(server_mutex_);
-    if (std::find(server_writers_.begin(), server_writers_.end(), prefix) ==
-        server_writers_.end()) {
-      server_writers_.push_back(prefix);
-    }
-    if (state) server_ = teleop::dds::guid_prefix_text(prefix);
-  }
-
-  std::unique_ptr<teleop::dds::Reader<SceneDescriptionPubSubType>> r_scene_;
-  std::unique_ptr<teleop::dds::Reader<MeshTopologyPubSubType>> r_topology_;
-  std::unique_ptr<teleop::dds::Reader<MeshFramePubSubType>> r_frames_;
-  std::unique_ptr<teleop::dds::Reader<SlaveStatePubSubType>> r_slave_;
-  std::unique_ptr<teleop::dds::Reader<MasterStatePubSubType>> r_master_;
-  std::unique_ptr<teleop::dds::Reader<ServerStatsPubSubType>> r_stats_;
-  std::unique_ptr<teleop::dds::Reader<ExperimentDescriptionPubSubType>> r_experiment_;
-  std::unique_ptr<teleop::dds::Reader<EventPubSubType>> r_events_;
+  viewer::ViewerSession session_;
+  viewer::ViewerView view_;
+  std::unique_ptr<viewer::ViewerLink> link_;
+  std::unique_ptr<viewer::DriveInput> drive_input_;  ///< --drive
+  std::unique_ptr<viewer::ScriptPlayer> script_;     ///< --drive --input-script
 
   GLFWwindow* window_ = nullptr;
   bool glfw_ready_ = false;
@@ -815,33 +527,10 @@ class ViewerApp {
   bool paused_ = false;
   bool save_requested_ = false;
   std::string save_path_;  ///< where the next save goes ("" = a timestamped name)
-
-  SampleWindow frame_ms_;
-  std::vector<double> frame_scratch_;
-  std::uint64_t frames_ = 0, last_frames_ = 0;
-  std::int64_t rates_ns_ = 0;
-  viewer::Counters last_counters_;
-
-  // drive
-  std::unique_ptr<viewer::DriveSession> drive_;
-  viewer::TuningForm tuning_form_;
-  std::vector<viewer::ScriptAction> script_;
-  std::int64_t script_t0_ns_ = 0;
-  viewer::ScriptAction script_drag_;  // the drag under way (when script_dragging_)
-  bool script_dragging_ = false;
-  bool mouse_dragging_ = false;  // a drag started with the mouse
-  Eigen::Vector2f script_press_px_ = Eigen::Vector2f::Zero();
-  Eigen::Vector3d script_key_dir_ = Eigen::Vector3d::Zero();
-  double script_key_last_s_ = 0.0;
-  double script_key_until_s_ = -1.0;
 };
 
-}  // namespace
-
-namespace {
-
 /// Declares every flag of teleop_viewer.
-void add_flags(CLI::App& app, Options& o, teleop::dds::NetworkFlags& net_flags) {
+void add_flags(CLI::App& app, ViewerOptions& o, teleop::dds::NetworkFlags& net_flags) {
   app.add_option("--domain", o.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
       ->check(teleop::config::integer_in(0.0, 232.0));
   app.add_option("--profile", o.profile, "Fast DDS profile (default: loopback)");
@@ -907,7 +596,7 @@ void add_flags(CLI::App& app, Options& o, teleop::dds::NetworkFlags& net_flags) 
 /// and keeps Mesa's software rasteriser (llvmpipe) on the render thread instead of one thread per
 /// core, whose helper threads raise the master's loop jitter (docs/viewer.md). A value the user
 /// set wins; other drivers ignore the variable.
-void yield_to_control_loops(const Options& o) {
+void yield_to_control_loops(const ViewerOptions& o) {
   if (o.nice > 0 && setpriority(PRIO_PROCESS, 0, o.nice) != 0) {
     std::cerr << "teleop_viewer: warning: cannot lower the priority (--nice " << o.nice << ")\n";
   }
@@ -918,7 +607,7 @@ void yield_to_control_loops(const Options& o) {
 
 int main(int argc, char** argv) {
   CLI::App app{"teleop_viewer: 3-D observer of a teleoperation session (scene, plots, events)"};
-  Options o;
+  ViewerOptions o;
   teleop::dds::NetworkFlags net_flags;
   add_flags(app, o, net_flags);
   if (const int status = teleop::config::parse_command_line(app, "teleop_viewer", argc, argv);
@@ -926,7 +615,7 @@ int main(int argc, char** argv) {
     return status == 2 ? kExitUsage : status;
   }
   try {
-    validate(o);
+    viewer::validate_options(o);
     if (!o.drive_json.empty()) prepare_output_file("--drive-json", o.drive_json);
     // driving publishes the device and tuning topics: the secure profiles' operator role
     if (o.drive) net_flags.default_identity = "operator";
@@ -939,8 +628,7 @@ int main(int argc, char** argv) {
     if (!o.input_script.empty()) script = teleop::viewer::parse_input_script(o.input_script);
     ViewerApp viewer(o, dds_options);
     if (const int status = viewer.init_graphics(); status != 0) return status;
-    viewer.init_dds();
-    viewer.set_script(std::move(script));
+    viewer.init_dds(std::move(script));
     const int status = viewer.run();
     viewer.print_summary();
     viewer.finish_drive();

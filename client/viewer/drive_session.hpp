@@ -7,7 +7,8 @@
 //     master's hand and as a bar against the device's peak force);
 //   - send_tuning() writes teleop/tuning; teleop/tuning_status brings the master's answer, the
 //     values in force and their bounds (teleop_master --accept-tuning applies requests).
-// The render thread calls the other methods; everything shared is behind one mutex.
+// The render thread calls the other methods (it is the DriveTarget that DriveInput and the input
+// script move); everything shared is behind one mutex.
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -15,6 +16,7 @@
 #include <string>
 #include <thread>
 
+#include "client/viewer/drive_input.hpp"
 #include "client/viewer/hand_drive.hpp"
 #include "common/dds/endpoint.hpp"
 #include "teleop/idl/DevicePubSubTypes.h"
@@ -37,25 +39,25 @@ struct DriveView {
   std::uint64_t tunings_sent = 0;
 };
 
-class DriveSession {
+class DriveSession : public DriveTarget {
  public:
   /// `peak_force_n`: the device's declared peak force (DeviceState.max_force_n; the bar's full
   /// scale). Starts the 1 kHz thread.
   DriveSession(dds::Participant& participant, const HandDriveParams& params, double peak_force_n);
-  ~DriveSession();
+  ~DriveSession() override;
   DriveSession(const DriveSession&) = delete;
   DriveSession& operator=(const DriveSession&) = delete;
 
   // input (render thread), forwarded to the HandDrive under the lock
   void grab(const Eigen::Vector3d& anchor_world_m, const Eigen::Vector3d& view_dir,
-            const Eigen::Vector3d& ray_origin, const Eigen::Vector3d& ray_dir);
-  void drag(const Eigen::Vector3d& ray_origin, const Eigen::Vector3d& ray_dir);
-  void release();
-  bool dragging() const;
-  void nudge(const Eigen::Vector3d& direction, double dt_s);
+            const Eigen::Vector3d& ray_origin, const Eigen::Vector3d& ray_dir) override;
+  void drag(const Eigen::Vector3d& ray_origin, const Eigen::Vector3d& ray_dir) override;
+  void release() override;
+  bool dragging() const override;
+  void nudge(const Eigen::Vector3d& direction, double dt_s) override;
 
   /// Writes a tuning request (fields: TUNE_* bits; values in the request's units).
-  void send_tuning(const TuningRequest& request);
+  void send_tuning(const TuningRequest& request) override;
 
   DriveView view() const;
   double peak_force_n() const { return peak_force_n_; }

@@ -7,20 +7,6 @@
 
 namespace teleop::viewer {
 
-TuningRequest make_tuning_request(const TuningForm& f, std::uint32_t fields) {
-  TuningRequest r;
-  r.fields(fields);
-  r.master_stiffness_n_per_m(f.master_stiffness_n_per_m);
-  r.master_damping_ns_per_m(f.master_damping_ns_per_m);
-  r.force_gain(f.force_gain);
-  r.slave_stiffness_n_per_m(f.slave_stiffness_n_per_m);
-  r.forward_delay_ms(f.forward_delay_ms);
-  r.backward_delay_ms(f.backward_delay_ms);
-  r.ramp_s(f.ramp_s);
-  r.source("viewer");
-  return r;
-}
-
 void draw_drive_overlay(const OrbitCamera& camera, float view_w, float view_h,
                         const Eigen::Vector3d& hand, const DriveView& drive,
                         double force_scale_m_per_n, bool dragging) {

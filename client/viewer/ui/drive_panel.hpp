@@ -7,21 +7,10 @@
 #include <cstdint>
 
 #include "client/viewer/camera.hpp"
+#include "client/viewer/drive_input.hpp"
 #include "client/viewer/drive_session.hpp"
 
 namespace teleop::viewer {
-
-/// The tuning form's values (delays in ms, as shown).
-struct TuningForm {
-  bool loaded = false;         ///< filled from a status
-  std::uint64_t answered = 0;  ///< request_seq of the status it was last filled from
-  double master_stiffness_n_per_m = 0.0, master_damping_ns_per_m = 0.0, force_gain = 0.0,
-         slave_stiffness_n_per_m = 0.0, forward_delay_ms = 0.0, backward_delay_ms = 0.0;
-  double ramp_s = 0.5;
-};
-
-/// A request for `fields` (TUNE_* bits) with the form's values.
-TuningRequest make_tuning_request(const TuningForm& form, std::uint32_t fields);
 
 /// Draws the master's hand (a ring, filled while dragged) at `hand_world_m` and the force the
 /// device renders as an arrow from it (`force_scale_m_per_n`), over a 3-D view of
