@@ -21,6 +21,7 @@
 #include "common/util/data_dir.hpp"
 #include "common/util/files.hpp"
 #include "server/node/server_node.hpp"
+#include "server/world/scene_params.hpp"
 #include "server/world/world_model.hpp"
 
 namespace {
@@ -57,6 +58,7 @@ struct Flags {
   std::optional<std::string> profile;
   std::string summary_json;
   bool quiet = false;
+  bool print_scene_parameters = false;
   teleop::RealtimeOptions realtime;
   teleop::dds::NetworkFlags net_flags;
 };
@@ -92,6 +94,9 @@ void add_flags(CLI::App& app, Flags& f) {
   app.add_option("--summary-json", f.summary_json, "write a JSON summary here at exit");
   teleop::config::add_realtime_flags(app, f.realtime, "physics loop", "step", true);
   app.add_flag("--quiet", f.quiet, "print only warnings and errors");
+  app.add_flag("--print-scene-parameters", f.print_scene_parameters,
+               "print the table of the scene file's plain fields (markdown) and exit")
+      ->group("");
 }
 
 /// The server's options from the flags and the scene, each checked against its range.
@@ -142,6 +147,10 @@ int main(int argc, char** argv) {
   if (const int status = teleop::config::parse_command_line(app, "teleop_server", argc, argv);
       status >= 0) {
     return status == 2 ? 2 : status;
+  }
+  if (f.print_scene_parameters) {
+    std::cout << teleop::sim::scene_params_markdown();
+    return 0;
   }
   try {
     const teleop::sim::WorldModel scene = teleop::sim::load_world_model(f.scene_file);

@@ -9,43 +9,23 @@
 #include <sstream>
 #include <vector>
 
+#include "server/world/scene_params.hpp"
+
 namespace teleop::sim {
 
 collision::TipContactParams load_tip_contact_params(const config::Node& node) {
   collision::TipContactParams p;
   if (!node.defined()) return p;
-  node.reject_unknown_keys({"stiffness_n_per_m", "damping_ns_per_m", "damping_ramp_m",
-                            "friction_static", "friction_kinetic", "max_force_n", "patch_radius_m",
-                            "patch_blend", "node_stiffness_n_per_m", "node_damping_ns_per_m",
-                            "node_reference_area_m2"});
-  p.stiffness_n_per_m = node.number_or("stiffness_n_per_m", p.stiffness_n_per_m, 1.0, 1e7);
-  p.damping_ns_per_m = node.number_or("damping_ns_per_m", p.damping_ns_per_m, 0.0, 1e5);
-  p.damping_ramp_m = node.number_or("damping_ramp_m", p.damping_ramp_m, 0.0, 0.1);
-  p.friction_static = node.number_or("friction_static", p.friction_static, 0.0, 5.0);
-  p.friction_kinetic = node.number_or("friction_kinetic", p.friction_kinetic, 0.0, 5.0);
+  node.reject_unknown_keys(config::field_keys(tip_contact_params()));
+  config::read_fields(node, tip_contact_params(), p);
   if (p.friction_kinetic > p.friction_static) {
     node.fail("friction_kinetic",
               "must not exceed friction_static (" + std::to_string(p.friction_static) + ")");
   }
-  p.max_force_n = node.number_or("max_force_n", p.max_force_n, 0.0, 1e5);
-  p.patch_radius_m = node.number_or("patch_radius_m", p.patch_radius_m, 0.0, 1.0);
-  p.patch_blend = node.number_or("patch_blend", p.patch_blend, 0.0, 1.0);
-  p.node_stiffness_n_per_m =
-      node.number_or("node_stiffness_n_per_m", p.node_stiffness_n_per_m, 0.0, 1e6);
-  p.node_damping_ns_per_m =
-      node.number_or("node_damping_ns_per_m", p.node_damping_ns_per_m, 0.0, 1e4);
-  p.node_reference_area_m2 =
-      node.number_or("node_reference_area_m2", p.node_reference_area_m2, 0.0, 1.0);
   return p;
 }
 
 namespace {
-Eigen::Vector3d vec3(const config::Node& n, const std::string& key, const Eigen::Vector3d& def,
-                     double lo, double hi) {
-  const auto v = n.numbers_or(key, {def.x(), def.y(), def.z()}, lo, hi);
-  return {v[0], v[1], v[2]};
-}
-
 /// Free space of a plane may be entered by at most this much at the start (a body resting on
 /// the floor touches it; one that starts inside a wall explodes) [m].
 constexpr double kStartPenetrationM = 1e-3;
@@ -426,9 +406,8 @@ void check_scene_root(const config::Node& root) {
 void parse_world_box(const config::Node& root, WorldModel& s) {
   if (root.has("world")) {
     const auto w = root.at("world");
-    w.reject_unknown_keys({"min_m", "max_m"});
-    s.world_min_m = vec3(w, "min_m", s.world_min_m, -1000.0, 1000.0);
-    s.world_max_m = vec3(w, "max_m", s.world_max_m, -1000.0, 1000.0);
+    w.reject_unknown_keys(config::field_keys(world_box_params()));
+    config::read_fields(w, world_box_params(), s);
     for (int i = 0; i < 3; ++i) {
       if (s.world_min_m[i] >= s.world_max_m[i]) {
         w.fail("min_m", "value " + vec_text(s.world_min_m) + ": element " + std::to_string(i) +
@@ -441,20 +420,16 @@ void parse_world_box(const config::Node& root, WorldModel& s) {
 void parse_physics(const config::Node& root, WorldModel& s) {
   if (root.has("physics")) {
     const auto p = root.at("physics");
-    p.reject_unknown_keys({"rate_hz", "visual_rate_hz", "gravity_mps2"});
-    s.physics_rate_hz = p.number_or("rate_hz", s.physics_rate_hz, 10.0, 20000.0);
-    s.visual_rate_hz = p.number_or("visual_rate_hz", s.visual_rate_hz, 1.0, 240.0);
-    s.gravity_mps2 = vec3(p, "gravity_mps2", s.gravity_mps2, -100.0, 100.0);
+    p.reject_unknown_keys(config::field_keys(physics_params()));
+    config::read_fields(p, physics_params(), s);
   }
 }
 
 void parse_command(const config::Node& root, WorldModel& s) {
   if (root.has("command")) {
     const auto c = root.at("command");
-    c.reject_unknown_keys({"timeout_s", "workspace_min_m", "workspace_max_m"});
-    s.command_timeout_s = c.number_or("timeout_s", s.command_timeout_s, 0.001, 10.0);
-    s.workspace_min_m = vec3(c, "workspace_min_m", s.workspace_min_m, -100.0, 100.0);
-    s.workspace_max_m = vec3(c, "workspace_max_m", s.workspace_max_m, -100.0, 100.0);
+    c.reject_unknown_keys(config::field_keys(command_params()));
+    config::read_fields(c, command_params(), s);
     for (int i = 0; i < 3; ++i) {
       if (s.workspace_min_m[i] >= s.workspace_max_m[i]) {
         c.fail("workspace_min_m", "element " + std::to_string(i) + " must be below " +
@@ -479,21 +454,8 @@ void parse_tool(const config::Node& root, WorldModel& s) {
   s.tool.gravity_mps2 = s.gravity_mps2;
   if (root.has("tool")) {
     const auto t = root.at("tool");
-    t.reject_unknown_keys({"mass_kg", "radius_m", "kp_n_per_m", "kd_ns_per_m", "kp_rot_nm_per_rad",
-                           "kd_rot_nms_per_rad", "linear_damping_ns_per_m", "max_force_n",
-                           "gravity_compensation", "start_position_m"});
-    s.tool.mass_kg = t.number_or("mass_kg", s.tool.mass_kg, 1e-3, 100.0);
-    s.tool.radius_m = t.number_or("radius_m", s.tool.radius_m, 1e-3, 1.0);
-    s.tool.kp_n_per_m = t.number_or("kp_n_per_m", s.tool.kp_n_per_m, 0.0, 1e6);
-    s.tool.kd_ns_per_m = t.number_or("kd_ns_per_m", s.tool.kd_ns_per_m, 0.0, 1e4);
-    s.tool.kp_rot_nm_per_rad = t.number_or("kp_rot_nm_per_rad", s.tool.kp_rot_nm_per_rad, 0, 1e4);
-    s.tool.kd_rot_nms_per_rad =
-        t.number_or("kd_rot_nms_per_rad", s.tool.kd_rot_nms_per_rad, 0, 1e3);
-    s.tool.linear_damping_ns_per_m =
-        t.number_or("linear_damping_ns_per_m", s.tool.linear_damping_ns_per_m, 0.0, 1e4);
-    s.tool.max_force_n = t.number_or("max_force_n", s.tool.max_force_n, 0.1, 1e5);
-    s.tool.gravity_compensation = t.boolean_or("gravity_compensation", true);
-    s.tool_start_m = vec3(t, "start_position_m", s.tool_start_m, -100.0, 100.0);
+    t.reject_unknown_keys(config::field_keys(tool_params()));
+    config::read_fields(t, tool_params(), s);
   }
 }
 
@@ -508,8 +470,7 @@ void parse_planes(const config::Node& root, WorldModel& s) {
     for (std::size_t i = 0; i < ps.size(); ++i) {
       const auto p = ps.at(i);
       if (!p.is_map()) p.fail("", "must be a mapping with at least 'normal'");
-      p.reject_unknown_keys(
-          {"name", "normal", "offset_m", "stiffness_n_per_m", "damping_ns_per_m", "friction"});
+      p.reject_unknown_keys(config::field_keys(plane_params(), {"name", "normal"}));
       Plane pl;
       pl.id = static_cast<int>(100 + i);
       pl.name = p.string_or("name", "plane" + std::to_string(i));
@@ -523,10 +484,7 @@ void parse_planes(const config::Node& root, WorldModel& s) {
       pl.normal = Eigen::Vector3d(n[0], n[1], n[2]);
       if (pl.normal.norm() < 1e-6) p.fail("normal", "must not be the zero vector");
       pl.normal.normalize();
-      pl.offset_m = p.number_or("offset_m", 0.0, -100.0, 100.0);
-      pl.stiffness_n_per_m = p.number_or("stiffness_n_per_m", pl.stiffness_n_per_m, 1.0, 1e8);
-      pl.damping_ns_per_m = p.number_or("damping_ns_per_m", pl.damping_ns_per_m, 0.0, 1e6);
-      pl.friction = p.number_or("friction", pl.friction, 0.0, 5.0);
+      config::read_fields(p, plane_params(), pl);
       s.planes.push_back(pl);
     }
   }
