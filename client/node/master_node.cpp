@@ -9,7 +9,6 @@
 #include <functional>
 #include <iostream>
 #include <limits>
-#include <mutex>
 #include <thread>
 
 #include "client/cycle/master_cycle.hpp"
@@ -22,9 +21,10 @@
 #include "client/metrics/session_metrics.hpp"
 #include "client/net/delay_channel.hpp"
 #include "client/node/dds_slave_link.hpp"
+#include "client/node/device_driver_latch.hpp"
 #include "client/node/experiment_publisher.hpp"
-#include "client/node/loop_delay_meter.hpp"
 #include "client/node/master_report.hpp"
+#include "client/node/master_session.hpp"
 #include "client/node/server_binding.hpp"
 #include "client/node/server_health.hpp"
 #include "client/node/server_word.hpp"
@@ -84,67 +84,22 @@ constexpr int kReconnect = -2;
 
 }  // namespace
 
-/// One driver at a time on teleop/device_state: the first writer is the device until it has been
-/// silent for kSilentNs; samples of any other writer meanwhile are ignored and counted (a second
-/// driver or a second driving viewer must not move the master's hand). Called from the reader's
-/// thread.
-class DeviceDriverLatch {
- public:
-  static constexpr std::int64_t kSilentNs = 100'000'000;
-  bool accept(const eprosima::fastrtps::rtps::InstanceHandle_t& writer, std::int64_t now_ns) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (seen_ns_ == 0 || now_ns - seen_ns_ > kSilentNs) {
-      driver_ = writer;
-    } else if (writer != driver_) {
-      ignored_.fetch_add(1);
-      return false;
-    }
-    seen_ns_ = now_ns;
-    return true;
-  }
-  std::uint64_t ignored() const { return ignored_.load(); }
-
- private:
-  std::mutex mutex_;
-  eprosima::fastrtps::rtps::InstanceHandle_t driver_;
-  std::int64_t seen_ns_ = 0;
-  std::atomic<std::uint64_t> ignored_{0};
-};
-
-/// The master's side of ownership during a run (watch_ownership()).
-struct OwnershipWatch {
-  bool refused = false;        // another master owns the slave: the cycle holds
-  bool owned_once = false;     // this master has owned the slave in this session
-  bool give_up = false;        // refused and not (or no longer) waiting: end the session
-  bool refused_first = false;  // refused before it ever owned the slave
-  double refused_at_s = 0.0;
-  double waited_s = 0.0;
-};
-
-/// The haptic loop's state across its cycles (MasterNode::Impl::run_loop), made before the first
-/// cycle so that a cycle allocates nothing.
+/// The haptic loop's state across its cycles (MasterNode::Impl::run_loop): the session's
+/// bookkeeping (MasterSession) and the buffers a cycle fills, made before the first cycle so that
+/// a cycle allocates nothing.
 struct LoopState {
-  LoopState(MasterCycle& c, RateLoop& l, DdsSlaveLink& k, ExternalDevice* e, SessionReport& r)
-      : cycle(c), loop(l), link(k), external(e), rep(r) {}
+  LoopState(MasterCycle& c, RateLoop& l, DdsSlaveLink& k, ExternalDevice* e, SessionReport& r,
+            const SessionPlan& plan, std::int64_t t0_ns)
+      : cycle(c), loop(l), link(k), external(e), rep(r), session(plan, t0_ns) {}
   MasterCycle& cycle;
   RateLoop& loop;
   DdsSlaveLink& link;
   ExternalDevice* external;  // the device, when it is driven over teleop/device_state
   SessionReport& rep;
-  LoopDelayMeter loop_delay;
+  MasterSession session;
   MasterState ms;             // MasterState for observers, filled in place
   DeviceState device_sample;  // the newest teleop/device_state sample (external device)
   std::uint64_t device_seen = 0;
-  std::uint64_t cycles = 0;
-  std::uint64_t state_every = 1;  // MasterState every this many cycles
-  std::uint64_t faults_seen = 0;  // the server's faults counted since the master started
-  bool was_link_lost = false;
-  double prev_cycle_s = -1.0;     // when the previous cycle began [s]; -1 before the first
-  double session_length_s = 0.0;  // after homing [s]
-  double grace_s = 0.0;  // how long the first commands' answer may take (watch_ownership) [s]
-  std::int64_t t0 = 0;   // the loop's start [ns]
-  double t0_s = 0.0;
-  OwnershipWatch owner;
   std::function<void(std::uint8_t, const std::string&)> report_tuning;  // TuningEndpoint::poll
 };
 
@@ -266,15 +221,6 @@ struct MasterNode::Impl {
   Eigen::Vector3d contact_point(const SceneDescription* scene, const Eigen::Vector3d& tip) {
     if (options.has_contact_point) return options.contact_point_m;
     return dds::scene_contact_point(scene, tip);
-  }
-
-  OperatorScript make_device_script() const {
-    if (options.script == "press-slip") {
-      return press_slip_script(Eigen::Vector3d::Zero(), options.press_depth_m);
-    }
-    OperatorScript s;
-    s.kind = parse_script_kind(options.script);
-    return s;
   }
 
   std::unique_ptr<HapticDevice> make_device() {
@@ -525,40 +471,29 @@ struct MasterNode::Impl {
     return finish_session(cycle, rep);
   }
 
-  /// Ownership, once per cycle (see OwnershipWatch): a master refused the slave holds (renders
-  /// nothing, commands nothing) and ends the session unless it waits; one that gets the slave
-  /// after waiting re-homes. `grace_s`: how long this master's first commands may take to
-  /// reach the server and its answer to come back.
-  void watch_ownership(MasterCycle& cycle, const DdsSlaveLink& link, double now_s, double t0_s,
-                       double grace_s, OwnershipWatch& w) {
-    const DdsSlaveLink::Owner owner = link.owner();
-    if (owner == DdsSlaveLink::Owner::kMine) {
-      if (w.refused) {
-        w.refused = false;
-        w.waited_s += now_s - w.refused_at_s;
-        cycle.hold(false);
-        cycle.rehome(now_s, RehomeReason::kTakeover);
+  /// Ownership, once per cycle: the watch decides (OwnershipWatch), the cycle holds while
+  /// refused and re-homes when it gets the slave after waiting, and each change is an event.
+  void watch_ownership(LoopState& s, double now_s) {
+    switch (s.session.owner().update(s.link.owner(), now_s)) {
+      case OwnershipWatch::Change::kGotSlave: {
+        const double owner_wait_s = s.session.owner().last_wait_s();
+        s.cycle.hold(false);
+        s.cycle.rehome(now_s, RehomeReason::kTakeover);
         event(static_cast<std::uint8_t>(sim::EventKind::kOwnership), 1,
-              "got the slave after waiting " + std::to_string(now_s - w.refused_at_s) + " s",
-              now_s - w.refused_at_s);
+              "got the slave after waiting " + std::to_string(owner_wait_s) + " s", owner_wait_s);
+        break;
       }
-      w.owned_once = true;
-      return;
-    }
-    if (owner != DdsSlaveLink::Owner::kOther) return;
-    if (!w.refused && (w.owned_once || now_s - t0_s > grace_s)) {
-      w.refused = true;
-      w.refused_first = !w.owned_once;
-      w.refused_at_s = now_s;
-      cycle.hold(true);
-      char msg[160];
-      std::snprintf(msg, sizeof(msg), "refused: the slave is owned by master session 0x%08x%s",
-                    link.other_owner_session(),
-                    options.wait_owner_s > 0 ? "; waiting for it" : "; no force rendered");
-      event(static_cast<std::uint8_t>(sim::EventKind::kOwnership), 2, msg, 0.0);
-      if (options.wait_owner_s <= 0) w.give_up = true;
-    } else if (w.refused && now_s - w.refused_at_s > options.wait_owner_s) {
-      w.give_up = true;
+      case OwnershipWatch::Change::kRefused: {
+        s.cycle.hold(true);
+        char msg[160];
+        std::snprintf(msg, sizeof(msg), "refused: the slave is owned by master session 0x%08x%s",
+                      s.link.other_owner_session(),
+                      options.wait_owner_s > 0 ? "; waiting for it" : "; no force rendered");
+        event(static_cast<std::uint8_t>(sim::EventKind::kOwnership), 2, msg, 0.0);
+        break;
+      }
+      case OwnershipWatch::Change::kNone:
+        break;
     }
   }
 
@@ -589,19 +524,10 @@ struct MasterNode::Impl {
           static_cast<double>(binding.foreign_total()));
   }
 
-  /// A cycle that begins this long after the previous one is a stall of this master's own loop
-  /// (the process was stopped, starved or swapped out): the device held its last force meanwhile
-  /// [s]. Far above any overrun of a loaded machine (tens of ms).
-  static constexpr double kStallS = 0.2;
-
-  /// A stall of the loop, detected from the clock: counted for the summary, published as an
-  /// event, and the force fades out at the device's rate bound and back in over the link fade
-  /// (SafetyLayer::fade_in) instead of carrying on from where it froze.
-  void check_stall(MasterCycle& cycle, double now_s, double prev_s, SessionReport& rep) {
-    if (prev_s < 0.0 || now_s - prev_s < kStallS) return;
-    const double gap_s = now_s - prev_s;
-    ++rep.stalls;
-    rep.longest_stall_s = std::max(rep.longest_stall_s, gap_s);
+  /// A stall of the loop (StallWatch): published as an event, and the force fades out at the
+  /// device's rate bound and back in over the link fade (SafetyLayer::fade_in) instead of
+  /// carrying on from where it froze. `gap_s`: the stall's length [s].
+  void on_stall(MasterCycle& cycle, double gap_s) {
     cycle.safety().fade_in();
     char msg[96];
     std::snprintf(msg, sizeof msg, "haptic loop stalled for %.3f s: force faded out and back in",
@@ -650,24 +576,14 @@ struct MasterNode::Impl {
     return std::max<std::uint64_t>(health.faults.total(), server_word.faults());
   }
 
-  /// Before the first cycle: the loop's pace and length, the thread's scheduling, the server's
-  /// fault baseline, homing, and the first tuning status and experiment description.
+  /// Before the first cycle: the thread's scheduling, the server's fault baseline, homing, and
+  /// the first tuning status and experiment description.
   void begin_loop(LoopState& s, const Eigen::Vector3d& tip0) {
-    s.state_every = std::max<std::uint64_t>(
-        1, static_cast<std::uint64_t>(std::llround(options.rate_hz / options.state_rate_hz)));
-    s.session_length_s = options.duration_s > 0
-                             ? options.duration_s
-                             : (options.device == "simulated"
-                                    ? std::max(2.0, script_duration_s(make_device_script()) + 1.0)
-                                    : 10.0);
-    s.grace_s = 0.5 + 2.0 * (options.forward.delay_s + options.backward.delay_s);
     // made once: the loop passes it by reference every cycle without building a std::function
     s.report_tuning = [this](std::uint8_t severity, const std::string& msg) {
       event(static_cast<std::uint8_t>(sim::EventKind::kTuning), severity, msg, 0.0);
       if (!options.quiet && severity == 0) std::cerr << "teleop_master: " << msg << "\n";
     };
-    s.t0 = now_ns();
-    s.t0_s = static_cast<double>(s.t0) * 1e-9;
     if (wants_thread_setup(options.realtime)) {
       const std::string problem = make_thread_realtime(options.realtime);
       if (!problem.empty()) {
@@ -676,18 +592,10 @@ struct MasterNode::Impl {
       }
     }
     update_health();  // the baseline: the server's counts from before this session
-    server_word.start_session(s.t0);
-    s.cycle.start_homing(s.t0_s, tip0, options.homing_s);
-    tuning->publish_status(s.cycle, s.t0);
+    server_word.start_session(s.session.t0_ns());
+    s.cycle.start_homing(s.session.t0_s(), tip0, options.homing_s);
+    tuning->publish_status(s.cycle, s.session.t0_ns());
     experiment->begin(s.cycle, master_session, options.name, options.device, options.rate_hz);
-  }
-
-  /// The session length, the sample limit or a refusal without waiting ends the loop.
-  bool loop_over(const LoopState& s, std::int64_t now) const {
-    const double now_s = static_cast<double>(now) * 1e-9;
-    if (options.samples > 0 && s.cycles >= options.samples) return true;
-    if (s.owner.give_up) return true;
-    return !s.cycle.homing() && now_s - s.cycle.session_start_s() >= s.session_length_s;
   }
 
   /// With --device external: the newest teleop/device_state sample into the device, and a
@@ -704,27 +612,26 @@ struct MasterNode::Impl {
     }
   }
 
-  /// One haptic cycle: the device's sample, tuning, the cycle's step, the loop delay, the
-  /// external device's command, ownership, then what follows from it (after_cycle).
+  /// One haptic cycle: the device's sample, tuning, a stall, the cycle's step, the loop delay,
+  /// the external device's command, ownership, then what follows from it (after_cycle).
   void run_cycle(LoopState& s, std::int64_t now) {
     const double now_s = static_cast<double>(now) * 1e-9;
     MasterCycle& cycle = s.cycle;
-    ++s.cycles;
+    LoopDelayMeter& loop_delay = s.session.loop_delay();
     take_device_sample(s);
     tuning->poll(cycle, now_s, now, s.report_tuning);
-    check_stall(cycle, now_s, s.prev_cycle_s, s.rep);
-    s.prev_cycle_s = now_s;
+    if (const double gap_s = s.session.begin_cycle(now_s); gap_s > 0.0) on_stall(cycle, gap_s);
     cycle.step(now_s);
-    s.loop_delay.entered(cycle.command_seq(), now_s);
+    loop_delay.entered(cycle.command_seq(), now_s);
     if (cycle.sample_arrived() &&
-        s.loop_delay.echo_used(cycle.slave_at_master().command_seq, cycle.command_seq(), now_s)) {
-      experiment->record_loop_delay(s.loop_delay.last_ms());
+        loop_delay.echo_used(cycle.slave_at_master().command_seq, cycle.command_seq(), now_s)) {
+      experiment->record_loop_delay(loop_delay.last_ms());
     }
     if (s.external && device_command_writer) {
       DeviceCommand dc = to_idl(s.external->next_command(), now);
       device_command_writer->write(dc);
     }
-    watch_ownership(cycle, s.link, now_s, s.t0_s, s.grace_s, s.owner);
+    watch_ownership(s, now_s);
     report_second_server();
     cycle.finish(now_s);
     experiment->update(cycle, now_s, now);
@@ -737,52 +644,51 @@ struct MasterNode::Impl {
     const double now_s = static_cast<double>(now) * 1e-9;
     MasterCycle& cycle = s.cycle;
     // a session whose slave faulted is never stable
-    if (const std::uint64_t faults = update_health(); faults > s.faults_seen) {
-      s.faults_seen = faults;
-      cycle.metrics().mark_unstable("the slave faulted on the server", now_s - s.t0_s);
+    if (s.session.faults_rose(update_health())) {
+      cycle.metrics().mark_unstable("the slave faulted on the server", now_s - s.session.t0_s());
     }
-    if (cycle.safety().link_lost() && !s.was_link_lost) ++s.rep.link_losses;
-    s.was_link_lost = cycle.safety().link_lost();
+    s.session.link_state(cycle.safety().link_lost());
     sim::SimEvent se;
     while (cycle.safety().events().pop(se)) {
       event(static_cast<std::uint8_t>(se.kind), static_cast<std::uint8_t>(se.severity), se.message,
             se.value);
     }
-    if (s.cycles % s.state_every == 0) {
-      publish_state(cycle, s.cycles, now, s.link.last_rtt_ms(), s.ms);
+    if (s.session.state_due()) {
+      publish_state(cycle, s.session.cycles(), now, s.link.last_rtt_ms(), s.ms);
     }
-    if (log) log->row(cycle, now_s - s.t0_s, s.link.last_rtt_ms(), s.loop_delay.last_ms());
+    if (log) {
+      log->row(cycle, now_s - s.session.t0_s(), s.link.last_rtt_ms(),
+               s.session.loop_delay().last_ms());
+    }
   }
 
-  /// After the last cycle: the loop's figures and the ownership into the report, then the close
+  /// After the last cycle: the session's and the cycle's figures into the report, then the close
   /// (close_session).
   void end_loop(LoopState& s) {
     MasterCycle& cycle = s.cycle;
     SessionReport& rep = s.rep;
     const double end_s = static_cast<double>(now_ns()) * 1e-9;
-    rep.elapsed_s = end_s - s.t0_s;
-    rep.session_s = cycle.session_start_s() < 0 ? 0.0 : end_s - cycle.session_start_s();
-    rep.loop_delay_ms = s.loop_delay.summary();
-    rep.refused = s.owner.give_up;
-    rep.refused_first = s.owner.refused_first;
-    rep.waited_for_owner_s =
-        s.owner.waited_s + (s.owner.refused ? end_s - s.owner.refused_at_s : 0.0);
+    s.session.report(end_s, cycle.session_start_s(), rep);
     rep.driver_silences = cycle.driver_silences();
     rep.driver_silent_s = cycle.driver_silent_s(end_s);
-    rep.closing_cycles = close_session(cycle, s.loop, s.link, s.t0_s);
+    rep.closing_cycles = close_session(cycle, s.loop, s.link, s.session.t0_s());
     rep.releases_sent = s.link.releases_sent();
   }
 
-  /// The haptic loop until the session length, the sample limit or a stop signal, then the
-  /// close.
+  /// The haptic loop until the session length, the sample limit, a refusal or a stop signal,
+  /// then the close.
   void run_loop(MasterCycle& cycle, RateLoop& loop, DdsSlaveLink& link, ExternalDevice* external,
                 const Eigen::Vector3d& tip0, SessionReport& rep) {
-    LoopState s(cycle, loop, link, external, rep);
+    LoopState s(cycle, loop, link, external, rep, plan_session(options), now_ns());
     begin_loop(s, tip0);
-    SessionStatus status(options.homing_s + s.session_length_s);  // homing, then the session
+    // the status line spans homing, then the session
+    SessionStatus status(options.homing_s + s.session.plan().session_length_s);
     while (!stop_requested()) {
       const std::int64_t now = now_ns();
-      if (loop_over(s, now)) break;
+      if (s.session.over(static_cast<double>(now) * 1e-9, cycle.homing(),
+                         cycle.session_start_s())) {
+        break;
+      }
       run_cycle(s, now);
       loop.wait();
     }
