@@ -532,8 +532,7 @@ struct MasterNode::Impl {
     char msg[96];
     std::snprintf(msg, sizeof msg, "haptic loop stalled for %.3f s: force faded out and back in",
                   gap_s);
-    event(static_cast<std::uint8_t>(sim::EventKind::kWatchdog), 1, msg, gap_s);
-    if (!options.quiet) std::cerr << "teleop_master: " << msg << "\n";
+    event(static_cast<std::uint8_t>(sim::EventKind::kWatchdog), 1, msg, gap_s);  // and stderr
   }
 
   /// The end of a session: the force fades to zero at the device's rate bound while the slave
