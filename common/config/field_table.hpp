@@ -26,7 +26,7 @@
 
 namespace teleop::config {
 
-/// One field of a mapping that fills an S: set exactly one of number, flag, point.
+/// One field of a mapping that fills an S: set exactly one of number, integer, flag, point.
 template <class S>
 struct FieldParam {
   std::string key{};   ///< key in the mapping
@@ -35,6 +35,7 @@ struct FieldParam {
   double lo = 0.0;  ///< number, point: smallest allowed value (each component)
   double hi = 0.0;  ///< number, point: largest allowed value (each component)
   double& (*number)(S&) = nullptr;
+  int& (*integer)(S&) = nullptr;  ///< a whole number within [lo, hi]
   bool& (*flag)(S&) = nullptr;
   Eigen::Vector3d& (*point)(S&) = nullptr;
 
@@ -43,6 +44,9 @@ struct FieldParam {
   void read(const Node& node, S& s) const {
     if (number != nullptr) {
       number(s) = node.number_or(key, number(s), lo, hi);
+    } else if (integer != nullptr) {
+      integer(s) = static_cast<int>(
+          node.integer_or(key, integer(s), static_cast<long long>(lo), static_cast<long long>(hi)));
     } else if (flag != nullptr) {
       flag(s) = node.boolean_or(key, flag(s));
     } else {
@@ -54,6 +58,7 @@ struct FieldParam {
   /// The field's value in `s` as YAML writes it ("400", "true", "[0, 0, -9.81]").
   std::string text(S s) const {
     if (number != nullptr) return param_number_text(number(s));
+    if (integer != nullptr) return std::to_string(integer(s));
     if (flag != nullptr) return flag(s) ? "true" : "false";
     const Eigen::Vector3d& p = point(s);
     return "[" + param_number_text(p.x()) + ", " + param_number_text(p.y()) + ", " +
@@ -63,6 +68,7 @@ struct FieldParam {
   std::string allowed_text() const {
     if (flag != nullptr) return "true, false";
     const std::string range = "[" + param_number_text(lo) + ", " + param_number_text(hi) + "]";
+    if (integer != nullptr) return range + ", whole";
     return point != nullptr ? "each in " + range : range;
   }
 };

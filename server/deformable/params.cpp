@@ -4,6 +4,7 @@
 #include <set>
 #include <string>
 
+#include "server/deformable/body_params.hpp"
 #include "server/deformable/deformable.hpp"
 
 namespace teleop::sim::deformable {
@@ -84,7 +85,7 @@ IntegratorKind parse_integrator_kind(const std::string& name) {
 
 namespace {
 
-// The fields of the volumetric model: its tetrahedral mesh and its contact stiffness.
+// The fields only the volumetric model takes: its tetrahedral mesh, nodal pressure, mass scaling.
 void load_volume_fields(const teleop::config::Node& node, DeformableParams& p) {
   const bool fem = p.model == ModelKind::kFem;
   p.tet_mesh_file = node.string_or("tet_mesh_file", "");
@@ -92,17 +93,11 @@ void load_volume_fields(const teleop::config::Node& node, DeformableParams& p) {
   if (!p.tet_mesh_file.empty() && !p.mesh_file.empty()) {
     node.fail("tet_mesh_file", "give either mesh_file (filled by gmsh) or tet_mesh_file, not both");
   }
-  p.tet_max_edge_m = node.number_or("tet_max_edge_m", 0.0, 0.0, 100.0);
-  p.contact_pressure_stiffness_pa_per_m =
-      node.number_or("contact_pressure_stiffness_pa_per_m", 0.0, 0.0, 1e15);
   if (!fem && node.has("nodal_pressure")) node.fail("nodal_pressure", "is for model fem only");
   p.nodal_pressure = node.boolean_or("nodal_pressure", true);
   for (const char* key : {"mass_scaling_step_s", "mass_scaling_max_fraction"}) {
     if (!fem && node.has(key)) node.fail(key, "is for model fem only");
   }
-  p.mass_scaling_step_s = node.number_or("mass_scaling_step_s", 0.0, 0.0, 1.0);
-  p.mass_scaling_max_fraction =
-      node.number_or("mass_scaling_max_fraction", p.mass_scaling_max_fraction, 0.0, 0.5);
 }
 
 // Model mass_spring: a body that gives its material (youngs_modulus_pa, poisson_ratio) gets its
@@ -127,44 +122,12 @@ void load_mass_spring_source(const teleop::config::Node& node, DeformableParams&
 
 namespace {
 
-// The fields of a deformable body's mapping.
-const std::set<std::string>& deformable_keys() {
-  static const std::set<std::string> keys = {"model",
-                                             "integrator",
-                                             "kernel",
-                                             "level",
-                                             "radius_m",
-                                             "centre_m",
-                                             "mesh_file",
-                                             "mesh_scale",
-                                             "tet_mesh_file",
-                                             "tet_max_edge_m",
-                                             "contact_pressure_stiffness_pa_per_m",
-                                             "nodal_pressure",
-                                             "mass_scaling_step_s",
-                                             "mass_scaling_max_fraction",
-                                             "mass_kg",
-                                             "density_kg_per_m3",
-                                             "centre_mass_fraction",
-                                             "edge_stiffness_n_per_m",
-                                             "radial_stiffness_n_per_m3",
-                                             "youngs_modulus_pa",
-                                             "poisson_ratio",
-                                             "stiffness_damping_s",
-                                             "radial_damping_s",
-                                             "mass_damping_per_s",
-                                             "gravity_mps2",
-                                             "contact_frequency_rad_per_s",
-                                             "contact_damping_ratio",
-                                             "friction",
-                                             "cg_max_iterations",
-                                             "cg_tolerance",
-                                             "sleep_speed_mps",
-                                             "sleep_time_s",
-                                             "max_speed_mps",
-                                             "max_substeps",
-                                             "min_substeps"};
-  return keys;
+// The fields of a deformable body's mapping: the table's and those read here.
+std::set<std::string> deformable_keys() {
+  return config::field_keys(body_field_params(),
+                            {"model", "integrator", "kernel", "level", "mesh_file", "tet_mesh_file",
+                             "nodal_pressure", "density_kg_per_m3", "radial_stiffness_n_per_m3",
+                             "stiffness_damping_s", "mass_damping_per_s"});
 }
 
 // model, integrator, kernel and level.
@@ -190,65 +153,25 @@ void load_kind_fields(const teleop::config::Node& node, DeformableParams& p) {
 #endif
 }
 
-// The shape: radius, centre, surface mesh and its scale.
-void load_shape_fields(const teleop::config::Node& node, DeformableParams& p) {
-  p.radius_m = node.number_or("radius_m", p.radius_m, 1e-3, 100.0);
-  const auto c =
-      node.numbers_or("centre_m", {p.centre_m.x(), p.centre_m.y(), p.centre_m.z()}, -1e4, 1e4);
-  if (c.size() != 3) node.fail("centre_m", "must be a list of 3 numbers [x, y, z] in metres");
-  p.centre_m = Eigen::Vector3d(c[0], c[1], c[2]);
-  p.mesh_file = node.string_or("mesh_file", "");
-  p.mesh_scale = node.number_or("mesh_scale", 1.0, 1e-6, 1e6);
-}
-
-// Mass, stiffness, material and damping.
+// Density, and the fields whose default depends on the model: radial springs, Rayleigh damping.
 void load_material_fields(const teleop::config::Node& node, DeformableParams& p) {
   const bool fem = p.model == ModelKind::kFem;
   if (node.has("mass_kg") && node.has("density_kg_per_m3")) {
     node.fail("density_kg_per_m3", "give either mass_kg or density_kg_per_m3, not both");
   }
-  p.mass_kg = node.number_or("mass_kg", p.mass_kg, 1e-4, 1e5);
   if (node.has("density_kg_per_m3")) {
     p.density_kg_per_m3 = node.number("density_kg_per_m3", 1.0, 2.5e4);
   }
-  p.centre_mass_fraction =
-      node.number_or("centre_mass_fraction", p.centre_mass_fraction, 0.01, 0.9);
-  p.edge_stiffness_n_per_m =
-      node.number_or("edge_stiffness_n_per_m", p.edge_stiffness_n_per_m, 0.0, 1e7);
   const double radial_default =
       p.model == ModelKind::kMassSpring ? p.radial_stiffness_n_per_m3 : 0.0;
   p.radial_stiffness_n_per_m3 =
       node.number_or("radial_stiffness_n_per_m3", radial_default, 0.0, 1e10);
-  p.youngs_modulus_pa = node.number_or("youngs_modulus_pa", p.youngs_modulus_pa, 1.0, 1e10);
-  p.poisson_ratio = node.number_or("poisson_ratio", p.poisson_ratio, 0.0, 0.49);
   // model fem: Rayleigh damping beta K + alpha M (alpha relative to the mean velocity); lighter
   // defaults than the surface models' (zeta 0.05 on the default ball's lowest modes)
   p.stiffness_damping_s =
       node.number_or("stiffness_damping_s", fem ? 1e-4 : p.stiffness_damping_s, 0.0, 1.0);
-  p.radial_damping_s = node.number_or("radial_damping_s", p.radial_damping_s, 0.0, 1.0);
   p.mass_damping_per_s =
       node.number_or("mass_damping_per_s", fem ? 5.0 : p.mass_damping_per_s, 0.0, 1e3);
-}
-
-// Gravity, contact, the implicit solve, sleep and sub-steps.
-void load_solver_fields(const teleop::config::Node& node, DeformableParams& p) {
-  const auto g = node.numbers_or(
-      "gravity_mps2", {p.gravity_mps2.x(), p.gravity_mps2.y(), p.gravity_mps2.z()}, -100.0, 100.0);
-  if (g.size() != 3) node.fail("gravity_mps2", "must be a list of 3 numbers [m/s^2]");
-  p.gravity_mps2 = Eigen::Vector3d(g[0], g[1], g[2]);
-  p.contact_frequency_rad_per_s =
-      node.number_or("contact_frequency_rad_per_s", p.contact_frequency_rad_per_s, 1.0, 1e6);
-  p.contact_damping_ratio =
-      node.number_or("contact_damping_ratio", p.contact_damping_ratio, 0.0, 10.0);
-  p.friction = node.boolean_or("friction", p.friction);
-  p.cg_max_iterations =
-      static_cast<int>(node.integer_or("cg_max_iterations", p.cg_max_iterations, 1, 10000));
-  p.cg_tolerance = node.number_or("cg_tolerance", p.cg_tolerance, 1e-14, 1e-1);
-  p.sleep_speed_mps = node.number_or("sleep_speed_mps", p.sleep_speed_mps, 0.0, 1.0);
-  p.sleep_time_s = node.number_or("sleep_time_s", p.sleep_time_s, 0.0, 1e3);
-  p.max_speed_mps = node.number_or("max_speed_mps", p.max_speed_mps, 1e-3, 1e6);
-  p.max_substeps = static_cast<int>(node.integer_or("max_substeps", p.max_substeps, 1, 10000));
-  p.min_substeps = static_cast<int>(node.integer_or("min_substeps", p.min_substeps, 1, 10000));
 }
 
 }  // namespace
@@ -261,10 +184,10 @@ DeformableParams load_deformable_params(const teleop::config::Node& node) {
   node.reject_unknown_keys(deformable_keys());
   DeformableParams p;
   load_kind_fields(node, p);
-  load_shape_fields(node, p);
+  p.mesh_file = node.string_or("mesh_file", "");
   load_volume_fields(node, p);
+  config::read_fields(node, body_field_params(), p);
   load_material_fields(node, p);
-  load_solver_fields(node, p);
   load_mass_spring_source(node, p);
   if (p.model == ModelKind::kMassSpring && !p.springs_from_material &&
       p.edge_stiffness_n_per_m <= 0.0 && p.radial_stiffness_n_per_m3 <= 0.0) {

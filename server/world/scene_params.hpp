@@ -1,12 +1,13 @@
 #pragma once
 // The plain fields of a scene file, each declared once (common/config/field_table.hpp): the
-// world box, physics, command, tool, each plane's and each deformable body's tip contact. The
+// world box, physics, command, tool, each plane's, and each deformable body's tip contact (the
+// body's own: server/deformable/body_params.hpp). The
 // scene loader (server/world/world_model.cpp) reads these mappings with the tables,
 // teleop_server's --rate and --command-timeout take their ranges from them, and
 // docs/configuration.md's table of them is `teleop_server --print-scene-parameters`
 // (ctest docs.scene_parameters_table_is_the_programs). The fields with rules beyond a range (a
-// plane's name and normal, the deformable bodies' models and materials, the robot) are read by
-// the loader's own code and described by hand in the docs.
+// plane's name and normal, a body's model and the fields whose default depends on it, the robot)
+// are read by the loader's own code and described by hand in the docs.
 #include <string>
 #include <vector>
 

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "server/deformable/body_params.hpp"
 #include "server/world/world_model.hpp"
 #include "tests/support/config_error.hpp"
 
@@ -29,6 +30,10 @@ const Section kPhysics{"physics", "physics: {@}\n"};
 const Section kCommand{"command", "command: {@}\n"};
 const Section kTool{"tool", "tool: {@}\n"};
 const Section kPlane{"planes[0]", "planes:\n  - {normal: [0, 0, 1], @}\n"};
+const Section kBody{"deformables[0].body",
+                    "planes:\n  - {normal: [0, 0, 1]}\n"
+                    "deformables:\n"
+                    "  - body: {model: fem, level: 1, @}\n"};
 const Section kContact{"deformables[0].contact",
                        "planes:\n  - {normal: [0, 0, 1]}\n"
                        "deformables:\n"
@@ -47,7 +52,8 @@ WorldModel load(const std::string& yaml) {
 
 template <class S>
 std::string value_text(const FieldParam<S>& f, double v) {
-  const std::string x = config::param_number_text(v);
+  const std::string x = f.integer != nullptr ? std::to_string(static_cast<long long>(v))
+                                             : config::param_number_text(v);
   return f.point != nullptr ? "[" + x + ", " + x + ", " + x + "]" : x;
 }
 
@@ -73,7 +79,10 @@ TEST(SceneParams, EachTableHasUniqueKeysOneAccessorAndARange) {
     std::set<std::string> keys;
     for (const auto& f : table) {
       EXPECT_TRUE(keys.insert(f.key).second) << f.key;
-      EXPECT_EQ((f.number != nullptr) + (f.flag != nullptr) + (f.point != nullptr), 1) << f.key;
+      EXPECT_EQ((f.number != nullptr) + (f.integer != nullptr) + (f.flag != nullptr) +
+                    (f.point != nullptr),
+                1)
+          << f.key;
       if (f.flag == nullptr) {
         EXPECT_LT(f.lo, f.hi) << f.key;
       }
@@ -86,6 +95,7 @@ TEST(SceneParams, EachTableHasUniqueKeysOneAccessorAndARange) {
   check(tool_params());
   check(plane_params());
   check(tip_contact_params());
+  check(deformable::body_field_params());
 }
 
 TEST(SceneParams, TheLoaderRefusesEachFieldPastEitherEndOfItsRange) {
@@ -95,6 +105,7 @@ TEST(SceneParams, TheLoaderRefusesEachFieldPastEitherEndOfItsRange) {
   expect_ends_refused(kTool, tool_params());
   expect_ends_refused(kPlane, plane_params());
   expect_ends_refused(kContact, tip_contact_params());
+  expect_ends_refused(kBody, deformable::body_field_params());
 }
 
 TEST(SceneParams, AFieldTheFileGivesIsSetAndTheOthersKeepTheirDefaults) {
@@ -104,7 +115,8 @@ TEST(SceneParams, AFieldTheFileGivesIsSetAndTheOthersKeepTheirDefaults) {
       "tool: {kd_rot_nms_per_rad: 0.02, gravity_compensation: false}\n"
       "planes:\n  - {normal: [0, 0, 2], friction: 0.7}\n"
       "deformables:\n"
-      "  - body: {level: 1, radius_m: 0.25, centre_m: [0.6, 0, 0.25]}\n"
+      "  - body: {level: 1, radius_m: 0.25, centre_m: [0.6, 0, 0.25], max_substeps: 32,\n"
+      "           friction: false}\n"
       "    contact: {patch_blend: 0.4, friction_static: 0.3, friction_kinetic: 0.2}\n");
   EXPECT_EQ(w.visual_rate_hz, 30.0);
   EXPECT_EQ(w.physics_rate_hz, d.physics_rate_hz);
@@ -117,6 +129,10 @@ TEST(SceneParams, AFieldTheFileGivesIsSetAndTheOthersKeepTheirDefaults) {
   EXPECT_EQ(w.planes[0].stiffness_n_per_m, Plane{}.stiffness_n_per_m);
   ASSERT_EQ(w.bodies.size(), 1u);
   EXPECT_EQ(w.bodies[0].contact.patch_blend, 0.4);
+  EXPECT_EQ(w.bodies[0].body.params.max_substeps, 32);
+  EXPECT_FALSE(w.bodies[0].body.params.friction);
+  EXPECT_EQ(w.bodies[0].body.params.cg_max_iterations,
+            deformable::DeformableParams{}.cg_max_iterations);
   EXPECT_EQ(w.bodies[0].contact.node_stiffness_n_per_m,
             collision::TipContactParams{}.node_stiffness_n_per_m);
 }
@@ -143,7 +159,8 @@ TEST(SceneParams, TheDocsTableHasARowPerFieldWithItsDefaultAndRange) {
     ++rows;
   }
   EXPECT_EQ(rows, world_box_params().size() + physics_params().size() + command_params().size() +
-                      tool_params().size() + plane_params().size() + tip_contact_params().size());
+                      tool_params().size() + plane_params().size() + tip_contact_params().size() +
+                      deformable::body_field_params().size());
 }
 
 }  // namespace
