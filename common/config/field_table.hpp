@@ -34,6 +34,9 @@ struct FieldParam {
   std::string help{};
   double lo = 0.0;  ///< number, point: smallest allowed value (each component)
   double hi = 0.0;  ///< number, point: largest allowed value (each component)
+  /// number: the field holds the file's value times this (e.g. degrees in the file, radians in
+  /// the field); lo, hi and the docs are in the file's unit.
+  double scale = 1.0;
   double& (*number)(S&) = nullptr;
   int& (*integer)(S&) = nullptr;  ///< a whole number within [lo, hi]
   bool& (*flag)(S&) = nullptr;
@@ -43,7 +46,7 @@ struct FieldParam {
   /// @throws ConfigError naming the file, the field path, the value and the range.
   void read(const Node& node, S& s) const {
     if (number != nullptr) {
-      number(s) = node.number_or(key, number(s), lo, hi);
+      number(s) = node.number_or(key, number(s) / scale, lo, hi) * scale;
     } else if (integer != nullptr) {
       integer(s) = static_cast<int>(
           node.integer_or(key, integer(s), static_cast<long long>(lo), static_cast<long long>(hi)));
@@ -57,7 +60,7 @@ struct FieldParam {
   }
   /// The field's value in `s` as YAML writes it ("400", "true", "[0, 0, -9.81]").
   std::string text(S s) const {
-    if (number != nullptr) return param_number_text(number(s));
+    if (number != nullptr) return param_number_text(number(s) / scale);
     if (integer != nullptr) return std::to_string(integer(s));
     if (flag != nullptr) return flag(s) ? "true" : "false";
     const Eigen::Vector3d& p = point(s);

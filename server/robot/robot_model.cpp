@@ -1,5 +1,7 @@
 #include "server/robot/robot_model.hpp"
 
+#include "server/robot/ik_params.hpp"
+
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
@@ -215,21 +217,8 @@ namespace {
 
 /// The `ik:` mapping over the defaults in `p`, each field checked against its range.
 void load_ik_params(const config::Node& k, IkParams& p) {
-  k.reject_unknown_keys({"gain_per_s", "orientation_weight_m", "damping_max_m",
-                         "singular_threshold_m", "limit_margin_deg", "max_tip_speed_mps",
-                         "max_tip_angular_speed_radps", "friction_compensation",
-                         "friction_velocity_radps"});
-  p.gain_per_s = k.number_or("gain_per_s", p.gain_per_s, kMinIkGainPerS, 1000.0);
-  p.orientation_weight_m = k.number_or("orientation_weight_m", p.orientation_weight_m, 0.0, 10.0);
-  p.damping_max_m = k.number_or("damping_max_m", p.damping_max_m, 0.0, 10.0);
-  p.singular_threshold_m = k.number_or("singular_threshold_m", p.singular_threshold_m, 1e-6, 10.0);
-  p.limit_margin_rad = k.number_or("limit_margin_deg", p.limit_margin_rad / kDeg, 0.0, 30.0) * kDeg;
-  p.max_tip_speed_mps = k.number_or("max_tip_speed_mps", p.max_tip_speed_mps, 1e-3, 100.0);
-  p.max_tip_angular_speed_radps =
-      k.number_or("max_tip_angular_speed_radps", p.max_tip_angular_speed_radps, 1e-3, 100.0);
-  p.friction_compensation = k.number_or("friction_compensation", p.friction_compensation, 0.0, 1.0);
-  p.friction_velocity_radps =
-      k.number_or("friction_velocity_radps", p.friction_velocity_radps, 1e-6, 10.0);
+  k.reject_unknown_keys(config::field_keys(ik_field_params()));
+  config::read_fields(k, ik_field_params(), p);
 }
 
 }  // namespace

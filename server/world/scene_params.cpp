@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "server/deformable/body_params.hpp"
+#include "server/robot/ik_params.hpp"
 #include "server/world/world_model.hpp"
 
 namespace teleop::sim {
@@ -256,6 +257,7 @@ std::string scene_params_markdown() {
   md += config::fields_markdown_rows("command.", command_params(), w);
   md += config::fields_markdown_rows("tool.", tool_params(), w);
   md += config::fields_markdown_rows("planes[].", plane_params(), Plane{});
+  md += config::fields_markdown_rows("robot.ik.", robot::ik_field_params(), robot::IkParams{});
   md += config::fields_markdown_rows("deformables[].body.", deformable::body_field_params(),
                                      deformable::DeformableParams{});
   md += config::fields_markdown_rows("deformables[].contact.", tip_contact_params(),

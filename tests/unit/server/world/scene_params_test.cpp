@@ -6,11 +6,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "server/deformable/body_params.hpp"
+#include "server/robot/ik_params.hpp"
 #include "server/world/world_model.hpp"
 #include "tests/support/config_error.hpp"
 
@@ -96,6 +98,7 @@ TEST(SceneParams, EachTableHasUniqueKeysOneAccessorAndARange) {
   check(plane_params());
   check(tip_contact_params());
   check(deformable::body_field_params());
+  check(robot::ik_field_params());
 }
 
 TEST(SceneParams, TheLoaderRefusesEachFieldPastEitherEndOfItsRange) {
@@ -137,6 +140,31 @@ TEST(SceneParams, AFieldTheFileGivesIsSetAndTheOthersKeepTheirDefaults) {
             collision::TipContactParams{}.node_stiffness_n_per_m);
 }
 
+TEST(SceneParams, TheRobotsIkFieldsAreReadWithTheirTableAndUnits) {
+  // the PUMA's robot mapping with ik fields set: a value in range is set (degrees into
+  // radians), one past either end is refused naming the field and the range in degrees
+  const std::string file = std::string(TELEOP_SOURCE_DIR) + "/deploy/scenes/robot_puma560.yaml";
+  auto robot_with = [&](const std::string& key, const std::string& value) {
+    const config::Node root = config::Node::load_file(file);
+    YAML::Node r = root.raw()["robot"];
+    r["ik"][key] = value;
+    return robot::load_robot_model(config::Node(r, file, "robot"));
+  };
+  EXPECT_NEAR(robot_with("limit_margin_deg", "2").ik.limit_margin_rad, 2.0 * M_PI / 180.0, 1e-15);
+  EXPECT_EQ(robot_with("gain_per_s", "25").ik.gain_per_s, 25.0);
+  for (const auto& f : robot::ik_field_params()) {
+    for (const double v : {f.lo - 1.0, f.hi * 2.0 + 1.0}) {
+      const std::string m =
+          test::config_error_of([&] { robot_with(f.key, config::param_number_text(v)); });
+      EXPECT_NE(m.find("'robot.ik." + f.key + "'"), std::string::npos) << m;
+      EXPECT_NE(m.find(config::range_text(f.lo, f.hi)), std::string::npos) << m;
+    }
+  }
+  EXPECT_NE(
+      scene_params_markdown().find("| `robot.ik.limit_margin_deg` | deg | 1.14592 | [0, 30] |"),
+      std::string::npos);
+}
+
 TEST(SceneParams, UnknownKeysAreRefusedWithTheKnownOnes) {
   const std::string m = test::config_error_of([] { load("tool: {mass: 1}\n"); });
   EXPECT_NE(m.find("'tool.mass'"), std::string::npos) << m;
@@ -160,7 +188,7 @@ TEST(SceneParams, TheDocsTableHasARowPerFieldWithItsDefaultAndRange) {
   }
   EXPECT_EQ(rows, world_box_params().size() + physics_params().size() + command_params().size() +
                       tool_params().size() + plane_params().size() + tip_contact_params().size() +
-                      deformable::body_field_params().size());
+                      deformable::body_field_params().size() + robot::ik_field_params().size());
 }
 
 }  // namespace
