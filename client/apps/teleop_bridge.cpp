@@ -157,16 +157,15 @@ int main(int argc, char** argv) {
   double duration_s = 0.0, stats_s = 10.0, queue_kb = 4096.0;
   bool quiet = false, insecure = false;
   std::string listen, token_file;
-  app.add_option("--domain", domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
-      ->check(config::integer_in(0.0, 232.0));
+  config::add_integer(app, "--domain", domain, 0.0, 232.0,
+                      "DDS domain id (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
   teleop::dds::NetworkFlags net_flags;
   teleop::dds::add_network_flags(app, net_flags, "observer", "--dds-listen");
-  auto* port_opt = app.add_option("--port", bo.port,
-                                  "TCP port on 127.0.0.1, 0-65535 (0: the system picks one and "
-                                  "it is printed)")
-                       ->check(config::integer_in(0.0, 65535.0))
+  auto* port_opt = config::add_integer(app, "--port", bo.port, 0.0, 65535.0,
+                                       "TCP port on 127.0.0.1 (0: the system picks one and it is "
+                                       "printed)")
                        ->capture_default_str();
   app.add_option("--listen", listen,
                  "ADDR:PORT to listen on (default 127.0.0.1:8765); a non-loopback address needs "
@@ -184,16 +183,15 @@ int main(int argc, char** argv) {
   app.add_flag("--full-rate", bo.full_rate,
                "also serve the 1 kHz topics (master_command, slave_state, master_state, "
                "device_*); by default their rate-limited _view/_monitor copies");
-  app.add_option("--queue-kb", queue_kb, "per-client send queue bound [KiB], 64-1048576")
-      ->check(config::number_in(64.0, 1048576.0))
+  config::add_number(app, "--queue-kb", queue_kb, 64.0, 1048576.0, "per-client send queue bound",
+                     "KiB")
       ->capture_default_str();
-  app.add_option("--max-clients", bo.max_clients, "clients served at once, 1-1024")
-      ->check(config::integer_in(1.0, 1024.0))
+  config::add_integer(app, "--max-clients", bo.max_clients, 1.0, 1024.0, "clients served at once")
       ->capture_default_str();
-  app.add_option("--duration", duration_s, "stop after this long [s], 0-1e6; 0 = until SIGINT")
-      ->check(config::number_in(0.0, 1e6));
-  app.add_option("--stats-s", stats_s, "print the counts to stderr this often [s], 0-3600; 0 = off")
-      ->check(config::number_in(0.0, 3600.0))
+  config::add_number(app, "--duration", duration_s, 0.0, 1e6,
+                     "stop after this long (0 = until SIGINT)", "s");
+  config::add_number(app, "--stats-s", stats_s, 0.0, 3600.0,
+                     "print the counts to stderr this often (0 = off)", "s")
       ->capture_default_str();
   app.add_flag("--quiet", quiet, "print only warnings, errors and the periodic counts");
   if (const int status = config::parse_command_line(app, "teleop_bridge", argc, argv);
@@ -201,9 +199,6 @@ int main(int argc, char** argv) {
     return status == 2 ? 2 : status;
   }
   try {
-    config::check_flag("--duration", duration_s, 0.0, 1e6);
-    config::check_flag("--stats-s", stats_s, 0.0, 3600.0);
-    config::check_flag("--queue-kb", queue_kb, 64.0, 1048576.0);
     bo.queue_bytes = static_cast<std::size_t>(queue_kb * 1024.0);
     if (!listen.empty()) parse_listen(listen, bo);
     check_access(bo, token_file, insecure);

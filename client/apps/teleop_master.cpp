@@ -66,18 +66,15 @@ struct Flags {
 
 /// The session's length and rate, the DDS flags and the controller's flags.
 void add_session_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
-  using teleop::config::integer_in;
-  using teleop::config::number_in;
-  app.add_option("--duration", o.duration_s,
-                 "session length after homing [s], 0-1e6 (0 = the script's length + 1 s)")
-      ->check(number_in(0.0, 1e6));
-  app.add_option("--samples", o.samples, "stop after N haptic cycles, 0-1e12 (0 = no limit)")
-      ->check(integer_in(0.0, 1e12));
-  app.add_option("--rate", o.rate_hz, "haptic loop rate [Hz], 10-20000")
-      ->check(number_in(10.0, 20000.0))
+  using teleop::config::add_integer;
+  using teleop::config::add_number;
+  add_number(app, "--duration", o.duration_s, 0.0, 1e6,
+             "session length after homing (0 = the script's length + 1 s)", "s");
+  add_integer(app, "--samples", o.samples, 0.0, 1e12, "stop after N haptic cycles (0 = no limit)");
+  add_number(app, "--rate", o.rate_hz, 10.0, 20000.0, "haptic loop rate", "Hz")
       ->capture_default_str();
-  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
-      ->check(integer_in(0.0, 232.0));
+  add_integer(app, "--domain", f.domain, 0.0, 232.0,
+              "DDS domain id (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", f.profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
   teleop::dds::add_network_flags(app, f.net_flags, "master");
@@ -95,7 +92,7 @@ void add_session_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f
 
 /// The device, the operator's script and the contact point.
 void add_device_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
-  using teleop::config::number_in;
+  using teleop::config::add_number;
   app.add_option("--device", o.device,
                  "haptic device: simulated | replay | external | evdev:/dev/input/eventN | "
                  "vendor[:NAME]")
@@ -115,49 +112,48 @@ void add_device_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f)
   app.add_option("--script", o.script, "operator script of the simulated device")
       ->check(CLI::IsMember({"hold", "line", "circle", "step", "press-slip"}))
       ->capture_default_str();
-  app.add_option("--press-depth", o.press_depth_m, "press-slip depth below the surface [m], 0-0.2")
-      ->check(number_in(0.0, 0.2))
+  add_number(app, "--press-depth", o.press_depth_m, 0.0, 0.2, "press-slip depth below the surface",
+             "m")
       ->capture_default_str();
-  app.add_option("--tremor", o.tremor_m, "operator tremor amplitude [m], 0-0.01")
-      ->check(number_in(0.0, 0.01));
+  add_number(app, "--tremor", o.tremor_m, 0.0, 0.01, "operator tremor amplitude", "m");
   app.add_option("--contact-point", f.contact_point,
-                 "slave point 'x,y,z' [m] of the master origin (default: top of the first "
-                 "deformable body, else the floor under the tip); each within +-100")
+                 "slave point 'x,y,z' of the master origin (default: top of the first deformable "
+                 "body, else the floor under the tip) [m], each in " +
+                     teleop::config::help_range_text(-kContactPointLimitM, kContactPointLimitM))
       ->check(teleop::config::non_empty());
 }
 
 /// Declares every flag of teleop_master.
 void add_flags(CLI::App& app, teleop::master::MasterOptions& o, Flags& f) {
-  using teleop::config::number_in;
+  using teleop::config::add_number;
   add_session_flags(app, o, f);
   add_device_flags(app, o, f);
   teleop::master::add_delay_flags(app, f.delay, "both directions");
-  app.add_option("--homing", o.homing_s, "time to bring the slave to the script start [s], 0-60")
-      ->check(number_in(0.0, 60.0))
+  add_number(app, "--homing", o.homing_s, 0.0, 60.0, "time to bring the slave to the script start",
+             "s")
       ->capture_default_str();
-  app.add_option("--wait-server", o.wait_server_s, "wait for the server this long [s], 0-3600")
-      ->check(number_in(0.0, 3600.0))
+  add_number(app, "--wait-server", o.wait_server_s, 0.0, 3600.0, "wait for the server this long",
+             "s")
       ->capture_default_str();
   app.add_flag("--accept-tuning", o.accept_tuning,
                "apply live tuning requests (teleop/tuning: gains and injected delays, checked "
                "against the scheme and the device, ramped in; e.g. from teleop_viewer's tuning "
                "panel). Off: the master only publishes its tuning status");
-  app.add_option("--wait-owner", o.wait_owner_s,
-                 "when another master owns the slave, wait this long for it to release it "
-                 "(or to fall silent) instead of exiting with status 4 [s], 0-86400 (default 0)")
-      ->check(number_in(0.0, 86400.0));
-  app.add_option("--command-rate", o.command_rate_hz,
-                 "commands to the slave per second [Hz], at most --rate (default: one per "
-                 "haptic cycle; model-mediated: 1000 with the haptic loop at 4000), 1 to --rate")
-      ->check(number_in(0.0, 20000.0));
+  add_number(app, "--wait-owner", o.wait_owner_s, 0.0, 86400.0,
+             "when another master owns the slave, wait this long for it to release it (or to "
+             "fall silent) instead of exiting with status 4 (default 0)",
+             "s");
+  add_number(app, "--command-rate", o.command_rate_hz, 0.0, 20000.0,
+             "commands to the slave per second, 1 to --rate (default and 0: one per haptic "
+             "cycle; model-mediated: 1000 with the haptic loop at 4000)",
+             "Hz");
   teleop::dds::add_reconnect_flag(app, o.reconnect_s);
   teleop::config::add_realtime_flags(app, o.realtime, "haptic loop", "cycle", false);
   app.add_option("--name", o.name,
                  "who this master is in the server's ownership events, up to 48 characters "
                  "(default IDENTITY@HOST:PID)");
-  app.add_option("--link-timeout", f.link_timeout,
-                 "no SlaveState for this long fades the force to zero [s], 0.001-10")
-      ->check(number_in(0.001, 10.0));
+  add_number(app, "--link-timeout", f.link_timeout, 0.001, 10.0,
+             "no SlaveState for this long fades the force to zero", "s");
   app.add_option("--driver-timeout", f.driver_timeout,
                  "no valid device reading for this long (a driver process such as teleop_viewer "
                  "--drive that quit or hangs) holds the slave and fades the force to zero, with "
@@ -193,24 +189,15 @@ void apply_config_file(const Flags& f, teleop::master::MasterOptions& o) {
   }
 }
 
-/// The DDS options, the ranges of the session's flags, the master's name and the output files.
+/// The DDS options, the CPU to pin to, the master's name and the output files.
 void apply_session_flags(const Flags& f, teleop::master::MasterOptions& o) {
-  using teleop::config::check_flag;
   o.dds =
       teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_master", f.net_flags);
   o.dds.announce_to_whole_domain = true;  // observers with any participant id find it
   teleop::dds::profile_file(o.dds.profile);
-  check_flag("--duration", o.duration_s, 0.0, 1e6);
-  check_flag("--rate", o.rate_hz, 10.0, 20000.0);
-  check_flag("--wait-server", o.wait_server_s, 0.0, 3600.0);
-  check_flag("--homing", o.homing_s, 0.0, 60.0);
-  check_flag("--wait-owner", o.wait_owner_s, 0.0, 86400.0);
-  check_flag("--realtime", o.realtime.priority, 0.0, 99.0);
-  check_flag("--cpu", o.realtime.cpu, -1.0,
-             static_cast<double>(std::thread::hardware_concurrency()) - 1.0);
-  check_flag("--dma-latency-us", o.realtime.dma_latency_us, -1.0, 1e5);
-  check_flag("--nice", o.realtime.nice, -20.0, 19.0);
-  if (o.reconnect_s != 0.0) check_flag("--reconnect", o.reconnect_s, 0.5, 3600.0);
+  // below the core count
+  teleop::config::check_flag("--cpu", o.realtime.cpu, -1.0,
+                             static_cast<double>(std::thread::hardware_concurrency()) - 1.0);
   if (o.name.size() > 48) {
     throw teleop::config::ConfigError("command line: --name '" + o.name + "' has " +
                                       std::to_string(o.name.size()) +
@@ -239,9 +226,7 @@ void apply_channel_flags(const Flags& f, teleop::master::MasterOptions& o) {
 
 /// --link-timeout and --driver-timeout (the latter with its unit).
 void apply_timeout_flags(const Flags& f, teleop::master::MasterOptions& o) {
-  using teleop::config::check_flag;
-  if (f.link_timeout)
-    o.safety.link_timeout_s = check_flag("--link-timeout", *f.link_timeout, 0.001, 10.0);
+  if (f.link_timeout) o.safety.link_timeout_s = *f.link_timeout;
   if (f.driver_timeout) {
     const std::string& t = *f.driver_timeout;
     if (!t.empty() && t.find_last_of("0123456789.") + 1 == t.size()) {
@@ -260,8 +245,6 @@ void apply_timeout_flags(const Flags& f, teleop::master::MasterOptions& o) {
 void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOptions& o) {
   using teleop::config::check_flag;
   apply_session_flags(f, o);
-  check_flag("--press-depth", o.press_depth_m, 0.0, 0.2);
-  check_flag("--tremor", o.tremor_m, 0.0, 0.01);
   if (o.device == "replay" && o.replay_file.empty()) {
     throw teleop::config::ConfigError("command line: --device replay needs --replay FILE.csv");
   }
@@ -281,7 +264,9 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
     if (!app.count("--rate")) o.rate_hz = 4000.0;
     if (!app.count("--command-rate")) o.command_rate_hz = std::min(1000.0, o.rate_hz);
   }
+  // at most the haptic loop's rate (--rate, or model-mediated's 4000)
   if (o.command_rate_hz != 0.0) check_flag("--command-rate", o.command_rate_hz, 1.0, o.rate_hz);
+  // below the haptic loop's period (1 / --rate)
   check_flag("--spin-us", o.realtime.spin_us, 0.0, std::ceil(1e6 / o.rate_hz) - 1.0);
 }
 

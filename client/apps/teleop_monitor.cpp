@@ -118,18 +118,18 @@ struct Flags {
 };
 
 void add_flags(CLI::App& app, Flags& f) {
-  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
-      ->check(teleop::config::integer_in(0.0, 232.0));
+  using teleop::config::add_integer;
+  using teleop::config::add_number;
+  add_integer(app, "--domain", f.domain, 0.0, 232.0,
+              "DDS domain id (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", f.profile, "Fast DDS profile (default: loopback)");
   tdds::add_network_flags(app, f.net);
-  app.add_option("--period", f.period,
-                 "refresh / print period [s], 0.05-60 (default: 0.25 on the screen, 1 otherwise)")
-      ->check(teleop::config::number_in(0.05, 60.0));
-  app.add_option("--duration", f.duration_s, "stop after this long [s], 0-1e7; 0 = until q/SIGINT")
-      ->check(teleop::config::number_in(0.0, 1e7));
-  app.add_option("--stale", f.stale_s,
-                 "a stream topic silent this long is STALE [s], 0.05-3600 (server_stats: at "
-                 "least 3 s)")
+  add_number(app, "--period", f.period, 0.05, 60.0,
+             "refresh / print period (default: 0.25 on the screen, 1 otherwise)", "s");
+  add_number(app, "--duration", f.duration_s, 0.0, 1e7, "stop after this long (0 = until q/SIGINT)",
+             "s");
+  add_number(app, "--stale", f.stale_s, 0.05, 3600.0,
+             "a stream topic silent this long is STALE (server_stats: at least 3 s)", "s")
       ->capture_default_str();
   auto* json_opt = app.add_flag("--json", f.json, "one JSON object per line, for scripts");
   auto* lines_opt = app.add_flag("--lines", f.lines, "scrolling text log (default off a terminal)");
@@ -137,10 +137,9 @@ void add_flags(CLI::App& app, Flags& f) {
   app.add_flag("--full-rate", f.full_rate,
                "read the full-rate topics (slave_state 1 kHz, master_command, master_state, "
                "mesh_frame) instead of the 10 Hz *_monitor copies; loads the loops");
-  app.add_option("--nice", f.nice,
-                 "scheduling niceness of the monitor, 0-19: it yields the CPU to the server and "
-                 "master on the same machine")
-      ->check(teleop::config::integer_in(0.0, 19.0))
+  add_integer(app, "--nice", f.nice, 0.0, 19.0,
+              "scheduling niceness of the monitor (it yields the CPU to the server and master on "
+              "the same machine)")
       ->capture_default_str();
   teleop::dds::add_reconnect_flag(app, f.reconnect_s);
   json_opt->excludes(lines_opt)->excludes(tui_opt);
@@ -374,18 +373,12 @@ Mode output_mode(const Flags& f) {
                    : (isatty(STDOUT_FILENO) ? Mode::kTui : Mode::kLines);
 }
 
-/// The flags' ranges, then --nice applied.
-/// @throws config::ConfigError naming the flag, the value and the range.
-void check_flags(const Flags& f, double period_s) {
-  config::check_flag("--period", period_s, 0.05, 60.0);
-  config::check_flag("--duration", f.duration_s, 0.0, 1e7);
-  config::check_flag("--stale", f.stale_s, 0.05, 3600.0);
-  config::check_flag("--nice", f.nice, 0, 19);
+/// --nice applied (the flags' ranges were checked on their text).
+void apply_nice(const Flags& f) {
   // before the participant: every DDS thread inherits the priority
   if (f.nice > 0 && setpriority(PRIO_PROCESS, 0, f.nice) != 0) {
     std::cerr << "teleop_monitor: warning: cannot lower the priority (--nice " << f.nice << ")\n";
   }
-  if (f.reconnect_s != 0.0) config::check_flag("--reconnect", f.reconnect_s, 0.5, 3600.0);
 }
 
 /// SIGINT and SIGTERM stop the monitor; so does SIGHUP (a closed terminal, or tmux kill-server).
@@ -400,7 +393,7 @@ void install_signal_handlers() {
 int run_monitor(Flags& f) {
   const Mode mode = output_mode(f);
   const double period_s = f.period ? *f.period : (mode == Mode::kTui ? 0.25 : 1.0);
-  check_flags(f, period_s);
+  apply_nice(f);
   const auto opts = tdds::resolve_participant_options(f.profile, f.domain, "teleop_monitor", f.net);
   tdds::profile_file(opts.profile);
   tdds::ProfileKind kind = tdds::ProfileKind::kUdp;

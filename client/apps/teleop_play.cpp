@@ -63,28 +63,26 @@ struct Flags {
 void add_flags(CLI::App& app, Flags& f) {
   teleop::record::PlayerOptions& po = f.po;
   app.add_option("file", po.file, "recording made by teleop_record")->required();
-  app.add_option("--speed", po.speed, "playback speed, 0.01-100 (1 = as recorded)")
-      ->check(teleop::config::number_in(0.01, 100.0))
+  using teleop::config::add_integer;
+  using teleop::config::add_number;
+  add_number(app, "--speed", po.speed, 0.01, 100.0, "playback speed (1 = as recorded)")
       ->capture_default_str();
-  app.add_option("--seek", po.seek_s, "start this far into the recording [s], 0-length")
-      ->check(teleop::config::number_in(0.0, 1e9));
-  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
-      ->check(teleop::config::integer_in(0.0, 232.0));
+  add_number(app, "--seek", po.seek_s, 0.0, 1e9,
+             "start this far into the recording, at most its length", "s");
+  add_integer(app, "--domain", f.domain, 0.0, 232.0,
+              "DDS domain id (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", f.profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
   teleop::dds::add_network_flags(app, f.net_flags, "observer");
   app.add_option("--exclude", po.exclude, "topic not to publish (repeatable)");
-  app.add_option("--wait", po.wait_s, "pause before the first sample, for discovery [s], 0-60")
-      ->check(teleop::config::number_in(0.0, 60.0))
+  add_number(app, "--wait", po.wait_s, 0.0, 60.0, "pause before the first sample, for discovery",
+             "s")
       ->capture_default_str();
-  app.add_option("--linger", po.linger_s,
-                 "keep publishing latched topics after the end [s], 0-3600")
-      ->check(teleop::config::number_in(0.0, 3600.0))
+  add_number(app, "--linger", po.linger_s, 0.0, 3600.0,
+             "keep publishing latched topics after the end", "s")
       ->capture_default_str();
-  app.add_option("--max-gap", po.max_gap_s,
-                 "a pause longer than this between recorded samples is cut to it, with a "
-                 "message [s], 0.001-3600")
-      ->check(teleop::config::number_in(0.001, 3600.0))
+  add_number(app, "--max-gap", po.max_gap_s, 0.001, 3600.0,
+             "a pause longer than this between recorded samples is cut to it, with a message", "s")
       ->capture_default_str();
   app.add_flag("--quiet", po.quiet, "print only warnings and errors");
   app.add_flag("--progress", f.progress,
@@ -101,15 +99,12 @@ void add_flags(CLI::App& app, Flags& f) {
                  ".sqlite, .sqlite3, else MCAP), publish nothing");
 }
 
-/// The ranges, the excluded topics, the recording and the output files.
-/// @throws teleop::config::ConfigError naming the flag, the value and what is allowed.
+/// The excluded topics, the recording and the output files (the ranges were checked on the
+/// flags' text). @throws teleop::config::ConfigError naming the flag, the value and what is
+/// allowed.
 void check_flags(const Flags& f) {
   using namespace teleop;
   const record::PlayerOptions& po = f.po;
-  config::check_flag("--speed", po.speed, 0.01, 100.0);
-  config::check_flag("--seek", po.seek_s, 0.0, 1e9);
-  config::check_flag("--wait", po.wait_s, 0.0, 60.0);
-  config::check_flag("--linger", po.linger_s, 0.0, 3600.0);
   for (const auto& t : po.exclude) {
     if (!record::find_topic(t)) {
       std::string names;

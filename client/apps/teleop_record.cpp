@@ -48,12 +48,10 @@ namespace {
 
 using namespace teleop;
 
-/// Checks the flags that need more than a range and fills `ro` from them.
-/// @throws config::ConfigError naming the flag, its value and what is allowed.
+/// Checks the flags that need more than a range (checked on their text) and fills `ro` from
+/// them. @throws config::ConfigError naming the flag, its value and what is allowed.
 void check_options(record::RecorderOptions& ro, const std::string& format, double queue_mb,
                    double chunk_mb, double chunk_s) {
-  config::check_flag("--queue-mb", queue_mb, 1.0, 4096.0);
-  config::check_flag("--batch-ms", ro.batch_ms, 0.0, 50.0);
   for (const auto& t : ro.exclude) {
     if (!record::find_topic(t)) {
       std::string names;
@@ -63,8 +61,6 @@ void check_options(record::RecorderOptions& ro, const std::string& format, doubl
     }
   }
   ro.queue_bytes = static_cast<std::size_t>(queue_mb * 1024.0 * 1024.0);
-  config::check_flag("--chunk-mb", chunk_mb, 0.0625, 64.0);
-  config::check_flag("--chunk-s", chunk_s, 0.05, 60.0);
   ro.mcap.chunk_bytes = static_cast<std::uint64_t>(chunk_mb * 1024.0 * 1024.0);
   ro.mcap.chunk_ns = static_cast<std::int64_t>(chunk_s * 1e9);
   const record::RecordingFormat by_name = record::format_for_path(ro.out);
@@ -140,29 +136,27 @@ void add_flags(CLI::App& app, Flags& f) {
       ->required();
   app.add_option("--format", f.format,
                  "mcap or sqlite (default: from the --out extension, mcap for any other name)");
-  app.add_option("--chunk-mb", f.chunk_mb,
-                 "MCAP: close a chunk at this many MiB of samples, 0.0625-64")
-      ->check(config::number_in(0.0625, 64.0))
+  config::add_number(app, "--chunk-mb", f.chunk_mb, 0.0625, 64.0,
+                     "MCAP: close a chunk at this many MiB of samples", "MiB")
       ->capture_default_str();
-  app.add_option("--chunk-s", f.chunk_s,
-                 "MCAP: close a chunk this long after its first sample [s], 0.05-60 (a recorder "
-                 "killed with -9 loses at most this much)")
-      ->check(config::number_in(0.05, 60.0))
+  config::add_number(app, "--chunk-s", f.chunk_s, 0.05, 60.0,
+                     "MCAP: close a chunk this long after its first sample (a recorder killed "
+                     "with -9 loses at most this much)",
+                     "s")
       ->capture_default_str();
-  app.add_option("--duration", f.duration_s, "stop after this long [s], 0-1e6; 0 = until SIGINT")
-      ->check(config::number_in(0.0, 1e6));
-  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
-      ->check(config::integer_in(0.0, 232.0));
+  config::add_number(app, "--duration", f.duration_s, 0.0, 1e6,
+                     "stop after this long (0 = until SIGINT)", "s");
+  config::add_integer(app, "--domain", f.domain, 0.0, 232.0,
+                      "DDS domain id (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", f.profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
   teleop::dds::add_network_flags(app, f.net_flags, "observer");
-  app.add_option("--queue-mb", f.queue_mb, "bound of the in-memory queue [MiB], 1-4096")
-      ->check(config::number_in(1.0, 4096.0))
+  config::add_number(app, "--queue-mb", f.queue_mb, 1.0, 4096.0, "bound of the in-memory queue",
+                     "MiB")
       ->capture_default_str();
   app.add_option("--exclude", ro.exclude, "topic not to record (repeatable)");
-  app.add_option("--batch-ms", ro.batch_ms,
-                 "take samples in batches this far apart [ms], 0-50 (0 = wake per sample)")
-      ->check(config::number_in(0.0, 50.0))
+  config::add_number(app, "--batch-ms", ro.batch_ms, 0.0, 50.0,
+                     "take samples in batches this far apart (0 = wake per sample)", "ms")
       ->capture_default_str();
   app.add_option("--summary-json", f.summary_json, "write the counts as JSON here at exit");
   app.add_flag("--quiet", f.quiet, "print only warnings and errors");
@@ -174,7 +168,6 @@ void add_flags(CLI::App& app, Flags& f) {
 /// Records until --duration, a stop signal or a failure; returns the exit status (report()).
 int record_session(Flags& f) {
   record::RecorderOptions& ro = f.ro;
-  config::check_flag("--duration", f.duration_s, 0.0, 1e6);
   check_options(ro, f.format, f.queue_mb, f.chunk_mb, f.chunk_s);
   prepare_output_file("--out", ro.out);
   if (!f.summary_json.empty()) prepare_output_file("--summary-json", f.summary_json);

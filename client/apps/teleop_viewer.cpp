@@ -529,68 +529,6 @@ class ViewerApp {
   std::string save_path_;  ///< where the next save goes ("" = a timestamped name)
 };
 
-/// Declares every flag of teleop_viewer.
-void add_flags(CLI::App& app, ViewerOptions& o, teleop::dds::NetworkFlags& net_flags) {
-  app.add_option("--domain", o.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
-      ->check(teleop::config::integer_in(0.0, 232.0));
-  app.add_option("--profile", o.profile, "Fast DDS profile (default: loopback)");
-  teleop::dds::add_network_flags(app, net_flags);
-  app.add_option("--snapshot", o.snapshot,
-                 "headless: render offscreen, write this PNG and exit (needs an X display, e.g. "
-                 "xvfb-run)");
-  app.add_option("--after", o.after_s,
-                 "snapshot after this many seconds of complete data [s], 0-3600")
-      ->capture_default_str();
-  app.add_option("--timeout", o.timeout_s,
-                 "snapshot: give up (exit 3) when the data is not complete by then [s], 0.1-3600")
-      ->capture_default_str();
-  app.add_option("--width", o.width, "window or snapshot width [px], 320-7680")
-      ->capture_default_str();
-  app.add_option("--height", o.height, "window or snapshot height [px], 240-4320")
-      ->capture_default_str();
-  app.add_option("--fps", o.fps,
-                 "frame rate cap [Hz], 0-1000; 0 = the display rate (vsync), or 15 on a "
-                 "software renderer (llvmpipe)")
-      ->capture_default_str();
-  app.add_option("--history", o.history_s, "plot window [s], 1-600")->capture_default_str();
-  app.add_option("--duration", o.duration_s, "close after this long [s], 0-1e7; 0 = until closed")
-      ->check(teleop::config::number_in(0.0, 1e7));
-  app.add_option("--msaa", o.msaa,
-                 "samples per pixel for anti-aliasing, 0-16 (default: 4; 0 in a window drawn by "
-                 "a software renderer such as llvmpipe)")
-      ->check(teleop::config::integer_in(0.0, 16.0));
-  app.add_option("--force-scale", o.force_scale_m_per_n,
-                 "contact force arrow length per newton [m/N], 0.0001-10")
-      ->capture_default_str();
-  app.add_option("--displacement-scale", o.displacement_scale_m,
-                 "deformation drawn fully red [m], 0.00001-1")
-      ->capture_default_str();
-  app.add_option("--nice", o.nice,
-                 "scheduling niceness of the viewer, 0-19: it yields the CPU to the server and "
-                 "master on the same machine")
-      ->check(teleop::config::integer_in(0.0, 19.0))
-      ->capture_default_str();
-  app.add_flag("--full-rate", o.full_rate,
-               "read the 1 kHz state topics instead of the 60 Hz *_view copies; loads the loops");
-  app.add_flag("--hide-panel", o.hide_panel, "start without the plot panel (key H)");
-  app.add_flag("--wireframe", o.wireframe, "start with wireframe meshes (key W)");
-  app.add_flag("--drive", o.drive,
-               "drive the session by hand: be the master's device (teleop_master --device "
-               "external) and its tuning tool (teleop_master --accept-tuning)");
-  app.add_option("--input-script", o.input_script,
-                 "with --drive: play mouse, key and tuning input from this file (docs/tools.md)");
-  app.add_option("--drive-json", o.drive_json, "with --drive: write the drive summary here");
-  app.add_option("--drive-scale", o.drive_scale,
-                 "slave metres per device metre (the master's position scale), 0.001-1000")
-      ->capture_default_str();
-  app.add_option("--drive-peak-force", o.drive_peak_force_n,
-                 "the device's declared peak force [N] (the force bar's full scale), 0.1-1000")
-      ->capture_default_str();
-  app.add_flag("--plain", o.plain_colours,
-               "start with meshes in their plain colour instead of coloured by deformation "
-               "(key C)");
-}
-
 /// An observer must not take the CPU from the control loops on the same machine. Lowers the
 /// priority (--nice) before any thread starts (the renderer's, DDS's), so they all inherit it;
 /// and keeps Mesa's software rasteriser (llvmpipe) on the render thread instead of one thread per
@@ -609,7 +547,7 @@ int main(int argc, char** argv) {
   CLI::App app{"teleop_viewer: 3-D observer of a teleoperation session (scene, plots, events)"};
   ViewerOptions o;
   teleop::dds::NetworkFlags net_flags;
-  add_flags(app, o, net_flags);
+  viewer::add_viewer_flags(app, o, net_flags);
   if (const int status = teleop::config::parse_command_line(app, "teleop_viewer", argc, argv);
       status >= 0) {
     return status == 2 ? kExitUsage : status;

@@ -1,9 +1,18 @@
 #pragma once
-// teleop_viewer's settings as the command line gives them, and the checks CLI11 cannot make.
-// The app declares the flags; validate_options() refuses a bad combination or value before any
-// window, file or participant is opened (exit 2).
+// teleop_viewer's settings as the command line gives them: add_viewer_flags() declares the flags
+// (each number with its range, checked on its text); validate_options() refuses what a range
+// cannot say, a bad combination or snapshot name, before any window, file or participant is
+// opened (exit 2).
 #include <optional>
 #include <string>
+
+namespace CLI {
+class App;
+}  // namespace CLI
+
+namespace teleop::dds {
+struct NetworkFlags;
+}  // namespace teleop::dds
 
 namespace teleop::viewer {
 
@@ -34,9 +43,12 @@ struct ViewerOptions {
   double drive_peak_force_n = 10.0;  ///< declared peak force of the device [N]
 };
 
-/// Checks the values and combinations CLI11 cannot: each number against its range, the drive
-/// flags against --drive and --snapshot, and the snapshot's name (.png) and directory (exists).
-/// @throws config::ConfigError naming the flag, the value and the allowed range.
+/// Declares every flag of teleop_viewer on `app`, bound to `o` and (the network flags) `net`.
+void add_viewer_flags(CLI::App& app, ViewerOptions& o, dds::NetworkFlags& net);
+
+/// Checks what the flags' ranges cannot: the drive flags against --drive and --snapshot, and the
+/// snapshot's name (.png) and directory (exists).
+/// @throws config::ConfigError naming the flag and the value.
 void validate_options(const ViewerOptions& options);
 
 }  // namespace teleop::viewer

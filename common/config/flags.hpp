@@ -1,9 +1,11 @@
 #pragma once
 // The command-line rules every executable shares (header-only: the apps link CLI11).
 //
-//   - a number flag is checked on its text, before conversion: the whole text must be a finite
-//     number within the flag's range (number_in / integer_in): "" (which CLI11 would turn into
-//     the default), "3x", "nan", "-0" or "-1" where the range starts at 0 are refused;
+//   - a number flag is declared with its range once, by add_number / add_integer: its text is
+//     checked before conversion (number_in / integer_in: the whole text must be a finite number
+//     within the range; "" (which CLI11 would turn into the default), "3x", "nan", "-0" or "-1"
+//     where the range starts at 0 are refused), and its help ends in the unit and the range,
+//     "session length after homing [s], [0, 1e6]";
 //   - harden_flags(app), called once every option is declared: every option that takes a value
 //     refuses an empty value (`--out ''`, `--domain=`), and every single-valued option refuses
 //     to be given twice (`--out a --out b`); CLI11 itself refuses unknown arguments;
@@ -11,12 +13,14 @@
 //     "<exe>: <flag>: '<value>' ..." with the usage (an unknown flag with the closest known one:
 //     "'--levle' is not an option of <exe> (did you mean '--level'?)"), and gives the exit
 //     status: 2 for a mistake, 0 for --help or --version (nothing runs), -1 to go on.
-// Checks that need another flag's value (a range that depends on --rate) stay after the parse,
-// with config::check_flag / parse_number, which refuse the same texts.
+// Checks that need another value (a range that depends on --rate or on the core count) stay
+// after the parse, with config::check_flag / parse_number, which refuse the same texts.
 #include <CLI/CLI.hpp>
 
 #include <iostream>
+#include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "common/config/config.hpp"
@@ -35,6 +39,51 @@ inline CLI::Validator number_in(double lo, double hi) {
 inline CLI::Validator integer_in(double lo, double hi) {
   return CLI::Validator([lo, hi](std::string& v) { return number_problem(v, lo, hi, true); },
                         "INTEGER in " + range_text(lo, hi));
+}
+
+/// A range in a flag's help, as the parameter tables write it: "[0, 1e6]".
+inline std::string help_range_text(double lo, double hi) {
+  return "[" + param_number_text(lo) + ", " + param_number_text(hi) + "]";
+}
+
+/// The help of a number flag: `help`, then the unit in brackets where there is one, then the
+/// range: "session length after homing [s], [0, 1e6]".
+inline std::string number_help(const std::string& help, const std::string& unit, double lo,
+                               double hi) {
+  return help + (unit.empty() ? "" : " [" + unit + "]") + ", " + help_range_text(lo, hi);
+}
+
+namespace detail {
+/// The value type a flag binds: T itself, or T of std::optional<T> (unset: not given).
+template <typename T>
+struct FlagValue {
+  using type = T;
+};
+template <typename T>
+struct FlagValue<std::optional<T>> {
+  using type = T;
+};
+}  // namespace detail
+
+/// Declares the number flag `flag` bound to `field` (a double, or std::optional<double> for a
+/// flag whose absence means something): its text must be a finite number in [lo, hi]
+/// (number_in) and its help is number_help(help, unit, lo, hi). Returns the option, for
+/// ->capture_default_str() where the help shows the default.
+template <typename T>
+CLI::Option* add_number(CLI::App& app, const std::string& flag, T& field, double lo, double hi,
+                        const std::string& help, const std::string& unit = "") {
+  static_assert(std::is_floating_point_v<typename detail::FlagValue<T>::type>,
+                "add_number binds a floating-point field; add_integer a whole number");
+  return app.add_option(flag, field, number_help(help, unit, lo, hi))->check(number_in(lo, hi));
+}
+
+/// The same for a whole number (int, std::uint64_t, ..., or an optional one): integer_in.
+template <typename T>
+CLI::Option* add_integer(CLI::App& app, const std::string& flag, T& field, double lo, double hi,
+                         const std::string& help, const std::string& unit = "") {
+  static_assert(std::is_integral_v<typename detail::FlagValue<T>::type>,
+                "add_integer binds an integer field; add_number a floating-point one");
+  return app.add_option(flag, field, number_help(help, unit, lo, hi))->check(integer_in(lo, hi));
 }
 
 /// A CLI11 check: the value is not empty.

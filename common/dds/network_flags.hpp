@@ -70,12 +70,26 @@ inline void add_network_flags(CLI::App& app, NetworkFlags& f, const std::string&
 
 /// --reconnect S of the clients (teleop_master, teleop_monitor): on a TCP client profile, with no
 /// answer from a server for S seconds, make a new participant (Fast DDS 2.9's TCP client was seen
-/// never to complete a connection, docs/networking.md). 0 = never.
+/// never to complete a connection, docs/networking.md). 0 = never; otherwise S is in
+/// [kMinReconnectS, 3600].
+constexpr double kMinReconnectS = 0.5;
 inline void add_reconnect_flag(CLI::App& app, double& reconnect_s) {
-  app.add_option("--reconnect", reconnect_s,
-                 "TCP client profiles: with no answer from a server for this long, make a new "
-                 "participant (a new connection) [s], 0.5-3600, 0 = never")
-      ->check(teleop::config::number_in(0.0, 3600.0))
+  // a value the text check let through (a number in [0, 3600]) that is neither 0 nor enough
+  const CLI::Validator never_or_enough(
+      [](std::string& v) {
+        const double s = std::stod(v);
+        return s != 0.0 && s < kMinReconnectS
+                   ? "'" + v + "' is out of the allowed range " +
+                         config::range_text(kMinReconnectS, 3600.0) + " (0 = never)"
+                   : std::string();
+      },
+      "");
+  config::add_number(app, "--reconnect", reconnect_s, 0.0, 3600.0,
+                     "TCP client profiles: with no answer from a server for this long, make a new "
+                     "participant (a new connection) (0 = never; else at least " +
+                         config::param_number_text(kMinReconnectS) + ")",
+                     "s")
+      ->check(never_or_enough)
       ->capture_default_str();
 }
 

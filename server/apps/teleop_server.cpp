@@ -26,23 +26,16 @@
 
 namespace {
 
-/// The loop flags checked against their ranges (the spin and the prewarm below the period).
-teleop::RealtimeOptions checked_loop_flags(const teleop::RealtimeOptions& realtime,
-                                           double rate_hz) {
+/// The loop flags whose range depends on the machine or the rate (the others were checked on
+/// their text). @throws teleop::config::ConfigError naming the flag, the value and the range.
+void check_loop_flags(const teleop::RealtimeOptions& realtime, double rate_hz) {
   using teleop::config::check_flag;
-  teleop::RealtimeOptions o;
-  o.priority = static_cast<int>(check_flag("--realtime", realtime.priority, 0.0, 99.0));
-  o.cpu = static_cast<int>(check_flag(
-      "--cpu", realtime.cpu, -1.0, static_cast<double>(std::thread::hardware_concurrency()) - 1));
-  o.spin_us = static_cast<int>(
-      check_flag("--spin-us", realtime.spin_us, 0.0, std::ceil(1e6 / rate_hz) - 1.0));
-  o.prewarm_us = static_cast<int>(
-      check_flag("--prewarm-us", realtime.prewarm_us, 0.0, std::ceil(1e6 / rate_hz) - 1.0));
-  o.lock_memory = realtime.lock_memory;
-  o.nice = static_cast<int>(check_flag("--nice", realtime.nice, -20.0, 19.0));
-  o.dma_latency_us =
-      static_cast<int>(check_flag("--dma-latency-us", realtime.dma_latency_us, -1.0, 1e5));
-  return o;
+  // below the core count
+  check_flag("--cpu", realtime.cpu, -1.0,
+             static_cast<double>(std::thread::hardware_concurrency()) - 1);
+  // below the physics step's period (1 / the rate)
+  check_flag("--spin-us", realtime.spin_us, 0.0, std::ceil(1e6 / rate_hz) - 1.0);
+  check_flag("--prewarm-us", realtime.prewarm_us, 0.0, std::ceil(1e6 / rate_hz) - 1.0);
 }
 
 /// teleop_server's command line.
@@ -66,28 +59,26 @@ struct Flags {
 /// Declares every flag of teleop_server.
 void add_flags(CLI::App& app, Flags& f) {
   app.add_option("--scene", f.scene_file, "scene YAML file")->capture_default_str();
-  app.add_option("--rate", f.rate_hz, "physics rate [Hz], 10-20000 (default: the scene's)")
-      ->check(teleop::config::number_in(10.0, 20000.0));
-  app.add_option("--command-timeout", f.command_timeout_s,
-                 "hold the slave when no valid command arrives for this long [s], 0.001-10 "
-                 "(default: the scene's, 0.05)")
-      ->check(teleop::config::number_in(0.001, 10.0));
-  app.add_option("--owner-timeout", f.owner_timeout_s,
-                 "a master owning the slave loses it when none of its commands arrived for "
-                 "this long, and another may take it over [s], from the command timeout to 60 "
-                 "(default: 0.5, or the command timeout if longer)")
-      ->check(teleop::config::number_in(0.001, 60.0));
-  app.add_option("--duration", f.duration_s,
-                 "stop after this many seconds, 0-1e7; 0 = run until SIGINT")
-      ->check(teleop::config::number_in(0.0, 1e7));
-  app.add_option("--stats-period", f.stats_period_s, "ServerStats period [s], 0.1-10")
-      ->check(teleop::config::number_in(0.1, 10.0));
-  app.add_option("--max-observers", f.max_observers,
-                 "warn (an event) when more observers than this read the state, 0-10000")
-      ->check(teleop::config::integer_in(0.0, 10000.0))
+  using teleop::config::add_integer;
+  using teleop::config::add_number;
+  add_number(app, "--rate", f.rate_hz, 10.0, 20000.0, "physics rate (default: the scene's)", "Hz");
+  add_number(app, "--command-timeout", f.command_timeout_s, 0.001, 10.0,
+             "hold the slave when no valid command arrives for this long (default: the scene's, "
+             "0.05)",
+             "s");
+  add_number(app, "--owner-timeout", f.owner_timeout_s, 0.001, 60.0,
+             "a master owning the slave loses it when none of its commands arrived for this "
+             "long, and another may take it over; at least the command timeout (default: 0.5, "
+             "or the command timeout if longer)",
+             "s");
+  add_number(app, "--duration", f.duration_s, 0.0, 1e7,
+             "stop after this many seconds (0 = run until SIGINT)", "s");
+  add_number(app, "--stats-period", f.stats_period_s, 0.1, 10.0, "ServerStats period", "s");
+  add_integer(app, "--max-observers", f.max_observers, 0.0, 10000.0,
+              "warn (an event) when more observers than this read the state")
       ->capture_default_str();
-  app.add_option("--domain", f.domain, "DDS domain id, 0-232 (default: $TELEOP_DOMAIN or 0)")
-      ->check(teleop::config::integer_in(0.0, 232.0));
+  add_integer(app, "--domain", f.domain, 0.0, 232.0,
+              "DDS domain id (default: $TELEOP_DOMAIN or 0)");
   app.add_option("--profile", f.profile,
                  "Fast DDS profile name in deploy/profiles or XML path (default: loopback)");
   teleop::dds::add_network_flags(app, f.net_flags, "server");
@@ -99,7 +90,8 @@ void add_flags(CLI::App& app, Flags& f) {
       ->group("");
 }
 
-/// The server's options from the flags and the scene, each checked against its range.
+/// The server's options from the flags and the scene; the values whose range depends on the
+/// scene, another flag or the machine are checked here (the others were checked on their text).
 /// @throws teleop::config::ConfigError naming the flag, the value and the range.
 teleop::server::ServerOptions server_options(const Flags& f, const teleop::sim::WorldModel& scene) {
   teleop::server::ServerOptions o;
@@ -107,6 +99,7 @@ teleop::server::ServerOptions server_options(const Flags& f, const teleop::sim::
       teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_server", f.net_flags);
   o.dds.announce_to_whole_domain = true;     // observers with any participant id find it
   teleop::dds::profile_file(o.dds.profile);  // fail early with the list of profiles
+  // the rate defaults from the scene
   o.rate_hz = teleop::config::check_flag("--rate", f.rate_hz.value_or(scene.physics_rate_hz), 10.0,
                                          20000.0);
   if (f.rate_hz) {  // the scene's own rate was checked at load
@@ -122,18 +115,20 @@ teleop::server::ServerOptions server_options(const Flags& f, const teleop::sim::
       std::cout << "teleop_server: " << f.scene_file << ": " << note << "\n";
     }
   }
+  // the command timeout defaults from the scene
   o.command_timeout_s = teleop::config::check_flag(
       "--command-timeout", f.command_timeout_s.value_or(scene.command_timeout_s), 0.001, 10.0);
+  // at least the command timeout
   o.owner_timeout_s = teleop::config::check_flag(
       "--owner-timeout", f.owner_timeout_s.value_or(std::max(0.5, o.command_timeout_s)),
       o.command_timeout_s, 60.0);
-  o.duration_s = teleop::config::check_flag("--duration", f.duration_s, 0.0, 1e7);
-  o.stats_period_s = teleop::config::check_flag("--stats-period", f.stats_period_s, 0.1, 10.0);
-  o.max_observers = static_cast<int>(
-      teleop::config::check_flag("--max-observers", f.max_observers, 0.0, 10000.0));
+  o.duration_s = f.duration_s;
+  o.stats_period_s = f.stats_period_s;
+  o.max_observers = f.max_observers;
   o.summary_json = f.summary_json;
   if (!f.summary_json.empty()) teleop::prepare_output_file("--summary-json", f.summary_json);
-  o.realtime = checked_loop_flags(f.realtime, o.rate_hz);
+  check_loop_flags(f.realtime, o.rate_hz);
+  o.realtime = f.realtime;
   o.quiet = f.quiet;
   return o;
 }

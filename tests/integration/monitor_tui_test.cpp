@@ -181,7 +181,7 @@ TEST(MonitorTui, JsonLinesForScripts) {
   // bad flags exit 2 naming the flag, value and range
   Process bad(kMonitorBinary, {"--domain", d, "--stale", "0"}, "mon_bad");
   EXPECT_EQ(bad.wait_for(20.0), 2);
-  EXPECT_NE(bad.err().find("--stale 0 is out of the allowed range"), std::string::npos)
+  EXPECT_NE(bad.err().find("--stale: '0' is out of the allowed range"), std::string::npos)
       << bad.err();
 }
 

@@ -136,19 +136,16 @@ int slurm(const Options& o) {
 
 void add_flags(CLI::App& app, Options& o, CLI::App*& run_cmd, CLI::App*& slurm_cmd,
                CLI::App*& merge_cmd) {
-  using teleop::config::integer_in;
+  using teleop::config::add_integer;
   app.require_subcommand(1);
   run_cmd = app.add_subcommand("run", "run a campaign (or one shard of it) on this machine");
   run_cmd->add_option("FILE", o.file, "campaign file (YAML)")->required();
   run_cmd->add_option("--out", o.out, "output folder (created; resumed when it holds the runs)")
       ->required();
-  run_cmd->add_option("--jobs", o.jobs, "threads, 1-4096 (default: every core)")
-      ->check(integer_in(1, 4096));
+  add_integer(*run_cmd, "--jobs", o.jobs, 1, 4096, "threads (default: every core)");
   run_cmd->add_option("--shard", o.shard, "run only shard I of N (runs with id % N == I)");
-  run_cmd
-      ->add_option("--max-runs", o.max_runs,
-                   "stop after this many runs, 1-1e9 (a later call resumes)")
-      ->check(integer_in(1, 1e9));
+  add_integer(*run_cmd, "--max-runs", o.max_runs, 1, 1e9,
+              "stop after this many runs (a later call resumes)");
   run_cmd->add_flag("--no-chart", o.no_chart, "write the table only");
   run_cmd->add_flag("--progress", o.progress,
                     "draw the progress line even when stderr is not a terminal");
@@ -157,12 +154,9 @@ void add_flags(CLI::App& app, Options& o, CLI::App*& run_cmd, CLI::App*& slurm_c
   slurm_cmd = app.add_subcommand("slurm", "write (and submit) a Slurm array job of the campaign");
   slurm_cmd->add_option("FILE", o.file, "campaign file (YAML)")->required();
   slurm_cmd->add_option("--out", o.out, "output folder, on storage every node sees")->required();
-  slurm_cmd
-      ->add_option("--shards", o.shards,
-                   "array tasks, 1-1e6 (at most one per run; default: min(runs, 100))")
-      ->check(integer_in(1, 1e6));
-  slurm_cmd->add_option("--cpus-per-task", o.cpus_per_task, "threads per task, 1-4096")
-      ->check(integer_in(1, 4096));
+  add_integer(*slurm_cmd, "--shards", o.shards, 1, 1e6,
+              "array tasks (at most one per run; default: min(runs, 100))");
+  add_integer(*slurm_cmd, "--cpus-per-task", o.cpus_per_task, 1, 4096, "threads per task");
   slurm_cmd->add_option("--partition", o.partition, "sbatch --partition");
   slurm_cmd->add_option("--time", o.time_limit, "sbatch --time (e.g. 01:00:00)");
   auto* submit = slurm_cmd->add_flag("--submit", o.submit, "submit with sbatch");

@@ -1,15 +1,20 @@
-// teleop_viewer's command-line checks without a process: each refusal names the flag, the value
-// and the allowed range (exit 2 in the app), and the drive and snapshot flags go together only
-// where they can.
+// teleop_viewer's command-line checks without a process: each number flag's refusal names the
+// flag, the value and the allowed range (exit 2 in the app), and the drive and snapshot flags go
+// together only where they can.
 #include "client/viewer/viewer_options.hpp"
 
 #include <gtest/gtest.h>
+#include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <filesystem>
-#include <functional>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "common/config/config.hpp"
+#include "common/config/flags.hpp"
+#include "common/dds/participant.hpp"
 
 namespace teleop::viewer {
 namespace {
@@ -33,35 +38,71 @@ TEST(ViewerOptions, TheDefaultsAreAccepted) {
   EXPECT_EQ(refusal(drive), "");
 }
 
+/// The message the viewer's flags refuse `args` with ("" when they accept them); `o` gets the
+/// values.
+std::string flag_refusal(std::vector<std::string> args, ViewerOptions& o) {
+  CLI::App app;
+  dds::NetworkFlags net;
+  add_viewer_flags(app, o, net);
+  config::harden_flags(app);
+  std::reverse(args.begin(), args.end());  // CLI11 takes the arguments last first
+  try {
+    app.parse(args);
+  } catch (const CLI::ParseError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 TEST(ViewerOptions, ANumberOutOfRangeIsRefusedNamingFlagValueAndRange) {
   struct Case {
-    std::function<void(ViewerOptions&)> set;
+    std::vector<std::string> args;
     std::string message;
   };
   const Case cases[] = {
-      {[](ViewerOptions& o) { o.width = 100000; },
-       "--width 100000 is out of the allowed range [320, 7680]"},
-      {[](ViewerOptions& o) { o.height = 100; }, "--height 100 is out of the allowed range"},
-      {[](ViewerOptions& o) { o.after_s = -1.0; },
-       "--after -1 is out of the allowed range [0, 3600]"},
-      {[](ViewerOptions& o) { o.timeout_s = 0.0; }, "--timeout 0 is out of the allowed range"},
-      {[](ViewerOptions& o) { o.fps = 2000.0; }, "--fps 2000 is out of the allowed range"},
-      {[](ViewerOptions& o) { o.history_s = 0.5; }, "--history 0.5 is out of the allowed range"},
-      {[](ViewerOptions& o) { o.duration_s = -3.0; }, "--duration -3 is out of the allowed range"},
-      {[](ViewerOptions& o) { o.msaa = 32; }, "--msaa 32 is out of the allowed range [0, 16]"},
-      {[](ViewerOptions& o) { o.nice = 20; }, "--nice 20 is out of the allowed range [0, 19]"},
-      {[](ViewerOptions& o) { o.force_scale_m_per_n = 0.0; }, "--force-scale 0 is out of"},
-      {[](ViewerOptions& o) { o.displacement_scale_m = 2.0; }, "--displacement-scale 2 is out of"},
-      {[](ViewerOptions& o) { o.drive_scale = 1e4; }, "--drive-scale 10000 is out of"},
-      {[](ViewerOptions& o) { o.drive_peak_force_n = 0.0; }, "--drive-peak-force 0 is out of"},
+      {{"--width", "100000"}, "--width: '100000' is out of the allowed range [320, 7680]"},
+      {{"--height", "100"}, "--height: '100' is out of the allowed range"},
+      {{"--after", "-1"}, "--after: '-1' is out of the allowed range [0, 3600]"},
+      {{"--timeout", "0"}, "--timeout: '0' is out of the allowed range"},
+      {{"--fps", "2000"}, "--fps: '2000' is out of the allowed range"},
+      {{"--history", "0.5"}, "--history: '0.5' is out of the allowed range"},
+      {{"--duration", "-3"}, "--duration: '-3' is out of the allowed range"},
+      {{"--msaa", "32"}, "--msaa: '32' is out of the allowed range [0, 16]"},
+      {{"--nice", "20"}, "--nice: '20' is out of the allowed range [0, 19]"},
+      {{"--force-scale", "0"}, "--force-scale: '0' is out of"},
+      {{"--displacement-scale", "2"}, "--displacement-scale: '2' is out of"},
+      {{"--drive-scale", "1e4"}, "--drive-scale: '1e4' is out of"},
+      {{"--drive-peak-force", "0"}, "--drive-peak-force: '0' is out of"},
+      {{"--width", ""}, "--width: '' is empty"},
+      {{"--duration", "-0"}, "--duration: '-0' is negative"},
+      {{"--width", "1280.5"}, "--width: '1280.5' is not a whole number"},
   };
   for (const Case& c : cases) {
     ViewerOptions o;
-    c.set(o);
-    const std::string m = refusal(o);
+    const std::string m = flag_refusal(c.args, o);
     EXPECT_NE(m.find(c.message), std::string::npos)
         << "expected '" << c.message << "', got '" << m << "'";
   }
+}
+
+TEST(ViewerOptions, TheFlagsSetTheOptionsAndTheHelpGivesEachRange) {
+  ViewerOptions o;
+  EXPECT_EQ(
+      flag_refusal({"--width", "320", "--msaa", "0", "--drive-scale", "0.5", "--domain", "7"}, o),
+      "");
+  EXPECT_EQ(o.width, 320);
+  EXPECT_EQ(o.msaa, std::optional<int>(0));
+  EXPECT_DOUBLE_EQ(o.drive_scale, 0.5);
+  EXPECT_EQ(o.domain, std::optional<int>(7));
+  EXPECT_EQ(refusal(o), "");
+  CLI::App app;
+  dds::NetworkFlags net;
+  ViewerOptions defaults;
+  add_viewer_flags(app, defaults, net);
+  const std::string help = app.help();
+  EXPECT_NE(help.find("window or snapshot width [px], [320, 7680]"), std::string::npos) << help;
+  EXPECT_NE(help.find("deformation drawn fully red [m], [1e-5, 1]"), std::string::npos) << help;
+  EXPECT_NE(help.find("=1280"), std::string::npos) << help;  // the default
 }
 
 TEST(ViewerOptions, TheDriveFlagsNeedDriveAndAWindow) {

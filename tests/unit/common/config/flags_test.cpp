@@ -8,7 +8,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -112,6 +114,101 @@ TEST(HardenFlags, RefusesEmptyRepeatedUnknownAndOutOfRange) {
   EXPECT_EQ(run({"--exclude", ""}), 2);
   EXPECT_EQ(run({"--bogus"}), 2);
   EXPECT_EQ(run({"stray"}), 2);
+}
+
+/// Flags declared with add_number / add_integer, as the programs declare theirs.
+struct RangedApp {
+  CLI::App app{"test"};
+  double duration_s = 0.0;
+  double rate_hz = 1000.0;
+  std::optional<double> period_s;
+  int nice = 19;
+  std::uint64_t samples = 0;
+  std::optional<int> domain;
+  RangedApp() {
+    using teleop::config::add_integer;
+    using teleop::config::add_number;
+    add_number(app, "--duration", duration_s, 0.0, 1e6, "session length (0 = no limit)", "s");
+    add_number(app, "--rate", rate_hz, 10.0, 20000.0, "loop rate", "Hz")->capture_default_str();
+    add_number(app, "--period", period_s, 0.05, 60.0, "print period", "s");
+    add_integer(app, "--nice", nice, 0, 19, "niceness")->capture_default_str();
+    add_integer(app, "--samples", samples, 0, 1e12, "stop after N cycles");
+    add_integer(app, "--domain", domain, 0, 232, "DDS domain id");
+  }
+};
+
+/// CLI11's refusal of `args` by a fresh RangedApp ("" when it accepts them).
+std::string ranged_refusal(std::vector<std::string> args) {
+  RangedApp a;
+  teleop::config::harden_flags(a.app);
+  std::reverse(args.begin(), args.end());  // CLI11 takes the arguments last first
+  try {
+    a.app.parse(args);
+  } catch (const CLI::ParseError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(AddNumber, TheHelpGivesTheUnitAndTheRangeOnce) {
+  RangedApp a;
+  const std::string help = a.app.help();
+  EXPECT_NE(help.find("session length (0 = no limit) [s], [0, 1e6]"), std::string::npos) << help;
+  EXPECT_NE(help.find("loop rate [Hz], [10, 20000]"), std::string::npos) << help;
+  EXPECT_NE(help.find("niceness, [0, 19]"), std::string::npos) << help;  // no unit: no brackets
+  EXPECT_NE(help.find("stop after N cycles, [0, 1e12]"), std::string::npos) << help;
+  EXPECT_NE(help.find("=1000"), std::string::npos) << help;  // the default, where captured
+  EXPECT_EQ(a.app.get_option("--duration")->get_description(),
+            "session length (0 = no limit) [s], [0, 1e6]");
+  EXPECT_EQ(teleop::config::number_help("gain", "N/m", 0.0, 1e-5), "gain [N/m], [0, 1e-5]");
+}
+
+TEST(AddNumber, OutOfRangeEmptyAndNegativeZeroAreRefusedNamingFlagValueAndRange) {
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  };
+  const Case cases[] = {
+      {{"--rate", "5"}, "--rate: '5' is out of the allowed range [10, 20000]"},
+      {{"--rate", "20001"}, "--rate: '20001' is out of the allowed range [10, 20000]"},
+      {{"--rate", ""}, "--rate: '' is empty, not a number (allowed range [10, 20000])"},
+      {{"--rate", "3x"},
+       "--rate: '3x' is not a number (it ends in 'x') (allowed range [10, 20000])"},
+      {{"--period", "-0"}, "--period: '-0' is out of the allowed range [0.05, 60]"},
+      {{"--duration", "-0"}, "--duration: '-0' is negative; the allowed range is [0, 1e+06]"},
+      {{"--duration", "nan"}, "--duration: 'nan' is not a finite number"},
+      {{"--nice", "20"}, "--nice: '20' is out of the allowed range [0, 19]"},
+      {{"--nice", "-0"}, "--nice: '-0' is negative; the allowed range is [0, 19]"},
+      {{"--nice", "1.5"}, "--nice: '1.5' is not a whole number (allowed range [0, 19])"},
+      {{"--domain", ""}, "--domain: '' is empty, not a number (allowed range [0, 232])"},
+      {{"--samples", "-1"}, "--samples: '-1' is out of the allowed range [0, 1e+12]"},
+  };
+  for (const Case& c : cases) {
+    const std::string m = ranged_refusal(c.args);
+    EXPECT_NE(m.find(c.message), std::string::npos)
+        << "expected '" << c.message << "', got '" << m << "'";
+  }
+}
+
+TEST(AddNumber, AValueInRangeIsSet) {
+  RangedApp a;
+  std::vector<std::string> args = {"--duration", "2.5",           "--rate",   "10",
+                                   "--period",   "0.05",          "--nice",   "0",
+                                   "--samples",  "1000000000000", "--domain", "7"};
+  std::reverse(args.begin(), args.end());
+  ASSERT_NO_THROW(a.app.parse(args));
+  EXPECT_DOUBLE_EQ(a.duration_s, 2.5);
+  EXPECT_DOUBLE_EQ(a.rate_hz, 10.0);
+  ASSERT_TRUE(a.period_s.has_value());
+  EXPECT_DOUBLE_EQ(*a.period_s, 0.05);
+  EXPECT_EQ(a.nice, 0);
+  EXPECT_EQ(a.samples, 1000000000000u);
+  EXPECT_EQ(a.domain, std::optional<int>(7));
+  RangedApp untouched;  // a flag not given keeps its default, an optional one stays unset
+  ASSERT_NO_THROW(untouched.app.parse(std::vector<std::string>{}));
+  EXPECT_DOUBLE_EQ(untouched.rate_hz, 1000.0);
+  EXPECT_FALSE(untouched.period_s.has_value());
+  EXPECT_FALSE(untouched.domain.has_value());
 }
 
 TEST(DidYouMean, NamesTheClosestKnownFlag) {
