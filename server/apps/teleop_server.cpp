@@ -61,11 +61,15 @@ void add_flags(CLI::App& app, Flags& f) {
   app.add_option("--scene", f.scene_file, "scene YAML file")->capture_default_str();
   using teleop::config::add_integer;
   using teleop::config::add_number;
-  add_number(app, "--rate", f.rate_hz, 10.0, 20000.0, "physics rate (default: the scene's)", "Hz");
-  add_number(app, "--command-timeout", f.command_timeout_s, 0.001, 10.0,
-             "hold the slave when no valid command arrives for this long (default: the scene's, "
-             "0.05)",
-             "s");
+  // the scene's fields these flags override, with their ranges (server/world/scene_params.cpp)
+  const auto& rate = teleop::sim::scene_param(teleop::sim::physics_params(), "rate_hz");
+  const auto& timeout = teleop::sim::scene_param(teleop::sim::command_params(), "timeout_s");
+  add_number(app, "--rate", f.rate_hz, rate.lo, rate.hi,
+             "physics rate (default: the scene's physics.rate_hz)", rate.unit);
+  add_number(app, "--command-timeout", f.command_timeout_s, timeout.lo, timeout.hi,
+             "hold the slave when no valid command arrives for this long (default: the scene's "
+             "command.timeout_s, 0.05)",
+             timeout.unit);
   add_number(app, "--owner-timeout", f.owner_timeout_s, 0.001, 60.0,
              "a master owning the slave loses it when none of its commands arrived for this "
              "long, and another may take it over; at least the command timeout (default: 0.5, "
@@ -99,9 +103,8 @@ teleop::server::ServerOptions server_options(const Flags& f, const teleop::sim::
       teleop::dds::resolve_participant_options(f.profile, f.domain, "teleop_server", f.net_flags);
   o.dds.announce_to_whole_domain = true;     // observers with any participant id find it
   teleop::dds::profile_file(o.dds.profile);  // fail early with the list of profiles
-  // the rate defaults from the scene
-  o.rate_hz = teleop::config::check_flag("--rate", f.rate_hz.value_or(scene.physics_rate_hz), 10.0,
-                                         20000.0);
+  // the rate defaults from the scene (the flag and the scene's field have one range)
+  o.rate_hz = f.rate_hz.value_or(scene.physics_rate_hz);
   if (f.rate_hz) {  // the scene's own rate was checked at load
     const std::string problem = teleop::sim::physics_rate_problem(scene, o.rate_hz);
     if (!problem.empty()) {
@@ -115,9 +118,8 @@ teleop::server::ServerOptions server_options(const Flags& f, const teleop::sim::
       std::cout << "teleop_server: " << f.scene_file << ": " << note << "\n";
     }
   }
-  // the command timeout defaults from the scene
-  o.command_timeout_s = teleop::config::check_flag(
-      "--command-timeout", f.command_timeout_s.value_or(scene.command_timeout_s), 0.001, 10.0);
+  // the command timeout defaults from the scene (one range, as the rate's)
+  o.command_timeout_s = f.command_timeout_s.value_or(scene.command_timeout_s);
   // at least the command timeout
   o.owner_timeout_s = teleop::config::check_flag(
       "--owner-timeout", f.owner_timeout_s.value_or(std::max(0.5, o.command_timeout_s)),
