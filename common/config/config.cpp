@@ -273,9 +273,7 @@ YAML::Node parse_checked(const std::string& text, const std::string& file) {
 }  // namespace
 
 std::string range_text(double lo, double hi) {
-  std::ostringstream os;
-  os << "[" << lo << ", " << hi << "]";
-  return os.str();
+  return "[" + param_number_text(lo) + ", " + param_number_text(hi) + "]";
 }
 
 Node::Node(const YAML::Node& node, std::string file, std::string path)

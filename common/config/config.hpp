@@ -104,7 +104,8 @@ class Node {
 /// zeros ("1e6", "0.001", "1e-4" as "0.0001").
 std::string param_number_text(double v);
 
-/// Formats a range for messages: "[lo, hi]".
+/// Formats a range for messages and help texts: "[lo, hi]", each as param_number_text() writes
+/// it ("[0, 1e6]").
 std::string range_text(double lo, double hi);
 
 /// Checks a field of a settings struct already read (from a file, flags or a live request):

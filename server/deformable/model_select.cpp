@@ -56,7 +56,7 @@ std::string fmt(double v, int digits, bool fixed = false) {
   return buf;
 }
 std::string fmt4(double v) { return fmt(v, 4); }
-std::string fmtg(double v) { return fmt(v, 6); }
+std::string fmtg(double v) { return config::param_number_text(v); }  // as range_text writes
 std::string fmt1(double v) { return fmt(v, 1, true); }
 
 std::string ms_text(double s) { return fmt4(s * 1e3) + " ms"; }

@@ -324,7 +324,7 @@ TEST(ControllerParams, TheHelpListsEachFlagWithUnitRangeAndDefault) {
     }
   }
   EXPECT_NE(help.find("}=force-position"), std::string::npos) << help;  // the default
-  EXPECT_NE(help.find("NUMBER in [0, 1e+06]"), std::string::npos) << help;
+  EXPECT_NE(help.find("NUMBER in [0, 1e6]"), std::string::npos) << help;
 }
 
 TEST(ControllerParams, TheDocsTableIsTheTable) {

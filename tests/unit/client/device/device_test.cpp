@@ -195,7 +195,7 @@ TEST(ReplayDevice, ValuesOutsideTheirBoundAreRefusedNamingRowColumnValueAndRange
   EXPECT_NE(msg.find("column 'z': -11"), std::string::npos) << msg;
   // time and quaternion components
   msg = error_of([] { parse_replay_csv("2e6,0,0,0\n", "t.csv"); });
-  EXPECT_NE(msg.find("column 'time_s': 2e6 is outside the allowed range [-1e+06, 1e+06] s"),
+  EXPECT_NE(msg.find("column 'time_s': 2e6 is outside the allowed range [-1e6, 1e6] s"),
             std::string::npos)
       << msg;
   msg = error_of([] { parse_replay_csv("0,0,0,0,1e200,0,0,0\n", "q.csv"); });

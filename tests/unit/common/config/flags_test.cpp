@@ -175,13 +175,13 @@ TEST(AddNumber, OutOfRangeEmptyAndNegativeZeroAreRefusedNamingFlagValueAndRange)
       {{"--rate", "3x"},
        "--rate: '3x' is not a number (it ends in 'x') (allowed range [10, 20000])"},
       {{"--period", "-0"}, "--period: '-0' is out of the allowed range [0.05, 60]"},
-      {{"--duration", "-0"}, "--duration: '-0' is negative; the allowed range is [0, 1e+06]"},
+      {{"--duration", "-0"}, "--duration: '-0' is negative; the allowed range is [0, 1e6]"},
       {{"--duration", "nan"}, "--duration: 'nan' is not a finite number"},
       {{"--nice", "20"}, "--nice: '20' is out of the allowed range [0, 19]"},
       {{"--nice", "-0"}, "--nice: '-0' is negative; the allowed range is [0, 19]"},
       {{"--nice", "1.5"}, "--nice: '1.5' is not a whole number (allowed range [0, 19])"},
       {{"--domain", ""}, "--domain: '' is empty, not a number (allowed range [0, 232])"},
-      {{"--samples", "-1"}, "--samples: '-1' is out of the allowed range [0, 1e+12]"},
+      {{"--samples", "-1"}, "--samples: '-1' is out of the allowed range [0, 1e12]"},
   };
   for (const Case& c : cases) {
     const std::string m = ranged_refusal(c.args);
