@@ -4,11 +4,24 @@
 #include <cmath>
 #include <limits>
 
+#include "client/control/scheme_traits.hpp"
+
 namespace teleop::master {
 
 namespace {
 constexpr double kSphereRadius = 0.25;  // [m]
 constexpr double kToolRadius = 0.05;    // [m]
+
+/// The controller's law as the scenario sets it (scheme and its own parameters; the gains and
+/// the workspace are set by build_press_setup()).
+ControllerParams scenario_law(const PressScenario& s) {
+  ControllerParams p;
+  p.scheme = s.scheme;
+  p.tdpa_base = s.tdpa_base;
+  p.wave_impedance_ns_per_m = s.wave_impedance_ns_per_m;
+  p.wave_matched = s.wave_matched;
+  return p;
+}
 }  // namespace
 
 PressSetup build_press_setup(const PressScenario& s) {
@@ -43,10 +56,7 @@ PressSetup build_press_setup(const PressScenario& s) {
 
   // loop
   LoopbackConfig& c = out.loop;
-  c.controller.scheme = s.scheme;
-  c.controller.tdpa_base = s.tdpa_base;
-  c.controller.wave_impedance_ns_per_m = s.wave_impedance_ns_per_m;
-  c.controller.wave_matched = s.wave_matched;
+  c.controller = scenario_law(s);
   c.controller.workspace.offset_m = Eigen::Vector3d(0.0, 0.0, 2.0 * kSphereRadius + kToolRadius);
   if (press_position_like(s)) {
     const double k = s.gain > 0.0 ? s.gain : 400.0;
@@ -67,8 +77,7 @@ PressSetup build_press_setup(const PressScenario& s) {
 }
 
 bool press_position_like(const PressScenario& s) {
-  return s.scheme == "position-position" || s.scheme == "wave-variables" ||
-         (s.scheme == "tdpa" && s.tdpa_base == "position-position");
+  return scheme_traits(scenario_law(s)).position_based;
 }
 
 LoopModel press_loop_model(const PressScenario& s, const PressSetup& setup) {
@@ -97,11 +106,10 @@ LoopModel press_loop_model(const PressScenario& s, const PressSetup& setup) {
 }
 
 void fill_analytic(const PressScenario& s, const PressSetup& setup, PressResult& r) {
-  // model-mediated closes its force loop at the master, not across the delay: like the passive
-  // schemes, its "theory" is stability at every delay
-  r.passive_scheme =
-      s.scheme == "wave-variables" || s.scheme == "tdpa" || s.scheme == "model-mediated";
-  if (s.scheme == "wave-variables" || s.scheme == "model-mediated") {
+  const SchemeTraits traits = scheme_traits(scenario_law(s));
+  r.passive_scheme = traits.passive_by_design;
+  // no linear model: the scheme's theory is stability at every delay
+  if (!traits.linear_loop_model) {
     r.analytic_margin_s = std::numeric_limits<double>::infinity();
     r.analytic_stable = true;
     return;

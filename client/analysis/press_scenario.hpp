@@ -51,11 +51,14 @@ struct PressSetup {
 /// the master origin maps to the tool centre touching its top (0, 0, 0.55) m.
 PressSetup build_press_setup(const PressScenario& s);
 
-/// True if the scenario's base law is position-position (PP, tdpa on PP, wave-variables).
+/// True if the scenario's law is position-based (SchemeTraits::position_based): its gain is
+/// K_pm = K_ps and its linear model position-position.
+/// @throws ConfigError naming the allowed schemes if s.scheme is unknown.
 bool press_position_like(const PressScenario& s);
 
 /// The linear model of the same setup in steady contact (for the analytic boundary). For tdpa
-/// it is the base law without the passivity controller; wave-variables has no such model.
+/// it is the base law without the passivity controller; wave-variables and model-mediated have
+/// no such model (SchemeTraits::linear_loop_model).
 LoopModel press_loop_model(const PressScenario& s, const PressSetup& setup);
 
 /// Result of one run.
@@ -70,9 +73,9 @@ struct PressResult {
   double contact_time_s = 0.0;
   bool safety_cut = false;
   double analytic_margin_s = 0.0;       ///< one-way delay margin of the linear model [s]
-                                        ///< (tdpa: of the base law; wave-variables: infinite)
+                                        ///< (tdpa: of the base law; wave, mmt: infinite)
   bool analytic_stable = true;          ///< the linear model is stable at this delay (exact count)
-  bool passive_scheme = false;          ///< wave-variables or tdpa: passive for any delay by design
+  bool passive_scheme = false;          ///< passive for any delay by design (wave, tdpa, mmt)
   double passivity_dissipated_j = 0.0;  ///< master + slave passivity controllers [J]
   double min_observer_j = 0.0;          ///< lowest master-side observer value seen [J]
   // transparency (SessionMetrics, docs/control.md "Transparency"); NaN where not measured
@@ -84,7 +87,9 @@ struct PressResult {
 /// Fills the result's metrics figures (verdict, errors, forces, transparency) from a session.
 void fill_metrics(const SessionMetrics& m, PressResult& r);
 
-/// Sets analytic_margin_s, analytic_stable and passive_scheme of `r` for `s`.
+/// Sets analytic_margin_s, analytic_stable and passive_scheme of `r` for `s`, as the scheme's
+/// traits say (SchemeTraits: passive_by_design, linear_loop_model).
+/// @throws ConfigError naming the allowed schemes if s.scheme is unknown.
 void fill_analytic(const PressScenario& s, const PressSetup& setup, PressResult& r);
 
 /// Runs one scenario built by build_press_setup(s) against `slave`, a slave simulating

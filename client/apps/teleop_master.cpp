@@ -258,11 +258,11 @@ void apply_flags(const CLI::App& app, const Flags& f, teleop::master::MasterOpti
     o.has_contact_point = true;
   }
   apply_timeout_flags(f, o);
-  // model-mediated renders from its local model at 4 kHz and sends positions at 1 kHz, unless
-  // told otherwise
-  if (o.controller.scheme == "model-mediated") {
-    if (!app.count("--rate")) o.rate_hz = 4000.0;
-    if (!app.count("--command-rate")) o.command_rate_hz = std::min(1000.0, o.rate_hz);
+  // the scheme's own loop and command rates (SchemeTraits), unless told otherwise
+  const teleop::master::SchemeTraits traits = teleop::master::scheme_traits(o.controller);
+  if (traits.default_rate_hz > 0.0 && !app.count("--rate")) o.rate_hz = traits.default_rate_hz;
+  if (traits.default_command_rate_hz > 0.0 && !app.count("--command-rate")) {
+    o.command_rate_hz = std::min(traits.default_command_rate_hz, o.rate_hz);
   }
   // at most the haptic loop's rate (--rate, or model-mediated's 4000)
   if (o.command_rate_hz != 0.0) check_flag("--command-rate", o.command_rate_hz, 1.0, o.rate_hz);

@@ -11,6 +11,7 @@
 
 #include "client/campaign/results.hpp"
 #include "client/control/bilateral_controller.hpp"
+#include "client/control/scheme_traits.hpp"
 #include "client/device/operator_model.hpp"
 #include "client/net/delay_config.hpp"
 #include "client/net/delay_params.hpp"
@@ -352,16 +353,12 @@ Campaign parse_root(const Node& root, const std::string& file) {
 
 }  // namespace
 
-const std::vector<std::string>& scheme_labels() {
-  static const std::vector<std::string> v = {
-      "position-position", "force-position", "wave-variables", "tdpa", "tdpa-fp", "model-mediated"};
-  return v;
-}
+const std::vector<std::string>& scheme_labels() { return master::scheme_variant_labels(); }
 
 SchemeLaw scheme_law(const std::string& label) {
-  if (label == "tdpa-fp") return {"tdpa", "force-position", true};
-  if (label == "tdpa") return {"tdpa", "position-position", false};
-  return {label, "position-position", label == "force-position" || label == "model-mediated"};
+  master::ControllerParams p;
+  master::apply_scheme_variant(label, p);
+  return {p.scheme, p.tdpa_base, !master::scheme_traits(p).position_based};
 }
 
 Campaign load_campaign(const std::string& file) {

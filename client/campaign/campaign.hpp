@@ -93,13 +93,16 @@ Campaign load_campaign(const std::string& file);
 Campaign parse_campaign(const std::string& text, const std::string& file);
 
 /// The controller scheme and tdpa base of a campaign scheme label ("tdpa-fp" is tdpa on
-/// force-position).
+/// force-position), as the scheme's variants declare them (client/control/scheme_traits.hpp).
 struct SchemeLaw {
   std::string scheme, tdpa_base;
-  bool force_gain = false;  ///< the gain axis is K_f (else K_pm = K_ps)
+  /// The gain axis is K_f (else K_pm = K_ps): the law is not position-based
+  /// (SchemeTraits::position_based).
+  bool force_gain = false;
 };
+/// @throws ConfigError naming the labels if `label` is none of scheme_labels().
 SchemeLaw scheme_law(const std::string& label);
-/// Every scheme label a campaign accepts.
+/// Every scheme label a campaign accepts (master::scheme_variant_labels()).
 const std::vector<std::string>& scheme_labels();
 
 /// A digest of everything that decides the campaign's rows (model, settings, every run's

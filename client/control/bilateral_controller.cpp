@@ -15,6 +15,11 @@ const std::vector<ControllerParam>& BilateralController::parameters() {
   return none;
 }
 
+const std::vector<SchemeVariant>& BilateralController::variants() {
+  static const std::vector<SchemeVariant> none;
+  return none;
+}
+
 void BilateralController::configure(const ControllerParams& params, const DeviceSpec& spec) {
   params.validate();
   params_ = params;

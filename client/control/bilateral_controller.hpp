@@ -11,12 +11,15 @@
 //
 // Extension: a scheme overrides compute() (and on_configure(), on_activate(), finish() if it
 // keeps state); the base pre-fills the command with the mapped pose and saturates the force
-// between compute() and finish().
+// between compute() and finish(). It declares its static traits() (client/control/
+// scheme_traits.hpp: what the shared code asks of it), and its parameters() and variants() if
+// it has any.
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "client/control/controller_params.hpp"
+#include "client/control/scheme_traits.hpp"
 #include "client/device/haptic_device.hpp"
 #include "common/config/config.hpp"
 #include "common/control/bilateral_types.hpp"
@@ -58,6 +61,11 @@ class BilateralController {
   /// The scheme's own parameters (none here; a scheme with some declares its own parameters()
   /// in its file, and the registry reads it).
   static const std::vector<ControllerParam>& parameters();
+  /// The scheme's variants (none here: the scheme is named by its name only; a scheme with
+  /// some declares its own variants(), and the registry reads it). Every scheme also declares
+  /// `static SchemeTraits traits(const ControllerParams&)`, which the base does not: the
+  /// registry refuses to compile a scheme without it.
+  static const std::vector<SchemeVariant>& variants();
   /// Scheme id (SCHEME_* constant).
   virtual SchemeId scheme() const = 0;
 

@@ -71,20 +71,7 @@ double lerp(double a, double b, double s) { return a + (b - a) * s; }
 }  // namespace
 
 std::uint32_t tunable_fields(const ControllerParams& p) {
-  const std::string& s = p.scheme;
-  if (s == "position-position") {
-    return kTuneMasterStiffness | kTuneMasterDamping | kTuneSlaveStiffness | kDelays;
-  }
-  if (s == "force-position") {
-    return kTuneForceGain | kTuneMasterDamping | kTuneSlaveStiffness | kDelays;
-  }
-  if (s == "tdpa") {
-    return (p.tdpa_base == "force-position" ? kTuneForceGain : kTuneMasterStiffness) |
-           kTuneMasterDamping | kTuneSlaveStiffness | kDelays;
-  }
-  if (s == "model-mediated") return kTuneMasterDamping | kTuneSlaveStiffness | kDelays;
-  if (s == "wave-variables") return kTuneMasterDamping | kDelays;
-  return kDelays;
+  return scheme_traits(p).tunable_gains | kDelays;
 }
 
 TuningLimits tuning_limits(const ControllerParams& params, const DeviceSpec& spec,

@@ -62,9 +62,9 @@ struct TuningLimits {
 /// Largest rate at which a live injected delay changes [s of delay per s].
 inline constexpr double kMaxDelaySlewSPerS = 0.25;
 
-/// The fields a scheme uses: position-position K_pm, B_m, K_ps; force-position K_f, B_m, K_ps;
-/// tdpa as its base law; wave-variables B_m (the wave impedance is fixed for the session);
-/// model-mediated B_m, K_ps. The delays always.
+/// The fields a scheme uses: the gains its traits name (SchemeTraits::tunable_gains, which may
+/// depend on its parameters), and the delays always.
+/// @throws ConfigError naming the allowed schemes if params.scheme is unknown.
 std::uint32_t tunable_fields(const ControllerParams& params);
 
 /// Bounds for `params` on a device with `spec`; `channel_capacity` samples at `dt_s` per cycle

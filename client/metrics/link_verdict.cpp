@@ -4,13 +4,13 @@
 #include <cmath>
 #include <cstdio>
 
+#include "client/control/scheme_traits.hpp"
 #include "common/util/exit_codes.hpp"
 
 namespace teleop::master {
 
 double round_trip_tolerance_ms(const std::string& scheme) {
-  if (scheme == "position-position" || scheme == "force-position") return 50.0;
-  return 500.0;
+  return scheme_traits(scheme).passive_by_design ? 500.0 : 50.0;
 }
 
 LinkTolerance link_tolerance(const std::string& scheme) {

@@ -45,9 +45,9 @@ struct LinkTolerance {
   std::uint64_t min_echoes = 100;   ///< fewer echoes: the round trip is not judged
 };
 
-/// The network round trip p99 a scheme tolerates [ms]: position-position and force-position
-/// (not passive under delay) 50; wave-variables, tdpa and model-mediated (passive or rendering
-/// from a local model) 500.
+/// The network round trip p99 a scheme tolerates [ms]: 500 for a scheme passive at any delay
+/// by design (SchemeTraits::passive_by_design), else 50. @throws ConfigError naming the
+/// allowed schemes if `scheme` is unknown.
 double round_trip_tolerance_ms(const std::string& scheme);
 /// The tolerance of `scheme` with the default loss threshold.
 LinkTolerance link_tolerance(const std::string& scheme);

@@ -1,8 +1,15 @@
 #include "client/control/schemes/force_position.hpp"
 
 #include "client/control/schemes/laws.hpp"
+#include "client/control/tuning.hpp"
 
 namespace teleop::master {
+
+SchemeTraits ForcePositionController::traits(const ControllerParams& /*params*/) {
+  SchemeTraits t;
+  t.tunable_gains = kTuneForceGain | kTuneMasterDamping | kTuneSlaveStiffness;
+  return t;
+}
 
 void ForcePositionController::on_activate(const DeviceReading& /*master*/) { damping_share_ = 0.0; }
 

@@ -17,6 +17,8 @@ class ForcePositionController final : public BilateralController {
  public:
   const char* name() const override { return "force-position"; }
   SchemeId scheme() const override { return SchemeId::kForcePosition; }
+  /// What the shared code asks of it (client/control/scheme_traits.hpp), in its .cpp.
+  static SchemeTraits traits(const ControllerParams& params);
   double environment_force_gain() const override { return params_.force_gain; }
 
  protected:

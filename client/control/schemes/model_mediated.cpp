@@ -4,8 +4,22 @@
 #include <cmath>
 
 #include "client/control/schemes/laws.hpp"
+#include "client/control/tuning.hpp"
 
 namespace teleop::master {
+
+SchemeTraits ModelMediatedController::traits(const ControllerParams& /*params*/) {
+  SchemeTraits t;
+  // the force is the local model's: neither K_pm nor K_f
+  t.tunable_gains = kTuneMasterDamping | kTuneSlaveStiffness;
+  // its force loop closes at the master, not across the delay: stable at every delay
+  t.passive_by_design = true;
+  t.linear_loop_model = false;
+  // it renders from its local model at 4 kHz and sends positions at 1 kHz
+  t.default_rate_hz = 4000.0;
+  t.default_command_rate_hz = 1000.0;
+  return t;
+}
 
 const std::vector<ControllerParam>& ModelMediatedController::parameters() {
   using P = ControllerParams;

@@ -20,6 +20,8 @@ class ModelMediatedController final : public BilateralController {
  public:
   const char* name() const override { return "model-mediated"; }
   SchemeId scheme() const override { return SchemeId::kModelMediated; }
+  /// What the shared code asks of it (client/control/scheme_traits.hpp), in its .cpp.
+  static SchemeTraits traits(const ControllerParams& params);
   /// Its own parameters (client/control/controller_params.hpp), declared in its .cpp.
   static const std::vector<ControllerParam>& parameters();
   /// The model rendered now (slave frame), and the energy bookkeeping of model updates.

@@ -13,6 +13,8 @@ class PositionPositionController final : public BilateralController {
  public:
   const char* name() const override { return "position-position"; }
   SchemeId scheme() const override { return SchemeId::kPositionPosition; }
+  /// What the shared code asks of it (client/control/scheme_traits.hpp), in its .cpp.
+  static SchemeTraits traits(const ControllerParams& params);
 
  protected:
   void compute(const DeviceReading& master, const SlaveSample& slave, double dt_s,

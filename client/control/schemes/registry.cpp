@@ -1,6 +1,8 @@
-// The table of the master-side schemes: a name, a constructor and the scheme's own parameters
-// each. A new scheme is a file pair in this folder and one line here (docs/control.md, "Adding
-// a scheme"). The controller's parameter table joins the common parameters and each scheme's.
+// The table of the master-side schemes: a name and the scheme's class, whose static members
+// give the constructor, its own parameters, its traits (what the shared code asks of it,
+// client/control/scheme_traits.hpp) and its variants. A new scheme is a file pair in this folder
+// and one line here (docs/control.md, "Adding a scheme"). The controller's parameter table joins
+// the common parameters and each scheme's.
 #include <algorithm>
 #include <memory>
 #include <string>
@@ -31,6 +33,10 @@ struct Scheme {
   std::unique_ptr<BilateralController> (*make)();
   /// The scheme's own parameters (the class's static parameters()).
   const std::vector<ControllerParam>& (*parameters)();
+  /// What the shared code asks of it (the class's static traits()).
+  SchemeTraits (*traits)(const ControllerParams&);
+  /// Its labels with some parameters fixed (the class's static variants(); none: its name).
+  const std::vector<SchemeVariant>& (*variants)();
 };
 
 template <class Controller>
@@ -38,20 +44,47 @@ std::unique_ptr<BilateralController> make() {
   return std::make_unique<Controller>();
 }
 
+/// The table's line of the scheme `name`, implemented by `Controller`.
+template <class Controller>
+constexpr Scheme entry(const char* name) {
+  return {name, &make<Controller>, &Controller::parameters, &Controller::traits,
+          &Controller::variants};
+}
+
 constexpr Scheme kSchemes[] = {
-    {"position-position", &make<PositionPositionController>,
-     &PositionPositionController::parameters},
-    {"force-position", &make<ForcePositionController>, &ForcePositionController::parameters},
-    {"wave-variables", &make<WaveVariablesController>, &WaveVariablesController::parameters},
-    {"tdpa", &make<TimeDomainPassivityController>, &TimeDomainPassivityController::parameters},
-    {"model-mediated", &make<ModelMediatedController>, &ModelMediatedController::parameters},
+    entry<PositionPositionController>("position-position"),
+    entry<ForcePositionController>("force-position"),
+    entry<WaveVariablesController>("wave-variables"),
+    entry<TimeDomainPassivityController>("tdpa"),
+    entry<ModelMediatedController>("model-mediated"),
 };
 
-[[noreturn]] void refuse_scheme(const std::string& scheme) {
+[[noreturn]] void refuse(const std::string& scheme, const std::vector<std::string>& names) {
   std::string allowed;
-  for (const Scheme& s : kSchemes) allowed += (allowed.empty() ? "" : ", ") + std::string(s.name);
+  for (const std::string& n : names) allowed += (allowed.empty() ? "" : ", ") + n;
   throw config::ConfigError("controller: scheme '" + scheme + "' is unknown (allowed: " + allowed +
                             ")");
+}
+
+[[noreturn]] void refuse_scheme(const std::string& scheme) { refuse(scheme, controller_names()); }
+
+/// One label of scheme_variant_labels(): the scheme and what the label sets.
+struct Label {
+  std::string label;
+  const Scheme* scheme;
+  void (*apply)(ControllerParams&);  ///< nullptr: the scheme's name, nothing set
+};
+
+const std::vector<Label>& labels() {
+  static const std::vector<Label> all = [] {
+    std::vector<Label> v;
+    for (const Scheme& s : kSchemes) {
+      if (s.variants().empty()) v.push_back({s.name, &s, nullptr});
+      for (const SchemeVariant& var : s.variants()) v.push_back({var.label, &s, var.apply});
+    }
+    return v;
+  }();
+  return all;
 }
 
 }  // namespace
@@ -87,6 +120,38 @@ std::vector<ControllerParam> scheme_params(const std::string& scheme) {
     if (d.scheme == scheme) own.push_back(d);
   }
   return own;
+}
+
+SchemeTraits scheme_traits(const ControllerParams& p) {
+  for (const Scheme& s : kSchemes) {
+    if (p.scheme == s.name) return s.traits(p);
+  }
+  refuse_scheme(p.scheme);
+}
+
+SchemeTraits scheme_traits(const std::string& scheme) {
+  ControllerParams p;
+  p.scheme = scheme;
+  return scheme_traits(p);
+}
+
+const std::vector<std::string>& scheme_variant_labels() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    for (const Label& l : labels()) n.push_back(l.label);
+    return n;
+  }();
+  return names;
+}
+
+void apply_scheme_variant(const std::string& label, ControllerParams& p) {
+  for (const Label& l : labels()) {
+    if (l.label != label) continue;
+    p.scheme = l.scheme->name;
+    if (l.apply) l.apply(p);
+    return;
+  }
+  refuse(label, scheme_variant_labels());
 }
 
 std::unique_ptr<BilateralController> make_controller(const std::string& scheme) {

@@ -1,6 +1,7 @@
 #include "client/control/schemes/tdpa.hpp"
 
 #include "client/control/schemes/laws.hpp"
+#include "client/control/tuning.hpp"
 
 namespace teleop::master {
 
@@ -13,6 +14,24 @@ const std::vector<ControllerParam>& TimeDomainPassivityController::parameters() 
        .choices = {"position-position", "force-position"}},
   };
   return table;
+}
+
+SchemeTraits TimeDomainPassivityController::traits(const ControllerParams& params) {
+  SchemeTraits t;
+  // as its base law; the delay margin of its linear model is the base law's without the PC
+  t.tunable_gains = (params.tdpa_base == "force-position" ? kTuneForceGain : kTuneMasterStiffness) |
+                    kTuneMasterDamping | kTuneSlaveStiffness;
+  t.position_based = params.tdpa_base == "position-position";
+  t.passive_by_design = true;
+  return t;
+}
+
+const std::vector<SchemeVariant>& TimeDomainPassivityController::variants() {
+  static const std::vector<SchemeVariant> labels = {
+      {"tdpa", [](ControllerParams& p) { p.tdpa_base = "position-position"; }},
+      {"tdpa-fp", [](ControllerParams& p) { p.tdpa_base = "force-position"; }},
+  };
+  return labels;
 }
 
 void TimeDomainPassivityController::on_configure() {

@@ -16,6 +16,10 @@ class TimeDomainPassivityController final : public BilateralController {
  public:
   const char* name() const override { return "tdpa"; }
   SchemeId scheme() const override { return SchemeId::kTimeDomainPassivity; }
+  /// What the shared code asks of it (client/control/scheme_traits.hpp), in its .cpp.
+  static SchemeTraits traits(const ControllerParams& params);
+  /// Its variants: "tdpa" (on position-position) and "tdpa-fp" (on force-position).
+  static const std::vector<SchemeVariant>& variants();
   /// Its own parameters (client/control/controller_params.hpp), declared in its .cpp.
   static const std::vector<ControllerParam>& parameters();
   double environment_force_gain() const override {

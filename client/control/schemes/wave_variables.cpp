@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <sstream>
 
+#include "client/control/tuning.hpp"
 #include "common/control/slave_port.hpp"
 
 namespace teleop::master {
@@ -14,6 +15,16 @@ std::string number_text(double v) {
   return o.str();
 }
 }  // namespace
+
+SchemeTraits WaveVariablesController::traits(const ControllerParams& /*params*/) {
+  SchemeTraits t;
+  // the wave impedance is fixed for the session, and K_ps only derives it
+  t.tunable_gains = kTuneMasterDamping;
+  t.position_based = true;
+  t.passive_by_design = true;
+  t.linear_loop_model = false;
+  return t;
+}
 
 const std::vector<ControllerParam>& WaveVariablesController::parameters() {
   using P = ControllerParams;

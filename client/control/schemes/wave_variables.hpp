@@ -16,6 +16,8 @@ class WaveVariablesController final : public BilateralController {
  public:
   const char* name() const override { return "wave-variables"; }
   SchemeId scheme() const override { return SchemeId::kWaveVariables; }
+  /// What the shared code asks of it (client/control/scheme_traits.hpp), in its .cpp.
+  static SchemeTraits traits(const ControllerParams& params);
   /// Its own parameters (client/control/controller_params.hpp), declared in its .cpp.
   static const std::vector<ControllerParam>& parameters();
   /// Effective wave impedance b after derivation and clamping [N s/m].

@@ -15,6 +15,7 @@
 #include "client/campaign/results.hpp"
 #include "client/campaign/runner.hpp"
 #include "client/campaign/store.hpp"
+#include "client/control/scheme_traits.hpp"
 #include "common/util/csv.hpp"
 #include "tests/support/config_error.hpp"
 #include "tests/support/press_world.hpp"
@@ -116,6 +117,39 @@ TEST(CampaignFile, RefusesBadInputNamingFileFieldValueAndRange) {
     for (const std::string& s : c.says) EXPECT_NE(msg.find(s), std::string::npos) << msg;
   }
   EXPECT_NE(config_error_of([] { load_campaign("/nonexistent/c.yaml"); }).find("/nonexistent"),
+            std::string::npos);
+}
+
+TEST(CampaignFile, SchemeLabelsAndLawsAreTheSchemesVariantsAndTraits) {
+  struct Law {
+    const char* label;
+    const char* scheme;
+    const char* tdpa_base;
+    bool force_gain;
+  };
+  const std::vector<Law> laws = {
+      {"position-position", "position-position", "position-position", false},
+      {"force-position", "force-position", "position-position", true},
+      {"wave-variables", "wave-variables", "position-position", false},
+      {"tdpa", "tdpa", "position-position", false},
+      {"tdpa-fp", "tdpa", "force-position", true},
+      {"model-mediated", "model-mediated", "position-position", true},
+  };
+  std::vector<std::string> labels;
+  for (const Law& w : laws) labels.emplace_back(w.label);
+  EXPECT_EQ(scheme_labels(), labels);
+  for (const Law& w : laws) {
+    const SchemeLaw law = scheme_law(w.label);
+    EXPECT_EQ(law.scheme, w.scheme) << w.label;
+    EXPECT_EQ(law.tdpa_base, w.tdpa_base) << w.label;
+    EXPECT_EQ(law.force_gain, w.force_gain) << w.label;
+    // the gain axis is the scheme's own answer
+    master::ControllerParams p;
+    p.scheme = law.scheme;
+    p.tdpa_base = law.tdpa_base;
+    EXPECT_EQ(law.force_gain, !master::scheme_traits(p).position_based) << w.label;
+  }
+  EXPECT_NE(config_error_of([] { scheme_law("pp"); }).find("tdpa, tdpa-fp, model-mediated"),
             std::string::npos);
 }
 

@@ -7,6 +7,9 @@
 #include <cmath>
 #include <limits>
 
+#include "client/control/scheme_traits.hpp"
+#include "tests/support/config_error.hpp"
+
 namespace teleop::master {
 namespace {
 
@@ -30,6 +33,19 @@ TEST(Tuning, EachSchemeTakesTheGainsItUses) {
   tdpa.tdpa_base = "force-position";
   EXPECT_TRUE(tunable_fields(tdpa) & kTuneForceGain);
   EXPECT_FALSE(tunable_fields(tdpa) & kTuneMasterStiffness);
+}
+
+TEST(Tuning, TheGainsAreTheSchemesTraitsAndAnUnknownSchemeIsRefused) {
+  const std::uint32_t delays = kTuneForwardDelay | kTuneBackwardDelay;
+  for (const std::string& label : scheme_variant_labels()) {
+    ControllerParams p;
+    apply_scheme_variant(label, p);
+    EXPECT_EQ(tunable_fields(p), scheme_traits(p).tunable_gains | delays) << label;
+  }
+  ControllerParams p;
+  p.scheme = "pp";
+  EXPECT_NE(test::config_error_of([&] { tunable_fields(p); }).find("scheme 'pp' is unknown"),
+            std::string::npos);
 }
 
 TEST(Tuning, BoundsComeFromTheDeviceAndTheChannel) {

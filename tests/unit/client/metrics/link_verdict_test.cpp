@@ -5,7 +5,10 @@
 
 #include <cmath>
 
+#include "client/control/bilateral_controller.hpp"
+#include "client/control/scheme_traits.hpp"
 #include "common/util/exit_codes.hpp"
+#include "tests/support/config_error.hpp"
 
 namespace {
 
@@ -14,6 +17,7 @@ using teleop::master::judge_link;
 using teleop::master::link_tolerance;
 using teleop::master::LinkCounts;
 using teleop::master::lost_commands;
+using teleop::master::round_trip_tolerance_ms;
 using teleop::master::Verdict;
 
 /// 10,000 commands, all received, a loopback round trip.
@@ -47,6 +51,17 @@ TEST(LinkVerdict, LossBeyondTheThresholdIsDegraded) {
   EXPECT_TRUE(j.degraded);
   EXPECT_NE(j.reason.find("2400 of 10000 commands lost"), std::string::npos) << j.reason;
   EXPECT_NE(j.reason.find("more than 5 %"), std::string::npos) << j.reason;
+}
+
+TEST(LinkVerdict, TheRoundTripToleranceFollowsTheSchemesPassivity) {
+  for (const std::string& name : teleop::master::controller_names()) {
+    const double want = teleop::master::scheme_traits(name).passive_by_design ? 500.0 : 50.0;
+    EXPECT_EQ(round_trip_tolerance_ms(name), want) << name;
+    EXPECT_EQ(link_tolerance(name).round_trip_ms, want) << name;
+  }
+  EXPECT_NE(
+      teleop::test::config_error_of([] { link_tolerance("pp"); }).find("scheme 'pp' is unknown"),
+      std::string::npos);
 }
 
 TEST(LinkVerdict, RoundTripBeyondTheSchemesToleranceIsDegraded) {
