@@ -5,17 +5,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <functional>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "client/net/delay_flags.hpp"
 #include "common/config/flags.hpp"
+#include "tests/support/config_error.hpp"
 
 namespace {
 
-using teleop::config::ConfigError;
 using teleop::config::Node;
 using teleop::master::delay_param;
 using teleop::master::delay_param_table;
@@ -24,14 +23,7 @@ using teleop::master::DelayParam;
 using teleop::master::DelayParamKind;
 using teleop::master::DelayQuantity;
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
+using teleop::test::config_error_of;
 
 DelayConfig from_yaml(const std::string& mapping) {
   return teleop::master::delay_config_from_yaml(Node::parse("d: " + mapping, "net.yaml").at("d"));
@@ -115,18 +107,18 @@ TEST(DelayParams, AValuePastItsRangeIsRefusedByTheFlagTheFileAndValidateAlike) {
       for (const auto& p : d.parts) v.push_back(p.hi);
       v[i] = d.parts[i].hi * 1.5;
       if (d.parts[i].quantity == DelayQuantity::kProbability) v[i] = 1.5;
-      const std::string flag = error_of([&] {
+      const std::string flag = config_error_of([&] {
         DelayConfig c;
         d.apply_flag(flag_text(d, v), c);
       });
       EXPECT_NE(flag.find("command line: " + d.flag), std::string::npos) << flag;
       const std::string file =
-          error_of([&] { from_yaml("{" + d.key + ": " + yaml_text(v) + "}"); });
+          config_error_of([&] { from_yaml("{" + d.key + ": " + yaml_text(v) + "}"); });
       EXPECT_NE(file.find("net.yaml: field 'd." + d.key + "'"), std::string::npos) << file;
       DelayConfig c;
       if (d.enable != nullptr) c.*(d.enable) = true;
       c.*(d.parts[i].field) = v[i];
-      const std::string checked = error_of([&] { c.validate(); });
+      const std::string checked = config_error_of([&] { c.validate(); });
       EXPECT_NE(checked.find("delay channel: " + d.key), std::string::npos) << checked;
       // each names the allowed range of the part that is out (probabilities: also in %)
       const std::string range = d.parts[i].quantity == DelayQuantity::kProbability
@@ -137,14 +129,14 @@ TEST(DelayParams, AValuePastItsRangeIsRefusedByTheFlagTheFileAndValidateAlike) {
       }
     }
   }
-  EXPECT_NE(error_of([] { from_yaml("{seed: 9007199254740994}"); }).find("2^53"),
+  EXPECT_NE(config_error_of([] { from_yaml("{seed: 9007199254740994}"); }).find("2^53"),
             std::string::npos);
-  EXPECT_NE(error_of([] {
+  EXPECT_NE(config_error_of([] {
               DelayConfig c;
               delay_param("capacity").apply_flag("1", c);
             }).find("[2, 16777216]"),
             std::string::npos);
-  EXPECT_NE(error_of([] { from_yaml("{burst_loss: [0.1, 0]}"); }).find("never end"),
+  EXPECT_NE(config_error_of([] { from_yaml("{burst_loss: [0.1, 0]}"); }).find("never end"),
             std::string::npos);
 }
 
@@ -155,15 +147,15 @@ TEST(DelayParams, AFileTakesTheScheduledFaultsAndRefusesTheWrongShape) {
   EXPECT_DOUBLE_EQ(c.spike_extra_s, 0.2);
   EXPECT_DOUBLE_EQ(c.window_at_s, 4.0);
   EXPECT_DOUBLE_EQ(c.window_loss, 0.5);
-  std::string m = error_of([] { from_yaml("{delay_spike: [3s, 1s]}"); });
+  std::string m = config_error_of([] { from_yaml("{delay_spike: [3s, 1s]}"); });
   EXPECT_NE(m.find("'d.delay_spike'"), std::string::npos) << m;
   EXPECT_NE(m.find("list of 3"), std::string::npos) << m;
-  m = error_of([] {
+  m = config_error_of([] {
     DelayConfig d;
     delay_param("delay_spike").apply_flag("3s,1s", d);
   });
   EXPECT_NE(m.find("must be at,duration,extra (example: 3s,1s,1s)"), std::string::npos) << m;
-  m = error_of([] { from_yaml("{capacity: 1.5}"); });
+  m = config_error_of([] { from_yaml("{capacity: 1.5}"); });
   EXPECT_NE(m.find("'d.capacity'"), std::string::npos) << m;
 }
 
