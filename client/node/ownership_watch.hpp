@@ -48,8 +48,8 @@ class OwnershipWatch {
   double grace_s_;
   double wait_owner_s_;
   bool refused_ = false;
-  bool owned_once_ =
-      false;  // this master has owned the slave since its teleoperation session began
+  /// This master has owned the slave since its teleoperation session began.
+  bool owned_once_ = false;
   bool give_up_ = false;
   bool refused_first_ = false;
   double refused_at_s_ = 0.0;
